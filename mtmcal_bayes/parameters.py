@@ -1,0 +1,162 @@
+"""Canonical names, units and meanings of the model parameters (SPEC §1).
+
+Three groups of quantities appear everywhere in the package:
+
+* the 13 geometric deviations of thesis Table 2.1 (:data:`DEVIATIONS`);
+* the eight quantities the thesis ball-bar procedure identifies
+  (:data:`IDENTIFIABLE`), seven of them deviations and one the combination
+  ``dx_CZ_minus_dx_BT``;
+* nuisance quantities of the instrument set-up: per tool setup of the
+  spindle-side (T) ball its centre offset ``xT, yT, zT`` and the tool-length
+  error ``dRB``; per mount of the workpiece-side (W) ball its offset
+  ``xW, yW, zW``.
+
+:class:`ParameterSpace` orders them into the parameter vector that forward
+models take, shape ``(n, p)``, in internal units (mm, rad).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import units
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A named quantity with its kind (``"angle"`` or ``"length"``) and meaning."""
+
+    name: str
+    kind: str
+    meaning: str
+
+    @property
+    def unit(self) -> str:
+        """Display unit: ``"arcsec"`` for angles, ``"um"`` for lengths."""
+        return "arcsec" if self.kind == "angle" else "um"
+
+
+_DEVIATION_TABLE = [
+    ("dx_BT", "length", "X offset of the spindle axis from the B-axis origin"),
+    ("dz_BT", "length", "Z offset of the spindle axis from the B-axis origin"),
+    ("alpha_BT", "angle", "squareness of the B axis to the spindle axis, about X"),
+    ("alpha_XB", "angle", "squareness of the B axis to the Z motion, about X"),
+    ("beta_XB", "angle", "initial angular position (zero) error of the B axis"),
+    ("gamma_XB", "angle", "squareness of the B axis to the X motion, about Z"),
+    ("gamma_XY", "angle", "squareness of the X and Y motions"),
+    ("alpha_YZ", "angle", "squareness of the Y and Z motions"),
+    ("beta_YZ", "angle", "squareness of the Z and X motions"),
+    ("dx_CZ", "length", "X offset of the C axis from the machine origin"),
+    ("dy_CZ", "length", "Y offset of the C axis from the machine origin"),
+    ("alpha_CZ", "angle", "parallelism of the C axis to Z, about X"),
+    ("beta_CZ", "angle", "parallelism of the C axis to Z, about Y"),
+]
+
+#: the 13 geometric deviations of thesis Table 2.1, by canonical name
+DEVIATIONS: dict[str, Quantity] = {n: Quantity(n, k, m) for n, k, m in _DEVIATION_TABLE}
+
+#: the eight quantities identified by the thesis ball-bar procedure (Table 4.5 order)
+IDENTIFIABLE: tuple[str, ...] = (
+    "alpha_CZ", "beta_CZ", "alpha_XB", "beta_XB",
+    "gamma_XB", "alpha_BT", "dx_CZ_minus_dx_BT", "dy_CZ",
+)
+
+#: every named quantity: deviations plus the identifiable combination
+QUANTITIES: dict[str, Quantity] = {
+    **DEVIATIONS,
+    "dx_CZ_minus_dx_BT": Quantity("dx_CZ_minus_dx_BT", "length", "dx_CZ − dx_BT, the C-axis X offset relative to the spindle"),
+}
+
+#: nuisance quantities of each tool setup (T-side ball offset and tool-length error)
+SETUP_NUISANCE: dict[str, Quantity] = {
+    "xT": Quantity("xT", "length", "T-ball centre offset along X of the spindle frame"),
+    "yT": Quantity("yT", "length", "T-ball centre offset along Y of the spindle frame"),
+    "zT": Quantity("zT", "length", "T-ball centre offset along Z of the spindle frame"),
+    "dRB": Quantity("dRB", "length", "tool-length error, true minus programmed R_B"),
+}
+
+#: nuisance quantities of each W-ball mount (offset in the C-axis frame)
+MOUNT_NUISANCE: dict[str, Quantity] = {
+    "xW": Quantity("xW", "length", "W-ball mounting offset along X of the C-axis frame"),
+    "yW": Quantity("yW", "length", "W-ball mounting offset along Y of the C-axis frame"),
+    "zW": Quantity("zW", "length", "W-ball mounting offset along Z of the C-axis frame"),
+}
+
+
+def quantity_unit(name: str) -> str:
+    """Display unit (``"arcsec"`` or ``"um"``) of a deviation, combination or nuisance base name."""
+    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE):
+        if name in table:
+            return table[name].unit
+    raise KeyError(name)
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One entry of a parameter vector.
+
+    ``name`` is unique in its space: a deviation name (``"beta_XB"``) or a
+    nuisance base name with its owner (``"xT[RB1]"``, ``"xW[C]"``).
+    """
+
+    name: str
+    base: str
+    group: str  # "deviation", "setup" or "mount"
+    owner: str | None
+    kind: str
+
+    @property
+    def unit(self) -> str:
+        return "arcsec" if self.kind == "angle" else "um"
+
+
+def nuisance_name(base: str, owner: str) -> str:
+    """Name of a nuisance parameter, e.g. ``nuisance_name("xT", "RB1") == "xT[RB1]"``."""
+    return f"{base}[{owner}]"
+
+
+class ParameterSpace:
+    """Ordered parameters of a campaign: 13 deviations, then per setup, then per mount.
+
+    Parameters
+    ----------
+    setups, mounts:
+        Ids of the tool setups and W-ball mounts, in campaign order.
+    """
+
+    def __init__(self, setups, mounts):
+        params = [Parameter(q.name, q.name, "deviation", None, q.kind) for q in DEVIATIONS.values()]
+        for s in setups:
+            params += [Parameter(nuisance_name(q.name, s), q.name, "setup", s, q.kind) for q in SETUP_NUISANCE.values()]
+        for m in mounts:
+            params += [Parameter(nuisance_name(q.name, m), q.name, "mount", m, q.kind) for q in MOUNT_NUISANCE.values()]
+        self.parameters: tuple[Parameter, ...] = tuple(params)
+        self._index = {p.name: i for i, p in enumerate(self.parameters)}
+
+    @classmethod
+    def for_campaign(cls, campaign) -> "ParameterSpace":
+        return cls(list(campaign.ballbar.setups), list(campaign.ballbar.mounts))
+
+    def __len__(self) -> int:
+        return len(self.parameters)
+
+    @property
+    def names(self) -> list[str]:
+        return [p.name for p in self.parameters]
+
+    def index(self, name: str) -> int:
+        """Column of ``name`` in a parameter batch."""
+        return self._index[name]
+
+    def display_scale(self) -> np.ndarray:
+        """Internal units per display unit for every column, shape ``(p,)``."""
+        return np.array([units.to_internal(1.0, p.unit) for p in self.parameters])
+
+    def vector(self, values: dict[str, float] | None = None) -> np.ndarray:
+        """Parameter vector, shape ``(p,)``, internal units, from ``{name: internal value}`` (others zero)."""
+        theta = np.zeros(len(self))
+        for name, v in (values or {}).items():
+            theta[self.index(name)] = v
+        return theta
