@@ -59,3 +59,25 @@ class Observations:
     @property
     def labels(self) -> list[str]:
         return [k.label for k in self.keys]
+
+
+def with_observations(campaign, values: np.ndarray):
+    """A copy of ``campaign`` whose runs carry ``values`` instead of their measured repeats.
+
+    ``values``: shape ``(m,)`` (one repeat each) or ``(m, r)`` (r repeats each),
+    mm, in the order of :meth:`Observations.from_campaign`.  Published results
+    are dropped (they belong to the measured data).
+    """
+    import copy
+
+    values = np.asarray(values, dtype=float)
+    if values.ndim == 1:
+        values = values[:, None]
+    out = copy.deepcopy(campaign)
+    out.reported = {}
+    keys = Observations.from_campaign(campaign).keys
+    if len(keys) != len(values):
+        raise ValueError(f"expected {len(keys)} observations, got {len(values)}")
+    for key, v in zip(keys, values):
+        out.ballbar.runs[key.run].repeats[key.component] = v.copy()
+    return out

@@ -46,9 +46,9 @@ def to_text(df: pd.DataFrame) -> str:
 def format_identification(result: IdentificationResult) -> str:
     """Human-readable text of :func:`~mtmcal_bayes.identify.identify` results."""
     out = [f"Campaign: {result.source}", "",
-           "Ball bar, thesis Eqs 4.10–4.18 (means of the repeats) vs Table 4.5"]
+           "Ball bar, thesis Eqs 4.10–4.18 on the means of the repeats, beside [reported.ballbar] (thesis: Table 4.5)"]
     out.append(to_text(identification_table(result.ballbar)))
-    out += ["", "Touch probe, thesis Eqs 5.1–5.19 vs Table 5.3"]
+    out += ["", "Touch probe, thesis Eqs 5.1–5.19, beside [reported.probe] (thesis: Table 5.3)"]
     if result.probe:
         out.append(to_text(identification_table(result.probe)))
     else:

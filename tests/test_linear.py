@@ -1,0 +1,84 @@
+"""The linear model against SPEC §3.1, term by term."""
+
+import numpy as np
+import pytest
+
+from mtmcal_bayes import LinearModel, MtmcalError, ParameterSpace
+from mtmcal_bayes.campaign import parse_campaign
+
+from .conftest import DATA
+
+
+def spec_eccentricity(pattern, comp, d, setup, mount):
+    """SPEC §3.1 written out as printed; ``d`` maps parameter base names to values (mm, rad)."""
+    R_B, Z_T, X_T, Z_C, R_C = setup.R_B, setup.Z_T, setup.X_T, mount.Z_C, mount.R_C
+    return {
+        ("BX", "ex"): d["dz_BT"] + d["zT"] - d["dRB"],
+        ("BX", "ez"): d["dx_BT"] + R_B * d["beta_XB"] + d["xT"],
+        ("BY", "ex"): -R_B * d["gamma_XB"],
+        ("BY", "ez"): +R_B * d["alpha_XB"],
+        ("CR", "ex"): d["dx_BT"] - d["dx_CZ"] - Z_T * d["beta_XB"] + Z_C * d["beta_CZ"] + d["xT"],
+        ("CR", "ey"): (-d["dy_CZ"] + Z_T * (d["alpha_XB"] + d["alpha_BT"]) - Z_C * d["alpha_CZ"]
+                       - X_T * d["gamma_XB"] + d["yT"]),
+        ("CA", "ex"): +R_C * d["beta_CZ"],
+        ("CA", "ey"): -R_C * d["alpha_CZ"],
+    }[(pattern, comp)]
+
+
+def _spec_predict(model, theta):
+    space, bb = model.space, model.campaign.ballbar
+    out = []
+    for key in model.observations.keys:
+        d = {p.base: theta[space.index(p.name)] for p in space.parameters
+             if p.owner in (None, key.setup, key.mount)}
+        out.append(spec_eccentricity(key.pattern, key.component, d, bb.setups[key.setup], bb.mounts[key.mount]))
+    return np.array(out)
+
+
+def test_each_parameter_alone(thesis):
+    """Every column of the design matrix: one parameter at a time, all others zero."""
+    model = LinearModel(thesis)
+    for j, p in enumerate(model.space.parameters):
+        theta = np.zeros(len(model.space))
+        theta[j] = 1e-5 if p.kind == "angle" else 0.01
+        np.testing.assert_allclose(model.predict(theta), _spec_predict(model, theta), rtol=1e-12, atol=1e-15,
+                                   err_msg=p.name)
+
+
+def test_random_batch_vectorised(thesis):
+    model = LinearModel(thesis)
+    rng = np.random.default_rng(1)
+    theta = rng.normal(size=(200, len(model.space))) * model.space.display_scale() * 50
+    pred = model.predict(theta)
+    assert pred.shape == (200, len(model.observations))
+    for i in (0, 57, 199):
+        np.testing.assert_allclose(pred[i], _spec_predict(model, theta[i]), rtol=1e-12, atol=1e-15)
+
+
+def test_thesis_sensitivities(thesis):
+    """Spot values: R_B·beta_XB for 1″ at R_B = 356.3945 mm is 1.728 µm."""
+    model = LinearModel(thesis)
+    theta = model.space.vector({"beta_XB": np.pi / 648000})
+    row = model.observations.labels.index("ez_BX@RB1/B")
+    assert model.predict(theta)[row] * 1e3 == pytest.approx(356.3945 * np.pi / 648000 * 1e3)
+
+
+def test_w_ball_offsets_do_not_enter(thesis):
+    model = LinearModel(thesis)
+    for p in model.space.parameters:
+        if p.group == "mount":
+            assert not model.design[:, model.space.index(p.name)].any(), p.name
+
+
+def test_parameter_space_layout(thesis):
+    space = ParameterSpace.for_campaign(thesis)
+    assert len(space) == 13 + 2 * 4 + 2 * 3
+    assert space.names[:2] == ["dx_BT", "dz_BT"]
+    assert "xT[RB2]" in space.names and "zW[C]" in space.names
+
+
+def test_pattern_without_linear_relation_is_a_clear_error():
+    text = (DATA / "minimal_one_repeat.toml").read_text().replace('pattern = "BY"', 'pattern = "BZ"')
+    c = parse_campaign(text, "bz.toml")
+    with pytest.raises(MtmcalError, match="BX, BY, CR and CA only"):
+        LinearModel(c)
