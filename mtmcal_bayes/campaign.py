@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +23,7 @@ from . import units
 from .errors import InputError
 from .parameters import DEVIATIONS, MOUNT_NUISANCE, QUANTITIES, SETUP_NUISANCE
 from .patterns import COMPONENTS, PATTERNS
+from .textfiles import read_text, write_text_atomic
 from .tomlio import Fixed, dumps, printed_decimals
 
 FORMAT = "mtmcal-campaign/1"
@@ -155,6 +155,8 @@ class Campaign:
 
 
 # --------------------------------------------------------------------------- reading helpers
+_MISSING = object()
+
 class _Reader:
     """Typed access to a parsed TOML document with errors naming file and key."""
 
@@ -164,16 +166,34 @@ class _Reader:
     def fail(self, key: str | None, message: str):
         raise InputError(self.source, key, message)
 
-    def table(self, parent: dict, key: str, path: str, required: bool = True) -> dict | None:
+    def _lookup(self, table: dict, key: str, path: str, required: bool, what: str):
+        """``(full key, value)``; value ``_MISSING`` when absent and not required."""
         full = f"{path}.{key}" if path else key
-        if key not in parent:
+        if key not in table:
             if required:
-                self.fail(full, "missing table")
+                self.fail(full, f"missing {what}".rstrip())
+            return full, _MISSING
+        return full, table[key]
+
+    def table(self, parent: dict, key: str, path: str, required: bool = True) -> dict | None:
+        full, v = self._lookup(parent, key, path, required, "table")
+        if v is _MISSING:
             return None
-        v = parent[key]
         if not isinstance(v, dict):
             self.fail(full, f"expected a table, got {_kind(v)}")
         return v
+
+    def subtables(self, parent: dict, key: str, path: str, allowed, what: str):
+        """Yield ``(id, full key, table)`` for each ``[path.key.<id>]``; at least one is required."""
+        tables = self.table(parent, key, path)
+        if not tables:
+            self.fail(f"{path}.{key}", f"at least one {what} is needed")
+        for oid, sub in tables.items():
+            full = f"{path}.{key}.{oid}"
+            if not isinstance(sub, dict):
+                self.fail(full, f"expected a table, got {_kind(sub)}")
+            self.check_keys(sub, allowed, full)
+            yield oid, full, sub
 
     def check_keys(self, table: dict, allowed, path: str) -> None:
         for k in table:
@@ -182,24 +202,19 @@ class _Reader:
                 self.fail(where, f"unknown key (expected one of: {', '.join(sorted(allowed))})")
 
     def string(self, table: dict, key: str, path: str, required: bool = False, default: str = "") -> str:
-        full = f"{path}.{key}" if path else key
-        if key not in table:
-            if required:
-                self.fail(full, "missing")
+        full, v = self._lookup(table, key, path, required, "")
+        if v is _MISSING:
             return default
-        v = table[key]
         if not isinstance(v, str):
             self.fail(full, f"expected a string, got {_kind(v)}")
         return v
 
     def number(self, table: dict, key: str, path: str, *, required: bool = True, positive: bool = False,
                nonnegative: bool = False, default: float | None = None) -> float | None:
-        full = f"{path}.{key}" if path else key
-        if key not in table:
-            if required:
-                self.fail(full, "missing")
+        full, v = self._lookup(table, key, path, required, "")
+        if v is _MISSING:
             return default
-        return self._check_number(table[key], full, positive, nonnegative)
+        return self._check_number(v, full, positive, nonnegative)
 
     def _check_number(self, v, full: str, positive: bool = False, nonnegative: bool = False) -> float:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
@@ -217,12 +232,10 @@ class _Reader:
 
     def array(self, table: dict, key: str, path: str, shape: tuple, *, required: bool = True) -> np.ndarray | None:
         """Numeric array of the given shape; ``None`` entries in ``shape`` match any length >= 1."""
-        full = f"{path}.{key}" if path else key
-        if key not in table:
-            if required:
-                self.fail(full, "missing")
+        full, v = self._lookup(table, key, path, required, "")
+        if v is _MISSING:
             return None
-        out = self._nested(table[key], full, len(shape))
+        out = self._nested(v, full, len(shape))
         arr = np.array(out, dtype=float)
         if arr.ndim != len(shape) or any(s is not None and s != n for s, n in zip(shape, arr.shape)):
             want = " x ".join("n" if s is None else str(s) for s in shape)
@@ -271,14 +284,7 @@ def load_campaign(path: str | os.PathLike | None = None) -> Campaign:
         text, source = builtin_campaign_text()
         return parse_campaign(text, source=source, base_dir=None)
     p = Path(path)
-    if not p.exists():
-        raise InputError(str(p), None, "file not found")
-    if p.is_dir():
-        raise InputError(str(p), None, "is a directory, not a campaign file")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(str(p), None, f"cannot read: {exc}") from None
+    text = read_text(p, "campaign file")
     return parse_campaign(text, source=str(p), base_dir=p.parent)
 
 
@@ -323,27 +329,13 @@ def _ballbar(r: _Reader, t: dict, base_dir: Path | None) -> Ballbar:
     feed = r.number(t, "feed_mm_per_min", P, required=False, positive=True)
 
     setups: dict[str, Setup] = {}
-    st = r.table(t, "setups", P)
-    if not st:
-        r.fail(f"{P}.setups", "at least one tool setup is needed")
-    for sid, s in st.items():
-        path = f"{P}.setups.{sid}"
-        if not isinstance(s, dict):
-            r.fail(path, f"expected a table, got {_kind(s)}")
-        r.check_keys(s, {"R_B_mm", "Z_T_mm", "X_T_mm"}, path)
+    for sid, path, s in r.subtables(t, "setups", P, {"R_B_mm", "Z_T_mm", "X_T_mm"}, "tool setup"):
         setups[sid] = Setup(sid, r.number(s, "R_B_mm", path, positive=True),
                             r.number(s, "Z_T_mm", path), r.number(s, "X_T_mm", path))
     _distinct_tool_lengths(r, [(f"{P}.setups.{s.id}", s.R_B, s.Z_T) for s in setups.values()])
 
     mounts: dict[str, Mount] = {}
-    mt = r.table(t, "mounts", P)
-    if not mt:
-        r.fail(f"{P}.mounts", "at least one W-ball mount is needed")
-    for mid, m in mt.items():
-        path = f"{P}.mounts.{mid}"
-        if not isinstance(m, dict):
-            r.fail(path, f"expected a table, got {_kind(m)}")
-        r.check_keys(m, {"Z_C_mm", "R_C_mm"}, path)
+    for mid, path, m in r.subtables(t, "mounts", P, {"Z_C_mm", "R_C_mm"}, "W-ball mount"):
         mounts[mid] = Mount(mid, r.number(m, "Z_C_mm", path, nonnegative=True),
                             r.number(m, "R_C_mm", path, nonnegative=True))
 
@@ -424,11 +416,7 @@ def _probe(r: _Reader, t: dict) -> Probe:
         r.check_keys(b, {"X_T_mm", "angles_deg", "styli"}, path)
         angles = r.array(b, "angles_deg", path, (2,))
         bax = BAxisProbe(r.number(b, "X_T_mm", path), angles)
-        for sid, s in (r.table(b, "styli", path) or {}).items():
-            sp = f"{path}.styli.{sid}"
-            if not isinstance(s, dict):
-                r.fail(sp, f"expected a table, got {_kind(s)}")
-            r.check_keys(s, {"R_B_mm", "nominal_mm", "centres_mm"}, sp)
+        for sid, sp, s in r.subtables(b, "styli", path, {"R_B_mm", "nominal_mm", "centres_mm"}, "stylus"):
             bax.styli[sid] = Stylus(sid, r.number(s, "R_B_mm", sp, positive=True),
                                     r.array(s, "nominal_mm", sp, (2, 3)),
                                     r.array(s, "centres_mm", sp, (None, 2, 3)))
@@ -582,19 +570,6 @@ def _probe_dict(p: Probe) -> dict:
                        "styli": {s.id: {"R_B_mm": s.R_B, "nominal_mm": s.nominal, "centres_mm": s.centres}
                                  for s in b.styli.values()}}
     return d
-
-
-def write_text_atomic(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file, so nothing is left half-written."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def save_campaign(campaign: Campaign, path: str | os.PathLike, header: str | None = None) -> None:

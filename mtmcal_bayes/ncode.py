@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .textfiles import read_text
 
 _WORD = re.compile(r"([A-Z])\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\b)", re.IGNORECASE)
 _COUNT = re.compile(r"^number\s+of\s+points\s+(\d+)\s*$", re.IGNORECASE)
@@ -39,16 +40,8 @@ class DprntPoints:
 
 def read_dprnt(path: str | Path) -> DprntPoints:
     """Read a DPRNT output file; malformed lines raise an error naming the line."""
-    p = Path(path)
-    if not p.exists():
-        raise InputError(str(p), None, "file not found")
-    if p.is_dir():
-        raise InputError(str(p), None, "is a directory, not a DPRNT file")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(str(p), None, f"cannot read: {exc}") from None
-    return parse_dprnt(text, str(p))
+    text = read_text(path, "DPRNT file")
+    return parse_dprnt(text, str(path))
 
 
 def parse_dprnt(text: str, source: str = "<dprnt>") -> DprntPoints:
