@@ -25,6 +25,8 @@ from .parameters import DEVIATIONS, MOUNT_NUISANCE, QUANTITIES, SETUP_NUISANCE
 from .patterns import COMPONENTS, PATTERNS
 from .textfiles import read_text, write_text_atomic
 from .tomlio import Fixed, dumps, printed_decimals
+from .traces import read_trace
+from .models.patterns import CR_GEOMETRIES
 
 FORMAT = "mtmcal-campaign/1"
 PRIOR_DISTS = {"normal": ("sd",), "halfnormal": ("sd",), "uniform": ("low", "high")}
@@ -65,7 +67,8 @@ class Run:
     setup: str
     mount: str
     repeats: dict[str, np.ndarray] = field(default_factory=dict)  # "ex" -> (r,) mm
-    trace_csv: str | None = None
+    trace_csv: list[str] | None = None  # trace files as written in the campaign, one repeat each
+    trace_rms: list[dict[str, float]] | None = None  # fit rms per file and direction, mm
 
     def mean(self, component: str) -> float:
         """Mean of the repeats of ``component``, mm."""
@@ -85,6 +88,7 @@ class Ballbar:
     setups: dict[str, Setup] = field(default_factory=dict)
     mounts: dict[str, Mount] = field(default_factory=dict)
     runs: list[Run] = field(default_factory=list)
+    cr_geometry: str = "RC-LB"  # T ball of CR at radius R_C − L_B (Table 2.3) or R_C + L_B (Fig 2.6)
 
 
 @dataclass
@@ -157,7 +161,7 @@ class Campaign:
 # --------------------------------------------------------------------------- reading helpers
 _MISSING = object()
 
-class _Reader:
+class TomlReader:
     """Typed access to a parsed TOML document with errors naming file and key."""
 
     def __init__(self, source: str):
@@ -290,7 +294,7 @@ def load_campaign(path: str | os.PathLike | None = None) -> Campaign:
 
 def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None = None) -> Campaign:
     """Parse and validate campaign TOML ``text``; ``source`` names it in error messages."""
-    r = _Reader(source)
+    r = TomlReader(source)
     if not text.strip():
         r.fail(None, "empty file (expected a campaign TOML with format = \"mtmcal-campaign/1\")")
     try:
@@ -313,7 +317,7 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir)
 
 
-def _machine(r: _Reader, t: dict) -> Machine:
+def _machine(r: TomlReader, t: dict) -> Machine:
     allowed = {"name", "configuration"} | {f"travel_{a}_mm" for a in "XYZ"}
     r.check_keys(t, allowed, "machine")
     travel = {a: r.number(t, f"travel_{a}_mm", "machine", positive=True)
@@ -321,9 +325,13 @@ def _machine(r: _Reader, t: dict) -> Machine:
     return Machine(r.string(t, "name", "machine"), r.string(t, "configuration", "machine"), travel)
 
 
-def _ballbar(r: _Reader, t: dict, base_dir: Path | None) -> Ballbar:
+def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
     P = "ballbar"
-    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "setups", "mounts", "runs"}, P)
+    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry",
+                     "setups", "mounts", "runs"}, P)
+    cr_geometry = r.string(t, "cr_geometry", P, default="RC-LB")
+    if cr_geometry not in CR_GEOMETRIES:
+        r.fail(f"{P}.cr_geometry", f"unknown CR geometry {cr_geometry!r} (expected {' or '.join(CR_GEOMETRIES)})")
     length = r.number(t, "length_mm", P, positive=True)
     accuracy = units.to_internal(r.number(t, "accuracy_um", P, positive=True), "um")
     feed = r.number(t, "feed_mm_per_min", P, required=False, positive=True)
@@ -344,11 +352,12 @@ def _ballbar(r: _Reader, t: dict, base_dir: Path | None) -> Ballbar:
         r.fail(f"{P}.runs", "missing: at least one [[ballbar.runs]] is needed")
     if not isinstance(raw_runs, list) or not all(isinstance(x, dict) for x in raw_runs) or not raw_runs:
         r.fail(f"{P}.runs", "expected one or more [[ballbar.runs]] tables")
-    runs = [_run(r, x, f"{P}.runs[{i}]", setups, mounts, base_dir) for i, x in enumerate(raw_runs)]
-    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs)
+    runs = [_run(r, x, f"{P}.runs[{i}]", setups, mounts, base_dir, length, cr_geometry)
+            for i, x in enumerate(raw_runs)]
+    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry)
 
 
-def _distinct_tool_lengths(r: _Reader, items: list[tuple[str, float, float]]) -> None:
+def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]]) -> None:
     """Two tool lengths that are equal make the second one carry no information."""
     for i, (pa, rb_a, zt_a) in enumerate(items):
         for pb, rb_b, zt_b in items[i + 1:]:
@@ -360,7 +369,7 @@ def _distinct_tool_lengths(r: _Reader, items: list[tuple[str, float, float]]) ->
                        "Z_T + R_B must stay constant between tool lengths")
 
 
-def _run(r: _Reader, t: dict, path: str, setups, mounts, base_dir) -> Run:
+def _run(r: TomlReader, t: dict, path: str, setups, mounts, base_dir, L_B: float, cr_geometry: str) -> Run:
     allowed = {"pattern", "setup", "mount", "trace_csv"} | {f"{c}_um" for c in ("ex", "ey", "ez")}
     r.check_keys(t, allowed, path)
     pattern = r.string(t, "pattern", path, required=True)
@@ -382,21 +391,30 @@ def _run(r: _Reader, t: dict, path: str, setups, mounts, base_dir) -> Run:
                 r.fail(f"{path}.{key}", f"pattern {pattern} has no component {c} "
                        f"(it gives {' and '.join(COMPONENTS[pattern])})")
             repeats[c] = units.to_internal(r.array(t, key, path, (None,)), "um")
-    trace = r.string(t, "trace_csv", path) or None
-    if trace is not None:
+    traces = rms = None
+    if "trace_csv" in t:
         if repeats:
-            r.fail(f"{path}.trace_csv", "a run carries either eccentricity repeats or a trace, not both")
-        trace_path = (base_dir / trace) if base_dir is not None else Path(trace)
-        if not trace_path.exists():
-            r.fail(f"{path}.trace_csv", f"trace file {str(trace_path)!r} not found")
-        r.fail(f"{path}.trace_csv", "raw traces are not read by this version yet; give the eccentricities "
-               "as ex_um/ey_um/ez_um repeats")
+            r.fail(f"{path}.trace_csv", "a run carries either eccentricity repeats or traces, not both")
+        raw = t["trace_csv"]
+        traces = [raw] if isinstance(raw, str) else raw
+        if not isinstance(traces, list) or not traces or not all(isinstance(x, str) and x for x in traces):
+            r.fail(f"{path}.trace_csv", "expected a file name or an array of file names")
+        extracted, rms = [], []
+        for name in traces:
+            fpath = (base_dir / name) if base_dir is not None else Path(name)
+            if not fpath.exists():
+                r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} not found")
+            ex = read_trace(fpath, pattern, mounts[mount].R_C, L_B, cr_geometry)
+            extracted.append(ex.values)
+            rms.append(ex.rms)
+        repeats = {c: np.array([e[c] for e in extracted]) for c in COMPONENTS[pattern]}
     if not repeats:
-        r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])}")
-    return Run(pattern, setup, mount, repeats, trace)
+        r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])} "
+               "or trace_csv")
+    return Run(pattern, setup, mount, repeats, traces, rms)
 
 
-def _probe(r: _Reader, t: dict) -> Probe:
+def _probe(r: TomlReader, t: dict) -> Probe:
     P = "probe"
     r.check_keys(t, {"instrument", "repeatability_um", "c_axis", "b_axis"}, P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
@@ -429,7 +447,7 @@ def _probe(r: _Reader, t: dict) -> Probe:
     return probe
 
 
-def _reported(r: _Reader, t: dict, text: str) -> dict[str, dict[str, ReportedValue]]:
+def _reported(r: TomlReader, t: dict, text: str) -> dict[str, dict[str, ReportedValue]]:
     out: dict[str, dict[str, ReportedValue]] = {}
     for method, vals in t.items():
         path = f"reported.{method}"
@@ -448,7 +466,7 @@ def _reported(r: _Reader, t: dict, text: str) -> dict[str, dict[str, ReportedVal
     return out
 
 
-def _priors(r: _Reader, t: dict) -> dict[str, dict]:
+def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
     known = {**{k: q.unit for k, q in DEVIATIONS.items()},
              **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE}.items()},
              "sigma_model": "um"}
@@ -477,7 +495,7 @@ def _priors(r: _Reader, t: dict) -> dict[str, dict]:
     return out
 
 
-def parse_truth(r: _Reader, t: dict, path: str, ballbar: Ballbar) -> Truth:
+def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar) -> Truth:
     """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``) located at ``path``."""
     r.check_keys(t, {"deviations", "setups", "mounts"}, path)
     truth = Truth()
@@ -503,8 +521,11 @@ def parse_truth(r: _Reader, t: dict, path: str, ballbar: Ballbar) -> Truth:
 
 
 # --------------------------------------------------------------------------- saving
-def campaign_to_dict(c: Campaign) -> dict:
-    """The TOML document of a campaign (file units), as nested dicts."""
+def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
+    """The TOML document of a campaign (file units), as nested dicts.
+
+    Trace files are written relative to ``save_dir`` (absolute when ``None``).
+    """
     um = lambda v: units.from_internal(v, "um")  # noqa: E731
     doc: dict = {"format": FORMAT}
     doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
@@ -517,14 +538,19 @@ def campaign_to_dict(c: Campaign) -> dict:
     b["accuracy_um"] = um(bb.accuracy)
     if bb.feed_mm_per_min is not None:
         b["feed_mm_per_min"] = bb.feed_mm_per_min
+    if bb.cr_geometry != "RC-LB":
+        b["cr_geometry"] = bb.cr_geometry
     b["setups"] = {s.id: {"R_B_mm": s.R_B, "Z_T_mm": s.Z_T, "X_T_mm": s.X_T} for s in bb.setups.values()}
     b["mounts"] = {m.id: {"Z_C_mm": m.Z_C, "R_C_mm": m.R_C} for m in bb.mounts.values()}
     b["runs"] = []
     for run in bb.runs:
         d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount}
-        d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
         if run.trace_csv:
-            d["trace_csv"] = run.trace_csv
+            d["trace_csv"] = [str(Path(c.base_dir or ".", f).resolve()) if save_dir is None
+                              else os.path.relpath(Path(c.base_dir or ".", f).resolve(), save_dir)
+                              for f in run.trace_csv]
+        else:
+            d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
         b["runs"].append(d)
     doc["ballbar"] = b
     if c.probe is not None:
@@ -574,7 +600,7 @@ def _probe_dict(p: Probe) -> dict:
 
 def save_campaign(campaign: Campaign, path: str | os.PathLike, header: str | None = None) -> None:
     """Write ``campaign`` as TOML to ``path`` (atomically); ``header`` becomes a leading comment."""
-    text = dumps(campaign_to_dict(campaign))
+    text = dumps(campaign_to_dict(campaign, Path(path).resolve().parent))
     if header:
         text = "".join(f"# {line}\n" for line in header.splitlines()) + "\n" + text
     write_text_atomic(path, text)

@@ -17,6 +17,7 @@ import sys
 from .errors import MtmcalError
 
 PROG = "mtmcal-bayes"
+MODEL_NAMES = ("linear", "htm-literal", "htm-thesis")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -91,6 +92,49 @@ def cmd_probe_fit(args) -> int:
     return 0
 
 
+def cmd_simulate(args) -> int:
+    from .campaign import load_campaign, save_campaign
+    from .simulate import eccentricity_records, load_truth, predict_truth, synthetic_campaign
+
+    campaign = load_campaign(args.campaign)
+    truth = load_truth(args.truth, campaign)
+    obs, pred = predict_truth(campaign, truth, args.model)
+    if args.output:
+        synth = synthetic_campaign(campaign, truth, args.model, noise=args.noise, seed=args.seed)
+        what = "with noise (seed %s)" % args.seed if args.noise else "noise-free"
+        save_campaign(synth, args.output, header=(
+            f"Synthetic campaign simulated by mtmcal-bayes with model {args.model}, {what},\n"
+            f"from {campaign.source} and truth {args.truth}."))
+        if not args.json:
+            print(f"wrote {args.output}: {len(obs)} eccentricity components, {what}, model {args.model}")
+    if args.json:
+        print_json({"model": args.model, "eccentricities": eccentricity_records(obs, pred)})
+    elif not args.output:
+        print(f"Predicted eccentricities (µm), model {args.model}, truth {args.truth}")
+        for rec in eccentricity_records(obs, pred):
+            print(f"  {rec['pattern']:2s} {rec['setup']:>6s} {rec['mount']:>4s}  {rec['component']}  "
+                  f"{rec['value_um']:10.3f}")
+    return 0
+
+
+def cmd_sensitivity(args) -> int:
+    from .campaign import load_campaign
+    from .sensitivity import sensitivity_table, to_markdown
+
+    df = sensitivity_table(load_campaign(args.campaign), args.model)
+    if args.json:
+        print_json({"model": args.model, "geometry": df.attrs["geometry"],
+                    "unit": "um per arcsec (angles) or um per um (lengths)",
+                    "sensitivity": {idx: row.to_dict() for idx, row in df.iterrows()}})
+    elif args.markdown:
+        print(to_markdown(df))
+    else:
+        print(f"Eccentricity per unit deviation, model {args.model} (µm per ″ for angles, µm per µm for lengths)")
+        print(f"Geometry: {df.attrs['geometry']}")
+        print(df.to_string(float_format=lambda v: "." if v == 0 else f"{v:.3f}"))
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
@@ -108,6 +152,25 @@ def build_parser() -> argparse.ArgumentParser:
                    help="stylus-ball radius, subtracted from the fitted radius (centre unchanged)")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_probe_fit)
+
+    s = sub.add_parser("simulate", help="predicted eccentricities for a known truth, or a synthetic campaign")
+    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign TOML (default: the built-in thesis campaign)")
+    s.add_argument("--truth", required=True, metavar="TRUTH.toml",
+                   help="[deviations] <name>_arcsec/_um, [setups.<id>] xT_um.., [mounts.<id>] xW_um..; missing = 0")
+    s.add_argument("--model", choices=MODEL_NAMES, default="htm-thesis", help="forward model (default htm-thesis)")
+    s.add_argument("-o", "--output", metavar="FILE", help="write a synthetic campaign TOML with the truth recorded")
+    s.add_argument("--noise", action="store_true", help="with -o: scatter like a real measurement (repeats, instrument accuracy)")
+    s.add_argument("--seed", type=int, default=None, help="random seed for --noise")
+    s.add_argument("--json", action="store_true", help="print the noise-free eccentricities as JSON")
+    s.set_defaults(func=cmd_simulate)
+
+    s = sub.add_parser("sensitivity", help="eccentricity of every pattern per unit deviation and mounting offset")
+    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign whose geometry to use (default: thesis)")
+    s.add_argument("--model", choices=MODEL_NAMES, default="htm-thesis", help="forward model (default htm-thesis)")
+    g = s.add_mutually_exclusive_group()
+    g.add_argument("--json", action="store_true", help="print JSON")
+    g.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    s.set_defaults(func=cmd_sensitivity)
     return p
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mtmcal_bayes import LinearModel, MtmcalError, ParameterSpace
+from mtmcal_bayes import LinearModel, ParameterSpace
 from mtmcal_bayes.campaign import parse_campaign
 
 from .conftest import DATA
@@ -77,8 +77,9 @@ def test_parameter_space_layout(thesis):
     assert "xT[RB2]" in space.names and "zW[C]" in space.names
 
 
-def test_pattern_without_linear_relation_is_a_clear_error():
+def test_patterns_beyond_the_thesis_get_rows():
+    """BZ has no thesis relation: its row comes from the htm-thesis Jacobian (tested in test_kinematic)."""
     text = (DATA / "minimal_one_repeat.toml").read_text().replace('pattern = "BY"', 'pattern = "BZ"')
-    c = parse_campaign(text, "bz.toml")
-    with pytest.raises(MtmcalError, match="BX, BY, CR and CA only"):
-        LinearModel(c)
+    model = LinearModel(parse_campaign(text, "bz.toml"))
+    row = model.observations.labels.index("ez_BZ@RB1/B")
+    assert model.design[row, model.space.index("dz_BT")] == pytest.approx(1.0, abs=1e-6)

@@ -14,23 +14,30 @@ run's tool setup (R_B, Z_T, X_T) and W-ball mount (Z_C, R_C)::
 
 Being linear, the model is a design matrix ``A`` of shape ``(m, p)``: the
 prediction of a batch ``theta`` of shape ``(n, p)`` is ``theta @ A.T``.
+
+The thesis gives no relation for the other patterns (BZ, BR, BT, BA, CT, CX,
+CY, CZ); their rows are the Jacobian of the ``htm-thesis`` kinematic model at
+zero, whose first-order response equals the relations above.  Like the thesis
+relations, the model leaves out the squareness of the linear axes (gamma_XY,
+alpha_YZ, beta_YZ; thesis Sec 2.5.3): their columns are zero.  The kinematic
+models do respond to them.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..errors import MtmcalError
 from ..observations import Observations
 from ..parameters import ParameterSpace, nuisance_name
 
 
-def linear_coefficients(pattern: str, component: str, setup, mount) -> dict[str, float]:
+def linear_coefficients(pattern: str, component: str, setup, mount) -> dict[str, float] | None:
     """Coefficients of one eccentricity component, ``{parameter name: d e / d parameter}``.
 
     Lengths in mm, angles in rad, so angular coefficients are lever arms in mm.
     ``setup`` and ``mount`` are :class:`~mtmcal_bayes.campaign.Setup` /
     :class:`~mtmcal_bayes.campaign.Mount`; nuisance names carry their ids.
+    ``None`` for a pattern the thesis gives no relation for.
     """
     xT, yT, zT, dRB = (nuisance_name(b, setup.id) for b in ("xT", "yT", "zT", "dRB"))
     R_B, Z_T, X_T = setup.R_B, setup.Z_T, setup.X_T
@@ -46,12 +53,11 @@ def linear_coefficients(pattern: str, component: str, setup, mount) -> dict[str,
         ("CA", "ex"): {"beta_CZ": R_C},
         ("CA", "ey"): {"alpha_CZ": -R_C},
     }
-    try:
-        return table[(pattern, component)]
-    except KeyError:
-        raise MtmcalError(
-            f"the linear model has thesis relations for BX, BY, CR and CA only, not {component} of {pattern}"
-        ) from None
+    return table.get((pattern, component))
+
+
+#: deviations the thesis relations leave out (columns of zeros in the linear model)
+LEFT_OUT = ("gamma_XY", "alpha_YZ", "beta_YZ")
 
 
 class LinearModel:
@@ -72,10 +78,21 @@ class LinearModel:
         self.observations = Observations.from_campaign(campaign)
         bb = campaign.ballbar
         A = np.zeros((len(self.observations), len(self.space)))
+        kinematic_rows = None
         for i, key in enumerate(self.observations.keys):
             coeffs = linear_coefficients(key.pattern, key.component, bb.setups[key.setup], bb.mounts[key.mount])
-            for name, c in coeffs.items():
-                A[i, self.space.index(name)] = c
+            if coeffs is None:
+                if kinematic_rows is None:
+                    from .kinematic import HTMModel, jacobian
+
+                    kinematic_rows = jacobian(HTMModel(campaign, "htm-thesis", self.space))
+                A[i] = kinematic_rows[i]
+            else:
+                for name, c in coeffs.items():
+                    A[i, self.space.index(name)] = c
+        for name in LEFT_OUT:
+            if name in self.space.names:
+                A[:, self.space.index(name)] = 0.0
         self.design = A  # (m, p), mm per internal parameter unit
 
     def predict(self, theta: np.ndarray) -> np.ndarray:

@@ -1,0 +1,72 @@
+"""Sensitivity of every pattern's eccentricities to every deviation and mounting offset.
+
+The numbers behind thesis Tables 2.4–2.6 (which show them only as plots): the
+Jacobian of a forward model at zero, in µm of eccentricity per ″ (angles) or per
+µm (lengths), for all 12 patterns with the geometry of a campaign (its first
+tool setup; a mount with R_C = 0 for B patterns and R_C > 0 for C patterns).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pandas as pd
+
+from .campaign import Campaign, Run
+from .errors import MtmcalError
+from .models import jacobian, make_model
+from .parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
+from .patterns import B_PATTERNS, C_PATTERNS, COMPONENTS
+
+
+def _all_patterns_campaign(campaign: Campaign) -> Campaign:
+    bb = campaign.ballbar
+    setup = next(iter(bb.setups))
+    b_mount = next((m.id for m in bb.mounts.values() if m.R_C == 0), None)
+    c_mount = next((m.id for m in bb.mounts.values() if m.R_C > 0), None)
+    if b_mount is None or c_mount is None:
+        raise MtmcalError("sensitivity needs a mount with R_C = 0 (B patterns) and one with R_C > 0 (C patterns)")
+    out = copy.deepcopy(campaign)
+    out.ballbar.runs = [Run(p, setup, b_mount if p in B_PATTERNS else c_mount,
+                            {c: np.zeros(1) for c in COMPONENTS[p]}) for p in B_PATTERNS + C_PATTERNS]
+    return out
+
+
+def sensitivity_table(campaign: Campaign, model: str = "htm-thesis") -> pd.DataFrame:
+    """DataFrame: rows ``"<pattern> <component>"``, columns deviations and nuisance bases.
+
+    Values in µm per ″ for angles and µm per µm for lengths; index names the
+    geometry used in ``attrs["geometry"]``.
+    """
+    c = _all_patterns_campaign(campaign)
+    fm = make_model(model, c)
+    J = jacobian(fm) * fm.space.display_scale() * 1e3  # µm per display unit
+    cols = list(DEVIATIONS) + list(SETUP_NUISANCE) + list(MOUNT_NUISANCE)
+    rows = {}
+    for i, key in enumerate(fm.observations.keys):
+        row = dict.fromkeys(cols, 0.0)
+        for j, p in enumerate(fm.space.parameters):
+            if p.owner in (None, key.setup, key.mount):
+                row[p.base] = J[i, j]
+        rows[f"{key.pattern} {key.component}"] = row
+    df = pd.DataFrame.from_dict(rows, orient="index")[cols]
+    df[np.abs(df) < 5e-7] = 0.0
+    s = c.ballbar.setups[c.ballbar.runs[0].setup]
+    cm = c.ballbar.mounts[c.ballbar.runs[-1].mount]
+    df.attrs["geometry"] = (f"R_B = {s.R_B:g} mm, Z_T = {s.Z_T:g} mm, X_T = {s.X_T:g} mm, "
+                            f"Z_C = {cm.Z_C:g} mm, R_C = {cm.R_C:g} mm, L_B = {c.ballbar.length:g} mm, "
+                            f"CR geometry {c.ballbar.cr_geometry}")
+    df.attrs["model"] = model
+    return df
+
+
+def to_markdown(df: pd.DataFrame, digits: int = 3) -> str:
+    """A Markdown table (blank for zero) of a sensitivity table."""
+    head = "| pattern | " + " | ".join(df.columns) + " |"
+    sep = "|---|" + "---:|" * len(df.columns)
+    lines = [head, sep]
+    for idx, row in df.iterrows():
+        cells = ["" if v == 0 else f"{v:.{digits}f}" for v in row]
+        lines.append(f"| {idx} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)

@@ -1,0 +1,101 @@
+"""Synthetic ball-bar data: predicted eccentricities for a known truth, with realistic scatter.
+
+A truth (``[truth]`` of a campaign, or a TRUTH.toml with the same tables at top
+level) gives the parameter vector; a forward model predicts every component of
+every run.  With noise, each component gets, like a real measurement, an
+instrument error shared by the run's repeats (sd = the ball bar's accuracy)
+and a repeat scatter per repeat, rounded to the instrument resolution.  This is
+the data-generating process the likelihood assumes (SPEC §5).
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+
+import numpy as np
+
+from . import units
+from .campaign import Campaign, Truth, TomlReader, parse_truth
+from .errors import InputError
+from .models import make_model
+from .observations import Observations, with_observations
+from .parameters import ParameterSpace, nuisance_name
+from .textfiles import read_text
+
+#: default repeat scatter of one eccentricity component (thesis Table 4.4: 0.05–0.54 µm, typically 0.25)
+REPEAT_SD_UM = 0.25
+#: resolution of the ball-bar readings (thesis Table 4.1)
+RESOLUTION_UM = 0.1
+
+
+def load_truth(path, campaign: Campaign) -> Truth:
+    """Read a TRUTH.toml: ``[deviations]``, ``[setups.<id>]``, ``[mounts.<id>]`` at top level."""
+    text = read_text(path, "truth file")
+    r = TomlReader(str(path))
+    if not text.strip():
+        r.fail(None, "empty file (expected [deviations], [setups.<id>], [mounts.<id>] tables)")
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(str(path), None, f"malformed TOML: {exc}") from None
+    return parse_truth(r, doc, "", campaign.ballbar)
+
+
+def truth_vector(space: ParameterSpace, truth: Truth) -> np.ndarray:
+    """Parameter vector ``(p,)`` (internal units) of a truth; missing values are zero."""
+    values = dict(truth.deviations)
+    for group in (truth.setups, truth.mounts):
+        for owner, kv in group.items():
+            values.update({nuisance_name(k, owner): v for k, v in kv.items()})
+    missing = [k for k in values if k not in space.names]
+    if missing:
+        raise InputError("<truth>", missing[0], "not a parameter of this campaign")
+    return space.vector(values)
+
+
+def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis") -> tuple[Observations, np.ndarray]:
+    """Noise-free eccentricities ``(m,)`` (mm) of every observed component under ``model``."""
+    fm = make_model(model, campaign)
+    return fm.observations, fm.predict(truth_vector(fm.space, truth))
+
+
+def noisy_repeats(mean: np.ndarray, n_repeats: np.ndarray, accuracy: float, rng: np.random.Generator,
+                  repeat_sd: float = REPEAT_SD_UM * 1e-3, resolution: float = RESOLUTION_UM * 1e-3) -> list[np.ndarray]:
+    """Repeats around ``mean`` (m,), mm: shared instrument error N(0, accuracy) + N(0, repeat_sd) each, rounded."""
+    out = []
+    for mu, r in zip(mean, n_repeats):
+        vals = mu + rng.normal(0.0, accuracy) + rng.normal(0.0, repeat_sd, size=int(r))
+        out.append(np.round(vals / resolution) * resolution)
+    return out
+
+
+def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesis", noise: bool = False,
+                       seed: int | None = None, repeats: int | None = None) -> Campaign:
+    """A copy of ``campaign`` whose runs carry simulated data and whose ``[truth]`` is ``truth``.
+
+    Noise-free: one repeat per component equal to the prediction.  With
+    ``noise``: as many repeats as the original run (or ``repeats``), scattered
+    as described in the module docstring.  Probe data and published results
+    are dropped (they belong to the real measurement).
+    """
+    obs, pred = predict_truth(campaign, truth, model)
+    if noise:
+        rng = np.random.default_rng(seed)
+        n = np.full(len(obs), repeats) if repeats else obs.n
+        values = noisy_repeats(pred, n, campaign.ballbar.accuracy, rng)
+    else:
+        values = [np.array([v]) for v in pred]
+    out = with_observations(campaign, np.zeros(len(obs)))
+    for key, v in zip(obs.keys, values):
+        out.ballbar.runs[key.run].repeats[key.component] = v
+        out.ballbar.runs[key.run].trace_csv = None
+    out.probe = None
+    out.truth = copy.deepcopy(truth)
+    return out
+
+
+def eccentricity_records(obs: Observations, values: np.ndarray) -> list[dict]:
+    """JSON records ``{"pattern", "setup", "mount", "component", "value_um"}`` of ``values`` (m,), mm."""
+    return [{"pattern": k.pattern, "setup": k.setup, "mount": k.mount, "component": k.component,
+             "value_um": units.from_internal(v, "um")} for k, v in zip(obs.keys, values)]
