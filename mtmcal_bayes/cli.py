@@ -135,6 +135,97 @@ def cmd_sensitivity(args) -> int:
     return 0
 
 
+def _progress_printer(label: str):
+    import time
+
+    t0 = time.perf_counter()
+
+    def show(step, max_steps, tau_max):
+        print(f"sampling [{label}]: step {step} (budget {max_steps}), τ_max ≈ {tau_max:.0f} steps, "
+              f"{time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
+
+    return show
+
+
+def _check_writable(path, what: str) -> None:
+    from pathlib import Path
+
+    parent = Path(path).resolve().parent
+    if not parent.is_dir():
+        raise MtmcalError(f"{path}: cannot write the {what}: directory {parent} does not exist")
+
+
+def cmd_sample(args) -> int:
+    from .campaign import load_campaign
+    from .inference.run import posterior_report, thesis_assumption_effect, write_netcdf_atomic
+    from .inference.sampling import SamplerSettings
+
+    campaign = load_campaign(args.campaign)
+    for path, what in ((args.output, "posterior"), (args.checkpoint, "checkpoint")):
+        if path:
+            _check_writable(path, what)
+    if args.closed_form:
+        return _closed_form(campaign, args)
+    settings = SamplerSettings(seed=args.seed, max_steps=args.max_steps)
+    progress = None if args.quiet else _progress_printer(args.model)
+    rep = posterior_report(campaign, args.model, args.fix_dx_BT, settings, args.checkpoint, progress)
+    if args.output:
+        write_netcdf_atomic(rep.idata, args.output)
+    for w in rep.warnings:
+        print(f"WARNING: {w}", file=sys.stderr)
+    if args.json:
+        cols = ["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit"]
+        print_json({
+            "model": args.model, "campaign": campaign.source, "fix_dx_BT": args.fix_dx_BT,
+            "summary": {n: {c: (row[c] if c == "unit" else float(row[c])) for c in cols}
+                        for n, row in rep.summary.iterrows()},
+            "comparison": {n: {k: (None if v is None or (isinstance(v, float) and math.isnan(v)) else v)
+                               for k, v in row.items()} for n, row in rep.comparison.iterrows()},
+            "diagnostics": rep.diagnostics(),
+            "output": args.output,
+        })
+        return 0
+    from .tables import format_posterior
+
+    print(format_posterior(rep, args.model))
+    if not args.fix_dx_BT:
+        print("\nThe thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = 0.3 µm "
+              "(run with --fix-dx-BT to sample it):")
+        print(thesis_assumption_effect(campaign, args.model).round(2).to_string())
+    if args.output:
+        print(f"\nposterior written to {args.output} (ArviZ InferenceData, NetCDF)")
+    return 0
+
+
+def _closed_form(campaign, args) -> int:
+    from . import units
+    from .inference.analytic import gaussian_posterior
+    from .inference.posterior import Posterior
+    from .parameters import IDENTIFIABLE, QUANTITIES
+
+    if args.model != "linear":
+        raise MtmcalError("--closed-form is exact for the linear model only (use --model linear)")
+    sigma = args.sigma_model_um * 1e-3
+    post = Posterior(campaign, "linear", fix_dx_BT=args.fix_dx_BT, sigma_model=sigma)
+    g = gaussian_posterior(post, sigma_model=sigma)
+    out = {}
+    for name in IDENTIFIABLE:
+        w = {"dx_CZ": 1.0, "dx_BT": -1.0} if name == "dx_CZ_minus_dx_BT" else {name: 1.0}
+        w = {k: v for k, v in w.items() if k in g.names}
+        m, sd = g.linear_combination(w)
+        unit = QUANTITIES[name].unit
+        m, sd = units.from_internal(m, unit), units.from_internal(sd, unit)
+        out[name] = {"mean": m, "sd": sd, "hdi_low": m - 1.959964 * sd, "hdi_high": m + 1.959964 * sd, "unit": unit}
+    if args.json:
+        print_json({"model": "linear", "closed_form": True, "sigma_model_um": args.sigma_model_um, "summary": out})
+    else:
+        print(f"Closed-form Gaussian posterior, linear model, sigma_model fixed at {args.sigma_model_um:g} µm")
+        for n, r in out.items():
+            print(f"  {n:18s} {r['mean']:9.2f} ± {r['sd']:6.2f} {units.SYMBOL[r['unit']]}   "
+                  f"95 %: [{r['hdi_low']:.2f}, {r['hdi_high']:.2f}]")
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
@@ -171,6 +262,21 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--json", action="store_true", help="print JSON")
     g.add_argument("--markdown", action="store_true", help="print a Markdown table")
     s.set_defaults(func=cmd_sensitivity)
+
+    s = sub.add_parser("sample", help="posterior of the deviations by MCMC (emcee ensembles), with diagnostics")
+    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign TOML (default: the built-in thesis campaign)")
+    s.add_argument("--model", choices=MODEL_NAMES, default="linear", help="forward model (default linear)")
+    s.add_argument("--seed", type=int, default=None, help="random seed: the same seed gives the same draws")
+    s.add_argument("-o", "--output", metavar="posterior.nc", help="write the ArviZ InferenceData (NetCDF)")
+    s.add_argument("--checkpoint", metavar="FILE", help="HDF5 checkpoint: written as it goes, resumed if it exists")
+    s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
+    s.add_argument("--max-steps", type=int, default=20_000, help="step budget per ensemble (default 20000)")
+    s.add_argument("--closed-form", action="store_true",
+                   help="instant closed-form Gaussian posterior (linear model, fixed sigma_model)")
+    s.add_argument("--sigma-model-um", type=float, default=0.0, help="sigma_model for --closed-form (default 0)")
+    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    s.add_argument("--json", action="store_true", help="print JSON")
+    s.set_defaults(func=cmd_sample)
     return p
 
 

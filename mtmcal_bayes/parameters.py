@@ -124,10 +124,14 @@ class ParameterSpace:
     ----------
     setups, mounts:
         Ids of the tool setups and W-ball mounts, in campaign order.
+    deviations:
+        Names of the deviations to include (default all 13, in Table 2.1 order);
+        forward models hold the others at zero.
     """
 
-    def __init__(self, setups, mounts):
-        params = [Parameter(q.name, q.name, "deviation", None, q.kind) for q in DEVIATIONS.values()]
+    def __init__(self, setups, mounts, deviations=None):
+        names = list(DEVIATIONS) if deviations is None else [d for d in DEVIATIONS if d in set(deviations)]
+        params = [Parameter(n, n, "deviation", None, DEVIATIONS[n].kind) for n in names]
         for s in setups:
             params += [Parameter(nuisance_name(q.name, s), q.name, "setup", s, q.kind) for q in SETUP_NUISANCE.values()]
         for m in mounts:
@@ -136,8 +140,8 @@ class ParameterSpace:
         self._index = {p.name: i for i, p in enumerate(self.parameters)}
 
     @classmethod
-    def for_campaign(cls, campaign) -> "ParameterSpace":
-        return cls(list(campaign.ballbar.setups), list(campaign.ballbar.mounts))
+    def for_campaign(cls, campaign, deviations=None) -> "ParameterSpace":
+        return cls(list(campaign.ballbar.setups), list(campaign.ballbar.mounts), deviations)
 
     def __len__(self) -> int:
         return len(self.parameters)

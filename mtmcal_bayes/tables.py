@@ -58,3 +58,33 @@ def format_identification(result: IdentificationResult) -> str:
     if result.assumptions:
         out += ["", "Assumptions:"] + [f"  - {a}" for a in result.assumptions]
     return "\n".join(out)
+
+
+def format_posterior(rep, model: str) -> str:
+    """Human-readable posterior summary, comparison with the deterministic results, diagnostics."""
+    from .parameters import IDENTIFIABLE
+
+    s = rep.summary
+    lines = [f"Posterior, model {model} ({rep.result.chains.shape[0]} ensembles × {rep.result.chains.shape[2]} walkers, "
+             f"{rep.result.n_steps} steps, {rep.result.wall_time:.0f} s); 95 % HDI"]
+    hdr = f"{'quantity':18s} {'unit':>4s} {'mean':>9s} {'sd':>7s} {'95 % HDI':>20s} {'R-hat':>6s} {'ESS':>7s}  ball bar  probe(thesis)"
+    lines.append(hdr)
+    c = rep.comparison
+    for name, r in s.iterrows():
+        line = (f"{name:18s} {units.SYMBOL[r['unit']]:>4s} {r['mean']:9.2f} {r['sd']:7.2f} "
+                f"[{r['hdi_low']:8.2f}, {r['hdi_high']:8.2f}] {r['r_hat']:6.3f} {r['ess_bulk']:7.0f}")
+        if name in c.index:
+            row = c.loc[name]
+            bb = row["ballbar"]
+            line += f"  {bb:8.2f}{'' if row['ballbar_in_hdi'] else '*'}" if bb is not None and bb == bb else "         —"
+            pr = row["probe_reported"]
+            line += f"  {pr:8.2f}{'' if row['probe_reported_in_hdi'] else '*'}" if pr is not None and pr == pr else "        —"
+        lines.append(line)
+    lines.append("* = outside the 95 % HDI")
+    if rep.not_identified:
+        lines += ["", "Not identified by the data:"] + [f"  - {m}" for m in rep.not_identified]
+    d = rep.diagnostics()
+    lines += ["", f"Diagnostics: converged {d['converged']}, τ_max {d['tau_max_steps']:.0f} steps, burn-in "
+              f"{d['burn_in']}, min bulk ESS {d['min_ess_bulk']:.0f} ({d['ess_bulk_per_second']:.0f}/s), "
+              f"max R-hat {d['max_r_hat']:.3f}"]
+    return "\n".join(lines)

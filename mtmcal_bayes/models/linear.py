@@ -77,6 +77,7 @@ class LinearModel:
         self.space = space or ParameterSpace.for_campaign(campaign)
         self.observations = Observations.from_campaign(campaign)
         bb = campaign.ballbar
+        self._names = set(self.space.names)
         A = np.zeros((len(self.observations), len(self.space)))
         kinematic_rows = None
         for i, key in enumerate(self.observations.keys):
@@ -89,7 +90,8 @@ class LinearModel:
                 A[i] = kinematic_rows[i]
             else:
                 for name, c in coeffs.items():
-                    A[i, self.space.index(name)] = c
+                    if name in self._names:  # parameters outside the space are held at zero
+                        A[i, self.space.index(name)] = c
         for name in LEFT_OUT:
             if name in self.space.names:
                 A[:, self.space.index(name)] = 0.0

@@ -13,6 +13,7 @@ CR with the Table 2.3 geometry (T ball at radius R_C − L_B < 0), where ψ = θ
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,9 +109,15 @@ class EccentricityFit:
         return self.coef[..., 1 + self.components.index(name)]
 
 
+@functools.lru_cache(maxsize=256)
+def _pinv(pattern: str, psi_bytes: bytes) -> tuple[np.ndarray, np.ndarray]:
+    D = polar_basis(pattern, np.frombuffer(psi_bytes))
+    return D, np.linalg.pinv(D)
+
+
 def fit_eccentricity(pattern: str, psi: np.ndarray, dL: np.ndarray) -> EccentricityFit:
     """Fit ``dL`` of shape ``(..., k)`` over polar angles ``psi`` (k,) in one linear solve."""
-    D = polar_basis(pattern, psi)
-    coef = dL @ np.linalg.pinv(D).T
+    D, pinv = _pinv(pattern, np.ascontiguousarray(psi, dtype=float).tobytes())
+    coef = dL @ pinv.T
     resid = dL - coef @ D.T
     return EccentricityFit(coef, COMPONENTS[pattern], np.sqrt(np.mean(resid**2, axis=-1)))

@@ -1,0 +1,58 @@
+"""Likelihood of the observed eccentricities (SPEC §5).
+
+For each eccentricity component the mean of its n repeats is Normal around the
+prediction with variance ``s²/n + u_inst² + sigma_model²``: ``s`` the sample
+standard deviation of the repeats (their scatter), ``u_inst`` the instrument
+accuracy (an error shared by the repeats of a run, so it does not average
+out), ``sigma_model`` what the model leaves out (dynamics, thermal drift, pitch
+error).  A component measured once has no ``s`` of its own; it takes the pooled
+repeat sd of the campaign's other components, or 0.25 µm (thesis Table 4.4)
+when no component was repeated.
+
+The class is small on purpose: a different likelihood (Student-t, correlated
+components) only has to provide ``loglike(pred, sigma_model)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import stats
+
+from ..observations import Observations
+from ..simulate import REPEAT_SD_UM
+
+
+class GaussianMeanLikelihood:
+    """Normal likelihood of the repeat means.
+
+    Parameters
+    ----------
+    observations : Observations (m components)
+    accuracy : instrument accuracy u_inst, mm
+    """
+
+    def __init__(self, observations: Observations, accuracy: float):
+        self.observations = observations
+        self.y = observations.mean  # (m,) mm
+        sd = observations.sd.copy()
+        repeated = observations.n > 1
+        if repeated.any():
+            pooled = np.sqrt(np.sum((observations.n[repeated] - 1) * sd[repeated] ** 2)
+                             / np.sum(observations.n[repeated] - 1))
+        else:
+            pooled = REPEAT_SD_UM * 1e-3
+        self.repeat_sd = np.where(repeated, sd, pooled)  # (m,) mm
+        self.base_var = self.repeat_sd**2 / observations.n + accuracy**2  # (m,) mm²
+
+    def variance(self, sigma_model: np.ndarray | float) -> np.ndarray:
+        """Variance of each mean, ``(n, m)`` for ``sigma_model`` of shape ``(n,)``."""
+        return self.base_var + np.square(np.atleast_1d(sigma_model))[:, None]
+
+    def loglike(self, pred: np.ndarray, sigma_model: np.ndarray | float) -> np.ndarray:
+        """Log-likelihood ``(n,)`` of predictions ``(n, m)`` (mm)."""
+        var = self.variance(sigma_model)
+        return stats.norm.logpdf(self.y, loc=pred, scale=np.sqrt(var)).sum(axis=1)
+
+    def replicate(self, pred: np.ndarray, sigma_model: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Posterior-predictive replicate of the means, ``(n, m)`` mm."""
+        return pred + rng.normal(size=pred.shape) * np.sqrt(self.variance(sigma_model))

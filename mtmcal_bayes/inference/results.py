@@ -1,0 +1,149 @@
+"""Posterior results: ArviZ InferenceData, the per-quantity summary and the comparison (SPEC §5).
+
+Values in the InferenceData and the tables are in display units (″ and µm).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+
+from .. import units
+from ..identify import IdentificationResult
+from ..parameters import IDENTIFIABLE, QUANTITIES, quantity_unit
+from .sampling import SamplingResult
+
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore", FutureWarning)
+    import arviz as az
+
+HDI_PROB = 0.95
+RHAT_MAX = 1.01
+ESS_MIN = 400
+#: posterior sd ≥ this × prior sd: the quantity is not identified by the data
+PRIOR_DOMINATED = 0.9
+
+
+def _unit_of(name: str) -> str:
+    return "um" if name == "sigma_model" else quantity_unit(name.split("[")[0])
+
+
+def _display(name: str, values: np.ndarray) -> np.ndarray:
+    return units.from_internal(values, _unit_of(name))
+
+
+def _with_derived(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
+    """Dict of display-unit draws (…,) per name, plus dx_CZ_minus_dx_BT."""
+    out = {n: _display(n, draws[..., i]) for i, n in enumerate(names)}
+    dx_bt = out.get("dx_BT", 0.0)
+    out["dx_CZ_minus_dx_BT"] = out["dx_CZ"] - dx_bt
+    return out
+
+
+def to_inference_data(result: SamplingResult, n_prior: int = 4000, n_predictive: int = 1000,
+                      seed: int | None = None) -> "az.InferenceData":
+    """InferenceData with posterior, prior, posterior predictive, observed data and sample stats.
+
+    Posterior draws: chain = ensemble, draw = the walkers' sequences one after the
+    other, so that ArviZ's autocorrelation-based ESS sees each walker's own
+    autocorrelation (interleaving walkers step by step would hide it).
+    """
+    post = result.posterior
+    K, S, W, q = result.chains.shape
+    flat = np.swapaxes(result.chains, 1, 2).reshape(K, W * S, q)
+    lp = np.swapaxes(result.log_prob, 1, 2).reshape(K, W * S)
+    posterior = _with_derived(post.names, flat)
+    rng = np.random.default_rng(seed)
+    prior = _with_derived(post.names, post.priors.rvs(n_prior, rng)[None])
+
+    # posterior predictive of the repeat means from an even subset of draws per ensemble
+    idx = np.linspace(0, S * W - 1, min(n_predictive, S * W)).astype(int)
+    sub = flat[:, idx, :].reshape(-1, q)
+    pred = post.forward.predict(sub[:, : post.p])
+    rep = post.likelihood.replicate(pred, post.sigma(sub), rng).reshape(K, len(idx), -1) * 1e3
+    obs = post.forward.observations
+    idata = az.from_dict(
+        posterior=posterior,
+        prior=prior,
+        posterior_predictive={"eccentricity": rep},
+        observed_data={"eccentricity": obs.mean * 1e3},
+        sample_stats={"lp": lp},
+        coords={"observation": obs.labels},
+        dims={"eccentricity": ["observation"]},
+    )
+    idata.posterior.attrs.update({
+        "model": post.model_name, "campaign": post.campaign.source, "fix_dx_BT": int(post.fix_dx_BT),
+        "n_ensembles": K, "n_walkers": W, "n_steps": result.n_steps, "burn_in": result.burn,
+        "tau_max_steps": float(result.tau.max()), "converged": int(result.converged),
+        "seed": -1 if result.settings.seed is None else int(result.settings.seed),
+        "units": "arc seconds for angles, micrometres for lengths",
+    })
+    idata.observed_data.attrs["unit"] = "um (mean of the repeats)"
+    return idata
+
+
+def prior_sd(result_or_post, names) -> dict[str, float]:
+    """Prior sd (display units) of each name, including the derived dx_CZ_minus_dx_BT."""
+    post = getattr(result_or_post, "posterior", result_or_post)
+    sd = {p.name: units.from_internal(p.sd, "um" if p.name == "sigma_model" else p.unit) for p in post.priors.priors}
+    sd["dx_CZ_minus_dx_BT"] = float(np.hypot(sd["dx_CZ"], sd.get("dx_BT", 0.0)))
+    return {n: sd[n] for n in names if n in sd}
+
+
+def summarize(idata, post, names=None) -> pd.DataFrame:
+    """One row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd, identified."""
+    names = list(names or (list(IDENTIFIABLE) + ["dx_CZ", "dx_BT", "dz_BT", "sigma_model"]))
+    names = [n for n in names if n in idata.posterior]
+    s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none")
+    s = s.rename(columns={"hdi_2.5%": "hdi_low", "hdi_97.5%": "hdi_high"})
+    s["median"] = [float(idata.posterior[n].median()) for n in s.index]
+    s["unit"] = [_unit_of(n) if n != "dx_CZ_minus_dx_BT" else "um" for n in s.index]
+    psd = prior_sd(post, s.index)
+    s["prior_sd"] = [psd.get(n, np.nan) for n in s.index]
+    s["identified"] = ~(s["sd"] >= PRIOR_DOMINATED * s["prior_sd"])
+    return s[["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
+              "prior_sd", "identified"]]
+
+
+def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:
+    """Loud warnings for R-hat > 1.01 or bulk ESS < 400 (SPEC §5)."""
+    out = []
+    for name, row in summary.iterrows():
+        if not row["r_hat"] <= RHAT_MAX:
+            out.append(f"{name}: R-hat {row['r_hat']:.3f} > {RHAT_MAX} — the ensembles disagree; do not trust it")
+        if not row["ess_bulk"] >= ESS_MIN:
+            out.append(f"{name}: bulk ESS {row['ess_bulk']:.0f} < {ESS_MIN} — too few effective draws")
+    return out
+
+
+def not_identified(summary: pd.DataFrame) -> list[str]:
+    return [f"{n}: posterior sd {r['sd']:.3g} ≥ {PRIOR_DOMINATED} × prior sd {r['prior_sd']:.3g} "
+            f"{units.SYMBOL[r['unit']]} — not identified by the data (the prior dominates)"
+            for n, r in summary.iterrows() if n in IDENTIFIABLE and not r["identified"]]
+
+
+def comparison(summary: pd.DataFrame, ident: IdentificationResult) -> pd.DataFrame:
+    """Each identifiable quantity's posterior against the ball-bar and touch-probe values.
+
+    For every reference value: whether it lies in the 95 % HDI, and its distance
+    from the posterior mean in posterior sd.
+    """
+    rows = []
+    for name in IDENTIFIABLE:
+        if name not in summary.index:
+            continue
+        r = summary.loc[name]
+        refs = {"ballbar": ident.ballbar.get(name).display if name in ident.ballbar else None}
+        probe = ident.probe.get(name)
+        refs["probe_reported"] = probe.reported_display if probe is not None and probe.reported else None
+        refs["probe_recomputed"] = probe.display if probe is not None else None
+        row = {"quantity": name, "unit": QUANTITIES[name].unit, "mean": r["mean"], "sd": r["sd"],
+               "hdi_low": r["hdi_low"], "hdi_high": r["hdi_high"]}
+        for key, v in refs.items():
+            row[key] = v
+            row[f"{key}_in_hdi"] = None if v is None else bool(r["hdi_low"] <= v <= r["hdi_high"])
+            row[f"{key}_z"] = None if v is None else (v - r["mean"]) / r["sd"]
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("quantity")

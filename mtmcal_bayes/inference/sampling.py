@@ -1,0 +1,179 @@
+"""emcee ensembles until converged: several independent ensembles, adaptive length, checkpoints.
+
+* ``n_ensembles`` (≥ 4) independent :class:`emcee.EnsembleSampler` runs with
+  ``vectorize=True`` — the log posterior is evaluated for half an ensemble in
+  one call.  The walkers of one ensemble are not independent chains, the
+  ensembles are: R-hat is computed across ensembles.
+* Moves: differential evolution (80 %) with snooker updates (20 %), which in
+  these 20–30 dimensions mixes about three times faster than the default
+  stretch move (τ ≈ 90 against ≈ 250 steps on the thesis campaign).
+* Dispersed starts: each ensemble starts from its own draws of the Gaussian
+  (linearised) posterior widened threefold, sigma_model from its prior.
+* Run length: the ensembles advance together in blocks of ``check_every``
+  steps.  After each block the first quarter is discarded as burn-in and the
+  integrated autocorrelation time τ of every parameter is estimated with
+  :func:`emcee.autocorr.integrated_time` (averaged over walkers).  The run stops
+  when the kept length is at least ``min_tau_multiple`` × τ for every
+  parameter in every ensemble and τ changed by less than ``tau_tolerance``
+  since the previous block — or at ``max_steps``, with a warning.
+* Every decision depends only on the stored chain, and emcee stores its random
+  state with every step: a run resumed from its checkpoint continues exactly
+  as the uninterrupted run would have.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import emcee
+import numpy as np
+
+from ..errors import MtmcalError
+from .analytic import gaussian_posterior
+from .posterior import Posterior
+
+
+@dataclass
+class SamplerSettings:
+    n_ensembles: int = 4
+    n_walkers: int | None = None  # default: max(48, 2·q rounded up to even)
+    check_every: int = 500
+    max_steps: int = 20_000
+    min_tau_multiple: float = 50.0
+    tau_tolerance: float = 0.05
+    start_widening: float = 3.0
+    seed: int | None = None
+
+    def moves(self):
+        return [(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)]
+
+    def walkers(self, q: int) -> int:
+        w = self.n_walkers or max(48, 2 * q)
+        return w + (w % 2)
+
+
+@dataclass
+class SamplingResult:
+    """Chains of every ensemble after burn-in, in internal units.
+
+    ``chains``: (K, steps, walkers, q); ``log_prob``: (K, steps, walkers);
+    ``tau``: (K, q) in steps; ``n_steps``: total steps per ensemble; ``burn``.
+    """
+
+    posterior: Posterior
+    chains: np.ndarray
+    log_prob: np.ndarray
+    tau: np.ndarray
+    n_steps: int
+    burn: int
+    converged: bool
+    acceptance: np.ndarray  # (K,)
+    wall_time: float
+    settings: SamplerSettings
+    messages: list[str] = field(default_factory=list)
+
+    @property
+    def n_draws(self) -> int:
+        """Kept draws over all ensembles (steps × walkers × ensembles)."""
+        return int(np.prod(self.chains.shape[:3]))
+
+
+def _tau(chain: np.ndarray) -> np.ndarray:
+    """τ (q,) of a chain (steps, walkers, q), first quarter discarded."""
+    n = chain.shape[0]
+    return emcee.autocorr.integrated_time(chain[n // 4:], c=5, tol=0, quiet=True)
+
+
+def _starts(post: Posterior, n: int, rng: np.random.Generator, widen: float) -> np.ndarray:
+    """``n`` dispersed starting points in scaled coordinates ``(n, q)``, all of finite posterior."""
+    sigma0 = post.fixed_sigma if post.fixed_sigma is not None else float(post.priors.priors[-1].frozen().median())
+    g = gaussian_posterior(post, sigma_model=sigma0, allow_non_normal=True)
+    out = np.empty((0, len(post)))
+    for _ in range(100):
+        theta = g.mean + widen * (rng.standard_normal((n, post.p)) @ np.linalg.cholesky(g.cov).T)
+        if post.fixed_sigma is None:
+            theta = np.column_stack([theta, post.priors.priors[-1].frozen().rvs(size=n, random_state=rng)])
+        lp = post.log_prob_theta(theta)
+        out = np.vstack([out, post.to_z(theta[np.isfinite(lp)])])
+        if len(out) >= n:
+            return out[:n]
+    raise MtmcalError("could not find starting points of finite posterior density (check [priors])")
+
+
+def _backend(checkpoint: Path | None, k: int, post: Posterior, walkers: int):
+    if checkpoint is None:
+        return None
+    backend = emcee.backends.HDFBackend(str(checkpoint), name=f"ensemble_{k}")
+    if backend.initialized and backend.shape != (walkers, len(post)):
+        raise MtmcalError(f"{checkpoint}: checkpoint holds another run ({backend.shape[1]} parameters, "
+                          f"{backend.shape[0]} walkers; this run has {len(post)}, {walkers}); remove it or "
+                          "use another file")
+    return backend
+
+
+def run_ensembles(post: Posterior, settings: SamplerSettings | None = None, checkpoint: str | Path | None = None,
+                  progress=None) -> SamplingResult:
+    """Sample ``post`` with independent emcee ensembles until converged (see module docstring).
+
+    ``progress(step, max_steps, tau_max)`` is called after every block.
+    ``checkpoint``: HDF5 file; an existing one with the same run is resumed.
+    """
+    s = settings or SamplerSettings()
+    if s.n_ensembles < 2:
+        raise MtmcalError("at least two independent ensembles are needed for R-hat (four by default)")
+    q, W = len(post), s.walkers(len(post))
+    ckpt = Path(checkpoint) if checkpoint else None
+    seeds = np.random.SeedSequence(s.seed).spawn(s.n_ensembles)
+    samplers, starts = [], []
+    for k in range(s.n_ensembles):
+        rng = np.random.default_rng(seeds[k])
+        backend = _backend(ckpt, k, post, W)
+        sampler = emcee.EnsembleSampler(W, q, post, vectorize=True, backend=backend, moves=s.moves())
+        fresh = sampler.iteration == 0
+        if fresh:
+            sampler.random_state = np.random.RandomState(rng.integers(2**32 - 1)).get_state()
+            starts.append(_starts(post, W, rng, s.start_widening))
+        else:
+            starts.append(None)
+        samplers.append(sampler)
+
+    t0 = time.perf_counter()
+    block = s.check_every
+    # a resumed run continues to the next block boundary of the furthest ensemble
+    target = max(block, -(-max(sm.iteration for sm in samplers) // block) * block)
+    prev_tau = None
+    while True:
+        for k, sm in enumerate(samplers):
+            todo = target - sm.iteration
+            if todo > 0:
+                sm.run_mcmc(starts[k] if sm.iteration == 0 else None, todo, progress=False)
+        chains = [sm.get_chain() for sm in samplers]
+        tau = np.array([_tau(c) for c in chains])
+        if prev_tau is None and target > block:  # resumed: τ of the previous block from the stored chain
+            prev_tau = np.array([_tau(c[: target - block]) for c in chains])
+        kept = target - target // 4
+        long_enough = bool(np.all(kept >= s.min_tau_multiple * tau))
+        stable = prev_tau is not None and bool(np.all(np.abs(tau - prev_tau) <= s.tau_tolerance * tau))
+        if progress:
+            progress(target, s.max_steps, float(tau.max()))
+        if (long_enough and stable) or target >= s.max_steps:
+            break
+        prev_tau = tau
+        target += block
+
+    burn = target // 4
+    messages = []
+    converged = long_enough and stable
+    if not converged:
+        messages.append(f"step budget of {s.max_steps} reached before convergence: kept {target - burn} steps, "
+                        f"largest τ = {tau.max():.0f} steps (want ≥ {s.min_tau_multiple:g} τ, τ stable)")
+    return SamplingResult(
+        posterior=post,
+        chains=np.stack([post.to_theta(sm.get_chain(discard=burn)) for sm in samplers]),
+        log_prob=np.stack([sm.get_log_prob(discard=burn) for sm in samplers]),
+        tau=tau, n_steps=target, burn=burn, converged=converged,
+        acceptance=np.array([np.mean(sm.acceptance_fraction) for sm in samplers]),
+        wall_time=time.perf_counter() - t0, settings=s, messages=messages,
+    )
