@@ -13,6 +13,7 @@ import pandas as pd
 from .. import units
 from ..identify import IdentificationResult
 from ..parameters import IDENTIFIABLE, QUANTITIES, quantity_unit
+from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity
 from .sampling import SamplingResult
 
 with warnings.catch_warnings():
@@ -22,8 +23,6 @@ with warnings.catch_warnings():
 HDI_PROB = 0.95
 RHAT_MAX = 1.01
 ESS_MIN = 400
-#: posterior sd ≥ this × prior sd: the quantity is not identified by the data
-PRIOR_DOMINATED = 0.9
 
 
 def _unit_of(name: str) -> str:
@@ -93,7 +92,13 @@ def prior_sd(result_or_post, names) -> dict[str, float]:
 
 
 def summarize(idata, post, names=None) -> pd.DataFrame:
-    """One row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd, identified."""
+    """One row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd, identified.
+
+    ``sd_ratio`` is posterior sd / prior sd; ``prior_growth`` how much the
+    posterior sd grows when the deviation priors widen tenfold
+    (:func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`); a quantity
+    whose growth exceeds 2 is not identified by the data.
+    """
     names = list(names or (list(IDENTIFIABLE) + ["dx_CZ", "dx_BT", "dz_BT", "sigma_model"]))
     names = [n for n in names if n in idata.posterior]
     s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none")
@@ -102,9 +107,13 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     s["unit"] = [_unit_of(n) if n != "dx_CZ_minus_dx_BT" else "um" for n in s.index]
     psd = prior_sd(post, s.index)
     s["prior_sd"] = [psd.get(n, np.nan) for n in s.index]
-    s["identified"] = ~(s["sd"] >= PRIOR_DOMINATED * s["prior_sd"])
+    s["sd_ratio"] = s["sd"] / s["prior_sd"]
+    sigma0 = float(np.median(idata.posterior["sigma_model"])) * 1e-3 if "sigma_model" in idata.posterior else 0.0
+    growth = prior_sensitivity(post, sigma0)
+    s["prior_growth"] = [growth.get(n, np.nan) for n in s.index]
+    s["identified"] = ~(s["prior_growth"] > NOT_IDENTIFIED_GROWTH)
     return s[["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
-              "prior_sd", "identified"]]
+              "prior_sd", "sd_ratio", "prior_growth", "identified"]]
 
 
 def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:
@@ -119,8 +128,9 @@ def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:
 
 
 def not_identified(summary: pd.DataFrame) -> list[str]:
-    return [f"{n}: posterior sd {r['sd']:.3g} ≥ {PRIOR_DOMINATED} × prior sd {r['prior_sd']:.3g} "
-            f"{units.SYMBOL[r['unit']]} — not identified by the data (the prior dominates)"
+    return [f"{n}: not identified by the data — its width follows the priors (widening the deviation priors "
+            f"{WIDEN:g}× widens it {r['prior_growth']:.1f}×; posterior sd {r['sd']:.3g} {units.SYMBOL[r['unit']]} "
+            f"= {r['sd_ratio']:.2f} × prior sd)"
             for n, r in summary.iterrows() if n in IDENTIFIABLE and not r["identified"]]
 
 
