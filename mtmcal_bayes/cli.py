@@ -189,9 +189,10 @@ def cmd_sample(args) -> int:
 
     print(format_posterior(rep, args.model))
     if not args.fix_dx_BT:
-        print("\nThe thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = 0.3 µm "
-              "(run with --fix-dx-BT to sample it):")
-        print(thesis_assumption_effect(campaign, args.model).round(2).to_string())
+        sigma_um = float(rep.summary.loc["sigma_model", "median"])
+        print(f"\nThe thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = {sigma_um:.2f} µm "
+              "(the posterior median; run with --fix-dx-BT to sample it):")
+        print(thesis_assumption_effect(campaign, args.model, sigma_um).round(2).to_string())
     if args.output:
         print(f"\nposterior written to {args.output} (ArviZ InferenceData, NetCDF)")
     return 0

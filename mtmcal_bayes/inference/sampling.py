@@ -154,22 +154,23 @@ def run_ensembles(post: Posterior, settings: SamplerSettings | None = None, chec
             todo = target - sm.iteration
             if todo > 0:
                 sm.run_mcmc(starts[k] if sm.iteration == 0 else None, todo, progress=False)
-        chains = [sm.get_chain() for sm in samplers]
-        tau = np.array([_tau(c) for c in chains])
+        chains = [sm.get_chain()[:, :, gate] for sm in samplers]  # τ of the gating parameters only
+        t = np.array([_tau(c) for c in chains])
         if prev_tau is None and target > block:  # resumed: τ of the previous block from the stored chain
             prev_tau = np.array([_tau(c[: target - block]) for c in chains])
         kept = target - target // 4
-        t, tp = tau[:, gate], (None if prev_tau is None else prev_tau[:, gate])
+        tp = prev_tau
         long_enough = bool(np.all(kept >= s.min_tau_multiple * t))
         stable = tp is not None and bool(np.all(np.abs(t - tp) <= s.tau_tolerance * t))
         if progress:
             progress(target, s.max_steps, float(t.max()))
         if (long_enough and stable) or target >= s.max_steps:
             break
-        prev_tau = tau
+        prev_tau = t
         target += block
 
     burn = target // 4
+    tau = np.array([_tau(sm.get_chain()) for sm in samplers])
     messages = []
     converged = long_enough and stable
     if not converged:
