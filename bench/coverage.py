@@ -15,9 +15,8 @@ import warnings
 import numpy as np
 
 from mtmcal_bayes import IDENTIFIABLE, load_campaign, units
-from mtmcal_bayes.campaign import Truth
 from mtmcal_bayes.inference import Posterior, SamplerSettings, run_ensembles, summarize, to_inference_data
-from mtmcal_bayes.simulate import synthetic_campaign
+from mtmcal_bayes.simulate import synthetic_campaign, truth_from_vector
 
 warnings.simplefilter("ignore", FutureWarning)
 
@@ -34,13 +33,7 @@ def main():
     covered = total = 0
     for k in range(args.campaigns):
         draw = post0.priors.rvs(1, rng)[0]
-        truth = Truth()
-        for p in post0.space.parameters:
-            v = draw[post0.names.index(p.name)]
-            if p.group == "deviation":
-                truth.deviations[p.name] = v
-            else:
-                getattr(truth, p.group + "s").setdefault(p.owner, {})[p.base] = v
+        truth = truth_from_vector(post0.space, draw)
         synth = synthetic_campaign(thesis, truth, "htm-thesis", noise=True, seed=int(rng.integers(1 << 31)))
         post = Posterior(synth, args.model)
         t0 = time.perf_counter()

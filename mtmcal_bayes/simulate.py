@@ -54,6 +54,17 @@ def truth_vector(space: ParameterSpace, truth: Truth) -> np.ndarray:
     return space.vector(values)
 
 
+def truth_from_vector(space: ParameterSpace, theta: np.ndarray) -> Truth:
+    """The :class:`Truth` of a parameter vector; ``theta`` may be longer than the space (extra columns ignored)."""
+    t = Truth()
+    for i, p in enumerate(space.parameters):
+        if p.group == "deviation":
+            t.deviations[p.name] = float(theta[i])
+        else:
+            getattr(t, p.group + "s").setdefault(p.owner, {})[p.base] = float(theta[i])
+    return t
+
+
 def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis") -> tuple[Observations, np.ndarray]:
     """Noise-free eccentricities ``(m,)`` (mm) of every observed component under ``model``."""
     fm = make_model(model, campaign)

@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import IDENTIFIABLE, load_campaign, units
-from mtmcal_bayes.campaign import Truth, parse_campaign
+from mtmcal_bayes.campaign import parse_campaign
 from mtmcal_bayes.datasets import read_text
 from mtmcal_bayes.inference import (Posterior, SamplerSettings, gaussian_posterior, run_ensembles, summarize,
                                     to_inference_data)
 from mtmcal_bayes.inference.results import not_identified
-from mtmcal_bayes.simulate import synthetic_campaign
+from mtmcal_bayes.simulate import synthetic_campaign, truth_from_vector
 
 
 def weights(name, names):
@@ -81,7 +81,7 @@ def test_closed_form_coverage_on_simulated_campaigns(thesis):
     covered = 0
     for k in range(10):
         draw = post0.priors.rvs(1, rng)[0]
-        truth = _truth_from(post0, draw)
+        truth = truth_from_vector(post0.space, draw)
         synth = synthetic_campaign(thesis, truth, "htm-thesis", noise=True, seed=int(rng.integers(1 << 31)))
         post = Posterior(synth, "linear", sigma_model=0.0)
         g = gaussian_posterior(post, sigma_model=0.0)
@@ -91,17 +91,6 @@ def test_closed_form_coverage_on_simulated_campaigns(thesis):
             true = sum(v * draw[post0.names.index(n)] for n, v in w.items())
             covered += abs(true - m) <= 1.959964 * sd
     assert covered >= 72, covered
-
-
-def _truth_from(post, draw):
-    t = Truth()
-    for p in post.space.parameters:
-        v = draw[post.names.index(p.name)]
-        if p.group == "deviation":
-            t.deviations[p.name] = v
-        else:
-            getattr(t, p.group + "s").setdefault(p.owner, {})[p.base] = v
-    return t
 
 
 def test_checkpoint_resume_gives_the_same_draws(tmp_path, thesis):
