@@ -82,6 +82,9 @@ def write_netcdf_atomic(idata, path) -> None:
     os.close(fd)
     try:
         idata.to_netcdf(tmp)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
