@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -13,6 +10,7 @@ import pandas as pd
 from .. import units
 from ..identify import identify
 from ..parameters import IDENTIFIABLE
+from ..textfiles import atomic_output
 from .analytic import gaussian_posterior
 from .posterior import Posterior
 from .results import comparison, diagnostics_warnings, not_identified, summarize, to_inference_data
@@ -77,15 +75,5 @@ def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: fl
 
 def write_netcdf_atomic(idata, path) -> None:
     """Save an InferenceData as NetCDF through a temporary file (nothing half-written)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".nc", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_output(path) as tmp:
         idata.to_netcdf(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
