@@ -18,10 +18,3 @@ COMPONENTS: dict[str, tuple[str, str]] = {
     **{p: ("ex", "ez") for p in B_PATTERNS},
     **{p: ("ex", "ey") for p in C_PATTERNS},
 }
-
-#: patterns used by the thesis identification (Eqs 4.10–4.18)
-THESIS_PATTERNS = ("BX", "BY", "CR", "CA")
-
-
-def is_b_pattern(pattern: str) -> bool:
-    return pattern in B_PATTERNS

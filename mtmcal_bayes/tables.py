@@ -8,12 +8,6 @@ from . import units
 from .identify import Identified, IdentificationResult
 
 
-def _fmt(v: float | None, unit: str) -> str:
-    if v is None:
-        return "—"
-    return f"{v:.2f}"
-
-
 def identification_table(values: dict[str, Identified]) -> pd.DataFrame:
     """One row per quantity: recomputed and published value (display units), difference, flag."""
     rows = []
@@ -25,7 +19,7 @@ def identification_table(values: dict[str, Identified]) -> pd.DataFrame:
         rows.append({
             "quantity": name,
             "unit": units.SYMBOL[ident.unit],
-            "recomputed": _fmt(ident.display, ident.unit),
+            "recomputed": "—" if ident.display is None else f"{ident.display:.2f}",
             "thesis": "—" if ident.reported is None else f"{ident.reported_display:.{ident.reported.decimals}f}",
             "difference": "—" if ident.difference is None else f"{ident.difference:+.3f}",
             "Eq": ident.equation,

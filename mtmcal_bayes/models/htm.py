@@ -89,10 +89,6 @@ def _apply(R: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v @ Rt  # batched matmul: far faster than einsum here
 
 
-def _zeros_like_draws(n: int) -> np.ndarray:
-    return np.zeros(n)
-
-
 def t_ball(p: dict[str, np.ndarray], geo: Geometry, cmd: Commands, piv: Pivots,
            dummy: bool = False) -> np.ndarray:
     """Actual T-ball (or dummy-sphere) centre, shape ``(n, k, 3)``, mm.
@@ -102,7 +98,7 @@ def t_ball(p: dict[str, np.ndarray], geo: Geometry, cmd: Commands, piv: Pivots,
     ``dummy=True`` gives the dummy sphere: true tool length, no ball offset.
     """
     n = len(p["dx_BT"])
-    zero = _zeros_like_draws(n)
+    zero = np.zeros(n)
     length = geo.R_B + p["dRB"]
     if dummy:
         t = np.stack([zero, zero, -length], axis=-1)
