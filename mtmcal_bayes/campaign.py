@@ -474,7 +474,7 @@ def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
     for name, spec in t.items():
         path = f"priors.{name}"
         if name not in known:
-            r.fail(path, f"unknown parameter (expected a deviation name, one of xT yT zT dRB xW yW zW, "
+            r.fail(path, "unknown parameter (expected a deviation name, one of xT yT zT dRB xW yW zW, "
                    "or sigma_model)")
         if not isinstance(spec, dict):
             r.fail(path, "expected an inline table such as {dist = \"normal\", sd_arcsec = 30}")

@@ -227,6 +227,26 @@ def _closed_form(campaign, args) -> int:
     return 0
 
 
+def cmd_report(args) -> int:
+    from .campaign import load_campaign
+    from .inference.sampling import SamplerSettings
+    from .report.build import build_report
+
+    campaign = load_campaign(args.campaign)
+    if args.max_steps < 500:
+        raise MtmcalError(f"--max-steps: {args.max_steps} is below one block of 500 steps")
+    settings = SamplerSettings(seed=args.seed, max_steps=args.max_steps)
+    progress = None if args.quiet else _progress_printer
+    say = None if args.quiet else (lambda text: print(f"report: {text}", file=sys.stderr, flush=True))
+    command = " ".join([PROG] + (sys.argv[1:] if args.argv is None else args.argv))
+    rep = build_report(campaign, args.output, args.model, settings, args.fix_dx_BT, args.compare_models,
+                       progress, say, command)
+    for w in rep.posterior.warnings:
+        print(f"WARNING: {w}", file=sys.stderr)
+    print(rep.console)
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
@@ -278,12 +298,26 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_sample)
+
+    s = sub.add_parser("report", help="sample the posterior and write an HTML report with figures, tables and NetCDF")
+    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign TOML (default: the built-in thesis campaign)")
+    s.add_argument("-o", "--output", metavar="DIR", default="report",
+                   help="report directory, created if needed (default ./report)")
+    s.add_argument("--model", choices=MODEL_NAMES, default="linear", help="forward model (default linear)")
+    s.add_argument("--compare-models", action="store_true",
+                   help="also sample under the other two models and compare (takes several minutes)")
+    s.add_argument("--seed", type=int, default=1, help="random seed (default 1: the same report every time)")
+    s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
+    s.add_argument("--max-steps", type=int, default=20_000, help="step budget per ensemble (default 20000)")
+    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    s.set_defaults(func=cmd_report)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.argv = argv
     try:
         return args.func(args)
     except MtmcalError as exc:

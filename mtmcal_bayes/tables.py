@@ -56,7 +56,6 @@ def format_identification(result: IdentificationResult) -> str:
 
 def format_posterior(rep, model: str) -> str:
     """Human-readable posterior summary, comparison with the deterministic results, diagnostics."""
-    from .parameters import IDENTIFIABLE
 
     s = rep.summary
     lines = [f"Posterior, model {model} ({rep.result.chains.shape[0]} ensembles × {rep.result.chains.shape[2]} walkers, "

@@ -8,13 +8,14 @@ import json
 import numpy as np
 import pytest
 
-from mtmcal_bayes import IDENTIFIABLE, load_campaign, units
+from mtmcal_bayes import IDENTIFIABLE, units
 from mtmcal_bayes.campaign import parse_campaign
-from mtmcal_bayes.datasets import read_text
 from mtmcal_bayes.inference import (Posterior, SamplerSettings, gaussian_posterior, run_ensembles, summarize,
                                     to_inference_data)
 from mtmcal_bayes.inference.results import not_identified
 from mtmcal_bayes.simulate import synthetic_campaign, truth_from_vector
+
+from . import variants
 
 
 def weights(name, names):
@@ -23,10 +24,7 @@ def weights(name, names):
 
 
 def without_second_tool_length():
-    text = read_text("integrex_i200.toml")
-    i = text.index("[[ballbar.runs]]\npattern = \"CR\"             # C axis, radial measurement at R'_B")
-    j = text.index("# ------------------------------------------------------ touch-trigger probe")
-    return parse_campaign(text[:i] + text[j:], "no_cr2.toml")
+    return parse_campaign(variants.without_second_tool_length(), "no_cr2.toml")
 
 
 def test_sampler_matches_closed_form(thesis):

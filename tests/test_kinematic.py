@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import LinearModel, load_campaign, units
-from mtmcal_bayes.campaign import Run, parse_campaign
+from mtmcal_bayes.campaign import Run
 from mtmcal_bayes.models import HTMModel, jacobian, make_model
 from mtmcal_bayes.models.linear import LEFT_OUT
 from mtmcal_bayes.models.patterns import fit_eccentricity, pattern_commands

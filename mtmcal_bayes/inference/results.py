@@ -33,7 +33,7 @@ def _display(name: str, values: np.ndarray) -> np.ndarray:
     return units.from_internal(values, _unit_of(name))
 
 
-def _with_derived(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
+def display_draws(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
     """Dict of display-unit draws (…,) per name, plus dx_CZ_minus_dx_BT."""
     out = {n: _display(n, draws[..., i]) for i, n in enumerate(names)}
     dx_bt = out.get("dx_BT", 0.0)
@@ -57,9 +57,9 @@ def to_inference_data(result: SamplingResult, n_prior: int = 4000, n_predictive:
     K, S, W, q = chains.shape
     flat = np.swapaxes(chains, 1, 2).reshape(K, W * S, q)
     lp = np.swapaxes(logp, 1, 2).reshape(K, W * S)
-    posterior = _with_derived(post.names, flat)
+    posterior = display_draws(post.names, flat)
     rng = np.random.default_rng(seed)
-    prior = _with_derived(post.names, post.priors.rvs(n_prior, rng)[None])
+    prior = display_draws(post.names, post.priors.rvs(n_prior, rng)[None])
 
     # posterior predictive of the repeat means from an even subset of draws per ensemble
     idx = np.linspace(0, S * W - 1, min(n_predictive, S * W)).astype(int)
@@ -115,7 +115,8 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     sigma0 = float(np.median(idata.posterior["sigma_model"])) * 1e-3 if "sigma_model" in idata.posterior else 0.0
     growth = prior_sensitivity(post, sigma0)
     s["prior_growth"] = [growth.get(n, np.nan) for n in s.index]
-    s["identified"] = ~(s["prior_growth"] > NOT_IDENTIFIED_GROWTH)
+    # None where no prior-sensitivity check applies (sigma_model)
+    s["identified"] = [None if np.isnan(g) else bool(g <= NOT_IDENTIFIED_GROWTH) for g in s["prior_growth"]]
     return s[["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
               "prior_sd", "sd_ratio", "prior_growth", "identified"]]
 
@@ -135,19 +136,20 @@ def not_identified(summary: pd.DataFrame) -> list[str]:
     return [f"{n}: not identified by the data — its width follows the priors (widening the deviation priors "
             f"{WIDEN:g}× widens it {r['prior_growth']:.1f}×; posterior sd {r['sd']:.3g} {units.SYMBOL[r['unit']]} "
             f"= {r['sd_ratio']:.2f} × prior sd)"
-            for n, r in summary.iterrows() if n in IDENTIFIABLE and not r["identified"]]
+            for n, r in summary.iterrows() if n in IDENTIFIABLE and r["identified"] is False]
 
 
 def comparison(summary: pd.DataFrame, ident: IdentificationResult) -> pd.DataFrame:
-    """Each identifiable quantity's posterior against the ball-bar and touch-probe values.
+    """Each quantity's posterior against the ball-bar and touch-probe values.
 
-    For every reference value: whether it lies in the 95 % HDI, and its distance
-    from the posterior mean in posterior sd.
+    Rows: the identifiable quantities, then any other deviation of the summary
+    with a touch-probe value (dx_CZ, dx_BT, dz_BT).  For every reference value:
+    whether it lies in the 95 % HDI, and its distance from the posterior mean in
+    posterior sd.
     """
     rows = []
-    for name in IDENTIFIABLE:
-        if name not in summary.index:
-            continue
+    extra = [n for n in summary.index if n in QUANTITIES and n not in IDENTIFIABLE and n in ident.probe]
+    for name in [n for n in IDENTIFIABLE if n in summary.index] + extra:
         r = summary.loc[name]
         refs = {"ballbar": ident.ballbar.get(name).display if name in ident.ballbar else None}
         probe = ident.probe.get(name)

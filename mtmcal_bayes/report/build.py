@@ -1,0 +1,261 @@
+"""``mtmcal-bayes report``: sample the posterior and write the report directory (SPEC §8).
+
+The directory receives ``index.html`` (self-contained), every figure as PNG,
+every table as CSV and the posterior as NetCDF.  Everything is written into a
+temporary directory first and moved into place at the end, so a failure leaves
+nothing half-written.
+"""
+
+from __future__ import annotations
+
+import datetime
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from .. import __version__
+from ..errors import MtmcalError
+from ..identify import identify
+from ..inference.run import PosteriorReport, posterior_report, thesis_assumption_effect, write_netcdf_atomic
+from ..inference.sampling import SamplerSettings
+from ..parameters import IDENTIFIABLE
+from ..tables import format_posterior, identification_table
+from ..textfiles import atomic_directory
+from . import compare, corner_plot, forest, mcmc_plots, polar, ppc, widths
+from .html import Page
+from .missing import missing_data
+from .style import save_png
+
+ALL_MODELS = ("linear", "htm-literal", "htm-thesis")
+SUMMARY_COLUMNS = ["unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
+                   "prior_sd", "sd_ratio", "identified"]
+REFERENCE_COLUMNS = ["ballbar", "ballbar_in_hdi", "ballbar_z", "probe_reported", "probe_reported_in_hdi",
+                     "probe_reported_z", "probe_recomputed", "probe_recomputed_in_hdi", "probe_recomputed_z"]
+
+
+@dataclass
+class Report:
+    """What :func:`build_report` wrote: the directory, file names, the summary table and console text."""
+
+    directory: Path
+    files: list[str]
+    summary: pd.DataFrame
+    console: str
+    wall_time: float
+    posterior: PosteriorReport
+
+
+def summary_table(rep: PosteriorReport) -> pd.DataFrame:
+    """summary.csv: one row per quantity with the posterior and the deterministic values beside it."""
+    s = rep.summary[SUMMARY_COLUMNS].copy()
+    c = rep.comparison.reindex(s.index)
+    for col in REFERENCE_COLUMNS:
+        s[col] = c[col] if col in c else None
+    s.index.name = "quantity"
+    return s
+
+
+def priors_table(post) -> pd.DataFrame:
+    return pd.DataFrame([{"parameter": p.name, "prior": p.describe(), "reason": p.reason}
+                         for p in post.priors.priors]).set_index("parameter")
+
+
+def _check_output_dir(out_dir: Path) -> None:
+    if out_dir.exists() and not out_dir.is_dir():
+        raise MtmcalError(f"{out_dir}: cannot write the report: it exists and is not a directory")
+    if not out_dir.resolve().parent.is_dir():
+        raise MtmcalError(f"{out_dir}: cannot write the report: directory {out_dir.resolve().parent} does not exist")
+
+
+def build_report(campaign, out_dir, model: str = "linear", settings: SamplerSettings | None = None,
+                 fix_dx_BT: bool = False, compare_models: bool = False, progress=None, say=None,
+                 command: str = "") -> Report:
+    """Sample, draw, tabulate and write the report of ``campaign`` into ``out_dir``.
+
+    ``progress(step, max_steps, tau)`` is passed to the sampler (with the model
+    name first when models are compared: ``progress(model)`` returns it);
+    ``say(text)`` receives one line per stage.
+    """
+    t0 = time.perf_counter()
+    out_dir = Path(out_dir)
+    _check_output_dir(out_dir)
+    say = say or (lambda text: None)
+    settings = settings or SamplerSettings()
+    sampler_progress = (lambda m: progress(m)) if progress else (lambda m: None)
+
+    say(f"sampling the posterior ({model})")
+    rep = posterior_report(campaign, model, fix_dx_BT, settings, progress=sampler_progress(model))
+    reports = {model: rep}
+    if compare_models:
+        for other in ALL_MODELS:
+            if other != model:
+                say(f"sampling the posterior ({other}) for the model comparison")
+                reports[other] = posterior_report(campaign, other, fix_dx_BT, settings, progress=sampler_progress(other))
+        reports = {m: reports[m] for m in ALL_MODELS}
+    ident = identify(campaign)
+    missing = missing_data(campaign, ident)
+    summary = summary_table(rep)
+    ppc_df = ppc.ppc_table(rep.idata, campaign)
+    diag = mcmc_plots.diagnostics_table(rep.summary, rep.result)
+    sigma_um = float(rep.summary.loc["sigma_model", "median"])
+
+    files: list[str] = []
+    with atomic_directory(out_dir) as tmp:
+        def png(name, fig):
+            say(f"drawing {name}")
+            save_png(fig, tmp / name)
+            files.append(name)
+
+        def csv(name, df, index=True):
+            df.to_csv(tmp / name, index=index, float_format="%.6g")
+            files.append(name)
+
+        corner_fig, off_scale = corner_plot.corner_figure(rep.idata, rep.comparison)
+        png("corner.png", corner_fig)
+        png("forest.png", forest.forest_figure({model: rep.summary}, rep.comparison))
+        png("ppc.png", ppc.ppc_figure({model: ppc_df}, campaign))
+        png("polar.png", polar.polar_figure(rep.result, campaign))
+        png("widths.png", widths.widths_figure(rep.summary))
+        png("rank.png", mcmc_plots.rank_figure(rep.idata))
+        png("trace.png", mcmc_plots.trace_figure(rep.result))
+        csv("summary.csv", summary)
+        csv("ppc.csv", ppc_df)
+        csv("diagnostics.csv", diag)
+        csv("priors.csv", priors_table(rep.result.posterior))
+        csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
+        if ident.probe:
+            csv("identification_probe.csv", identification_table(ident.probe), index=False)
+        effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um)
+        if effect is not None:
+            csv("thesis_assumption_dx_BT.csv", effect)
+        if compare_models:
+            png("compare_forest.png", forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison))
+            png("compare_ppc.png", ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign) for m, r in reports.items()},
+                                                  campaign))
+            csv("compare_models.csv", compare.model_comparison_table(reports), index=False)
+            csv("compare_fit.csv", compare.model_fit_table(reports, campaign))
+        say("writing posterior.nc")
+        write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
+        files.append("posterior.nc")
+        page = _page(campaign, model, rep, reports if compare_models else None, ident, missing, summary, ppc_df,
+                     diag, effect, off_scale, sigma_um, fix_dx_BT, tmp)
+        elapsed = time.perf_counter() - t0
+        files.insert(0, "index.html")
+        page.write(tmp / "index.html", _meta(campaign, model, settings, command, elapsed))
+    console = _console(rep, model, missing, out_dir, files, elapsed)
+    return Report(out_dir, files, summary, console, elapsed, rep)
+
+
+def _meta(campaign, model, settings, command, elapsed) -> str:
+    now = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
+    seed = "none (not reproducible)" if settings.seed is None else settings.seed
+    return (f"Campaign {campaign.source} · model {model} · seed {seed} · mtmcal-bayes {__version__} · "
+            f"generated {now} in {elapsed:.0f} s" + (f" · command: {command}" if command else ""))
+
+
+def _console(rep, model, missing, out_dir, files, elapsed) -> str:
+    lines = [format_posterior(rep, model)]
+    if rep.warnings:
+        lines += ["", "Warnings:"] + [f"  - {w}" for w in rep.warnings]
+    if missing:
+        lines += ["", "Missing from this campaign:"] + [f"  - {m}" for m in missing]
+    lines += ["", f"report written to {out_dir}/ in {elapsed:.0f} s: " + ", ".join(files),
+              f"open {out_dir / 'index.html'} in a browser"]
+    return "\n".join(lines)
+
+
+def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
+    s = summary.loc[[n for n in IDENTIFIABLE if n in summary.index] +
+                    [n for n in summary.index if n not in IDENTIFIABLE]]
+    unit = s["unit"].map({"arcsec": "″", "um": "µm"})
+    out = pd.DataFrame({"unit": unit, "mean": s["mean"], "sd": s["sd"], "HDI 2.5 %": s["hdi_low"],
+                        "HDI 97.5 %": s["hdi_high"], "ball bar": s["ballbar"], "in HDI": s["ballbar_in_hdi"],
+                        "probe (thesis)": s["probe_reported"], "in HDI ": s["probe_reported_in_hdi"],
+                        "probe (recomputed)": s["probe_recomputed"], "in HDI  ": s["probe_recomputed_in_hdi"],
+                        "R-hat": s["r_hat"], "bulk ESS": s["ess_bulk"].round(0).astype(int),
+                        "identified": s["identified"]})
+    return out
+
+
+def _page(campaign, model, rep, reports, ident, missing, summary, ppc_df, diag, effect, off_scale, sigma_um,
+          fix_dx_BT, tmp) -> Page:
+    d = rep.diagnostics()
+    page = Page("Bayesian calibration report — B and C axes of a turn-mill machine")
+    page.box("missing", "Missing from this campaign", missing)
+    page.box("warn", "Warnings", rep.warnings + rep.not_identified)
+
+    page.section("results", "Results")
+    page.paragraph(
+        f"Posterior of the eight quantities the thesis identifies (and the deviations sampled beside them) under the "
+        f"{model} model{' with the thesis assumption dx_BT = 0' if fix_dx_BT else ''}: mean, sd and 95 % highest-density "
+        "interval, beside the deterministic ball-bar values (thesis Eqs 4.10–4.18 recomputed from this campaign) and "
+        "the touch-probe values (as printed in Table 5.3 and as recomputed from Table 5.2). 'in HDI' says whether "
+        "that value lies inside the 95 % HDI. Angles in arc seconds, lengths in micrometres. Full table: summary.csv.")
+    page.table(_results_table(summary), digits={"R-hat": 3})
+
+    page.section("corner", "Joint posterior")
+    page.figure(tmp / "corner.png", corner_plot.CAPTION + (" Off scale, not drawn: " + "; ".join(off_scale) + "."
+                                                            if off_scale else ""), "corner plot")
+    page.section("forest", "Intervals against the deterministic methods")
+    page.figure(tmp / "forest.png", forest.CAPTION, "forest plot")
+
+    page.section("ppc", "Posterior predictive check")
+    page.figure(tmp / "ppc.png", ppc.CAPTION, "posterior predictive check")
+    n_out = int((~ppc_df["inside_95"]).sum())
+    q = len(rep.result.posterior.names)
+    page.paragraph(f"{n_out} of {len(ppc_df)} observed means fall outside their 95 % predictive interval. "
+                   f"σ_model (what the model leaves out), posterior median {sigma_um:.2f} µm. Table: ppc.csv."
+                   + (f" With {len(ppc_df)} observed means and {q} sampled parameters the model can match every "
+                      "mean, so this check has little power here: tension between measurements shows in the "
+                      "parameters (wide or shifted intervals, e.g. beta_XB against dx_BT) rather than in the "
+                      "residuals." if q >= len(ppc_df) else ""))
+    page.table(ppc_df[["observed_mean_um", "repeat_sd_um", "n_repeats", "predictive_mean_um", "predictive_sd_um",
+                       "z", "inside_95"]], digits={"z": 2})
+
+    page.section("polar", "Ball-bar trajectories")
+    page.figure(tmp / "polar.png", polar.CAPTION, "polar trajectories")
+
+    page.section("widths", "What the data taught")
+    page.figure(tmp / "widths.png", widths.CAPTION, "prior and posterior widths")
+    page.paragraph("Priors, each with its reason (priors.csv):")
+    page.table(priors_table(rep.result.posterior))
+
+    page.section("diagnostics", "Sampler diagnostics")
+    page.paragraph(
+        f"{d['n_ensembles']} independent emcee ensembles × {d['n_walkers']} walkers, {d['n_steps']} steps each "
+        f"(burn-in {d['burn_in']}), largest integrated autocorrelation time {d['tau_max_steps']:.0f} steps, "
+        f"{'converged' if d['converged'] else 'NOT converged'} by the rule length ≥ 50 τ with τ stable; "
+        f"max R-hat {d['max_r_hat']:.3f}, min bulk ESS of the eight {d['min_ess_bulk']:.0f}, "
+        f"acceptance {min(d['acceptance']):.2f}–{max(d['acceptance']):.2f}, sampling {d['wall_time_s']:.0f} s. "
+        "R-hat is computed across the independent ensembles (the walkers of one ensemble are not independent chains).")
+    page.table(diag.assign(ess_bulk=diag["ess_bulk"].round().astype(int), ess_tail=diag["ess_tail"].round().astype(int)),
+               digits={"r_hat": 3, "tau_steps": 0})
+    page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
+    page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
+
+    page.section("thesis", "Thesis values recomputed")
+    page.paragraph("The deterministic identification of the thesis, recomputed from this campaign beside the values "
+                   "printed in the thesis, with its flags (identification_ballbar.csv, identification_probe.csv).")
+    page.raw("<h3>Ball bar (Table 4.5, Eqs 4.10–4.18)</h3>")
+    page.table(identification_table(ident.ballbar), index=False)
+    page.raw("<h3>Touch probe (Table 5.3, Eqs 5.1–5.19)</h3>")
+    if ident.probe:
+        page.table(identification_table(ident.probe), index=False)
+    else:
+        page.paragraph("No touch-probe data in this campaign.")
+    page.box("missing", "Checks the deterministic method leaves out", ident.checks)
+    page.box("missing", "Assumptions", ident.assumptions)
+    if effect is not None:
+        page.paragraph("The thesis assumes dx_BT = 0 (Eq 4.2). Its effect on beta_XB and dx_CZ − dx_BT, closed form "
+                       f"at σ_model = {sigma_um:.2f} µm (thesis_assumption_dx_BT.csv):")
+        page.table(effect)
+
+    if reports is not None:
+        page.section("models", "Model comparison")
+        page.figure(tmp / "compare_forest.png", compare.CAPTION_FOREST, "intervals under three models")
+        page.table(compare.model_fit_table(reports, campaign))
+        page.figure(tmp / "compare_ppc.png", compare.CAPTION_PPC, "predictive fit under three models")
+        page.paragraph("All numbers: compare_models.csv, compare_fit.csv.")
+    return page

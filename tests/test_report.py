@@ -1,0 +1,146 @@
+"""The HTML report: files, self-containedness, captions, missing data, atomic output, model comparison."""
+
+import re
+from html import unescape
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.image import imread
+
+from mtmcal_bayes import identify
+from mtmcal_bayes.report import build as report_build
+from mtmcal_bayes.report.corner_plot import corner_figure
+from mtmcal_bayes.report.style import save_png
+
+from . import variants
+
+REQUIRED = ["index.html", "corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png",
+            "summary.csv", "ppc.csv", "diagnostics.csv", "priors.csv", "identification_ballbar.csv", "posterior.nc"]
+QUICK = ("--max-steps", "1000", "--seed", "2", "--quiet")
+
+
+@pytest.fixture(scope="module")
+def thesis_report(tmp_path_factory, request):
+    from mtmcal_bayes.cli import main
+
+    out = tmp_path_factory.mktemp("rep") / "thesis"
+    code = main(["report", "-o", str(out), *QUICK])
+    assert code == 0
+    return out
+
+
+def test_report_writes_every_file(thesis_report):
+    for name in REQUIRED:
+        assert (thesis_report / name).is_file(), name
+    for png in thesis_report.glob("*.png"):
+        img = imread(png)
+        assert img.shape[0] > 300 and img.shape[1] > 300, png.name
+
+
+def test_summary_csv_columns_and_reference_values(thesis_report, thesis):
+    s = pd.read_csv(thesis_report / "summary.csv", index_col="quantity")
+    for col in ("mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ballbar", "ballbar_in_hdi",
+                "probe_reported", "probe_reported_in_hdi", "probe_recomputed", "probe_recomputed_in_hdi"):
+        assert col in s.columns, col
+    ident = identify(thesis)
+    for name, value in ident.ballbar.items():
+        assert s.loc[name, "ballbar"] == pytest.approx(value.display, abs=1e-4)
+        inside = s.loc[name, "hdi_low"] <= s.loc[name, "ballbar"] <= s.loc[name, "hdi_high"]
+        assert bool(s.loc[name, "ballbar_in_hdi"]) == inside
+    assert s.loc["beta_XB", "probe_reported"] == pytest.approx(-19.04)
+    assert np.isnan(s.loc["alpha_BT", "probe_reported"])  # the probe gives no alpha_BT
+
+
+def test_html_is_self_contained_with_captions(thesis_report):
+    html = unescape((thesis_report / "index.html").read_text(encoding="utf-8"))
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:|//|file:)""", html)
+    assert "<link" not in html and "<script" not in html
+    pngs = sorted(p.name for p in thesis_report.glob("*.png"))
+    imgs = re.findall(r'<img src="data:image/png;base64,[A-Za-z0-9+/=]+"', html)
+    assert len(imgs) == len(pngs)
+    for name in pngs:
+        assert f"<strong>{name}.</strong>" in html  # each figure has its caption
+    assert "68 %" in html and "95 %" in html and "corner's default" in html
+    text = re.sub(r"<img[^>]*>", "", html)
+    assert not re.search(r"\bnan\b", text, re.IGNORECASE)
+    assert "step budget of 1000 reached" in html  # an unconverged run says so
+
+
+def test_corner_lists_reference_values_it_cannot_draw(thesis_report):
+    import arviz as az
+
+    idata = az.from_netcdf(thesis_report / "posterior.nc")
+    comp = pd.read_csv(thesis_report / "summary.csv", index_col="quantity")
+    fig, off = corner_figure(idata, comp)
+    save_png(fig, thesis_report / "corner_again.png")
+    # the recomputed probe gamma_XB (about −91″, Eq 5.17 with assumed nominals) is tens of sd away
+    assert any(o.startswith("gamma_XB: touch probe, recomputed") for o in off)
+    assert not any(o.startswith("beta_XB") for o in off)
+
+
+def test_report_without_probe_data_says_so(run_cli, tmp_path):
+    src = tmp_path / "no_probe.toml"
+    src.write_text(variants.without_probe(), encoding="utf-8")
+    code, out, err = run_cli("report", src, "-o", tmp_path / "rep", *QUICK)
+    assert code == 0, err
+    html = (tmp_path / "rep" / "index.html").read_text(encoding="utf-8")
+    assert "No touch-probe data in this campaign" in html
+    assert "No touch-probe data in this campaign" in out
+    s = pd.read_csv(tmp_path / "rep" / "summary.csv", index_col="quantity")
+    assert s["probe_reported"].isna().all() and s["probe_recomputed"].isna().all()
+    assert not (tmp_path / "rep" / "identification_probe.csv").exists()
+
+
+def test_report_without_second_tool_length_says_what_is_missing(run_cli, tmp_path):
+    src = tmp_path / "no_cr2.toml"
+    src.write_text(variants.without_second_tool_length(), encoding="utf-8")
+    code, out, err = run_cli("report", src, "-o", tmp_path / "rep", *QUICK)
+    assert code == 0, err
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    assert "needs ey of CR at a second tool length (R'_B)" in html
+    assert "alpha_BT: not identified by the data" in html
+    s = pd.read_csv(tmp_path / "rep" / "summary.csv", index_col="quantity")
+    assert not s.loc["alpha_BT", "identified"] and np.isnan(s.loc["alpha_BT", "ballbar"])
+
+
+def test_bad_input_writes_nothing(run_cli, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[machine\n", encoding="utf-8")
+    code, out, err = run_cli("report", bad, "-o", tmp_path / "rep")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "bad.toml" in err
+    assert not (tmp_path / "rep").exists()
+    (tmp_path / "afile").write_text("x")
+    code, out, err = run_cli("report", "-o", tmp_path / "afile", *QUICK)
+    assert code == 2 and "not a directory" in err
+    code, out, err = run_cli("report", "-o", tmp_path / "missing" / "rep", *QUICK)
+    assert code == 2 and "does not exist" in err
+
+
+def test_failure_midway_leaves_nothing_half_written(run_cli, tmp_path, monkeypatch):
+    def broken(*args, **kwargs):
+        raise RuntimeError("simulated failure while drawing")
+
+    monkeypatch.setattr(report_build.polar, "polar_figure", broken)
+    existing = tmp_path / "rep"
+    existing.mkdir()
+    (existing / "keep.txt").write_text("mine")
+    code, out, err = run_cli("report", "-o", existing, *QUICK)
+    assert code == 1 and "simulated failure" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]  # no temporary directory left
+    assert sorted(p.name for p in existing.iterdir()) == ["keep.txt"]
+
+
+def test_compare_models(run_cli, tmp_path):
+    code, out, err = run_cli("report", "-o", tmp_path / "rep", "--compare-models", "--max-steps", "500", "--quiet")
+    assert code == 0, err
+    rep = tmp_path / "rep"
+    for name in ("compare_forest.png", "compare_ppc.png", "compare_models.csv", "compare_fit.csv"):
+        assert (rep / name).is_file(), name
+    table = pd.read_csv(rep / "compare_models.csv")
+    assert sorted(table["model"].unique()) == ["htm-literal", "htm-thesis", "linear"]
+    assert len(table) == 3 * 8
+    # the literal kinematic model reads alpha_BT very differently from the thesis relations (SPEC §3.2)
+    m = table.set_index(["quantity", "model"])["mean"]
+    assert abs(m["alpha_BT", "htm-literal"] - m["alpha_BT", "linear"]) > abs(m["alpha_BT", "htm-thesis"] - m["alpha_BT", "linear"])
+    assert "Model comparison" in (rep / "index.html").read_text(encoding="utf-8")

@@ -1,0 +1,23 @@
+"""Variants of the built-in thesis campaign with measurements removed, as TOML text."""
+
+from mtmcal_bayes.datasets import read_text
+
+_PROBE = "# ------------------------------------------------------ touch-trigger probe"
+_REPORTED = "# ------------------------------------------- results as printed in the thesis"
+_CR2 = "[[ballbar.runs]]\npattern = \"CR\"             # C axis, radial measurement at R'_B"
+
+
+def thesis_text() -> str:
+    return read_text("integrex_i200.toml")
+
+
+def without_second_tool_length() -> str:
+    """The thesis campaign without the CR run at R'_B (thesis step 5)."""
+    text = thesis_text()
+    return text[: text.index(_CR2)] + text[text.index(_PROBE):]
+
+
+def without_probe() -> str:
+    """The thesis campaign without any touch-probe data or published probe results."""
+    text = thesis_text()
+    return text[: text.index(_PROBE)] + text[text.index(_REPORTED): text.index("[reported.probe]")]
