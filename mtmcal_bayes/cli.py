@@ -155,6 +155,19 @@ def _check_writable(path, what: str) -> None:
         raise MtmcalError(f"{path}: cannot write the {what}: directory {parent} does not exist")
 
 
+def _posterior_json(rep, args, campaign) -> dict:
+    """JSON of a posterior: summary and comparison per quantity, diagnostics (SPEC §10)."""
+    cols = ["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit"]
+    return {
+        "model": args.model, "campaign": campaign.source, "fix_dx_BT": args.fix_dx_BT,
+        "summary": {n: {c: (row[c] if c == "unit" else float(row[c])) for c in cols}
+                    for n, row in rep.summary.iterrows()},
+        "comparison": {n: {k: (None if v is None or (isinstance(v, float) and math.isnan(v)) else v)
+                           for k, v in row.items()} for n, row in rep.comparison.iterrows()},
+        "diagnostics": rep.diagnostics(),
+    }
+
+
 def cmd_sample(args) -> int:
     from .campaign import load_campaign
     from .inference.run import posterior_report, thesis_assumption_effect, write_netcdf_atomic
@@ -174,16 +187,7 @@ def cmd_sample(args) -> int:
     for w in rep.warnings:
         print(f"WARNING: {w}", file=sys.stderr)
     if args.json:
-        cols = ["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit"]
-        print_json({
-            "model": args.model, "campaign": campaign.source, "fix_dx_BT": args.fix_dx_BT,
-            "summary": {n: {c: (row[c] if c == "unit" else float(row[c])) for c in cols}
-                        for n, row in rep.summary.iterrows()},
-            "comparison": {n: {k: (None if v is None or (isinstance(v, float) and math.isnan(v)) else v)
-                               for k, v in row.items()} for n, row in rep.comparison.iterrows()},
-            "diagnostics": rep.diagnostics(),
-            "output": args.output,
-        })
+        print_json({**_posterior_json(rep, args, campaign), "output": args.output})
         return 0
     from .tables import format_posterior
 
@@ -243,7 +247,11 @@ def cmd_report(args) -> int:
                        progress, say, command)
     for w in rep.posterior.warnings:
         print(f"WARNING: {w}", file=sys.stderr)
-    print(rep.console)
+    if args.json:
+        print_json({**_posterior_json(rep.posterior, args, campaign), "directory": str(rep.directory),
+                    "files": rep.files, "missing": rep.missing, "wall_time_s": rep.wall_time})
+    else:
+        print(rep.console)
     return 0
 
 
@@ -310,6 +318,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
     s.add_argument("--max-steps", type=int, default=20_000, help="step budget per ensemble (default 20000)")
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    s.add_argument("--json", action="store_true", help="print the summary, diagnostics and written files as JSON")
     s.set_defaults(func=cmd_report)
     return p
 

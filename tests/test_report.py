@@ -143,4 +143,19 @@ def test_compare_models(run_cli, tmp_path):
     # the literal kinematic model reads alpha_BT very differently from the thesis relations (SPEC §3.2)
     m = table.set_index(["quantity", "model"])["mean"]
     assert abs(m["alpha_BT", "htm-literal"] - m["alpha_BT", "linear"]) > abs(m["alpha_BT", "htm-thesis"] - m["alpha_BT", "linear"])
-    assert "Model comparison" in (rep / "index.html").read_text(encoding="utf-8")
+    html = unescape((rep / "index.html").read_text(encoding="utf-8"))
+    assert "Model comparison" in html
+    # beta_XB: about −35″ under the thesis relations, +38″ under the literal Eq 2.10 (sd ≈ 12″ each)
+    assert "beta_XB: linear" in html and "htm-literal" in html.split("beta_XB: linear")[1][:80]
+
+
+def test_report_json(run_cli, tmp_path):
+    import json
+
+    code, out, err = run_cli("report", "-o", tmp_path / "rep", "--json", *QUICK)
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["files"][0] == "index.html" and "summary.csv" in data["files"]
+    assert set(data["summary"]["beta_XB"]) >= {"mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk",
+                                               "ess_tail", "unit"}
+    assert data["summary"]["beta_XB"]["unit"] == "arcsec" and data["missing"] == []

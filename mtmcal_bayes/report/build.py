@@ -45,6 +45,7 @@ class Report:
     console: str
     wall_time: float
     posterior: PosteriorReport
+    missing: list[str]
 
 
 def summary_table(rep: PosteriorReport) -> pd.DataFrame:
@@ -145,7 +146,7 @@ def build_report(campaign, out_dir, model: str = "linear", settings: SamplerSett
         files.insert(0, "index.html")
         page.write(tmp / "index.html", _meta(campaign, model, settings, command, elapsed))
     console = _console(rep, model, missing, out_dir, files, elapsed)
-    return Report(out_dir, files, summary, console, elapsed, rep)
+    return Report(out_dir, files, summary, console, elapsed, rep, missing)
 
 
 def _meta(campaign, model, settings, command, elapsed) -> str:
@@ -255,7 +256,15 @@ def _page(campaign, model, rep, reports, ident, missing, summary, ppc_df, diag, 
     if reports is not None:
         page.section("models", "Model comparison")
         page.figure(tmp / "compare_forest.png", compare.CAPTION_FOREST, "intervals under three models")
-        page.table(compare.model_fit_table(reports, campaign))
+        fit = compare.model_fit_table(reports, campaign)
+        page.table(fit, digits={"rms_z": 3, "max_abs_z": 3})
+        worst = float(fit["max_abs_z"].max())
+        page.box("warn", "Where the models disagree", compare.disagreements(reports))
+        if worst < 2:
+            page.paragraph(f"Every model reproduces every measured mean (largest |z| {worst:.2f}), so the data "
+                           "cannot tell the models apart: where their intervals differ, that difference is "
+                           "model-form uncertainty the measurement does not resolve, and the choice of model "
+                           "(which pivots the thesis relations assume, SPEC §3.2) decides the answer.")
         page.figure(tmp / "compare_ppc.png", compare.CAPTION_PPC, "predictive fit under three models")
         page.paragraph("All numbers: compare_models.csv, compare_fit.csv.")
     return page

@@ -42,3 +42,18 @@ def model_fit_table(reports: dict, campaign) -> pd.DataFrame:
                      "outside_95": int((~t["inside_95"]).sum()), "n_observations": len(t),
                      "sigma_model_median_um": float(rep.summary.loc["sigma_model", "median"])})
     return pd.DataFrame(rows).set_index("model")
+
+
+def disagreements(reports: dict) -> list[str]:
+    """Quantities whose 95 % HDIs under two models do not overlap, as sentences."""
+    out = []
+    models = list(reports)
+    for name in IDENTIFIABLE:
+        for i, a in enumerate(models):
+            for b in models[i + 1:]:
+                ra, rb = reports[a].summary.loc[name], reports[b].summary.loc[name]
+                if ra["hdi_high"] < rb["hdi_low"] or rb["hdi_high"] < ra["hdi_low"]:
+                    unit = "″" if ra["unit"] == "arcsec" else "µm"
+                    out.append(f"{name}: {a} {ra['mean']:.1f} ± {ra['sd']:.1f} {unit} against {b} "
+                               f"{rb['mean']:.1f} ± {rb['sd']:.1f} {unit} (95 % HDIs do not overlap)")
+    return out

@@ -53,7 +53,7 @@ def ppc_figure(tables: dict[str, pd.DataFrame], campaign):
     fig, (ax, az_) = plt.subplots(1, 2, figsize=(12, 0.42 * m + 2.0), sharey=True,
                                   gridspec_kw={"width_ratios": [2.2, 1.0]})
     k = len(tables)
-    offsets = np.linspace(-0.2, 0.2, k) if k > 1 else np.zeros(1)
+    offsets = np.linspace(0.2, -0.2, k) if k > 1 else np.zeros(1)  # first entry on top
     for (lab, t), dy in zip(tables.items(), offsets):
         colour = MODEL_COLOURS.get(lab, COLOURS["posterior"]) if k > 1 else COLOURS["posterior"]
         ax.hlines(y + dy, t["predictive_2.5%_um"], t["predictive_97.5%_um"], color=colour, lw=1.5)
