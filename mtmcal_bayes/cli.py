@@ -255,6 +255,29 @@ def cmd_report(args) -> int:
     return 0
 
 
+def cmd_plan(args) -> int:
+    from .campaign import load_campaign
+    from .planning.candidates import read_candidates
+    from .planning.output import format_plan, write_plan
+    from .planning.plan import plan
+
+    campaign = load_campaign(args.campaign)
+    if args.output:
+        _check_writable(args.output, "plan")
+    if args.sigma_model_um is not None and not (math.isfinite(args.sigma_model_um) and args.sigma_model_um >= 0):
+        raise MtmcalError(f"--sigma-model-um: {args.sigma_model_um} is not a non-negative number")
+    extra = read_candidates(args.candidates, campaign) if args.candidates else []
+    result = plan(campaign, args.target, extra, args.sigma_model_um, args.sweep_pattern, args.model)
+    files = write_plan(result, args.output) if args.output else []
+    if args.json:
+        print_json({**result.to_json(), "campaign": campaign.source, "output": args.output, "files": files})
+    else:
+        print(format_plan(result))
+        if files:
+            print(f"\nplan written to {args.output}/: {', '.join(files)}")
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
@@ -320,6 +343,21 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     s.add_argument("--json", action="store_true", help="print the summary, diagnostics and written files as JSON")
     s.set_defaults(func=cmd_report)
+
+    s = sub.add_parser("plan", help="rank candidate extra measurements by how much they reduce uncertainty")
+    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign TOML (default: the built-in thesis campaign)")
+    s.add_argument("--target", action="append", metavar="NAME",
+                   help="quantity to make more certain (repeatable; default the eight identified quantities)")
+    s.add_argument("--model", choices=MODEL_NAMES, default="linear",
+                   help="forward model (default linear; htm models are linearised at zero)")
+    s.add_argument("--candidates", metavar="FILE.toml", help="extra candidates of your own ([[candidate]] tables)")
+    s.add_argument("--sigma-model-um", type=float, default=None,
+                   help="fixed model-discrepancy sd of the closed form (default: rms of its prior, 2 µm)")
+    s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
+                   help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
+    s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")
+    s.add_argument("--json", action="store_true", help="print JSON, best candidate first")
+    s.set_defaults(func=cmd_plan)
     return p
 
 

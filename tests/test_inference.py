@@ -160,3 +160,26 @@ def test_cli_sample_closed_form(run_cli):
 def test_cli_sample_bad_output_dir(run_cli, tmp_path):
     code, out, err = run_cli("sample", "-o", tmp_path / "nope" / "p.nc", "--quiet")
     assert code == 2 and len(err.strip().splitlines()) == 1 and "does not exist" in err
+
+
+def test_sampler_matches_the_exact_sigma_marginal_posterior(thesis):
+    """emcee with sigma_model free against the exact linear posterior integrated over sigma_model on a grid.
+
+    Tolerances: means within 0.15 posterior sd, sds within 8 % (a few thousand effective draws).
+    """
+    from mtmcal_bayes.inference.priors import make_prior
+    from mtmcal_bayes.planning.design import Planner
+    from mtmcal_bayes.planning.preposterior import MarginalPosterior
+
+    post = Posterior(thesis, "linear")
+    result = run_ensembles(post, SamplerSettings(seed=5, max_steps=6000))
+    s = summarize(to_inference_data(result, seed=5), post)
+    pl = Planner(thesis, [], list(IDENTIFIABLE))
+    exact = MarginalPosterior(pl.A, pl.V - pl.sigma_model**2, pl.prior_var,
+                              make_prior("sigma_model", "sigma_model", "length", thesis.priors).frozen())
+    mean, sd = exact.target_moments(pl.observations.mean[None], pl.T)
+    for i, name in enumerate(IDENTIFIABLE):
+        m_i = units.from_internal(mean[0, i], pl.target_units[i])
+        sd_i = units.from_internal(sd[0, i], pl.target_units[i])
+        assert abs(s.loc[name, "mean"] - m_i) < 0.15 * sd_i, name
+        assert s.loc[name, "sd"] == pytest.approx(sd_i, rel=0.08), name

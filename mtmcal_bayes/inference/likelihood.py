@@ -41,6 +41,7 @@ class GaussianMeanLikelihood:
                              / np.sum(observations.n[repeated] - 1))
         else:
             pooled = REPEAT_SD_UM * 1e-3
+        self.pooled_sd = float(pooled)  # mm: the repeat sd assumed for a component measured once
         self.repeat_sd = np.where(repeated, sd, pooled)  # (m,) mm
         self.base_var = self.repeat_sd**2 / observations.n + accuracy**2  # (m,) mm²
 

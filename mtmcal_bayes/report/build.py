@@ -21,6 +21,8 @@ from ..identify import identify
 from ..inference.run import PosteriorReport, posterior_report, thesis_assumption_effect, write_netcdf_atomic
 from ..inference.sampling import SamplerSettings
 from ..parameters import IDENTIFIABLE
+from ..planning import figures as plan_figures
+from ..planning.plan import plan
 from ..tables import format_posterior, identification_table
 from ..textfiles import atomic_directory
 from . import compare, corner_plot, forest, mcmc_plots, polar, ppc, widths
@@ -137,11 +139,16 @@ def build_report(campaign, out_dir, model: str = "linear", settings: SamplerSett
                                                   campaign))
             csv("compare_models.csv", compare.model_comparison_table(reports), index=False)
             csv("compare_fit.csv", compare.model_fit_table(reports, campaign))
+        say("planning the next measurement")
+        planned = _planning(campaign, rep)
+        png("plan_ranking.png", plan_figures.ranking_figure(planned))
+        png("plan_sweep.png", plan_figures.sweep_figure(planned))
+        csv("plan.csv", planned.table, index=False)
         say("writing posterior.nc")
         write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
         files.append("posterior.nc")
         page = _page(campaign, model, rep, reports if compare_models else None, ident, missing, summary, ppc_df,
-                     diag, effect, off_scale, sigma_um, fix_dx_BT, tmp)
+                     diag, effect, off_scale, sigma_um, fix_dx_BT, planned, tmp)
         elapsed = time.perf_counter() - t0
         files.insert(0, "index.html")
         page.write(tmp / "index.html", _meta(campaign, model, settings, command, elapsed))
@@ -180,8 +187,14 @@ def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def _planning(campaign, rep):
+    """The plan for the quantities the data do not identify, else for all eight."""
+    targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
+    return plan(campaign, targets or None)
+
+
 def _page(campaign, model, rep, reports, ident, missing, summary, ppc_df, diag, effect, off_scale, sigma_um,
-          fix_dx_BT, tmp) -> Page:
+          fix_dx_BT, planned, tmp) -> Page:
     d = rep.diagnostics()
     page = Page("Bayesian calibration report — B and C axes of a turn-mill machine")
     page.box("missing", "Missing from this campaign", missing)
@@ -222,6 +235,26 @@ def _page(campaign, model, rep, reports, ident, missing, summary, ppc_df, diag, 
     page.figure(tmp / "widths.png", widths.CAPTION, "prior and posterior widths")
     page.paragraph("Priors, each with its reason (priors.csv):")
     page.table(priors_table(rep.result.posterior))
+
+    page.section("plan", "Which measurement next")
+    best = planned.table.iloc[0]
+    page.paragraph(
+        f"Targets: {', '.join(planned.targets)}"
+        + (" (the quantities this campaign does not identify)" if len(planned.targets) < len(IDENTIFIABLE) else "")
+        + f". Best candidate: {best['name']}, expected information gain {best['eig_bits']:.2f} bits"
+        + (f", which identifies {best['newly_identified']}" if best["newly_identified"] else "")
+        + ". Closed form for the linear model; the full ranking is in plan.csv, and mtmcal-bayes plan "
+          "ranks for any targets (docs/planning.md).")
+    page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
+    shown = planned.table.head(10)
+    cols = ["name", "eig_bits", "verdict", "newly_identified"] + [f"{t} sd_after" for t in planned.targets[:4]]
+    page.table(shown[cols].rename(columns={"newly_identified": "identifies"}), digits=3, index=False)
+    page.figure(tmp / "plan_sweep.png", plan_figures.SWEEP_CAPTION, "tool-length sweep")
+    if len(planned.check):
+        page.paragraph("Monte-Carlo check of the closed form (data simulated from the posterior predictive, "
+                       "sigma_model learnt from them):")
+        page.table(planned.check[["candidate", "target", "sd_after_closed_form", "sd_after_monte_carlo",
+                                  "relative_difference"]], digits=3, index=False)
 
     page.section("diagnostics", "Sampler diagnostics")
     page.paragraph(

@@ -1,0 +1,7 @@
+"""Measurement planning: which extra ball-bar run reduces the uncertainty most (SPEC §6)."""
+
+from .candidates import Candidate, catalogue, feasibility, read_candidates
+from .design import Planner
+from .plan import PlanResult, plan
+
+__all__ = ["Candidate", "catalogue", "feasibility", "read_candidates", "Planner", "PlanResult", "plan"]

@@ -1,0 +1,197 @@
+"""Candidate additional measurements and their feasibility (SPEC §6).
+
+A candidate is one ball-bar run that could be added to a campaign: a pattern
+at a tool setup and a W-ball mount with a bar length, measured ``repeats``
+times; or more repeats of a run the campaign already has.  New tool setups
+follow the thesis' extension-bar procedure (Step 5, Table 4.3): an extension
+of ``e`` mm gives ``R_B + e`` and ``Z_T − e`` (R_B + Z_T stays constant: the
+spindle head moves back by the extension), ``X_T`` unchanged.  A new setup or
+mount brings its own nuisance offsets (a re-centred ball, a re-clamped ball).
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..campaign import Campaign, Mount, Setup, TomlReader
+from ..errors import InputError
+from ..models.patterns import pattern_commands
+from ..patterns import B_PATTERNS, C_PATTERNS, PATTERNS
+from ..textfiles import read_text
+
+#: extension bars of the catalogue, mm
+EXTENSIONS_MM = (25.0, 50.0, 75.0, 100.0, 125.0, 150.0)
+#: other W-ball radii and bar lengths of the catalogue, mm
+OTHER_R_C_MM = (50.0, 100.0, 150.0)
+OTHER_L_B_MM = (50.0, 100.0, 150.0)
+#: patterns measured at additional tool lengths
+TOOL_LENGTH_PATTERNS = ("CR", "CA", "BX", "BY")
+DEFAULT_REPEATS = 3
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate measurement.
+
+    ``setup``/``mount`` carry the geometry (mm); their ids name the nuisance
+    parameters, so a candidate at an existing setup shares its offsets.
+    ``repeat_of`` is the index of the campaign run it repeats (``None`` for a
+    new run); ``extension`` the tool-length difference to the primary setup, mm.
+    """
+
+    name: str
+    kind: str
+    pattern: str
+    setup: Setup
+    mount: Mount
+    length: float
+    repeats: int = DEFAULT_REPEATS
+    repeat_of: int | None = None
+    extension: float | None = None
+
+
+def primary_setup(campaign: Campaign) -> Setup:
+    """The setup of the first BX run (the thesis' R_B), else the first setup."""
+    bb = campaign.ballbar
+    for run in bb.runs:
+        if run.pattern == "BX":
+            return bb.setups[run.setup]
+    return next(iter(bb.setups.values()))
+
+
+def mount_for(campaign: Campaign, pattern: str) -> Mount:
+    """The mount the campaign uses for patterns of the same axis (B or C), else a sensible one."""
+    bb = campaign.ballbar
+    family = B_PATTERNS if pattern in B_PATTERNS else C_PATTERNS
+    for run in bb.runs:
+        if run.pattern in family:
+            return bb.mounts[run.mount]
+    mounts = list(bb.mounts.values())
+    want_zero = pattern in B_PATTERNS
+    return next((m for m in mounts if (m.R_C == 0) == want_zero), mounts[0])
+
+
+def extended_setup(base: Setup, extension: float) -> Setup:
+    """The tool setup with an extension bar of ``extension`` mm (Step 5 of the thesis)."""
+    return Setup(f"{base.id}+{extension:g}", base.R_B + extension, base.Z_T - extension, base.X_T)
+
+
+def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
+    """The default candidates: tool lengths, unmeasured setups, repeats, other patterns, R_C and L_B."""
+    bb = campaign.ballbar
+    base = primary_setup(campaign)
+    L = bb.length
+    out: list[Candidate] = []
+    for pattern in TOOL_LENGTH_PATTERNS:
+        for e in extensions:
+            s = extended_setup(base, e)
+            out.append(Candidate(f"{pattern} @ R_B+{e:g} mm", "tool length", pattern, s, mount_for(campaign, pattern),
+                                 L, extension=e))
+    measured = {(r.pattern, r.setup) for r in bb.runs}
+    for s in bb.setups.values():
+        for pattern in TOOL_LENGTH_PATTERNS:
+            if (pattern, s.id) not in measured:
+                out.append(Candidate(f"{pattern} @ {s.id} (existing setup)", "existing setup", pattern, s,
+                                     mount_for(campaign, pattern), L, extension=s.R_B - base.R_B))
+    for i, run in enumerate(bb.runs):
+        out.append(Candidate(f"repeat {run.pattern} @ {run.setup}/{run.mount} (+{DEFAULT_REPEATS})", "repeats",
+                             run.pattern, bb.setups[run.setup], bb.mounts[run.mount], L, repeat_of=i))
+    done = {r.pattern for r in bb.runs}
+    for pattern in PATTERNS:
+        if pattern not in done:
+            out.append(Candidate(f"{pattern} @ {base.id}", "other pattern", pattern, base,
+                                 mount_for(campaign, pattern), L, extension=0.0))
+    c_mount = mount_for(campaign, "CR")
+    for R_C in OTHER_R_C_MM:
+        if R_C != c_mount.R_C:
+            m = Mount(f"{c_mount.id}@R_C{R_C:g}", c_mount.Z_C, R_C)
+            for pattern in ("CR", "CA"):
+                out.append(Candidate(f"{pattern} @ {base.id}, R_C {R_C:g} mm", "other R_C", pattern, base, m, L,
+                                     extension=0.0))
+    for L_B in OTHER_L_B_MM:
+        if L_B != L:
+            for pattern in TOOL_LENGTH_PATTERNS:
+                out.append(Candidate(f"{pattern} @ {base.id}, L_B {L_B:g} mm", "bar length", pattern, base,
+                                     mount_for(campaign, pattern), L_B, extension=0.0))
+    return out
+
+
+def feasibility(candidate: Candidate, campaign: Campaign) -> tuple[bool, str]:
+    """Whether the pattern's axis motions fit the machine's travels, and why not.
+
+    The campaign gives each axis' travel, not where the C axis sits inside it,
+    so a pattern is feasible when the span of each linear-axis command fits the
+    travel (the B-axis centre path of thesis Tables 2.2/2.3).
+    """
+    travel = campaign.machine.travel
+    if not travel:
+        return True, "no axis travels in [machine]: not checked"
+    cmd = pattern_commands(candidate.pattern, candidate.setup.R_B, candidate.mount.Z_C, candidate.mount.R_C,
+                           candidate.length, cr_geometry=campaign.ballbar.cr_geometry)
+    over = []
+    for axis, values in (("X", cmd.X), ("Y", cmd.Y), ("Z", cmd.Z)):
+        span = float(np.ptp(values))
+        if axis in travel and span > travel[axis] + 1e-9:
+            over.append(f"{axis} span {span:.0f} mm > travel {travel[axis]:g} mm")
+    return (not over), ("; ".join(over) if over else "within the axis travels")
+
+
+_USER_KEYS = {"name", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm", "Z_C_mm", "R_C_mm", "length_mm",
+              "repeats"}
+
+
+def read_candidates(path, campaign: Campaign) -> list[Candidate]:
+    """Candidates defined by the user in a TOML file of ``[[candidate]]`` tables.
+
+    Each gives ``pattern`` and either ``setup = "<id>"`` of the campaign or the
+    lever arms ``R_B_mm``, ``Z_T_mm``, ``X_T_mm`` of a new setup; either
+    ``mount = "<id>"`` or ``Z_C_mm``, ``R_C_mm`` of a new mount; optional
+    ``length_mm`` (bar length, default the campaign's), ``repeats`` (default 3)
+    and ``name``.
+    """
+    text = read_text(path, "candidates file")
+    r = TomlReader(str(path))
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(str(path), None, f"malformed TOML: {exc}") from None
+    r.check_keys(doc, {"candidate"}, "")
+    items = doc.get("candidate")
+    if not isinstance(items, list) or not items:
+        r.fail("candidate", "expected one or more [[candidate]] tables")
+    bb = campaign.ballbar
+    out = []
+    for i, t in enumerate(items):
+        path_i = f"candidate[{i}]"
+        if not isinstance(t, dict):
+            r.fail(path_i, "expected a table")
+        r.check_keys(t, _USER_KEYS, path_i)
+        pattern = r.string(t, "pattern", path_i, required=True)
+        if pattern not in PATTERNS:
+            r.fail(f"{path_i}.pattern", f"unknown pattern {pattern!r} (expected one of {' '.join(PATTERNS)})")
+        if "setup" in t:
+            sid = r.string(t, "setup", path_i)
+            if sid not in bb.setups:
+                r.fail(f"{path_i}.setup", f"no setup {sid!r} in the campaign (have {', '.join(bb.setups)})")
+            setup = bb.setups[sid]
+        else:
+            setup = Setup(f"user{i}", r.number(t, "R_B_mm", path_i, positive=True),
+                          r.number(t, "Z_T_mm", path_i), r.number(t, "X_T_mm", path_i))
+        if "mount" in t:
+            mid = r.string(t, "mount", path_i)
+            if mid not in bb.mounts:
+                r.fail(f"{path_i}.mount", f"no mount {mid!r} in the campaign (have {', '.join(bb.mounts)})")
+            mount = bb.mounts[mid]
+        else:
+            mount = Mount(f"user{i}", r.number(t, "Z_C_mm", path_i), r.number(t, "R_C_mm", path_i, nonnegative=True))
+        length = r.number(t, "length_mm", path_i, required=False, positive=True, default=bb.length)
+        repeats = r.number(t, "repeats", path_i, required=False, positive=True, default=DEFAULT_REPEATS)
+        if repeats != int(repeats):
+            r.fail(f"{path_i}.repeats", f"must be a whole number, got {repeats:g}")
+        name = r.string(t, "name", path_i, default=f"{pattern} @ {setup.id}/{mount.id} (user)")
+        out.append(Candidate(name, "user", pattern, setup, mount, length, int(repeats),
+                             extension=setup.R_B - primary_setup(campaign).R_B))
+    return out

@@ -1,0 +1,73 @@
+"""Text and files of a measurement plan."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from .. import units
+from ..textfiles import atomic_directory
+from .figures import ranking_figure, sweep_figure
+from .plan import PlanResult
+
+SHOWN = 15
+
+
+def format_plan(result: PlanResult) -> str:
+    """Human-readable ranking, sweep summary and Monte-Carlo check."""
+    sym = [units.SYMBOL[u] for u in result.target_units]
+    t = result.table
+    lines = [f"Candidate measurements for {', '.join(result.targets)}, best first "
+             f"(closed form, {result.model} model, sigma_model {result.sigma_model_um:.2f} µm)"]
+    head = f"{'#':>3s}  {'candidate':34s} {'EIG bits':>8s}  " + "  ".join(
+        f"{tg + ' ' + s_:>22s}" for tg, s_ in zip(result.targets[:3], sym)) + "  verdict"
+    lines.append(head)
+    for _, r in t.head(SHOWN).iterrows():
+        sds = "  ".join(f"{r[f'{tg} sd_before']:9.3g} → {r[f'{tg} sd_after']:9.3g}" for tg in result.targets[:3])
+        new = f" (identifies {r['newly_identified']})" if r["newly_identified"] else ""
+        lines.append(f"{int(r['rank']):3d}  {r['name'][:34]:34s} {r['eig_bits']:8.3f}  {sds}  {r['verdict']}{new}")
+    rest = t.iloc[SHOWN:]
+    if len(rest):
+        lines.append(f"  … {len(rest)} more ({int((~rest['feasible']).sum())} infeasible, "
+                     f"{int((rest['feasible'] & ~rest['informative']).sum())} identifying nothing new); all in "
+                     "--json or -o DIR/plan.csv")
+    bad = t[~t["feasible"]]
+    for _, r in bad.iterrows():
+        lines.append(f"  rejected: {r['name']}: {r['verdict']}")
+    s = result.sweep
+    lines += ["", f"Sweep: {result.sweep_pattern} at the primary tool length plus Δ"]
+    for tg, s_ in zip(result.targets, sym):
+        first, last = s.iloc[0], s.iloc[-1]
+        not_id = s.loc[~s[f"{tg} identified"], "extension_mm"]
+        msg = (f"  {tg}: sd {first[f'{tg} sd_before']:.3g}{s_} today; {first[f'{tg} sd_after']:.3g}{s_} at Δ = 0, "
+               f"{s.loc[s['extension_mm'] == 50, f'{tg} sd_after'].iloc[0]:.3g}{s_} at 50 mm, "
+               f"{s.loc[s['extension_mm'] == 150, f'{tg} sd_after'].iloc[0]:.3g}{s_} at 150 mm, "
+               f"{last[f'{tg} sd_after']:.3g}{s_} at {last['extension_mm']:g} mm")
+        if len(not_id):
+            msg += f"; not identified for Δ ≤ {not_id.max():g} mm" if not_id.min() == 0 else \
+                f"; not identified at Δ = {', '.join(f'{v:g}' for v in not_id)} mm"
+        lines.append(msg)
+    if len(result.check):
+        lines += ["", "Monte-Carlo preposterior check (sigma_model learnt from simulated data, exact for the "
+                  "linear model):"]
+        for _, r in result.check.iterrows():
+            lines.append(f"  {r['candidate'][:30]:30s} {r['target']:18s} closed form {r['sd_after_closed_form']:8.3g}"
+                         f"  Monte Carlo {r['sd_after_monte_carlo']:8.3g}  ({100 * r['relative_difference']:+.1f} %)")
+    lines += ["", "Notes:"] + [f"  - {n}" for n in result.notes]
+    return "\n".join(lines)
+
+
+def write_plan(result: PlanResult, out_dir) -> list[str]:
+    """plan.csv, plan_sweep.csv, plan_check.csv, plan.json, plan_ranking.png, plan_sweep.png into ``out_dir``."""
+    from ..report.style import save_png
+
+    files = []
+    with atomic_directory(Path(out_dir)) as tmp:
+        result.table.to_csv(tmp / "plan.csv", index=False, float_format="%.6g")
+        result.sweep.to_csv(tmp / "plan_sweep.csv", index=False, float_format="%.6g")
+        result.check.to_csv(tmp / "plan_check.csv", index=False, float_format="%.6g")
+        (tmp / "plan.json").write_text(json.dumps(result.to_json(), indent=2, ensure_ascii=False), encoding="utf-8")
+        save_png(ranking_figure(result), tmp / "plan_ranking.png")
+        save_png(sweep_figure(result), tmp / "plan_sweep.png")
+        files = sorted(p.name for p in tmp.iterdir())
+    return files
