@@ -143,6 +143,16 @@ _USER_KEYS = {"name", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm",
               "repeats"}
 
 
+def _existing(r: TomlReader, t: dict, key: str, path: str, known: dict):
+    """The campaign's setup/mount named by ``key``, None when the candidate gives a new one."""
+    if key not in t:
+        return None
+    oid = r.string(t, key, path)
+    if oid not in known:
+        r.fail(f"{path}.{key}", f"no {key} {oid!r} in the campaign (have {', '.join(known)})")
+    return known[oid]
+
+
 def read_candidates(path, campaign: Campaign) -> list[Candidate]:
     """Candidates defined by the user in a TOML file of ``[[candidate]]`` tables.
 
@@ -172,21 +182,11 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
         pattern = r.string(t, "pattern", path_i, required=True)
         if pattern not in PATTERNS:
             r.fail(f"{path_i}.pattern", f"unknown pattern {pattern!r} (expected one of {' '.join(PATTERNS)})")
-        if "setup" in t:
-            sid = r.string(t, "setup", path_i)
-            if sid not in bb.setups:
-                r.fail(f"{path_i}.setup", f"no setup {sid!r} in the campaign (have {', '.join(bb.setups)})")
-            setup = bb.setups[sid]
-        else:
-            setup = Setup(f"user{i}", r.number(t, "R_B_mm", path_i, positive=True),
-                          r.number(t, "Z_T_mm", path_i), r.number(t, "X_T_mm", path_i))
-        if "mount" in t:
-            mid = r.string(t, "mount", path_i)
-            if mid not in bb.mounts:
-                r.fail(f"{path_i}.mount", f"no mount {mid!r} in the campaign (have {', '.join(bb.mounts)})")
-            mount = bb.mounts[mid]
-        else:
-            mount = Mount(f"user{i}", r.number(t, "Z_C_mm", path_i), r.number(t, "R_C_mm", path_i, nonnegative=True))
+        setup = _existing(r, t, "setup", path_i, bb.setups) or Setup(
+            f"user{i}", r.number(t, "R_B_mm", path_i, positive=True), r.number(t, "Z_T_mm", path_i),
+            r.number(t, "X_T_mm", path_i))
+        mount = _existing(r, t, "mount", path_i, bb.mounts) or Mount(
+            f"user{i}", r.number(t, "Z_C_mm", path_i), r.number(t, "R_C_mm", path_i, nonnegative=True))
         length = r.number(t, "length_mm", path_i, required=False, positive=True, default=bb.length)
         repeats = r.number(t, "repeats", path_i, required=False, positive=True, default=DEFAULT_REPEATS)
         if repeats != int(repeats):
