@@ -278,6 +278,73 @@ def cmd_plan(args) -> int:
     return 0
 
 
+def cmd_ncgen(args) -> int:
+    from .campaign import load_campaign
+    from .compensation.compensate import geometry_for
+    from .compensation.verify import nc_origin
+    from .ncgen import pattern_program
+
+    start = origin = None
+    if (args.x0 is None) != (args.z0 is None):
+        raise MtmcalError("--x0 and --z0 go together (the NC position of the first block)")
+    if args.x0 is not None:
+        start = (args.x0, args.y0, args.z0)
+        if not all(math.isfinite(v) for v in start):
+            raise MtmcalError("--x0/--y0/--z0: must be finite numbers")
+    campaign = load_campaign(args.campaign) if (args.campaign or args.R_B_mm is None or start is None) else None
+    if campaign is not None:
+        geo = geometry_for(campaign, args.setup, args.mount)
+        R_B = args.R_B_mm if args.R_B_mm is not None else geo.R_B
+        origin = None if start is not None else nc_origin(geo)
+        L_B, Z_C, R_C, cr = campaign.ballbar.length, geo.Z_C, geo.R_C, campaign.ballbar.cr_geometry
+        if args.mount is None and args.pattern.startswith("C"):
+            mounts = [campaign.ballbar.mounts[r.mount] for r in campaign.ballbar.runs if r.pattern.startswith("C")]
+            R_C = mounts[0].R_C if mounts else R_C
+    else:
+        R_B, L_B, Z_C, R_C, cr = args.R_B_mm, 100.0, 0.0, 0.0, "RC-LB"
+    lines = pattern_program(args.pattern, R_B, args.step_deg, args.n, L_B=L_B, Z_C=Z_C, R_C=R_C, start=start,
+                            origin=origin, feed=args.feed, cr_geometry=cr)
+    text = "\n".join(lines) + "\n"
+    if args.output:
+        from .textfiles import write_text_atomic
+
+        _check_writable(args.output, "program")
+        write_text_atomic(args.output, text)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def cmd_compensate(args) -> int:
+    from .campaign import load_campaign
+    from .compensation.compensate import OFF_TOOL_MM, compensate
+    from .gcode import read_program
+    from .textfiles import write_text_atomic
+
+    campaign = load_campaign(args.campaign)
+    program = read_program(args.program)
+    _check_writable(args.output, "compensated program")
+    res = compensate(campaign, program, args.method, args.model, args.values, args.posterior, args.point,
+                     args.setup, args.mount)
+    write_text_atomic(args.output, res.text)
+    if args.json:
+        print_json({**res.to_json(), "program": str(args.program), "output": args.output})
+        return 0
+    j = res.to_json()
+    print(f"{args.program}: {j['blocks']} motion blocks compensated ({args.method}, {args.model}, "
+          f"tool point {args.point}, deviations = {args.values}) -> {args.output}")
+    c = j["correction_um"]["max_abs"]
+    print(f"  largest correction: X {c['X']:.1f} µm, Y {c['Y']:.1f} µm, Z {c['Z']:.1f} µm; "
+          f"tool-point error before {j['error_before_um']['max']:.1f} µm")
+    print(f"  residual tool-point error ({j['uncertainty_from']}): mean ≤ {j['residual_um']['mean_max']:.1f} µm, "
+          f"95 % ≤ {j['residual_um']['p95_max']:.1f} µm per block")
+    print(f"  not compensable by X/Y/Z (tool-axis tilt; error {OFF_TOOL_MM:g} mm along the tool from the "
+          "compensated point):")
+    for r in j["not_compensable"]:
+        print(f"    {r['name']:14s} {r['tool_tilt_arcsec']:7.2f} ″  {r[f'error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um']:6.2f} µm")
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
@@ -358,6 +425,38 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")
     s.add_argument("--json", action="store_true", help="print JSON, best candidate first")
     s.set_defaults(func=cmd_plan)
+
+    s = sub.add_parser("ncgen", help="measuring NC program of a ball-bar pattern (e.g. thesis Fig 4.30(a))")
+    s.add_argument("pattern", metavar="PATTERN", help="one of BR BT BA BX BY BZ CR CT CA CX CY CZ")
+    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign whose setup geometry to use (default: thesis)")
+    s.add_argument("--R-B-mm", dest="R_B_mm", type=float, default=None, help="tool length R_B, mm (default: the setup's)")
+    s.add_argument("--x0", type=float, default=None, help="NC X of the first block, mm (with --z0)")
+    s.add_argument("--y0", type=float, default=0.0, help="NC Y of the first block, mm (default 0)")
+    s.add_argument("--z0", type=float, default=None, help="NC Z of the first block, mm (with --x0)")
+    s.add_argument("--step-deg", type=float, default=2.5, help="B or C step, degrees (default 2.5)")
+    s.add_argument("--feed", type=float, default=None, help="feed word F (default none)")
+    s.add_argument("-n", type=int, default=None, help="number of blocks (default: 0–90° for B, one turn for C)")
+    s.add_argument("--setup", default=None, help="campaign setup for R_B and the NC origin (default: that of BX)")
+    s.add_argument("--mount", default=None, help="campaign mount for Z_C, R_C")
+    s.add_argument("-o", "--output", metavar="FILE.nc", help="write the program to FILE (default: print)")
+    s.set_defaults(func=cmd_ncgen)
+
+    s = sub.add_parser("compensate", help="rewrite X/Y/Z of an NC program for the identified deviations, with uncertainty")
+    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign TOML (default: the built-in thesis campaign)")
+    s.add_argument("program", metavar="PROGRAM.nc", help="NC program (G00/G01 blocks, absolute)")
+    s.add_argument("-o", "--output", required=True, metavar="OUT.nc", help="compensated program")
+    s.add_argument("--method", choices=("exact", "thesis"), default="exact",
+                   help="exact inversion (default) or thesis Eqs 3.4–3.13 as printed (double correction)")
+    s.add_argument("--model", choices=MODEL_NAMES, default="htm-thesis", help="kinematic model (default htm-thesis)")
+    s.add_argument("--values", choices=("posterior", "ballbar"), default="posterior",
+                   help="compensate with the posterior mean (default) or the deterministic ball-bar values")
+    s.add_argument("--posterior", metavar="post.nc", help="posterior draws (from sample -o); default: closed form")
+    s.add_argument("--point", choices=("tcp", "nose"), default="tcp",
+                   help="compensate the tool centre point (default) or the spindle nose as the thesis does")
+    s.add_argument("--setup", default=None, help="campaign setup of the tool (R_B, NC origin; default: that of BX)")
+    s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
+    s.add_argument("--json", action="store_true", help="print JSON: corrections, residuals, what is not compensable")
+    s.set_defaults(func=cmd_compensate)
     return p
 
 

@@ -1,0 +1,121 @@
+"""``mtmcal-bayes compensate``: rewrite a program's X, Y, Z so the tool reaches the programmed points.
+
+The deviations are the posterior mean (default) or the deterministic ball-bar
+values (``values="ballbar"``, thesis Table 4.5 for the thesis campaign).  The
+uncertainty of the result comes from posterior draws: for each draw the tool
+point of the compensated program is computed again; per block the residual
+error's mean and 95 % quantile of its length are reported.  What X/Y/Z cannot
+correct — the tilt of the tool axis — is reported per deviation by name, with
+the position error it leaves 100 mm along the tool from the compensated point.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import units
+from ..errors import MtmcalError
+from ..gcode import Program, rewrite
+from ..models.htm import Geometry
+from ..parameters import DEVIATIONS
+from ..planning.candidates import primary_setup
+from .kinematics import compensate_exact, tool_axis_tilt, tool_point
+from .thesis_method import compensate_thesis
+from .values import ballbar_values, posterior_draws
+from .verify import nc_origin
+
+OFF_TOOL_MM = 100.0
+METHODS = ("exact", "thesis")
+
+
+@dataclass
+class CompensationResult:
+    """Compensated program text and, per motion block (k), corrections and residuals in µm."""
+
+    text: str
+    xyz: np.ndarray  # (k, 3) original NC X, Y, Z, mm
+    xyz_c: np.ndarray  # (k, 3) compensated, mm
+    residual_mean_um: np.ndarray  # (k,) mean length of the residual tool-point error over the draws
+    residual_p95_um: np.ndarray  # (k,) its 95 % quantile
+    error_before_um: np.ndarray  # (k,) length of the error of the original program at the used deviations
+    not_compensable: list[dict] = field(default_factory=list)
+    info: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        corr = (self.xyz_c - self.xyz) * 1e3
+        return {
+            **self.info,
+            "blocks": len(self.xyz),
+            "correction_um": {"max_abs": {a: float(np.abs(corr[:, i]).max()) for i, a in enumerate("XYZ")},
+                              "first_block": dict(zip("XYZ", map(float, corr[0])))},
+            "error_before_um": {"max": float(self.error_before_um.max())},
+            "residual_um": {"mean_max": float(self.residual_mean_um.max()),
+                            "p95_max": float(self.residual_p95_um.max()),
+                            "per_block_p95": [float(v) for v in self.residual_p95_um]},
+            "not_compensable": self.not_compensable,
+        }
+
+
+def geometry_for(campaign, setup_id: str | None, mount_id: str | None) -> Geometry:
+    bb = campaign.ballbar
+    if setup_id is not None and setup_id not in bb.setups:
+        raise MtmcalError(f"--setup: no setup {setup_id!r} in the campaign (have {', '.join(bb.setups)})")
+    if mount_id is not None and mount_id not in bb.mounts:
+        raise MtmcalError(f"--mount: no mount {mount_id!r} in the campaign (have {', '.join(bb.mounts)})")
+    s = bb.setups[setup_id] if setup_id else primary_setup(campaign)
+    m = bb.mounts[mount_id] if mount_id else next(iter(bb.mounts.values()))
+    return Geometry(s.R_B, s.Z_T, s.X_T, m.Z_C, m.R_C)
+
+
+def not_compensable(theta: np.ndarray, geo: Geometry, xyz_model: np.ndarray, bc: np.ndarray, model: str) -> list[dict]:
+    """Tool-axis tilt left by each deviation (largest over the blocks) and its effect off the tool length."""
+    out = []
+    for i, name in enumerate(DEVIATIONS):
+        if theta[i] == 0.0:
+            continue
+        single = np.zeros((1, len(DEVIATIONS)))
+        single[0, i] = theta[i]
+        tilt = float(tool_axis_tilt(single, geo, xyz_model, bc, model).max())
+        if units.from_internal(tilt, "arcsec") > 0.01:
+            out.append({"name": name, "tool_tilt_arcsec": units.from_internal(tilt, "arcsec"),
+                        f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um": units.from_internal(tilt * OFF_TOOL_MM, "um")})
+    total = float(tool_axis_tilt(theta[None], geo, xyz_model, bc, model).max())
+    out.append({"name": "all together", "tool_tilt_arcsec": units.from_internal(total, "arcsec"),
+                f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um": units.from_internal(total * OFF_TOOL_MM, "um")})
+    return sorted(out, key=lambda r: -r["tool_tilt_arcsec"])
+
+
+def compensate(campaign, program: Program, method: str = "exact", model: str = "htm-thesis", values: str = "posterior",
+               posterior=None, point: str = "tcp", setup: str | None = None, mount: str | None = None,
+               seed: int = 0) -> CompensationResult:
+    """Compensate ``program`` for the deviations of ``campaign`` (see the module docstring)."""
+    if method not in METHODS:
+        raise MtmcalError(f"--method: {method!r} (expected exact or thesis)")
+    if model == "linear":
+        raise MtmcalError("--model linear: compensation needs a kinematic chain; use htm-thesis (default) or htm-literal")
+    geo = geometry_for(campaign, setup, mount)
+    origin = nc_origin(geo)
+    pos = program.positions()
+    xyz, bc = pos[:, :3], pos[:, 3:]
+    xyz_model = xyz + origin
+    draws, source = posterior_draws(campaign, posterior, seed=seed)
+    theta = ballbar_values(campaign) if values == "ballbar" else draws.mean(axis=0)
+    if method == "exact":
+        xyz_c_model, miss = compensate_exact(theta[None], geo, xyz_model, bc, model, point)
+        xyz_c = xyz_c_model - origin
+    else:
+        xyz_c = compensate_thesis(dict(zip(DEVIATIONS, theta)), xyz, bc)[0]
+        xyz_c_model, miss = xyz_c + origin, float("nan")
+    nominal = tool_point(np.zeros((1, len(DEVIATIONS))), geo, xyz_model, bc, model)[0]
+    before = np.linalg.norm(tool_point(theta[None], geo, xyz_model, bc, model)[0] - nominal, axis=-1) * 1e3
+    resid = np.linalg.norm(tool_point(draws, geo, xyz_c_model, bc, model) - nominal, axis=-1) * 1e3  # (n, k)
+    info = {"method": method, "model": model, "point": point, "values": values,
+            "uncertainty_from": source, "geometry_mm": {"R_B": geo.R_B, "Z_T": geo.Z_T, "X_T": geo.X_T, "Z_C": geo.Z_C},
+            "nc_origin_mm": origin.tolist(), "newton_miss_um": miss * 1e3,
+            "deviations": {n: {"value": units.from_internal(v, DEVIATIONS[n].unit), "unit": DEVIATIONS[n].unit}
+                           for n, v in zip(DEVIATIONS, theta) if v != 0.0}}
+    return CompensationResult(rewrite(program, xyz_c), xyz, xyz_c, resid.mean(axis=0),
+                              np.quantile(resid, 0.95, axis=0), before,
+                              not_compensable(theta, geo, xyz_model, bc, model), info)
