@@ -281,8 +281,9 @@ def cmd_plan(args) -> int:
 def cmd_ncgen(args) -> int:
     from .campaign import load_campaign
     from .compensation.compensate import geometry_for
-    from .compensation.verify import nc_origin
+    from .models.htm import nc_origin
     from .ncgen import pattern_program
+    from .patterns import PATTERNS
 
     start = origin = None
     if (args.x0 is None) != (args.z0 is None):
@@ -293,13 +294,13 @@ def cmd_ncgen(args) -> int:
             raise MtmcalError("--x0/--y0/--z0: must be finite numbers")
     campaign = load_campaign(args.campaign) if (args.campaign or args.R_B_mm is None or start is None) else None
     if campaign is not None:
-        geo = geometry_for(campaign, args.setup, args.mount)
+        from .planning.candidates import mount_for
+
+        mount = args.mount or (mount_for(campaign, args.pattern).id if args.pattern in PATTERNS else None)
+        geo = geometry_for(campaign, args.setup, mount)
         R_B = args.R_B_mm if args.R_B_mm is not None else geo.R_B
         origin = None if start is not None else nc_origin(geo)
         L_B, Z_C, R_C, cr = campaign.ballbar.length, geo.Z_C, geo.R_C, campaign.ballbar.cr_geometry
-        if args.mount is None and args.pattern.startswith("C"):
-            mounts = [campaign.ballbar.mounts[r.mount] for r in campaign.ballbar.runs if r.pattern.startswith("C")]
-            R_C = mounts[0].R_C if mounts else R_C
     else:
         R_B, L_B, Z_C, R_C, cr = args.R_B_mm, 100.0, 0.0, 0.0, "RC-LB"
     lines = pattern_program(args.pattern, R_B, args.step_deg, args.n, L_B=L_B, Z_C=Z_C, R_C=R_C, start=start,
@@ -346,6 +347,13 @@ def cmd_compensate(args) -> int:
 
 
 # --------------------------------------------------------------------------- parser
+def _sampler_options(s) -> None:
+    """Options of the commands that run the sampler (sample, report)."""
+    s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
+    s.add_argument("--max-steps", type=int, default=20_000, help="step budget per ensemble (default 20000)")
+    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
     sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
@@ -388,12 +396,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, default=None, help="random seed: the same seed gives the same draws")
     s.add_argument("-o", "--output", metavar="posterior.nc", help="write the ArviZ InferenceData (NetCDF)")
     s.add_argument("--checkpoint", metavar="FILE", help="HDF5 checkpoint: written as it goes, resumed if it exists")
-    s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
-    s.add_argument("--max-steps", type=int, default=20_000, help="step budget per ensemble (default 20000)")
+    _sampler_options(s)
     s.add_argument("--closed-form", action="store_true",
                    help="instant closed-form Gaussian posterior (linear model, fixed sigma_model)")
     s.add_argument("--sigma-model-um", type=float, default=0.0, help="sigma_model for --closed-form (default 0)")
-    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     s.add_argument("--json", action="store_true", help="print JSON")
     s.set_defaults(func=cmd_sample)
 
@@ -405,9 +411,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--compare-models", action="store_true",
                    help="also sample under the other two models and compare (takes several minutes)")
     s.add_argument("--seed", type=int, default=1, help="random seed (default 1: the same report every time)")
-    s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
-    s.add_argument("--max-steps", type=int, default=20_000, help="step budget per ensemble (default 20000)")
-    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    _sampler_options(s)
     s.add_argument("--json", action="store_true", help="print the summary, diagnostics and written files as JSON")
     s.set_defaults(func=cmd_report)
 

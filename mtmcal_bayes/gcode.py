@@ -96,19 +96,10 @@ def parse_program(text: str, source: str = "<program>") -> Program:
     blocks = []
     for i, line in enumerate(lines, start=1):
         stripped = line.strip()
-        if not stripped or stripped[0] in "%(;O" and not stripped.upper().startswith(("G", "X", "Y", "Z")):
+        if not stripped or stripped[0] in "%(;O":  # blank, tape mark, comment, program number
             blocks.append(Block(i, line))
             continue
-        if stripped[0].isalpha() and not _WORD.match(stripped.replace(" ", "")):
-            blocks.append(Block(i, line))
-            continue
-        try:
-            words = _words(line, i, source)
-        except InputError:
-            if _COMMENT.sub("", line).strip() == "":
-                blocks.append(Block(i, line))
-                continue
-            raise
+        words = _words(line, i, source)
         g = [w.value for w in words if w.letter == "G"]
         if 91 in g:
             raise InputError(source, f"line {i}", "G91 incremental programming is not supported (absolute G90 only)")

@@ -24,7 +24,7 @@ from ..planning.candidates import primary_setup
 from .kinematics import compensate_exact, tool_axis_tilt, tool_point
 from .thesis_method import compensate_thesis
 from .values import ballbar_values, posterior_draws
-from .verify import nc_origin
+from ..models.htm import nc_origin
 
 OFF_TOOL_MM = 100.0
 METHODS = ("exact", "thesis")

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.htm import PIVOTS, Geometry, _apply, rotation, t_ball
+from ..models.htm import PIVOTS, CAxis, Geometry, t_ball
 from ..models.patterns import Commands
 from ..parameters import DEVIATIONS
 
@@ -40,12 +40,7 @@ def tool_point(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.nda
     B, C = np.radians(bc_deg[:, 0]), np.radians(bc_deg[:, 1])
     cmd = Commands(xyz[:, 0], xyz[:, 1], xyz[:, 2], B, C, B)
     T = t_ball(p, geo, cmd, piv)  # (n, k, 3) machine frame
-    # C-axis frame (Eq 2.16): undo the axis tilt about its pivot height and its offsets
-    zero = np.zeros_like(p["dx_CZ"])
-    R = rotation(np.stack([p["alpha_CZ"], p["beta_CZ"], zero], axis=-1))
-    h = np.array([0.0, 0.0, 2.0 * geo.Z_C if piv.c_tilt_height == "2Z_C" else 0.0])
-    d = np.stack([p["dx_CZ"], p["dy_CZ"], zero], axis=-1)[:, None, :]
-    Tc = _apply(np.transpose(R, (0, 2, 1)), T - d - h) + h
+    Tc = CAxis(p, geo.Z_C, piv).to_table(T)  # C-axis frame (Eq 2.16)
     # turn back by C: the workpiece (table) frame
     cC, sC = np.cos(C), np.sin(C)
     x = cC * Tc[..., 0] + sC * Tc[..., 1]

@@ -7,16 +7,12 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
+from ..models.htm import nc_origin
 from ..models.kinematic import HTMModel
 from ..models.patterns import Commands
 from ..parameters import DEVIATIONS, ParameterSpace
 from .kinematics import compensate_exact
 from .thesis_method import compensate_thesis
-
-
-def nc_origin(geo) -> np.ndarray:
-    """The NC origin in the model frame, (X_T, 0, Z_C + R_B + Z_T) mm."""
-    return np.array([geo.X_T, 0.0, geo.Z_C + geo.R_B + geo.Z_T])
 
 
 def resimulate(campaign, theta13: np.ndarray, model: str = "htm-thesis", method: str = "exact",

@@ -76,6 +76,11 @@ class Geometry:
     R_C: float
 
 
+def nc_origin(geo: Geometry) -> np.ndarray:
+    """The NC origin in the model frame, ``(X_T, 0, Z_C + R_B + Z_T)`` mm."""
+    return np.array([geo.X_T, 0.0, geo.Z_C + geo.R_B + geo.Z_T])
+
+
 def rotation(rotvec: np.ndarray) -> np.ndarray:
     """Exact rotation matrices ``expm([ε]×)`` for rotation vectors ``(n, 3)`` -> ``(n, 3, 3)``."""
     return Rotation.from_rotvec(np.atleast_2d(rotvec)).as_matrix()
@@ -126,7 +131,7 @@ def t_ball(p: dict[str, np.ndarray], geo: Geometry, cmd: Commands, piv: Pivots,
     t3 = pivot + _apply(R_xb, t2 - pivot)
 
     # travels with squareness (Eqs 2.5–2.9) about the frame or NC origin
-    O = np.array([geo.X_T, 0.0, geo.Z_C + geo.R_B + geo.Z_T]) if piv.origin == "nc" else np.zeros(3)
+    O = nc_origin(geo) if piv.origin == "nc" else np.zeros(3)
     R_xy = rotation(np.stack([zero, zero, p["gamma_XY"]], axis=-1))
     R_yz = rotation(np.stack([p["alpha_YZ"], p["beta_YZ"], zero], axis=-1))
     k = len(cmd.X)
@@ -160,8 +165,9 @@ class CAxis:
         return _apply(self.R, v - self.h) + self.h + d
 
     def to_table(self, w: np.ndarray) -> np.ndarray:
-        """Machine-frame points ``(n,3)`` to the C frame (Eq 2.16)."""
-        return _apply(np.transpose(self.R, (0, 2, 1)), w - self.d - self.h) + self.h
+        """Machine-frame points ``(n,3)`` or ``(n,k,3)`` to the C frame (Eq 2.16)."""
+        d = self.d if w.ndim == 2 else self.d[:, None, :]
+        return _apply(np.transpose(self.R, (0, 2, 1)), w - d - self.h) + self.h
 
 
 def w_ball(p: dict[str, np.ndarray], axis: CAxis, P0: np.ndarray, w_offset: np.ndarray,

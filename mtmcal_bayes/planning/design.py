@@ -192,8 +192,7 @@ class Planner:
         candidates = self.candidates if candidates is None else candidates
         rows = self.candidate_rows(candidates)
         added = np.stack([A.T @ (A * w[:, None]) for A, w in rows]) if rows else np.zeros((0,) + (len(self.space),) * 2)
-        scale = units.from_internal(1.0, "arcsec"), units.from_internal(1.0, "um")
-        to_display = np.array([scale[0] if u == "arcsec" else scale[1] for u in self.target_units])
+        to_display = np.array([units.from_internal(1.0, u) for u in self.target_units])
         out = {}
         for widen in (1.0, WIDEN):
             lam = self._precision(widen)

@@ -18,8 +18,8 @@ learnt from the data rather than fixed as in the closed form.
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
+from .. import units
 from ..inference.priors import make_prior
 from .design import Planner
 
@@ -107,9 +107,9 @@ def realised_sd(planner: Planner, candidate_index: int, n_sim: int = 400, seed: 
     y_all = np.hstack([np.broadcast_to(y, (n_sim, len(y))), y_c])
     _, sd_after = after.target_moments(y_all, planner.T)
     _, sd_now = now.target_moments(y[None], planner.T)
-    scale = np.array([3600 * 180 / np.pi if u == "arcsec" else 1e3 for u in planner.target_units])
+    scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     return {"sd_now": sd_now[0] * scale, "sd_realised": np.sqrt(np.mean(sd_after**2, axis=0)) * scale,
             "sd_realised_spread": sd_after.std(axis=0) * scale}
 
 
-__all__ = ["MarginalPosterior", "realised_sd", "stats"]
+__all__ = ["MarginalPosterior", "realised_sd"]

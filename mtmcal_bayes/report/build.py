@@ -86,7 +86,7 @@ def build_report(campaign, out_dir, model: str = "linear", settings: SamplerSett
     _check_output_dir(out_dir)
     say = say or (lambda text: None)
     settings = settings or SamplerSettings()
-    sampler_progress = (lambda m: progress(m)) if progress else (lambda m: None)
+    sampler_progress = progress or (lambda model_name: None)
 
     say(f"sampling the posterior ({model})")
     rep = posterior_report(campaign, model, fix_dx_BT, settings, progress=sampler_progress(model))
