@@ -21,12 +21,12 @@ import numpy as np
 
 from . import units
 from .errors import InputError
+from .models.patterns import CR_GEOMETRIES
 from .parameters import DEVIATIONS, MOUNT_NUISANCE, QUANTITIES, SETUP_NUISANCE
-from .patterns import COMPONENTS, PATTERNS
+from .patterns import B_PATTERNS, COMPONENTS, PATTERNS
 from .textfiles import read_text, write_text_atomic
 from .tomlio import Fixed, dumps, printed_decimals
 from .traces import read_trace
-from .models.patterns import CR_GEOMETRIES
 
 FORMAT = "mtmcal-campaign/1"
 PRIOR_DISTS = {"normal": ("sd",), "halfnormal": ("sd",), "uniform": ("low", "high")}
@@ -383,6 +383,9 @@ def _run(r: TomlReader, t: dict, path: str, setups, mounts, base_dir, L_B: float
     if mount not in mounts:
         r.fail(f"{path}.mount", f"names mount {mount!r}, which is not in [ballbar.mounts] "
                f"(have: {', '.join(mounts)})")
+    if pattern in B_PATTERNS and mounts[mount].R_C != 0:  # one W-ball placement cannot be on and off the axis
+        r.fail(f"{path}.mount", f"pattern {pattern} measures with the W ball on the C axis (thesis Table 2.2), "
+               f"but mount {mount!r} has R_C_mm = {mounts[mount].R_C:g}: use a mount with R_C_mm = 0")
     repeats = {}
     for c in ("ex", "ey", "ez"):
         key = f"{c}_um"
@@ -391,6 +394,11 @@ def _run(r: TomlReader, t: dict, path: str, setups, mounts, base_dir, L_B: float
                 r.fail(f"{path}.{key}", f"pattern {pattern} has no component {c} "
                        f"(it gives {' and '.join(COMPONENTS[pattern])})")
             repeats[c] = units.to_internal(r.array(t, key, path, (None,)), "um")
+            too_big = np.flatnonzero(np.abs(repeats[c]) >= L_B)
+            if too_big.size:  # also keeps the models and the planner away from overflow
+                i = int(too_big[0])
+                r.fail(f"{path}.{key}[{i}]", f"{units.from_internal(repeats[c][i], 'um'):g} µm is not below the "
+                       f"bar length L_B = {L_B:g} mm: not an eccentricity")
     traces = rms = None
     if "trace_csv" in t:
         if repeats:
@@ -404,6 +412,8 @@ def _run(r: TomlReader, t: dict, path: str, setups, mounts, base_dir, L_B: float
             fpath = (base_dir / name) if base_dir is not None else Path(name)
             if not fpath.exists():
                 r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} not found")
+            if fpath.is_dir():
+                r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} is a directory")
             ex = read_trace(fpath, pattern, mounts[mount].R_C, L_B, cr_geometry)
             extracted.append(ex.values)
             rms.append(ex.rms)
@@ -433,6 +443,9 @@ def _probe(r: TomlReader, t: dict) -> Probe:
         path = f"{P}.b_axis"
         r.check_keys(b, {"X_T_mm", "angles_deg", "styli"}, path)
         angles = r.array(b, "angles_deg", path, (2,))
+        if list(angles) != [0.0, 90.0]:  # identify's Eqs 5.8–5.19 take the rows as B = 0° and B = 90°
+            r.fail(f"{path}.angles_deg", f"must be [0, 90] (the B-axis equations use the centres at B = 0° "
+                   f"and 90°), got [{', '.join(f'{a:g}' for a in angles)}]")
         bax = BAxisProbe(r.number(b, "X_T_mm", path), angles)
         for sid, sp, s in r.subtables(b, "styli", path, {"R_B_mm", "nominal_mm", "centres_mm"}, "stylus"):
             bax.styli[sid] = Stylus(sid, r.number(s, "R_B_mm", sp, positive=True),
@@ -491,6 +504,11 @@ def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
             parsed[p] = units.to_internal(v, unit)
         if dist == "uniform" and parsed["high"] <= parsed["low"]:
             r.fail(f"{path}.high_{unit}", "must be greater than low")
+        if name == "sigma_model":  # a standard deviation: the sampler only visits sigma_model > 0
+            for p in ("low", "mean"):
+                if parsed.get(p, 0.0) < 0:
+                    r.fail(f"{path}.{p}_{unit}", f"must not be negative for sigma_model (a standard deviation), "
+                           f"got {units.from_internal(parsed[p], unit):g}")
         out[name] = parsed
     return out
 
@@ -526,7 +544,7 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
 
     Trace files are written relative to ``save_dir`` (absolute when ``None``).
     """
-    um = lambda v: units.from_internal(v, "um")  # noqa: E731
+    um = lambda v: units.from_internal(v, "um")
     doc: dict = {"format": FORMAT}
     doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
                       **{f"travel_{a}_mm": v for a, v in c.machine.travel.items()}}

@@ -346,6 +346,42 @@ def cmd_compensate(args) -> int:
     return 0
 
 
+def cmd_validate_sbc(args) -> int:
+    import time
+
+    from .campaign import load_campaign
+    from .validation import SBCSettings, run_sbc
+    from .validation.output import format_sbc, write_sbc
+
+    campaign = load_campaign(args.campaign)
+    if args.output:
+        _check_writable(args.output, "SBC")
+    settings = SBCSettings(n=args.n, model=args.model, sampler=args.sampler, n_ranked=args.draws,
+                           max_steps=args.max_steps, workers=args.workers, seed=args.seed)
+    t0 = time.perf_counter()
+    last = [0.0]
+
+    def progress(done, n, elapsed):
+        if args.quiet or (done < n and time.perf_counter() - last[0] < 10):
+            return
+        last[0] = time.perf_counter()
+        eta = elapsed / done * (n - done)
+        print(f"sbc [{args.model}, {args.sampler}]: {done}/{n} replicates, {elapsed:.0f} s, about {eta:.0f} s to go",
+              file=sys.stderr, flush=True)
+
+    result = run_sbc(campaign, settings, progress)
+    files = write_sbc(result, args.output) if args.output else []
+    if args.json:
+        print_json({**result.to_json(), "output": args.output, "files": files})
+    else:
+        print(format_sbc(result))
+        if files:
+            print(f"\nSBC written to {args.output}/: {', '.join(files)}")
+    if not args.quiet:
+        print(f"sbc: done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 def _sampler_options(s) -> None:
     """Options of the commands that run the sampler (sample, report)."""
@@ -461,6 +497,27 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
     s.add_argument("--json", action="store_true", help="print JSON: corrections, residuals, what is not compensable")
     s.set_defaults(func=cmd_compensate)
+
+    s = sub.add_parser("validate", help="check the inference itself: simulation-based calibration")
+    vsub = s.add_subparsers(dest="check", metavar="CHECK", parser_class=_Parser)
+    vsub.required = True
+    v = vsub.add_parser("sbc", help="simulation-based calibration (Talts et al. 2018): rank histograms, coverage")
+    v.add_argument("campaign", nargs="?", metavar="CAMPAIGN",
+                   help="campaign whose design (runs, repeats, priors) to simulate (default: thesis)")
+    v.add_argument("--n", type=int, default=200, help="replicates: truths drawn from the prior (default 200)")
+    v.add_argument("--model", choices=MODEL_NAMES, default="linear", help="forward model (default linear)")
+    v.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
+                   help="emcee (default: what sample/report use) or the exact linear posterior (checks SBC itself)")
+    v.add_argument("--draws", type=int, default=99, help="posterior draws each truth is ranked among (default 99)")
+    v.add_argument("--max-steps", type=int, default=4000, help="emcee step budget per ensemble (default 4000)")
+    v.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                   help=f"parallel processes (default: the CPU count, {os.cpu_count() or 1})")
+    v.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
+    v.add_argument("-o", "--output", metavar="DIR",
+                   help="write sbc.json, sbc_summary.csv, sbc_replicates.csv, sbc_ranks.png, sbc_ecdf.png")
+    v.add_argument("--json", action="store_true", help="print JSON: p_uniform and coverage_50/90/95 per quantity")
+    v.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    v.set_defaults(func=cmd_validate_sbc)
     return p
 
 
@@ -476,6 +533,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # output piped into head & co.: stop quietly, like other Unix tools
+        sys.stdout = None
+        return 141
     except Exception as exc:  # an internal error: still one line unless debugging
         if os.environ.get("MTMCAL_DEBUG"):
             raise

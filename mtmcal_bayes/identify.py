@@ -128,6 +128,7 @@ def identify_ballbar(campaign: Campaign) -> dict[str, Identified]:
         return None
 
     def put(name, eq, value, missing=None):
+        value = None if value is None else float(value) + 0.0  # + 0.0: no "-0.00" from all-zero data
         out[name] = Identified(name, value, eq, missing)
 
     ca_y, ca_x = first("CA", "ey"), first("CA", "ex")

@@ -20,6 +20,7 @@ from .textfiles import read_text
 _WORD = re.compile(r"([A-Z])\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)\b)", re.IGNORECASE)
 _COUNT = re.compile(r"^number\s+of\s+points\s+(\d+)\s*$", re.IGNORECASE)
 _FEATURE = re.compile(r"^feature\s+model\s+(\S+)\s*$", re.IGNORECASE)
+_AXES = ("X", "Y", "Z", "B", "C")
 
 
 @dataclass
@@ -64,7 +65,13 @@ def parse_dprnt(text: str, source: str = "<dprnt>") -> DprntPoints:
         for m in _WORD.finditer(line):
             if line[pos:m.start()].strip():
                 break
-            words[m.group(1).upper()] = m.group(2)
+            letter = m.group(1).upper()
+            if letter not in _AXES:
+                raise InputError(source, f"line {no}", f"word {letter}{m.group(2)} is not a coordinate "
+                                 f"(expected {' '.join(_AXES)}): {raw.strip()!r}")
+            if letter in words:
+                raise InputError(source, f"line {no}", f"{letter} appears twice: {raw.strip()!r}")
+            words[letter] = m.group(2)
             pos = m.end()
         if pos != len(line) or not words:
             raise InputError(source, f"line {no}", f"not a DPRNT point line: {raw.strip()!r}")

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from .campaign import Campaign, Run
-from .errors import MtmcalError
+from .errors import InputError
 from .models import jacobian, make_model
 from .parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
 from .patterns import B_PATTERNS, C_PATTERNS, COMPONENTS
@@ -26,7 +26,9 @@ def _all_patterns_campaign(campaign: Campaign) -> Campaign:
     b_mount = next((m.id for m in bb.mounts.values() if m.R_C == 0), None)
     c_mount = next((m.id for m in bb.mounts.values() if m.R_C > 0), None)
     if b_mount is None or c_mount is None:
-        raise MtmcalError("sensitivity needs a mount with R_C = 0 (B patterns) and one with R_C > 0 (C patterns)")
+        have = ", ".join(f"{m.id} R_C_mm = {m.R_C:g}" for m in bb.mounts.values())
+        raise InputError(campaign.source, "ballbar.mounts", "the sensitivity table needs a mount with R_C_mm = 0 "
+                         f"(B patterns) and one with R_C_mm > 0 (C patterns); have {have}")
     out = copy.deepcopy(campaign)
     out.ballbar.runs = [Run(p, setup, b_mount if p in B_PATTERNS else c_mount,
                             {c: np.zeros(1) for c in COMPONENTS[p]}) for p in B_PATTERNS + C_PATTERNS]

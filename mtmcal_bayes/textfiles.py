@@ -22,9 +22,15 @@ def read_text(path: str | os.PathLike, kind: str) -> str:
     if p.is_dir():
         raise InputError(str(p), None, f"is a directory, not a {kind}")
     try:
-        return p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(str(p), None, f"cannot read as a {kind}: {exc}") from None
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise InputError(str(p), None, f"cannot read as a {kind}: {exc.strerror or exc}") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:  # name the line of the first bad byte: binary, or saved as Latin-1/UTF-16
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise InputError(str(p), f"line {line}", f"not UTF-8 text (byte 0x{raw[exc.start]:02x}): "
+                         f"cannot read as a {kind}; save it as UTF-8") from None
 
 
 @contextlib.contextmanager

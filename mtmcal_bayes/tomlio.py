@@ -23,7 +23,7 @@ class Fixed:
 
 
 def _key(k: str) -> str:
-    return k if _BARE_KEY.match(k) else '"' + k.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    return k if _BARE_KEY.match(k) else _string(k)
 
 
 def _float(x: float) -> str:
@@ -36,9 +36,17 @@ def _float(x: float) -> str:
     return s if ("." in s or "e" in s or "inf" in s or "nan" in s) else s + ".0"
 
 
+def _string(s: str) -> str:
+    """A TOML basic string: backslash, quote and every control character escaped (tab may stay)."""
+    out = s.replace("\\", "\\\\").replace('"', '\\"')
+    return '"' + "".join(c if c == "\t" or (ord(c) >= 0x20 and ord(c) != 0x7F) else f"\\u{ord(c):04X}"
+                         for c in out) + '"'
+
+
 def _value(v) -> str:
     if isinstance(v, Fixed):
-        return f"{v.value:.{v.decimals}f}"
+        s = f"{v.value:.{v.decimals}f}"
+        return s[1:] if s.startswith("-") and float(s) == 0 else s  # "-0" would read back as the integer 0
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):
@@ -46,7 +54,7 @@ def _value(v) -> str:
     if isinstance(v, float):
         return _float(v)
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+        return _string(v)
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
     if hasattr(v, "tolist"):  # numpy arrays and scalars

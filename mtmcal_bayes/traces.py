@@ -1,7 +1,8 @@
 """Raw ball-bar traces: reading ``angle_deg, dL_um, direction`` CSV files and extracting eccentricities.
 
 Each direction (CW, CCW) is fitted separately with the same least-squares
-extractor the kinematic models use, and the two are averaged (thesis Sec 4.3.2).
+extractor the kinematic models use, and the two are averaged (thesis Sec 4.3.2);
+a file must hold both.
 """
 
 from __future__ import annotations
@@ -30,9 +31,13 @@ class TraceExtraction:
 
 
 def polar_angle(pattern: str, angle_deg: np.ndarray, R_C: float, L_B: float, cr_geometry: str) -> np.ndarray:
-    """Polar-plot angle ψ (rad) of a pattern's angles: θ + 180° for CR with the T ball at R_C − L_B < 0."""
+    """Polar-plot angle ψ (rad) of a pattern's angles: θ + 180° for CR with the T ball at R_C − L_B.
+
+    ψ is the bar's direction from W to T, which for the Table 2.3 geometry is θ + 180°
+    whatever the sign of R_C − L_B (``R_C``, ``L_B`` are kept for the callers).
+    """
     psi = np.deg2rad(angle_deg)
-    if pattern == "CR" and cr_geometry == "RC-LB" and R_C - L_B < 0:
+    if pattern == "CR" and cr_geometry == "RC-LB":
         psi = psi + np.pi
     return psi
 
@@ -61,6 +66,11 @@ def read_trace(path, pattern: str, R_C: float, L_B: float, cr_geometry: str = "R
         d = r[2].strip().upper()
         if d not in DIRECTIONS:
             raise InputError(src, f"line {no}", f"direction must be CW or CCW, got {r[2].strip()!r}")
+        if abs(a) > 360.0:
+            raise InputError(src, f"line {no}", f"angle_deg = {a:g} is outside -360…360°")
+        if abs(dl) * 1e-3 >= L_B:
+            raise InputError(src, f"line {no}", f"dL_um = {dl:g} is not below the bar length "
+                             f"L_B = {L_B:g} mm: not a ball-bar reading")
         data[d].append((a, dl))
     fits = {}
     for d, pts in data.items():
@@ -68,11 +78,18 @@ def read_trace(path, pattern: str, R_C: float, L_B: float, cr_geometry: str = "R
             continue
         arr = np.array(pts)
         span = np.ptp(arr[:, 0])
+        if pattern in B_PATTERNS and span > 180.0:
+            raise InputError(src, None, f"{d} trace spans {span:g}°, more than the 180° a B pattern can swing "
+                             "(0–90° in the thesis): is this a C-pattern trace?")
         if len(arr) < 4 or span < (30.0 if pattern in B_PATTERNS else 90.0):
             raise InputError(src, None, f"{d} trace too short to fit ({len(arr)} points over {span:g}°)")
         psi = polar_angle(pattern, arr[:, 0], R_C, L_B, cr_geometry)
         fits[d] = fit_eccentricity(pattern, psi, arr[:, 1] * 1e-3)
     if not fits:
         raise InputError(src, None, "no data rows")
+    missing = [d for d in DIRECTIONS if d not in fits]
+    if missing:  # each repeat is the mean of a CW and a CCW run (thesis Sec 4.3.2); one alone is not guessed
+        raise InputError(src, None, f"no {missing[0]} rows: a trace needs both directions, CW and CCW "
+                         "(their mean cancels the direction-dependent errors)")
     values = {c: float(np.mean([f.component(c) for f in fits.values()])) for c in COMPONENTS[pattern]}
     return TraceExtraction(values, {d: float(f.rms) for d, f in fits.items()})

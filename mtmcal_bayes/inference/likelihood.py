@@ -15,6 +15,8 @@ components) only has to provide ``loglike(pred, sigma_model)``.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 from scipy import stats
 
@@ -44,6 +46,12 @@ class GaussianMeanLikelihood:
         self.pooled_sd = float(pooled)  # mm: the repeat sd assumed for a component measured once
         self.repeat_sd = np.where(repeated, sd, pooled)  # (m,) mm
         self.base_var = self.repeat_sd**2 / observations.n + accuracy**2  # (m,) mm²
+
+    def with_means(self, y: np.ndarray) -> "GaussianMeanLikelihood":
+        """The same likelihood (same repeat sds, counts and accuracy) for other means ``y`` (m,), mm."""
+        out = copy.copy(self)
+        out.y = np.asarray(y, dtype=float)
+        return out
 
     def variance(self, sigma_model: np.ndarray | float) -> np.ndarray:
         """Variance of each mean, ``(n, m)`` for ``sigma_model`` of shape ``(n,)``."""

@@ -13,6 +13,8 @@ coordinate lets the sampler reach that end (τ of sigma_model ≈ 3× shorter).
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ..models import make_model
@@ -58,6 +60,17 @@ class Posterior:
         self._sigma_scale = priors[-1].scale if sigma_model is None else None
         self.names = self.priors.names
         self.p = len(self.space)
+
+    def with_means(self, y: np.ndarray) -> "Posterior":
+        """The posterior of the same campaign structure given other repeat means ``y`` (m,), mm.
+
+        Only the likelihood's data change (repeat sds, counts, priors and model
+        stay): what simulation-based calibration needs.  ``campaign`` and
+        ``forward.observations`` still describe the original measurement.
+        """
+        out = copy.copy(self)
+        out.likelihood = self.likelihood.with_means(y)
+        return out
 
     def __len__(self) -> int:
         return len(self.names)

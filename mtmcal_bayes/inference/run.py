@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
 import pandas as pd
 
 from .. import units
 from ..identify import identify
+from ..models import make_model
 from ..parameters import IDENTIFIABLE
 from ..textfiles import atomic_output
 from .analytic import gaussian_posterior
@@ -49,8 +51,30 @@ def posterior_report(campaign, model: str = "linear", fix_dx_BT: bool = False, s
     idata = to_inference_data(result, seed=seed)
     summary = summarize(idata, post)
     comp = comparison(summary, identify(campaign))
-    warn = result.messages + diagnostics_warnings(summary)
+    warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary)
     return PosteriorReport(idata, summary, comp, result, warn, not_identified(summary))
+
+
+def linear_model_check(result: SamplingResult) -> list[str]:
+    """A warning when the linear model's first order does not hold at the deviations found.
+
+    At the posterior mean, the kinematic model ``htm-thesis`` (whose first order is the
+    linear model) is compared with the linear model; a difference above the instrument
+    accuracy means the deviations are too large for the linear model (thesis
+    magnitudes leave 0.06 µm, deviations of a degree millimetres).
+    """
+    post = result.posterior
+    if post.model_name != "linear":
+        return []
+    theta = result.chains.reshape(-1, result.chains.shape[-1])[:, : post.p].mean(axis=0)
+    gap = float(np.abs(make_model("htm-thesis", post.campaign, post.space).predict(theta)
+                       - post.forward.predict(theta)).max())
+    accuracy = post.campaign.ballbar.accuracy
+    if gap <= accuracy:
+        return []
+    return [f"the linear model is first order and the deviations found are too large for it: at the posterior "
+            f"mean the kinematic model htm-thesis predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} µm "
+            f"away from it (instrument accuracy {units.from_internal(accuracy, 'um'):g} µm); use --model htm-thesis"]
 
 
 def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: float = 0.3) -> pd.DataFrame:

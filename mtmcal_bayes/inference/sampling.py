@@ -127,6 +127,8 @@ def run_ensembles(post: Posterior, settings: SamplerSettings | None = None, chec
     s = settings or SamplerSettings()
     if s.n_ensembles < 2:
         raise MtmcalError("at least two independent ensembles are needed for R-hat (four by default)")
+    if s.max_steps < s.check_every:  # the ensembles run in whole blocks: a smaller budget would be overrun silently
+        raise MtmcalError(f"--max-steps: {s.max_steps} is below one block of {s.check_every} steps")
     q, W = len(post), s.walkers(len(post))
     ckpt = Path(checkpoint) if checkpoint else None
     seeds = np.random.SeedSequence(s.seed).spawn(s.n_ensembles)

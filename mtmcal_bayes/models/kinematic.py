@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import MtmcalError
 from ..observations import Observations
 from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE, ParameterSpace, nuisance_name
 from ..patterns import B_PATTERNS, COMPONENTS
@@ -49,6 +50,10 @@ class HTMModel:
         self.observations = Observations.from_campaign(campaign)
         bb = campaign.ballbar
         geometry = getattr(bb, "cr_geometry", "RC-LB")
+        for r in bb.runs:  # B-pattern commands (Table 2.2) put the W ball on the C axis; a mount is one placement
+            if r.pattern in B_PATTERNS and bb.mounts[r.mount].R_C != 0:
+                raise MtmcalError(f"run {r.label}: pattern {r.pattern} measures with the W ball on the C axis "
+                                  f"(thesis Table 2.2), but mount {r.mount!r} has R_C = {bb.mounts[r.mount].R_C:g} mm")
 
         def plan(pattern, setup_id, mount_id, angles=None):
             s, m = bb.setups[setup_id], bb.mounts[mount_id]

@@ -7,8 +7,9 @@ about +Y, C about +Z; the tool points to −Z at B = 0.
 Eccentricities are read in the polar-plot frame: ``dL = r0 + e_a·u_a + e_b·u_b``
 by least squares, with ``(u_a, u_b) = (sin φ, cos φ)`` giving ``(ex, ez)`` for B
 patterns and ``(cos ψ, sin ψ)`` giving ``(ex, ey)`` for C patterns, ψ = θ except
-CR with the Table 2.3 geometry (T ball at radius R_C − L_B < 0), where ψ = θ + 180°
-(the direction of the bar from the W ball to the T ball).
+CR with the Table 2.3 geometry (T ball at radius R_C − L_B), where ψ = θ + 180°:
+the direction of the bar from the W ball to the T ball, ``T − W = −L_B·(cos θ, sin θ)``
+whatever the sign of R_C − L_B (for R_C ≥ L_B as well as for the thesis' R_C < L_B).
 """
 
 from __future__ import annotations
@@ -72,7 +73,7 @@ def pattern_commands(pattern: str, R_B: float, Z_C: float, R_C: float, L_B: floa
             raise ValueError(f"unknown CR geometry {cr_geometry!r}")
         radius = R_C - L_B if cr_geometry == "RC-LB" else R_C + L_B
         X, Y, Z = radius * c, radius * s, Zr
-        if radius < 0:
+        if cr_geometry == "RC-LB":  # the bar points from W to T along θ + 180°, also when R_C ≥ L_B
             psi = th + np.pi
     elif pattern == "CT":
         R_CT, a = np.hypot(R_C, L_B), np.arctan2(L_B, R_C)

@@ -46,7 +46,10 @@ def fit_sphere(points: np.ndarray, stylus_radius: float = 0.0) -> SphereFit:
     shift = P.mean(axis=0)
     Q = P - shift  # centred for conditioning
     A = np.c_[2 * Q, np.ones(len(Q))]
-    b = (Q**2).sum(axis=1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        b = (Q**2).sum(axis=1)
+    if not (np.isfinite(P).all() and np.isfinite(b).all()):
+        raise MtmcalError("coordinates too large for a sphere fit (their squares overflow)")
     sol, _, rank, sv = np.linalg.lstsq(A, b, rcond=None)
     if rank < 4 or sv[-1] < 1e-9 * sv[0]:
         raise MtmcalError("the points do not determine a sphere (coplanar or coincident)")

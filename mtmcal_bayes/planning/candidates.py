@@ -74,6 +74,16 @@ def mount_for(campaign: Campaign, pattern: str) -> Mount:
     return next((m for m in mounts if (m.R_C == 0) == want_zero), mounts[0])
 
 
+def candidate_mount(campaign: Campaign, pattern: str) -> Mount:
+    """The mount of a new run of ``pattern``: :func:`mount_for`, except that a B pattern measures with the W
+    ball on the C axis (thesis Table 2.2) — without such a mount in the campaign, a new placement there
+    (``<id>@R_C0``, at that mount's height, with its own W-ball offsets)."""
+    m = mount_for(campaign, pattern)
+    if pattern in B_PATTERNS and m.R_C != 0:
+        return Mount(f"{m.id}@R_C0", m.Z_C, 0.0)
+    return m
+
+
 def extended_setup(base: Setup, extension: float) -> Setup:
     """The tool setup with an extension bar of ``extension`` mm (Step 5 of the thesis)."""
     return Setup(f"{base.id}+{extension:g}", base.R_B + extension, base.Z_T - extension, base.X_T)
@@ -88,14 +98,14 @@ def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
     for pattern in TOOL_LENGTH_PATTERNS:
         for e in extensions:
             s = extended_setup(base, e)
-            out.append(Candidate(f"{pattern} @ R_B+{e:g} mm", "tool length", pattern, s, mount_for(campaign, pattern),
+            out.append(Candidate(f"{pattern} @ R_B+{e:g} mm", "tool length", pattern, s, candidate_mount(campaign, pattern),
                                  L, extension=e))
     measured = {(r.pattern, r.setup) for r in bb.runs}
     for s in bb.setups.values():
         for pattern in TOOL_LENGTH_PATTERNS:
             if (pattern, s.id) not in measured:
                 out.append(Candidate(f"{pattern} @ {s.id} (existing setup)", "existing setup", pattern, s,
-                                     mount_for(campaign, pattern), L, extension=s.R_B - base.R_B))
+                                     candidate_mount(campaign, pattern), L, extension=s.R_B - base.R_B))
     for i, run in enumerate(bb.runs):
         out.append(Candidate(f"repeat {run.pattern} @ {run.setup}/{run.mount} (+{DEFAULT_REPEATS})", "repeats",
                              run.pattern, bb.setups[run.setup], bb.mounts[run.mount], L, repeat_of=i))
@@ -103,7 +113,7 @@ def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
     for pattern in PATTERNS:
         if pattern not in done:
             out.append(Candidate(f"{pattern} @ {base.id}", "other pattern", pattern, base,
-                                 mount_for(campaign, pattern), L, extension=0.0))
+                                 candidate_mount(campaign, pattern), L, extension=0.0))
     c_mount = mount_for(campaign, "CR")
     for R_C in OTHER_R_C_MM:
         if R_C != c_mount.R_C:
@@ -115,7 +125,7 @@ def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
         if L_B != L:
             for pattern in TOOL_LENGTH_PATTERNS:
                 out.append(Candidate(f"{pattern} @ {base.id}, L_B {L_B:g} mm", "bar length", pattern, base,
-                                     mount_for(campaign, pattern), L_B, extension=0.0))
+                                     candidate_mount(campaign, pattern), L_B, extension=0.0))
     return out
 
 
@@ -187,6 +197,10 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
             r.number(t, "X_T_mm", path_i))
         mount = _existing(r, t, "mount", path_i, bb.mounts) or Mount(
             f"user{i}", r.number(t, "Z_C_mm", path_i), r.number(t, "R_C_mm", path_i, nonnegative=True))
+        if pattern in B_PATTERNS and mount.R_C != 0:
+            r.fail(f"{path_i}.mount" if "mount" in t else f"{path_i}.R_C_mm",
+                   f"pattern {pattern} measures with the W ball on the C axis (thesis Table 2.2), but the mount "
+                   f"has R_C_mm = {mount.R_C:g}: use a mount with R_C_mm = 0")
         length = r.number(t, "length_mm", path_i, required=False, positive=True, default=bb.length)
         repeats = r.number(t, "repeats", path_i, required=False, positive=True, default=DEFAULT_REPEATS)
         if repeats != int(repeats):

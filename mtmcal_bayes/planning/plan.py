@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from .candidates import Candidate, catalogue, extended_setup, feasibility, mount_for, primary_setup
+from .candidates import Candidate, candidate_mount, catalogue, extended_setup, feasibility, primary_setup
 from .design import Planner
 from .preposterior import realised_sd
 
@@ -82,7 +82,7 @@ def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP
     """Expected target sds for ``pattern`` at the primary setup plus each extension (mm)."""
     base = primary_setup(campaign)
     cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
-                       mount_for(campaign, pattern), campaign.ballbar.length, extension=float(e)) for e in extensions]
+                       candidate_mount(campaign, pattern), campaign.ballbar.length, extension=float(e)) for e in extensions]
     sub = Planner(campaign, cands, planner.targets, planner.sigma_model, planner.model)
     ev = sub.evaluate()
     rows = []

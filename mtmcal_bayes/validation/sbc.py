@@ -1,0 +1,238 @@
+"""Simulation-based calibration (Talts et al. 2018, arXiv:1804.06788) of the posterior.
+
+For each of ``n`` replicates: draw a truth θ̃ (deviations, mounting offsets,
+tool-length errors and sigma_model) from the prior; simulate the campaign's
+repeat means from the likelihood, ``ỹ ~ N(f(θ̃), s²/n + u_inst² + σ̃²)``, with
+the campaign's own repeat counts, repeat sds and instrument accuracy — exactly
+the data-generating process the likelihood assumes; draw from the posterior
+given ỹ; rank θ̃ among ``L`` near-independent posterior draws, for every
+quantity.  If the inference is right, each rank is uniform on {0, …, L}
+whatever the prior and the design, and the truth lies inside the posterior's
+x % highest-density interval in x % of the replicates.
+
+The replicates are independent: they run in parallel over processes
+(:class:`concurrent.futures.ProcessPoolExecutor`), each seeded from its own
+child of one :class:`numpy.random.SeedSequence`, so the result does not depend
+on the number of workers.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import warnings
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from ..errors import MtmcalError
+from ..inference.posterior import Posterior
+from ..inference.results import display_draws
+from ..parameters import IDENTIFIABLE
+from .samplers import make_sampler
+
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore", FutureWarning)
+    import arviz as az
+
+#: ranked quantities: the eight of Table 4.5, then the other sampled deviations and sigma_model
+SBC_QUANTITIES: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT", "sigma_model")
+#: probabilities of the highest-density intervals whose coverage is counted
+INTERVALS: tuple[float, ...] = (0.5, 0.9, 0.95)
+#: a quantity fails when its uniformity p-value is below this
+P_MIN = 0.01
+
+
+@dataclass
+class SBCSettings:
+    """What to run: ``n`` replicates of ``model`` with ``sampler`` (``"emcee"`` or ``"exact"``).
+
+    ``n_ranked`` = L, the posterior draws each truth is ranked among (ranks 0…L);
+    ``max_steps``: the emcee step budget per ensemble; ``workers``: processes.
+    """
+
+    n: int = 200
+    model: str = "linear"
+    sampler: str = "emcee"
+    n_ranked: int = 99
+    max_steps: int = 4000
+    workers: int = field(default_factory=lambda: os.cpu_count() or 1)
+    seed: int = 1
+
+    def check(self) -> None:
+        for name, value, low in (("--n", self.n, 2), ("--workers", self.workers, 1), ("--draws", self.n_ranked, 9)):
+            if value < low:
+                raise MtmcalError(f"{name}: {value} is below {low}")
+
+
+@dataclass
+class SBCResult:
+    """Ranks and interval hits of every replicate (``N`` replicates, ``Q`` quantities).
+
+    ``ranks`` (N, Q) in 0…L; ``truth``, ``post_mean``, ``post_sd`` (N, Q) display units (″, µm);
+    ``covered`` (N, len(INTERVALS), Q) bool; ``converged``, ``n_steps``, ``tau_max``, ``seconds`` (N,).
+    """
+
+    settings: SBCSettings
+    campaign: str
+    quantities: tuple[str, ...]
+    ranks: np.ndarray
+    truth: np.ndarray
+    post_mean: np.ndarray
+    post_sd: np.ndarray
+    prior_sd: np.ndarray  # (Q,) display units
+    covered: np.ndarray
+    converged: np.ndarray
+    n_steps: np.ndarray
+    tau_max: np.ndarray
+    seconds: np.ndarray
+    wall_time: float
+
+    @property
+    def n_bins(self) -> int:
+        """Histogram bins: a divisor of L + 1, at most 20, with ≥ 5 expected replicates per bin."""
+        L1 = self.settings.n_ranked + 1
+        for b in range(min(20, L1), 1, -1):
+            if L1 % b == 0 and len(self.ranks) / b >= 5:
+                return b
+        return 2 if L1 % 2 == 0 else 1
+
+    def bin_counts(self) -> np.ndarray:
+        """Rank-histogram counts ``(Q, B)``."""
+        B, L1 = self.n_bins, self.settings.n_ranked + 1
+        return np.stack([np.bincount(self.ranks[:, j] * B // L1, minlength=B) for j in range(len(self.quantities))])
+
+    def coverage_band(self, prob: float, level: float = 0.99) -> tuple[float, float]:
+        """Central ``level`` range of the coverage a calibrated posterior gives over N replicates (binomial)."""
+        n = len(self.ranks)
+        lo, hi = stats.binom.interval(level, n, prob)
+        return lo / n, hi / n
+
+    def summary(self) -> pd.DataFrame:
+        """Per quantity: p_uniform (χ² test of the binned ranks), coverage_50/90/95, z-score mean and sd,
+        posterior contraction (1 − mean posterior variance / prior variance) and the verdict."""
+        counts = self.bin_counts()
+        rows = {}
+        z = (self.post_mean - self.truth) / self.post_sd
+        for j, q in enumerate(self.quantities):
+            chi2, p = stats.chisquare(counts[j]) if counts.shape[1] > 1 else (np.nan, np.nan)
+            row = {"p_uniform": float(p), "chi2": float(chi2)}
+            for k, prob in enumerate(INTERVALS):
+                row[f"coverage_{round(100 * prob)}"] = float(self.covered[:, k, j].mean())
+            row["z_mean"] = float(z[:, j].mean())
+            row["z_sd"] = float(z[:, j].std(ddof=1))
+            row["contraction"] = float(1.0 - np.mean(self.post_sd[:, j] ** 2) / self.prior_sd[j] ** 2)
+            lo, hi = self.coverage_band(0.9)
+            row["ok"] = bool(p > P_MIN and lo <= row["coverage_90"] <= hi)
+            rows[q] = row
+        return pd.DataFrame(rows).T.astype({"ok": bool})
+
+    def to_json(self) -> dict:
+        s = self.summary()
+        lo, hi = self.coverage_band(0.9)
+        return {
+            "campaign": self.campaign, "model": self.settings.model, "sampler": self.settings.sampler,
+            "n": len(self.ranks), "n_ranked": self.settings.n_ranked, "n_bins": self.n_bins,
+            "seed": self.settings.seed, "workers": self.settings.workers,
+            "max_steps": self.settings.max_steps if self.settings.sampler == "emcee" else None,
+            "wall_time_s": self.wall_time, "replicate_seconds_median": float(np.median(self.seconds)),
+            "replicates_not_converged": int((~self.converged).sum()),
+            "p_min": P_MIN, "coverage_90_band_99pct": [lo, hi],
+            "quantities": {q: {k: (bool(v) if k == "ok" else float(v)) for k, v in s.loc[q].items()}
+                           for q in self.quantities},
+            "all_ok": bool(s.loc[list(IDENTIFIABLE), "ok"].all()),
+        }
+
+    def replicates(self) -> pd.DataFrame:
+        """One row per replicate: truth, rank, posterior mean and sd of every quantity, sampler facts."""
+        cols = {"replicate": np.arange(len(self.ranks)), "converged": self.converged, "n_steps": self.n_steps,
+                "tau_max": self.tau_max, "seconds": self.seconds}
+        for j, q in enumerate(self.quantities):
+            cols.update({f"{q} truth": self.truth[:, j], f"{q} rank": self.ranks[:, j],
+                         f"{q} mean": self.post_mean[:, j], f"{q} sd": self.post_sd[:, j]})
+        return pd.DataFrame(cols)
+
+
+def quantity_values(post: Posterior, theta: np.ndarray) -> np.ndarray:
+    """The ranked quantities ``(n, Q)`` (display units) of parameter draws ``(n, q)`` (internal units)."""
+    d = display_draws(post.names, theta)
+    return np.column_stack([d[q] for q in SBC_QUANTITIES])
+
+
+def simulate_data(post: Posterior, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """A truth from the prior ``(q,)`` and repeat means simulated from the likelihood ``(m,)``, mm."""
+    theta = post.priors.rvs(1, rng)
+    pred = post.forward.predict(theta[:, : post.p])
+    return theta[0], post.likelihood.replicate(pred, post.sigma(theta), rng)[0]
+
+
+def one_replicate(post: Posterior, sampler, n_ranked: int, seed: np.random.SeedSequence) -> dict:
+    """Simulate, sample and rank one replicate (see module docstring)."""
+    rng = np.random.default_rng(seed)
+    theta, y = simulate_data(post, rng)
+    t0 = time.perf_counter()
+    draws = sampler(post.with_means(y), n_ranked, rng)
+    truth = quantity_values(post, theta[None])[0]
+    ranked, full = quantity_values(post, draws.ranked), quantity_values(post, draws.all)
+    covered = np.empty((len(INTERVALS), len(truth)), dtype=bool)
+    for k, prob in enumerate(INTERVALS):
+        for j in range(len(truth)):
+            lo, hi = az.hdi(full[:, j], hdi_prob=prob)
+            covered[k, j] = lo <= truth[j] <= hi
+    return {"rank": (ranked < truth).sum(axis=0), "truth": truth, "mean": full.mean(axis=0),
+            "sd": full.std(axis=0, ddof=1), "covered": covered, "converged": draws.converged,
+            "n_steps": draws.n_steps, "tau_max": draws.tau_max, "seconds": time.perf_counter() - t0}
+
+
+# one posterior and sampler per worker process, built once by the initializer
+_WORKER: dict = {}
+
+
+def _init_worker(campaign, model: str, sampler, n_ranked: int) -> None:
+    _WORKER.update(post=Posterior(campaign, model), sampler=sampler, n_ranked=n_ranked)
+
+
+def _run_one(seed: np.random.SeedSequence) -> dict:
+    return one_replicate(_WORKER["post"], _WORKER["sampler"], _WORKER["n_ranked"], seed)
+
+
+def run_sbc(campaign, settings: SBCSettings | None = None, progress=None, sampler=None) -> SBCResult:
+    """Simulation-based calibration of ``settings.model`` on the design of ``campaign``.
+
+    ``progress(done, n, elapsed_s)`` is called as replicates finish.  ``sampler``
+    replaces the draw strategy named in the settings (any callable
+    ``(posterior, L, rng) -> Draws`` with a ``check(posterior)`` method; the
+    tests pass deliberately wrong ones to show that SBC catches them).
+    """
+    s = settings or SBCSettings()
+    s.check()
+    post = Posterior(campaign, s.model)
+    sampler = sampler or make_sampler(s.sampler, s.max_steps)
+    sampler.check(post)
+    seeds = np.random.SeedSequence(s.seed).spawn(s.n)
+    out: list[dict | None] = [None] * s.n
+    t0 = time.perf_counter()
+    workers = min(s.workers, s.n)
+    if workers == 1:
+        for i, seed in enumerate(seeds):
+            out[i] = one_replicate(post, sampler, s.n_ranked, seed)
+            if progress:
+                progress(i + 1, s.n, time.perf_counter() - t0)
+    else:
+        with ProcessPoolExecutor(workers, initializer=_init_worker,
+                                 initargs=(campaign, s.model, sampler, s.n_ranked)) as pool:
+            futures = {pool.submit(_run_one, seed): i for i, seed in enumerate(seeds)}
+            for done, f in enumerate(as_completed(futures), start=1):
+                out[futures[f]] = f.result()
+                if progress:
+                    progress(done, s.n, time.perf_counter() - t0)
+    stack = lambda key: np.array([r[key] for r in out])
+    prior_theta = post.priors.rvs(20_000, np.random.default_rng(np.random.SeedSequence(s.seed).spawn(s.n + 1)[-1]))
+    return SBCResult(
+        settings=s, campaign=campaign.source, quantities=SBC_QUANTITIES, ranks=stack("rank"), truth=stack("truth"),
+        post_mean=stack("mean"), post_sd=stack("sd"), prior_sd=quantity_values(post, prior_theta).std(axis=0),
+        covered=stack("covered"), converged=stack("converged"), n_steps=stack("n_steps"), tau_max=stack("tau_max"),
+        seconds=stack("seconds"), wall_time=time.perf_counter() - t0)
