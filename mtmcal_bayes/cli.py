@@ -98,7 +98,13 @@ def cmd_simulate(args) -> int:
 
     campaign = load_campaign(args.campaign)
     truth = load_truth(args.truth, campaign)
-    obs, pred = predict_truth(campaign, truth, args.model)
+    obs, pred = predict_truth(campaign, truth, args.model, source=str(args.truth))
+    if args.model == "linear":  # first order: say so when the truth is too large for it
+        gap = float(abs(predict_truth(campaign, truth, "htm-thesis", source=str(args.truth))[1] - pred).max())
+        if gap > campaign.ballbar.accuracy:
+            print(f"WARNING: the linear model is first order and this truth is too large for it: htm-thesis "
+                  f"predicts eccentricities up to {gap * 1e3:.1f} µm away (instrument accuracy "
+                  f"{campaign.ballbar.accuracy * 1e3:g} µm)", file=sys.stderr)
     if args.output:
         synth = synthetic_campaign(campaign, truth, args.model, noise=args.noise, seed=args.seed)
         what = "with noise (seed %s)" % args.seed if args.noise else "noise-free"

@@ -42,7 +42,7 @@ def load_truth(path, campaign: Campaign) -> Truth:
     return parse_truth(r, doc, "", campaign.ballbar)
 
 
-def truth_vector(space: ParameterSpace, truth: Truth) -> np.ndarray:
+def truth_vector(space: ParameterSpace, truth: Truth, source: str = "<truth>") -> np.ndarray:
     """Parameter vector ``(p,)`` (internal units) of a truth; missing values are zero."""
     values = dict(truth.deviations)
     for group in (truth.setups, truth.mounts):
@@ -50,7 +50,7 @@ def truth_vector(space: ParameterSpace, truth: Truth) -> np.ndarray:
             values.update({nuisance_name(k, owner): v for k, v in kv.items()})
     missing = [k for k in values if k not in space.names]
     if missing:
-        raise InputError("<truth>", missing[0], "not a parameter of this campaign")
+        raise InputError(source, missing[0], "not a parameter of this campaign")
     return space.vector(values)
 
 
@@ -65,10 +65,23 @@ def truth_from_vector(space: ParameterSpace, theta: np.ndarray) -> Truth:
     return t
 
 
-def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis") -> tuple[Observations, np.ndarray]:
-    """Noise-free eccentricities ``(m,)`` (mm) of every observed component under ``model``."""
+def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
+                  source: str = "<truth>") -> tuple[Observations, np.ndarray]:
+    """Noise-free eccentricities ``(m,)`` (mm) of every observed component under ``model``.
+
+    A truth so large that an eccentricity is not finite or not below the bar
+    length (no ball-bar could measure it) is an error naming ``source``.
+    """
     fm = make_model(model, campaign)
-    return fm.observations, fm.predict(truth_vector(fm.space, truth))
+    pred = fm.predict(truth_vector(fm.space, truth, source))
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(pred) < campaign.ballbar.length)
+    if bad.any():
+        k = fm.observations.keys[int(np.argmax(bad))]
+        raise InputError(source, None, f"this truth gives {k.component} of {k.pattern} = "
+                         f"{units.from_internal(pred[bad][0], 'um'):.4g} µm under {model}, not below the bar length "
+                         f"L_B = {campaign.ballbar.length:g} mm: the deviations are too large to be measured")
+    return fm.observations, pred
 
 
 def noisy_repeats(mean: np.ndarray, n_repeats: np.ndarray, accuracy: float, rng: np.random.Generator,

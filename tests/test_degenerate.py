@@ -284,3 +284,22 @@ def test_step_budget_below_one_block(run_cli, steps):
     """The ensembles advance in blocks of 500 steps: a smaller budget used to be overrun silently (and then
     reported as reached); now it is an error."""
     assert_error(run_cli("sample", "--max-steps", steps, "--quiet"), "--max-steps", "below one block of 500 steps")
+
+
+def test_simulate_truth_too_large_for_any_ballbar(run_cli, tmp_path):
+    """A truth whose eccentricities are not finite or not below the bar length: one line naming the truth file."""
+    truth = tmp_path / "huge.toml"
+    truth.write_text("[deviations]\nbeta_XB_arcsec = 1e300\n", encoding="utf-8")
+    code, out, err = run_cli("simulate", "--truth", truth, "-o", tmp_path / "synth.toml")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "huge.toml" in err and "too large to be measured" in err
+    assert not (tmp_path / "synth.toml").exists()
+
+
+def test_simulate_linear_warns_for_degree_sized_truth(run_cli, tmp_path):
+    truth = tmp_path / "deg.toml"
+    truth.write_text("[deviations]\nbeta_XB_arcsec = 7200\n", encoding="utf-8")
+    code, out, err = run_cli("simulate", "--truth", truth, "--model", "linear", "--json")
+    assert code == 0 and "linear model is first order" in err
+    code, out, err = run_cli("simulate", "--truth", truth, "--model", "htm-thesis", "--json")
+    assert code == 0 and "WARNING" not in err
