@@ -16,7 +16,7 @@ import tomllib
 import numpy as np
 
 from . import units
-from .campaign import Campaign, Truth, TomlReader, parse_truth
+from .campaign import Campaign, TomlReader, Truth, parse_truth
 from .errors import InputError
 from .models import make_model
 from .observations import Observations, with_observations
