@@ -299,7 +299,7 @@ def test_simulate_truth_too_large_for_any_ballbar(run_cli, tmp_path):
 def test_simulate_linear_warns_for_degree_sized_truth(run_cli, tmp_path):
     truth = tmp_path / "deg.toml"
     truth.write_text("[deviations]\nbeta_XB_arcsec = 7200\n", encoding="utf-8")
-    code, out, err = run_cli("simulate", "--truth", truth, "--model", "linear", "--json")
+    code, _out, err = run_cli("simulate", "--truth", truth, "--model", "linear", "--json")
     assert code == 0 and "linear model is first order" in err
     code, _out, err = run_cli("simulate", "--truth", truth, "--model", "htm-thesis", "--json")
     assert code == 0 and "WARNING" not in err
