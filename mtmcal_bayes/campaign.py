@@ -414,7 +414,7 @@ def _run(r: TomlReader, t: dict, path: str, setups, mounts, base_dir, L_B: float
                 r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} not found")
             if fpath.is_dir():
                 r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} is a directory")
-            ex = read_trace(fpath, pattern, mounts[mount].R_C, L_B, cr_geometry)
+            ex = read_trace(fpath, pattern, L_B, cr_geometry)
             extracted.append(ex.values)
             rms.append(ex.rms)
         repeats = {c: np.array([e[c] for e in extracted]) for c in COMPONENTS[pattern]}

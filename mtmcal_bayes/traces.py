@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .models.patterns import fit_eccentricity
+from .models.patterns import fit_eccentricity, polar_angle
 from .patterns import B_PATTERNS, COMPONENTS
 from .textfiles import read_text
 
@@ -30,19 +30,7 @@ class TraceExtraction:
     rms: dict[str, float]
 
 
-def polar_angle(pattern: str, angle_deg: np.ndarray, R_C: float, L_B: float, cr_geometry: str) -> np.ndarray:
-    """Polar-plot angle ψ (rad) of a pattern's angles: θ + 180° for CR with the T ball at R_C − L_B.
-
-    ψ is the bar's direction from W to T, which for the Table 2.3 geometry is θ + 180°
-    whatever the sign of R_C − L_B (``R_C``, ``L_B`` are kept for the callers).
-    """
-    psi = np.deg2rad(angle_deg)
-    if pattern == "CR" and cr_geometry == "RC-LB":
-        psi = psi + np.pi
-    return psi
-
-
-def read_trace(path, pattern: str, R_C: float, L_B: float, cr_geometry: str = "RC-LB") -> TraceExtraction:
+def read_trace(path, pattern: str, L_B: float, cr_geometry: str = "RC-LB") -> TraceExtraction:
     """Read a trace CSV and extract the pattern's eccentricities; bad content names file and line."""
     text = read_text(path, "trace CSV file")
     src = str(path)
@@ -83,7 +71,7 @@ def read_trace(path, pattern: str, R_C: float, L_B: float, cr_geometry: str = "R
                              "(0–90° in the thesis): is this a C-pattern trace?")
         if len(arr) < 4 or span < (30.0 if pattern in B_PATTERNS else 90.0):
             raise InputError(src, None, f"{d} trace too short to fit ({len(arr)} points over {span:g}°)")
-        psi = polar_angle(pattern, arr[:, 0], R_C, L_B, cr_geometry)
+        psi = polar_angle(pattern, np.deg2rad(arr[:, 0]), cr_geometry)
         fits[d] = fit_eccentricity(pattern, psi, arr[:, 1] * 1e-3)
     if not fits:
         raise InputError(src, None, "no data rows")

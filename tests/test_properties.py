@@ -727,8 +727,7 @@ def test_trace_csv_extraction_recovers_the_model_eccentricities(c, data, r0_um, 
             rows += [f"{float(a)!r},{float(v)!r},{direction}" for a, v in zip(angles[order], vals[order])]
         path = d / f"run{i}.csv"
         path.write_text("\n".join(rows) + "\n")
-        mount = c.ballbar.mounts[run.mount]
-        ex = read_trace(path, run.pattern, mount.R_C, c.ballbar.length, c.ballbar.cr_geometry)
+        ex = read_trace(path, run.pattern, c.ballbar.length, c.ballbar.cr_geometry)
         for comp in COMPONENTS[run.pattern]:
             k = index[(i, comp)]
             assert ex.values[comp] == pytest.approx(pred[k], abs=1e-12), (run.label, comp)  # mm: 1e-9 µm

@@ -67,14 +67,11 @@ def pattern_commands(pattern: str, R_B: float, Z_C: float, R_C: float, L_B: floa
     th = np.deg2rad(C_ANGLES_DEG if angles_deg is None else np.asarray(angles_deg, float))
     s, c, zero = np.sin(th), np.cos(th), np.zeros_like(th)
     Zr = Z_C + R_B + zero
-    psi = th
     if pattern == "CR":
         if cr_geometry not in CR_GEOMETRIES:
             raise ValueError(f"unknown CR geometry {cr_geometry!r}")
         radius = R_C - L_B if cr_geometry == "RC-LB" else R_C + L_B
         X, Y, Z = radius * c, radius * s, Zr
-        if cr_geometry == "RC-LB":  # the bar points from W to T along θ + 180°, also when R_C ≥ L_B
-            psi = th + np.pi
     elif pattern == "CT":
         R_CT, a = np.hypot(R_C, L_B), np.arctan2(L_B, R_C)
         X, Y, Z = R_CT * np.cos(th + a), R_CT * np.sin(th + a), Zr
@@ -84,7 +81,13 @@ def pattern_commands(pattern: str, R_B: float, Z_C: float, R_C: float, L_B: floa
         X, Y, Z = L_B + R_C * c, R_C * s, Zr
     else:  # CY
         X, Y, Z = R_C * c, L_B + R_C * s, Zr
-    return Commands(X, Y, Z, zero, th, psi)
+    return Commands(X, Y, Z, zero, th, polar_angle(pattern, th, cr_geometry))
+
+
+def polar_angle(pattern: str, theta: np.ndarray, cr_geometry: str = "RC-LB") -> np.ndarray:
+    """Polar-plot angle ψ (rad) of C-pattern angles θ (rad): θ, or θ + 180° for CR in the Table 2.3
+    geometry, where the bar points from W to T along θ + 180° whatever the sign of R_C − L_B."""
+    return theta + np.pi if pattern == "CR" and cr_geometry == "RC-LB" else theta
 
 
 def polar_basis(pattern: str, psi: np.ndarray) -> np.ndarray:
