@@ -23,7 +23,7 @@ from . import units
 from .errors import InputError
 from .models.patterns import CR_GEOMETRIES
 from .parameters import DEVIATIONS, MOUNT_NUISANCE, QUANTITIES, SETUP_NUISANCE
-from .patterns import B_PATTERNS, COMPONENTS, PATTERNS
+from .patterns import COMPONENTS, PATTERNS, mount_conflict
 from .textfiles import read_text, write_text_atomic
 from .tomlio import Fixed, dumps, printed_decimals
 from .traces import read_trace
@@ -383,9 +383,8 @@ def _run(r: TomlReader, t: dict, path: str, setups, mounts, base_dir, L_B: float
     if mount not in mounts:
         r.fail(f"{path}.mount", f"names mount {mount!r}, which is not in [ballbar.mounts] "
                f"(have: {', '.join(mounts)})")
-    if pattern in B_PATTERNS and mounts[mount].R_C != 0:  # one W-ball placement cannot be on and off the axis
-        r.fail(f"{path}.mount", f"pattern {pattern} measures with the W ball on the C axis (thesis Table 2.2), "
-               f"but mount {mount!r} has R_C_mm = {mounts[mount].R_C:g}: use a mount with R_C_mm = 0")
+    if conflict := mount_conflict(pattern, mount, mounts[mount].R_C):
+        r.fail(f"{path}.mount", conflict)
     repeats = {}
     for c in ("ex", "ey", "ez"):
         key = f"{c}_um"

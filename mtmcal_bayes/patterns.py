@@ -18,3 +18,15 @@ COMPONENTS: dict[str, tuple[str, str]] = {
     **{p: ("ex", "ez") for p in B_PATTERNS},
     **{p: ("ex", "ey") for p in C_PATTERNS},
 }
+
+
+def mount_conflict(pattern: str, mount_id: str | None, R_C: float) -> str | None:
+    """Why ``pattern`` cannot be measured on a mount at radius ``R_C`` (mm), or None if it can.
+
+    B patterns put the W ball on the C axis (Table 2.2), and one mount is one W-ball placement.
+    """
+    if pattern in B_PATTERNS and R_C != 0:
+        which = f"mount {mount_id!r}" if mount_id else "the mount"
+        return (f"pattern {pattern} measures with the W ball on the C axis (thesis Table 2.2), but {which} has "
+                f"R_C_mm = {R_C:g}: use a mount with R_C_mm = 0")
+    return None

@@ -508,12 +508,13 @@ def full_campaigns(draw):
     for name in draw(st.lists(st.sampled_from(names), max_size=5, unique=True)):
         unit = DEVIATIONS[name].unit if name in DEVIATIONS else "um"
         dist = draw(st.sampled_from(["normal", "halfnormal", "uniform"]))
+        low = 0.0 if name == "sigma_model" else None  # a standard deviation: the loader rejects low/mean < 0
         if dist == "uniform":
-            spec = {"low": draw(st.floats(-1000.0, 0.0)), "high": draw(st.floats(1.0, 1000.0))}
+            spec = {"low": draw(st.floats(-1000.0 if low is None else low, 0.0)), "high": draw(st.floats(1.0, 1000.0))}
         else:
             spec = {"sd": draw(st.floats(0.01, 1000.0))}
             if dist == "normal":
-                spec["mean"] = draw(st.floats(-100.0, 100.0))
+                spec["mean"] = draw(st.floats(-100.0 if low is None else low, 100.0))
         c.priors[name] = {"dist": dist, **{k: units.to_internal(v, unit) for k, v in spec.items()}}
 
     if draw(st.booleans()):

@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import MtmcalError
 from ..observations import Observations
 from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE, ParameterSpace, nuisance_name
-from ..patterns import B_PATTERNS, COMPONENTS
+from ..patterns import B_PATTERNS, COMPONENTS, mount_conflict
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
 from .patterns import Commands, fit_eccentricity, pattern_commands
 
@@ -50,8 +50,8 @@ class HTMModel:
         self.observations = Observations.from_campaign(campaign)
         bb = campaign.ballbar
         geometry = getattr(bb, "cr_geometry", "RC-LB")
-        for r in bb.runs:  # B-pattern commands (Table 2.2) put the W ball on the C axis; a mount is one placement
-            if r.pattern in B_PATTERNS and bb.mounts[r.mount].R_C != 0:
+        for r in bb.runs:  # campaigns built in Python skip the loader's check
+            if mount_conflict(r.pattern, r.mount, bb.mounts[r.mount].R_C):
                 raise MtmcalError(f"run {r.label}: pattern {r.pattern} measures with the W ball on the C axis "
                                   f"(thesis Table 2.2), but mount {r.mount!r} has R_C = {bb.mounts[r.mount].R_C:g} mm")
 

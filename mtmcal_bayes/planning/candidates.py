@@ -19,7 +19,7 @@ import numpy as np
 from ..campaign import Campaign, Mount, Setup, TomlReader
 from ..errors import InputError
 from ..models.patterns import pattern_commands
-from ..patterns import B_PATTERNS, C_PATTERNS, PATTERNS
+from ..patterns import B_PATTERNS, C_PATTERNS, PATTERNS, mount_conflict
 from ..textfiles import read_text
 
 #: extension bars of the catalogue, mm
@@ -79,7 +79,7 @@ def candidate_mount(campaign: Campaign, pattern: str) -> Mount:
     ball on the C axis (thesis Table 2.2) — without such a mount in the campaign, a new placement there
     (``<id>@R_C0``, at that mount's height, with its own W-ball offsets)."""
     m = mount_for(campaign, pattern)
-    if pattern in B_PATTERNS and m.R_C != 0:
+    if mount_conflict(pattern, m.id, m.R_C):
         return Mount(f"{m.id}@R_C0", m.Z_C, 0.0)
     return m
 
@@ -197,10 +197,8 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
             r.number(t, "X_T_mm", path_i))
         mount = _existing(r, t, "mount", path_i, bb.mounts) or Mount(
             f"user{i}", r.number(t, "Z_C_mm", path_i), r.number(t, "R_C_mm", path_i, nonnegative=True))
-        if pattern in B_PATTERNS and mount.R_C != 0:
-            r.fail(f"{path_i}.mount" if "mount" in t else f"{path_i}.R_C_mm",
-                   f"pattern {pattern} measures with the W ball on the C axis (thesis Table 2.2), but the mount "
-                   f"has R_C_mm = {mount.R_C:g}: use a mount with R_C_mm = 0")
+        if conflict := mount_conflict(pattern, t.get("mount"), mount.R_C):
+            r.fail(f"{path_i}.mount" if "mount" in t else f"{path_i}.R_C_mm", conflict)
         length = r.number(t, "length_mm", path_i, required=False, positive=True, default=bb.length)
         repeats = r.number(t, "repeats", path_i, required=False, positive=True, default=DEFAULT_REPEATS)
         if repeats != int(repeats):
