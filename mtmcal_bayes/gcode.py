@@ -27,6 +27,7 @@ import numpy as np
 
 from .errors import InputError
 from .textfiles import read_text
+from .units import fixed
 
 _WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))?")
 _COMMENT = re.compile(r"\([^)]*\)|;.*$")
@@ -197,11 +198,6 @@ def read_program(path) -> Program:
     return parse_program(read_text(path, "NC program"), str(path))
 
 
-def _fmt(value: float, decimals: int) -> str:
-    s = f"{value:.{decimals}f}"
-    return s[1:] if s.startswith("-") and float(s) == 0 else s  # no "-0.0000"
-
-
 def rewrite(program: Program, xyz: np.ndarray, default_decimals: int = 4) -> str:
     """Program text with the motion blocks' X, Y, Z replaced by ``xyz`` (k, 3) mm; all else unchanged.
 
@@ -226,24 +222,24 @@ def rewrite(program: Program, xyz: np.ndarray, default_decimals: int = 4) -> str
             if new[w.letter] == w.value:  # unchanged: keep the text as written (X+1.5, X100., X-0.000)
                 modal[w.letter] = w.value
                 continue
-            text = _fmt(new[w.letter], max(w.decimals, MIN_DECIMALS))
+            text = fixed(new[w.letter], max(w.decimals, MIN_DECIMALS))
             line = line[: w.start] + text + line[w.end:]
             modal[w.letter] = float(text)
         missing = [a for a in LINEAR if a not in present and (modal[a] is None or len(
-            {_fmt(new[a], dec), _fmt(modal[a], dec), _fmt(b.position[LINEAR.index(a)], dec)}) > 1)]
+            {fixed(new[a], dec), fixed(modal[a], dec), fixed(b.position[LINEAR.index(a)], dec)}) > 1)]
         if missing:  # modal axis that now moves: its word is added after the block's last word
             last = max(b.words, key=lambda w: w.end)
             shift = len(line) - len(b.text)
             at = last.end + shift
-            line = line[:at] + "".join(f" {a}{_fmt(new[a], dec)}" for a in missing) + line[at:]
-            modal.update({a: float(_fmt(new[a], dec)) for a in missing})
+            line = line[:at] + "".join(f" {a}{fixed(new[a], dec)}" for a in missing) + line[at:]
+            modal.update({a: float(fixed(new[a], dec)) for a in missing})
         out.append(line)
     return program.newline.join(out) + program.newline
 
 
 def block_line(X, Y, Z, B, C, feed=None, decimals: int = 4, motion: str = "G01") -> str:
     """One motion block, e.g. ``G01 X-390.0000 Y0.0000 Z-112.2605 B0.0000 C0.0000 F2000``."""
-    words = [motion] + [f"{a}{_fmt(v, decimals)}" for a, v in zip(AXES, (X, Y, Z, B, C))]
+    words = [motion] + [f"{a}{fixed(v, decimals)}" for a, v in zip(AXES, (X, Y, Z, B, C))]
     if feed is not None:
         words.append(f"F{feed:g}")
     return " ".join(words)

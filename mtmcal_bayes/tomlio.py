@@ -11,6 +11,8 @@ import math
 import re
 from dataclasses import dataclass
 
+from .units import fixed
+
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
 
 
@@ -45,8 +47,7 @@ def _string(s: str) -> str:
 
 def _value(v) -> str:
     if isinstance(v, Fixed):
-        s = f"{v.value:.{v.decimals}f}"
-        return s[1:] if s.startswith("-") and float(s) == 0 else s  # "-0" would read back as the integer 0
+        return fixed(v.value, v.decimals)
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):

@@ -27,6 +27,13 @@ _SCALE = {"mm": 1.0, "um": UM, "arcsec": ARCSEC, "deg": DEG, "rad": 1.0}
 SYMBOL = {"mm": "mm", "um": "µm", "arcsec": "″", "deg": "°", "rad": "rad"}
 
 
+def fixed(value: float, decimals: int) -> str:
+    """``value`` with ``decimals`` digits after the point, never ``-0.000`` (files re-read ``-0`` as an integer,
+    and an NC program should not show a sign for zero)."""
+    s = f"{value:.{decimals}f}"
+    return s[1:] if s.startswith("-") and float(s) == 0 else s
+
+
 def to_internal(value, unit: str):
     """Convert ``value`` (scalar or array) from ``unit`` to mm / rad."""
     if np.isscalar(value):
