@@ -212,7 +212,7 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress=None, sample
     post = Posterior(campaign, s.model)
     sampler = sampler or make_sampler(s.sampler, s.max_steps)
     sampler.check(post)
-    seeds = np.random.SeedSequence(s.seed).spawn(s.n)
+    *seeds, prior_seed = np.random.SeedSequence(s.seed).spawn(s.n + 1)  # one per replicate, one for the prior sd
     out: list[dict | None] = [None] * s.n
     t0 = time.perf_counter()
     workers = min(s.workers, s.n)
@@ -230,7 +230,7 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress=None, sample
                 if progress:
                     progress(done, s.n, time.perf_counter() - t0)
     stack = lambda key: np.array([r[key] for r in out])
-    prior_theta = post.priors.rvs(20_000, np.random.default_rng(np.random.SeedSequence(s.seed).spawn(s.n + 1)[-1]))
+    prior_theta = post.priors.rvs(20_000, np.random.default_rng(prior_seed))
     return SBCResult(
         settings=s, campaign=campaign.source, quantities=SBC_QUANTITIES, ranks=stack("rank"), truth=stack("truth"),
         post_mean=stack("mean"), post_sd=stack("sd"), prior_sd=quantity_values(post, prior_theta).std(axis=0),
