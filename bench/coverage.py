@@ -10,15 +10,18 @@ the truth (≥ 72 of 80 wanted: the expected count is 76, sd ≈ 2).
 
 import argparse
 import time
-import warnings
 
 import numpy as np
 
 from mtmcal_bayes import IDENTIFIABLE, load_campaign, units
-from mtmcal_bayes.inference import Posterior, SamplerSettings, run_ensembles, summarize, to_inference_data
-from mtmcal_bayes.simulate import synthetic_campaign, truth_from_vector
-
-warnings.simplefilter("ignore", FutureWarning)
+from mtmcal_bayes.inference import (
+    LogPosterior,
+    SamplerSettings,
+    run_ensembles,
+    summarize,
+    to_inference_data,
+)
+from mtmcal_bayes.simulation import synthetic_campaign, truth_from_vector
 
 
 def main():
@@ -28,14 +31,14 @@ def main():
     ap.add_argument("--seed", type=int, default=2026)
     args = ap.parse_args()
     thesis = load_campaign()
-    post0 = Posterior(thesis, args.model)
+    post0 = LogPosterior(thesis, args.model)
     rng = np.random.default_rng(args.seed)
     covered = total = 0
     for k in range(args.campaigns):
         draw = post0.priors.rvs(1, rng)[0]
         truth = truth_from_vector(post0.space, draw)
         synth = synthetic_campaign(thesis, truth, "htm-thesis", noise=True, seed=int(rng.integers(1 << 31)))
-        post = Posterior(synth, args.model)
+        post = LogPosterior(synth, args.model)
         t0 = time.perf_counter()
         res = run_ensembles(post, SamplerSettings(seed=int(rng.integers(1 << 31))))
         s = summarize(to_inference_data(res), post)

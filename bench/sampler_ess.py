@@ -10,16 +10,19 @@ identifiable quantities.
 
 import argparse
 import time
-import warnings
 
 import emcee
 import numpy as np
 
 from mtmcal_bayes import load_campaign
-from mtmcal_bayes.inference import Posterior, SamplerSettings, run_ensembles, summarize, to_inference_data
+from mtmcal_bayes.inference import (
+    LogPosterior,
+    SamplerSettings,
+    run_ensembles,
+    summarize,
+    to_inference_data,
+)
 from mtmcal_bayes.parameters import IDENTIFIABLE
-
-warnings.simplefilter("ignore", FutureWarning)
 
 
 class ScalarPosterior:
@@ -64,7 +67,7 @@ def main():
     ap.add_argument("--model", default="linear")
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()
-    post = Posterior(load_campaign(), args.model)
+    post = LogPosterior(load_campaign(), args.model)
     tv, ev, rv = run(post, args.steps, True, args.seed)
     ts, es, rs = run(post, args.steps, False, args.seed)
     same = np.array_equal(rv.chains, rs.chains)

@@ -6,10 +6,9 @@ Run:  python examples/identify_thesis.py
 import numpy as np
 
 import mtmcal_bayes as mb
-from mtmcal_bayes.tables import format_identification
 
 campaign = mb.load_campaign()  # the built-in thesis campaign (INTEGREX i-200)
-print(format_identification(mb.identify(campaign)))
+print(mb.identify(campaign).to_text())
 
 # The linear forward model: a batch of parameter vectors -> predicted eccentricities.
 model = mb.LinearModel(campaign)

@@ -10,7 +10,7 @@ Run:  python examples/simulate_and_identify.py
 import mtmcal_bayes as mb
 from mtmcal_bayes import units
 from mtmcal_bayes.campaign import Truth
-from mtmcal_bayes.simulate import synthetic_campaign
+from mtmcal_bayes.simulation import synthetic_campaign
 
 table_4_5 = {"alpha_CZ": 1.10, "beta_CZ": -25.16, "alpha_XB": -20.89, "beta_XB": -24.11,
              "gamma_XB": 5.63, "alpha_BT": 9.63}

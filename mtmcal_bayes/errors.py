@@ -1,8 +1,9 @@
 """Errors a user can act on.
 
 Every problem with user input is raised as a :class:`MtmcalError` whose string
-is one line naming the file and the key and saying what is wrong.  The command
-line prints that line on stderr and exits with status 2, never a traceback.
+is one line saying what is wrong and where: :class:`InputError` names the file
+and the key, :class:`ParameterError` the function parameter.  The command line
+prints that line on stderr and exits with status 2, never a traceback.
 """
 
 from __future__ import annotations
@@ -25,5 +26,14 @@ class InputError(MtmcalError):
         super().__init__(f"{where}: {message}")
 
 
-class IdentificationError(MtmcalError):
-    """The data do not contain what a deterministic identification needs."""
+class ParameterError(MtmcalError):
+    """A bad value of a function parameter, named as the Python API names it (``max_steps``).
+
+    ``str(err)`` is ``"max_steps: <message>"``; the command line shows its own
+    flag instead (``--max-steps: <message>``).  ``message`` must make sense after
+    either, so it never names a flag itself.
+    """
+
+    def __init__(self, parameter: str, message: str):
+        self.parameter, self.message = parameter, message
+        super().__init__(f"{parameter}: {message}")

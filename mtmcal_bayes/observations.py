@@ -9,6 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: typical repeat scatter of one eccentricity component, µm (thesis Table 4.4: 0.05–0.54 µm, typically 0.25):
+#: the repeat sd assumed where a campaign gives none, and that of simulated repeats
+TYPICAL_REPEAT_SD_UM = 0.25
+
 
 @dataclass(frozen=True)
 class ObservationKey:
@@ -43,7 +47,7 @@ class Observations:
     n: np.ndarray
 
     @classmethod
-    def from_campaign(cls, campaign) -> "Observations":
+    def from_campaign(cls, campaign) -> Observations:
         keys, mean, sd, n = [], [], [], []
         for i, run in enumerate(campaign.ballbar.runs):
             for comp, rep in run.repeats.items():

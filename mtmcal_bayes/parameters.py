@@ -5,7 +5,9 @@ Three groups of quantities appear everywhere in the package:
 * the 13 geometric deviations of thesis Table 2.1 (:data:`DEVIATIONS`);
 * the eight quantities the thesis ball-bar procedure identifies
   (:data:`IDENTIFIABLE`), seven of them deviations and one the combination
-  ``dx_CZ_minus_dx_BT``;
+  ``dx_CZ_minus_dx_BT``: a derived quantity, a weighted sum of deviations
+  defined once in :data:`DERIVED` (every consumer asks :func:`weights` or
+  :func:`combine`);
 * nuisance quantities of the instrument set-up: per tool setup of the
   spindle-side (T) ball its centre offset ``xT, yT, zT`` and the tool-length
   error ``dRB``; per mount of the workpiece-side (W) ball its offset
@@ -63,11 +65,37 @@ IDENTIFIABLE: tuple[str, ...] = (
     "gamma_XB", "alpha_BT", "dx_CZ_minus_dx_BT", "dy_CZ",
 )
 
-#: every named quantity: deviations plus the identifiable combination
+#: derived quantities: name -> {deviation: weight}; the value is Σ weight · deviation (same kind for all)
+DERIVED: dict[str, dict[str, float]] = {
+    "dx_CZ_minus_dx_BT": {"dx_CZ": 1.0, "dx_BT": -1.0},
+}
+
+#: every named quantity: deviations plus the derived ones
 QUANTITIES: dict[str, Quantity] = {
     **DEVIATIONS,
     "dx_CZ_minus_dx_BT": Quantity("dx_CZ_minus_dx_BT", "length", "dx_CZ − dx_BT, the C-axis X offset relative to the spindle"),
 }
+
+#: the model-discrepancy scale of the likelihood (SPEC §5), sampled beside the parameters
+SIGMA_MODEL = Quantity("sigma_model", "length", "sd of what the model leaves out (dynamics, thermal drift, pitch error)")
+
+
+def weights(name: str, available=None) -> dict[str, float]:
+    """Deviation weights of a quantity: ``{name: 1.0}``, or the definition of a derived one.
+
+    ``available`` (names of the parameters a posterior has) drops the weights
+    of deviations held at zero, such as ``dx_BT`` under the thesis assumption.
+    """
+    w = dict(DERIVED.get(name, {name: 1.0}))
+    if available is not None:
+        have = set(available)
+        w = {k: v for k, v in w.items() if k in have}
+    return w
+
+
+def combine(name: str, values) -> np.ndarray:
+    """Value of a derived quantity from ``values`` (``{deviation: array}``, one unit for all; absent = 0)."""
+    return sum(v * values[k] for k, v in DERIVED[name].items() if k in values)
 
 #: nuisance quantities of each tool setup (T-side ball offset and tool-length error)
 SETUP_NUISANCE: dict[str, Quantity] = {
@@ -86,10 +114,12 @@ MOUNT_NUISANCE: dict[str, Quantity] = {
 
 
 def quantity_unit(name: str) -> str:
-    """Display unit (``"arcsec"`` or ``"um"``) of a deviation, combination or nuisance base name."""
-    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE):
-        if name in table:
-            return table[name].unit
+    """Display unit (``"arcsec"`` or ``"um"``) of a deviation, derived quantity, nuisance parameter
+    (base name ``"xT"`` or full name ``"xT[RB1]"``) or ``sigma_model``."""
+    base = name.split("[")[0]
+    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, {SIGMA_MODEL.name: SIGMA_MODEL}):
+        if base in table:
+            return table[base].unit
     raise KeyError(name)
 
 
@@ -140,7 +170,7 @@ class ParameterSpace:
         self._index = {p.name: i for i, p in enumerate(self.parameters)}
 
     @classmethod
-    def for_campaign(cls, campaign, deviations=None) -> "ParameterSpace":
+    def for_campaign(cls, campaign, deviations=None) -> ParameterSpace:
         return cls(list(campaign.ballbar.setups), list(campaign.ballbar.mounts), deviations)
 
     def __len__(self) -> int:

@@ -28,7 +28,7 @@ import pytest
 from mtmcal_bayes import InputError, load_campaign, parse_campaign
 from mtmcal_bayes.cli import build_parser
 from mtmcal_bayes.datasets import data_path
-from mtmcal_bayes.gcode import parse_program
+from mtmcal_bayes.io.gcode import parse_program
 
 from .conftest import DATA
 

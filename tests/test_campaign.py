@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import InputError, load_campaign, parse_campaign, save_campaign
-from mtmcal_bayes.campaign import campaign_to_dict
-from mtmcal_bayes.tomlio import dumps
+from mtmcal_bayes.io import campaign_to_dict
+from mtmcal_bayes.io.tomlio import dumps
 
 from .conftest import DATA
 

@@ -10,7 +10,7 @@ from mtmcal_bayes.compensation.thesis_method import compensate_thesis
 from mtmcal_bayes.compensation.values import ballbar_values
 from mtmcal_bayes.compensation.verify import resimulate
 from mtmcal_bayes.datasets import data_path
-from mtmcal_bayes.gcode import parse_program, read_program, rewrite
+from mtmcal_bayes.io.gcode import parse_program, read_program, rewrite
 from mtmcal_bayes.models.htm import Geometry
 from mtmcal_bayes.parameters import DEVIATIONS
 
@@ -75,13 +75,13 @@ def test_compensating_fig_4_30a_keeps_b_c_and_other_blocks(run_cli, tmp_path):
 
 def test_exact_compensation_removes_the_eccentricities(thesis):
     """Thesis deviations, htm-thesis: BY, CR and CA re-simulated after compensation are below 0.5 µm."""
-    table = resimulate(thesis, ballbar_values(thesis), "htm-thesis", "exact", "tcp")
+    table = resimulate(thesis, ballbar_values(thesis), model="htm-thesis", method="exact", point="tcp")
     for label, row in table.iterrows():
         if label.split("_")[1].split("@")[0] in ("BY", "CR", "CA"):
             assert abs(row["after_um"]) < 0.5, (label, row["after_um"])
     assert abs(table.loc["ey_CR@RB1/C", "before_um"]) > 20  # there was something to remove
     # compensating the spindle nose instead (the thesis' reference) leaves the tool tilts times Z_T at the ball
-    nose = resimulate(thesis, ballbar_values(thesis), "htm-thesis", "exact", "nose")
+    nose = resimulate(thesis, ballbar_values(thesis), model="htm-thesis", method="exact", point="nose")
     assert abs(nose.loc["ey_CR@RB1/C", "after_um"]) > 5
 
 
@@ -91,10 +91,10 @@ def test_newton_reaches_the_programmed_point(thesis):
     xyz = pos[:, :3] + np.array([490.0, 0.0, 65.5348 + 356.3945 + 112.2877])
     theta = ballbar_values(thesis)
     for model in ("htm-thesis", "htm-literal"):
-        x_c, miss = compensate_exact(theta[None], geo, xyz, pos[:, 3:], model)
+        x_c, miss = compensate_exact(theta[None], geo, xyz, pos[:, 3:], model=model)
         assert miss < 1e-9  # mm
-        actual = tool_point(theta[None], geo, x_c, pos[:, 3:], model)[0]
-        nominal = tool_point(np.zeros((1, 13)), geo, xyz, pos[:, 3:], model)[0]
+        actual = tool_point(theta[None], geo, x_c, pos[:, 3:], model=model)[0]
+        nominal = tool_point(np.zeros((1, 13)), geo, xyz, pos[:, 3:], model=model)[0]
         assert np.abs(actual - nominal).max() < 1e-9
 
 
@@ -108,6 +108,6 @@ def test_thesis_method_corrects_twice(thesis):
     _, _, fixed = compensate_thesis(d, pos[:, :3], pos[:, 3:], corrected=True)
     assert np.abs(fixed).max() < 1e-9
     # in the kinematic model the CR errors flip too (radial and tangential within 5 %)
-    table = resimulate(thesis, ballbar_values(thesis), "htm-thesis", "thesis")
+    table = resimulate(thesis, ballbar_values(thesis), model="htm-thesis", method="thesis")
     for label in ("ey_CR@RB1/C", "ex_CR@RB2/C", "ey_CR@RB2/C"):
         assert table.loc[label, "after_um"] == pytest.approx(-table.loc[label, "before_um"], rel=0.05)

@@ -186,7 +186,7 @@ def test_deviations_of_degrees(run_cli, tmp_path):
     _, err = assert_clean(run_cli("sample", synth, *QUICK))
     warning = next(line for line in err.splitlines() if "linear model is first order" in line)
     assert warning.startswith("WARNING: the linear model is first order and the deviations found are too large")
-    assert warning.endswith("use --model htm-thesis")
+    assert warning.endswith("use the htm-thesis model")
 
     doc = finite_json(assert_clean(run_cli("sample", synth, "--model", "htm-thesis", "--json", *QUICK))[0])
     assert_summary_filled(doc)

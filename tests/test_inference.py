@@ -9,11 +9,17 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import IDENTIFIABLE, units
-from mtmcal_bayes.campaign import parse_campaign
-from mtmcal_bayes.inference import (Posterior, SamplerSettings, gaussian_posterior, run_ensembles, summarize,
-                                    to_inference_data)
+from mtmcal_bayes.inference import (
+    LogPosterior,
+    SamplerSettings,
+    gaussian_posterior,
+    run_ensembles,
+    summarize,
+    to_inference_data,
+)
 from mtmcal_bayes.inference.results import not_identified
-from mtmcal_bayes.simulate import synthetic_campaign, truth_from_vector
+from mtmcal_bayes.io import parse_campaign
+from mtmcal_bayes.simulation import synthetic_campaign, truth_from_vector
 
 from . import variants
 
@@ -30,7 +36,7 @@ def without_second_tool_length():
 def test_sampler_matches_closed_form(thesis):
     """Linear model, sigma_model fixed: means within 0.1 posterior sd, sds within 10 %, all eight quantities."""
     sigma = 0.3e-3
-    post = Posterior(thesis, "linear", sigma_model=sigma)
+    post = LogPosterior(thesis, "linear", sigma_model=sigma)
     res = run_ensembles(post, SamplerSettings(seed=3))
     assert res.converged
     g = gaussian_posterior(post, sigma_model=sigma)
@@ -47,7 +53,7 @@ def test_sampler_matches_closed_form(thesis):
 def test_without_cr_at_second_tool_length_alpha_BT_and_dy_CZ_not_identified():
     """Acceptance 4, with the criterion this package uses (see docs/inference.md)."""
     c = without_second_tool_length()
-    post = Posterior(c, "linear")
+    post = LogPosterior(c, "linear")
     res = run_ensembles(post, SamplerSettings(seed=4, min_tau_multiple=20))
     summary = summarize(to_inference_data(res, seed=4), post)
     for name in ("alpha_BT", "dy_CZ"):
@@ -66,7 +72,7 @@ def test_without_cr_at_second_tool_length_alpha_BT_and_dy_CZ_not_identified():
 def test_thesis_campaign_all_eight_identified(thesis):
     from mtmcal_bayes.inference.analytic import prior_sensitivity
 
-    growth = prior_sensitivity(Posterior(thesis, "linear"), 0.3e-3)
+    growth = prior_sensitivity(LogPosterior(thesis, "linear"), 0.3e-3)
     assert max(growth.values()) < 1.1
 
 
@@ -75,13 +81,13 @@ def test_closed_form_coverage_on_simulated_campaigns(thesis):
     true noise level: the 95 % interval covers the truth in ≥ 72 of 80 cases. (The sampler's own count is in
     bench/coverage.py; the sampler is tied to the closed form by test_sampler_matches_closed_form.)"""
     rng = np.random.default_rng(2026)
-    post0 = Posterior(thesis, "linear")
+    post0 = LogPosterior(thesis, "linear")
     covered = 0
     for k in range(10):
         draw = post0.priors.rvs(1, rng)[0]
         truth = truth_from_vector(post0.space, draw)
         synth = synthetic_campaign(thesis, truth, "htm-thesis", noise=True, seed=int(rng.integers(1 << 31)))
-        post = Posterior(synth, "linear", sigma_model=0.0)
+        post = LogPosterior(synth, "linear", sigma_model=0.0)
         g = gaussian_posterior(post, sigma_model=0.0)
         for name in IDENTIFIABLE:
             w = weights(name, post.names)
@@ -94,14 +100,14 @@ def test_closed_form_coverage_on_simulated_campaigns(thesis):
 def test_checkpoint_resume_gives_the_same_draws(tmp_path, thesis):
     """A run killed mid-way resumes from its checkpoint and ends exactly like an uninterrupted run."""
     settings = SamplerSettings(seed=9, check_every=150, max_steps=600, n_walkers=48)
-    post = Posterior(thesis, "linear", sigma_model=0.3e-3)
+    post = LogPosterior(thesis, "linear", sigma_model=0.3e-3)
     full = run_ensembles(post, settings)
 
     class Killed(Exception):
         pass
 
-    def kill_after_first_block(step, max_steps, tau):
-        if step >= 300:
+    def kill_after_first_block(event):
+        if event.done >= 300:
             raise Killed
 
     ckpt = tmp_path / "run.h5"
@@ -117,15 +123,15 @@ def test_checkpoint_of_another_run_is_refused(tmp_path, thesis):
 
     settings = SamplerSettings(seed=1, check_every=50, max_steps=50, n_walkers=48)
     ckpt = tmp_path / "run.h5"
-    run_ensembles(Posterior(thesis, "linear"), settings, checkpoint=ckpt)
+    run_ensembles(LogPosterior(thesis, "linear"), settings, checkpoint=ckpt)
     with pytest.raises(MtmcalError, match="another run"):
-        run_ensembles(Posterior(thesis, "linear", fix_dx_BT=True), settings, checkpoint=ckpt)
+        run_ensembles(LogPosterior(thesis, "linear", fix_dx_BT=True), settings, checkpoint=ckpt)
 
 
 def test_fix_dx_BT_recovers_thesis_beta_XB(thesis):
     """With Eq 4.2's assumption the posterior of beta_XB sits near the thesis value; without it, it does not."""
-    fixed = gaussian_posterior(Posterior(thesis, "linear", fix_dx_BT=True, sigma_model=3e-4), 3e-4)
-    free = gaussian_posterior(Posterior(thesis, "linear", sigma_model=3e-4), 3e-4)
+    fixed = gaussian_posterior(LogPosterior(thesis, "linear", fix_dx_BT=True, sigma_model=3e-4), 3e-4)
+    free = gaussian_posterior(LogPosterior(thesis, "linear", sigma_model=3e-4), 3e-4)
     m_fixed, sd_fixed = (units.from_internal(v, "arcsec") for v in fixed.linear_combination({"beta_XB": 1}))
     m_free, sd_free = (units.from_internal(v, "arcsec") for v in free.linear_combination({"beta_XB": 1}))
     assert abs(m_fixed - (-24.11)) < 3 * sd_fixed + 1.0
@@ -167,11 +173,11 @@ def test_sampler_matches_the_exact_sigma_marginal_posterior(thesis):
 
     Tolerances: means within 0.15 posterior sd, sds within 8 % (a few thousand effective draws).
     """
+    from mtmcal_bayes.inference.marginal import MarginalPosterior
     from mtmcal_bayes.inference.priors import make_prior
     from mtmcal_bayes.planning.design import Planner
-    from mtmcal_bayes.planning.preposterior import MarginalPosterior
 
-    post = Posterior(thesis, "linear")
+    post = LogPosterior(thesis, "linear")
     result = run_ensembles(post, SamplerSettings(seed=5, max_steps=6000))
     s = summarize(to_inference_data(result, seed=5), post)
     pl = Planner(thesis, [], list(IDENTIFIABLE))

@@ -10,8 +10,13 @@ from mtmcal_bayes import LinearModel, load_campaign, units
 from mtmcal_bayes.campaign import Run
 from mtmcal_bayes.models import HTMModel, jacobian, make_model
 from mtmcal_bayes.models.linear import LEFT_OUT
-from mtmcal_bayes.models.patterns import fit_eccentricity, pattern_commands
-from mtmcal_bayes.patterns import B_PATTERNS, C_PATTERNS, COMPONENTS
+from mtmcal_bayes.patterns import (
+    B_PATTERNS,
+    C_PATTERNS,
+    COMPONENTS,
+    fit_eccentricity,
+    pattern_commands,
+)
 
 from .conftest import DATA
 
@@ -163,9 +168,9 @@ def test_extractor_recovers_eccentricity_and_reports_residual():
 
 
 def test_cr_polar_angle_table_2_3():
-    cmd = pattern_commands("CR", 356.0, 65.0, 50.0, 100.0)
+    cmd = pattern_commands("CR", R_B=356.0, Z_C=65.0, R_C=50.0, L_B=100.0)
     np.testing.assert_allclose(cmd.psi - np.deg2rad(np.arange(0, 360, 5.0)), np.pi)  # R_C − L_B < 0
-    cmd = pattern_commands("CR", 356.0, 65.0, 50.0, 100.0, cr_geometry="RC+LB")
+    cmd = pattern_commands("CR", R_B=356.0, Z_C=65.0, R_C=50.0, L_B=100.0, cr_geometry="RC+LB")
     np.testing.assert_allclose(cmd.psi, np.deg2rad(np.arange(0, 360, 5.0)))
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import LinearModel, ParameterSpace
-from mtmcal_bayes.campaign import parse_campaign
+from mtmcal_bayes.io import parse_campaign
 
 from .conftest import DATA
 

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import IDENTIFIABLE, units
-from mtmcal_bayes.campaign import parse_campaign
-from mtmcal_bayes.inference import Posterior, gaussian_posterior
+from mtmcal_bayes.inference import LogPosterior, gaussian_posterior
+from mtmcal_bayes.io import parse_campaign
+from mtmcal_bayes.parameters import weights
 from mtmcal_bayes.planning.candidates import catalogue, feasibility
-from mtmcal_bayes.planning.design import Planner, target_weights
+from mtmcal_bayes.planning.design import Planner
 from mtmcal_bayes.planning.plan import tool_length_sweep
 from mtmcal_bayes.planning.preposterior import realised_sd
 
@@ -67,10 +68,10 @@ def test_closed_form_matches_the_inference_on_an_augmented_campaign(no_cr2):
     sigma = units.to_internal(2.0, "um")
     cands = [c for c in catalogue(no_cr2) if c.name in ("CR @ R_B+100 mm", "BZ @ RB1", "CA @ RB1, R_C 100 mm")]
     assert len(cands) == 3
-    ev = Planner(no_cr2, cands, list(IDENTIFIABLE), sigma).evaluate()
-    g = gaussian_posterior(Posterior(no_cr2, "linear", sigma_model=sigma), sigma)
+    ev = Planner(no_cr2, cands, list(IDENTIFIABLE), sigma_model=sigma).evaluate()
+    g = gaussian_posterior(LogPosterior(no_cr2, "linear", sigma_model=sigma), sigma)
     for i, name in enumerate(IDENTIFIABLE):
-        _, sd = g.linear_combination({k: v for k, v in target_weights(name).items() if k in g.names})
+        _, sd = g.linear_combination({k: v for k, v in weights(name).items() if k in g.names})
         assert ev.sd_before[i] == pytest.approx(units.from_internal(sd, ev.units[i]), rel=1e-9)
     # a campaign with the extra CR run written out as TOML; repeats of sd 0.33 µm ≈ the pooled repeat sd
     extra = {
@@ -80,15 +81,15 @@ def test_closed_form_matches_the_inference_on_an_augmented_campaign(no_cr2):
     }
     for name, toml in extra.items():
         k = [c.name for c in cands].index(name)
-        planner = Planner(no_cr2, [cands[k]], list(IDENTIFIABLE), sigma)
+        planner = Planner(no_cr2, [cands[k]], list(IDENTIFIABLE), sigma_model=sigma)
         a = units.from_internal(planner.pooled_sd, "um")  # repeats (−a, 0, a): sample sd = the pooled sd
         comps = ("ex", "ey") if name.startswith("CR") else ("ex", "ez")
         toml += "".join(f"{c}_um = [{-a:.9f}, 0.0, {a:.9f}]\n" for c in comps)
         aug = parse_campaign(_augmented_text(toml), "aug.toml")
-        post = Posterior(aug, "linear", sigma_model=sigma)
+        post = LogPosterior(aug, "linear", sigma_model=sigma)
         g2 = gaussian_posterior(post, sigma)
         for i, t in enumerate(IDENTIFIABLE):
-            _, sd = g2.linear_combination({kk: v for kk, v in target_weights(t).items() if kk in g2.names})
+            _, sd = g2.linear_combination({kk: v for kk, v in weights(t).items() if kk in g2.names})
             assert ev.sd_after[k, i] == pytest.approx(units.from_internal(sd, ev.units[i]), rel=1e-6), (name, t)
 
 

@@ -6,7 +6,7 @@ import pytest
 from mtmcal_bayes import fit_sphere, identify, read_dprnt
 from mtmcal_bayes.datasets import data_path
 from mtmcal_bayes.errors import InputError, MtmcalError
-from mtmcal_bayes.ncode import parse_dprnt
+from mtmcal_bayes.io.dprnt import parse_dprnt
 
 DPRNT = data_path("fig5_13_dprnt_output.txt")
 

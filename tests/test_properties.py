@@ -36,20 +36,22 @@ from mtmcal_bayes.campaign import (
     Truth,
 )
 from mtmcal_bayes.errors import MtmcalError
-from mtmcal_bayes.gcode import block_line, parse_program, rewrite
+from mtmcal_bayes.io.dprnt import parse_dprnt
+from mtmcal_bayes.io.gcode import block_line, parse_program, rewrite
+from mtmcal_bayes.io.traces import read_trace
 from mtmcal_bayes.models import HTMModel, LinearModel, jacobian, make_model
 from mtmcal_bayes.models.linear import LEFT_OUT
-from mtmcal_bayes.models.patterns import (
+from mtmcal_bayes.models.probe import fit_sphere
+from mtmcal_bayes.parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
+from mtmcal_bayes.patterns import (
     B_ANGLES_DEG,
+    B_PATTERNS,
     C_ANGLES_DEG,
+    COMPONENTS,
     CR_GEOMETRIES,
+    PATTERNS,
     polar_basis,
 )
-from mtmcal_bayes.models.probe import fit_sphere
-from mtmcal_bayes.ncode import parse_dprnt
-from mtmcal_bayes.parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
-from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS
-from mtmcal_bayes.traces import read_trace
 
 MODELS = ("linear", "htm-literal", "htm-thesis")
 HTM = ("htm-literal", "htm-thesis")
@@ -204,9 +206,9 @@ def test_b_pattern_on_a_mount_off_the_c_axis_is_rejected():
 
 
 def load_campaign_text() -> str:
-    from mtmcal_bayes.datasets import read_text
+    from mtmcal_bayes.datasets import builtin_text
 
-    return read_text("integrex_i200.toml")
+    return builtin_text("integrex_i200.toml")
 
 
 # --------------------------------------------------------------------------- linearity in the small
@@ -633,7 +635,7 @@ def programs(draw):
     lines = ["%", "O1000 (BALL BAR)", "G90 G54 G17", "M03 S1000"]
     dec = draw(st.integers(0, 5))
     first = [draw(st.integers(-5000, 5000)) * 10.0**-min(dec, 2) for _ in range(5)]
-    lines.append(block_line(*first, feed=2000, decimals=dec))
+    lines.append(block_line(first, feed=2000, decimals=dec))
     for _ in range(draw(st.integers(1, 12))):
         kind = draw(st.sampled_from(["motion", "motion", "motion", "comment", "blank", "m"]))
         if kind == "comment":
@@ -698,7 +700,7 @@ def test_block_line_parses_back(vals, dec, feed):
     """block_line writes what parse_program reads: values with ``dec`` decimals are exact decimal strings, so
     they parse back to the float nearest the decimal (compared to 1e-12 relative), F as written."""
     x = [v * 10.0**-dec for v in vals]
-    line = block_line(*x, feed=feed, decimals=dec)
+    line = block_line(x, feed=feed, decimals=dec)
     prog = parse_program(line + "\n")
     np.testing.assert_allclose(prog.positions()[0], x, rtol=1e-12, atol=1e-12)
     for word in line.split()[1:6]:

@@ -9,9 +9,9 @@ import pytest
 from matplotlib.image import imread
 
 from mtmcal_bayes import identify
-from mtmcal_bayes.report import build as report_build
-from mtmcal_bayes.report.corner_plot import corner_figure
-from mtmcal_bayes.report.style import save_png
+from mtmcal_bayes.figure_style import save_png
+from mtmcal_bayes.reporting import build as report_build
+from mtmcal_bayes.reporting.corner_plot import corner_figure
 
 from . import variants
 

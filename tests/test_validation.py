@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from mtmcal_bayes.inference.posterior import Posterior
+from mtmcal_bayes.inference import LogPosterior
 from mtmcal_bayes.parameters import IDENTIFIABLE
 from mtmcal_bayes.validation import SBCSettings, run_sbc
 from mtmcal_bayes.validation.samplers import Draws, ExactDraws
@@ -14,7 +14,7 @@ from mtmcal_bayes.validation.sbc import SBC_QUANTITIES, simulate_data
 
 
 def test_with_means_changes_only_the_data(thesis):
-    post = Posterior(thesis, "linear")
+    post = LogPosterior(thesis, "linear")
     rng = np.random.default_rng(3)
     theta, y = simulate_data(post, rng)
     other = post.with_means(y)

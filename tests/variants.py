@@ -1,6 +1,6 @@
 """Variants of the built-in thesis campaign with measurements removed, as TOML text."""
 
-from mtmcal_bayes.datasets import read_text
+from mtmcal_bayes.datasets import builtin_text
 
 _PROBE = "# ------------------------------------------------------ touch-trigger probe"
 _REPORTED = "# ------------------------------------------- results as printed in the thesis"
@@ -8,7 +8,7 @@ _CR2 = "[[ballbar.runs]]\npattern = \"CR\"             # C axis, radial measurem
 
 
 def thesis_text() -> str:
-    return read_text("integrex_i200.toml")
+    return builtin_text("integrex_i200.toml")
 
 
 def without_second_tool_length() -> str:

@@ -16,17 +16,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import units
-from ..errors import MtmcalError
-from ..gcode import Program, rewrite
-from ..models.htm import Geometry
+from ..errors import ParameterError
+from ..io.gcode import Program, rewrite
+from ..io.textfiles import write_text_atomic
+from ..models import KINEMATIC_MODELS, check_model
+from ..models.htm import Geometry, nc_origin
 from ..parameters import DEVIATIONS
-from ..planning.candidates import primary_setup
-from .kinematics import compensate_exact, tool_axis_tilt, tool_point
+from .kinematics import (
+    OFF_TOOL_MM,
+    POINTS,
+    compensate_exact,
+    tool_axis_tilt,
+    tool_point,
+)
 from .thesis_method import compensate_thesis
-from .values import ballbar_values, posterior_draws
-from ..models.htm import nc_origin
+from .values import VALUES, ballbar_values, posterior_draws
 
-OFF_TOOL_MM = 100.0
 METHODS = ("exact", "thesis")
 
 
@@ -35,6 +40,7 @@ class CompensationResult:
     """Compensated program text and, per motion block (k), corrections and residuals in µm."""
 
     text: str
+    program: str  # the source program's file name
     xyz: np.ndarray  # (k, 3) original NC X, Y, Z, mm
     xyz_c: np.ndarray  # (k, 3) compensated, mm
     residual_mean_um: np.ndarray  # (k,) mean length of the residual tool-point error over the draws
@@ -42,9 +48,26 @@ class CompensationResult:
     error_before_um: np.ndarray  # (k,) length of the error of the original program at the used deviations
     not_compensable: list[dict] = field(default_factory=list)
     info: dict = field(default_factory=dict)
+    output: str | None = None  # where :meth:`save` wrote the compensated program
+
+    def save(self, path) -> None:
+        """Write the compensated program to ``path`` (atomically)."""
+        write_text_atomic(path, self.text)
+        self.output = str(path)
+
+    def to_text(self) -> str:
+        """What ``compensate`` prints."""
+        from .output import format_compensation
+
+        return format_compensation(self)
 
     def to_json(self) -> dict:
-        corr = (self.xyz_c - self.xyz) * 1e3
+        """What ``compensate --json`` prints: the method, corrections, residuals, what is not compensable."""
+        return {**self.summary(), "program": self.program, "output": self.output}
+
+    def summary(self) -> dict:
+        """Corrections, tool-point errors before and after, and the tool tilts, in µm and ″."""
+        corr = units.from_internal(self.xyz_c - self.xyz, "um")
         return {
             **self.info,
             "blocks": len(self.xyz),
@@ -59,17 +82,18 @@ class CompensationResult:
 
 
 def geometry_for(campaign, setup_id: str | None, mount_id: str | None) -> Geometry:
+    """Lever arms of a campaign setup and mount (default: the primary setup, the first mount)."""
     bb = campaign.ballbar
     if setup_id is not None and setup_id not in bb.setups:
-        raise MtmcalError(f"--setup: no setup {setup_id!r} in the campaign (have {', '.join(bb.setups)})")
+        raise ParameterError("setup", f"no setup {setup_id!r} in the campaign (have {', '.join(bb.setups)})")
     if mount_id is not None and mount_id not in bb.mounts:
-        raise MtmcalError(f"--mount: no mount {mount_id!r} in the campaign (have {', '.join(bb.mounts)})")
-    s = bb.setups[setup_id] if setup_id else primary_setup(campaign)
+        raise ParameterError("mount", f"no mount {mount_id!r} in the campaign (have {', '.join(bb.mounts)})")
+    s = bb.setups[setup_id] if setup_id else campaign.primary_setup()
     m = bb.mounts[mount_id] if mount_id else next(iter(bb.mounts.values()))
     return Geometry(s.R_B, s.Z_T, s.X_T, m.Z_C, m.R_C)
 
 
-def not_compensable(theta: np.ndarray, geo: Geometry, xyz_model: np.ndarray, bc: np.ndarray, model: str) -> list[dict]:
+def not_compensable(theta: np.ndarray, geo: Geometry, xyz_model: np.ndarray, bc: np.ndarray, *, model: str) -> list[dict]:
     """Tool-axis tilt left by each deviation (largest over the blocks) and its effect off the tool length."""
     out = []
     for i, name in enumerate(DEVIATIONS):
@@ -77,24 +101,33 @@ def not_compensable(theta: np.ndarray, geo: Geometry, xyz_model: np.ndarray, bc:
             continue
         single = np.zeros((1, len(DEVIATIONS)))
         single[0, i] = theta[i]
-        tilt = float(tool_axis_tilt(single, geo, xyz_model, bc, model).max())
+        tilt = float(tool_axis_tilt(single, geo, xyz_model, bc, model=model).max())
         if units.from_internal(tilt, "arcsec") > 0.01:
             out.append({"name": name, "tool_tilt_arcsec": units.from_internal(tilt, "arcsec"),
                         f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um": units.from_internal(tilt * OFF_TOOL_MM, "um")})
-    total = float(tool_axis_tilt(theta[None], geo, xyz_model, bc, model).max())
+    total = float(tool_axis_tilt(theta[None], geo, xyz_model, bc, model=model).max())
     out.append({"name": "all together", "tool_tilt_arcsec": units.from_internal(total, "arcsec"),
                 f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um": units.from_internal(total * OFF_TOOL_MM, "um")})
     return sorted(out, key=lambda r: -r["tool_tilt_arcsec"])
 
 
-def compensate(campaign, program: Program, method: str = "exact", model: str = "htm-thesis", values: str = "posterior",
-               posterior=None, point: str = "tcp", setup: str | None = None, mount: str | None = None,
-               seed: int = 0) -> CompensationResult:
-    """Compensate ``program`` for the deviations of ``campaign`` (see the module docstring)."""
-    if method not in METHODS:
-        raise MtmcalError(f"--method: {method!r} (expected exact or thesis)")
+def compensate(campaign, program: Program, *, method: str = "exact", model: str = "htm-thesis",
+               values: str = "posterior", posterior=None, point: str = "tcp", setup: str | None = None,
+               mount: str | None = None, seed: int = 0) -> CompensationResult:
+    """Compensate ``program`` for the deviations of ``campaign`` (see the module docstring).
+
+    ``values``: the posterior mean (``"posterior"``) or the thesis' ball-bar values (``"ballbar"``);
+    ``posterior``: posterior draws, as a NetCDF file, a result of :func:`mtmcal_bayes.sample` or an
+    InferenceData (default: the closed form); ``point``: ``"tcp"``
+    or the spindle ``"nose"``; ``setup``/``mount``: campaign ids of the tool and the C-axis pivot.
+    """
+    for name, value, allowed in (("method", method, METHODS), ("values", values, VALUES), ("point", point, POINTS)):
+        if value not in allowed:
+            raise ParameterError(name, f"{value!r} (expected {' or '.join(allowed)})")
     if model == "linear":
-        raise MtmcalError("--model linear: compensation needs a kinematic chain; use htm-thesis (default) or htm-literal")
+        raise ParameterError("model", "linear: compensation needs a kinematic chain; use htm-thesis (default) "
+                             "or htm-literal")
+    check_model(model, KINEMATIC_MODELS)
     geo = geometry_for(campaign, setup, mount)
     origin = nc_origin(geo)
     pos = program.positions()
@@ -103,19 +136,21 @@ def compensate(campaign, program: Program, method: str = "exact", model: str = "
     draws, source = posterior_draws(campaign, posterior, seed=seed)
     theta = ballbar_values(campaign) if values == "ballbar" else draws.mean(axis=0)
     if method == "exact":
-        xyz_c_model, miss = compensate_exact(theta[None], geo, xyz_model, bc, model, point)
+        xyz_c_model, miss = compensate_exact(theta[None], geo, xyz_model, bc, model=model, point=point)
         xyz_c = xyz_c_model - origin
     else:
         xyz_c = compensate_thesis(dict(zip(DEVIATIONS, theta)), xyz, bc)[0]
         xyz_c_model, miss = xyz_c + origin, float("nan")
-    nominal = tool_point(np.zeros((1, len(DEVIATIONS))), geo, xyz_model, bc, model)[0]
-    before = np.linalg.norm(tool_point(theta[None], geo, xyz_model, bc, model)[0] - nominal, axis=-1) * 1e3
-    resid = np.linalg.norm(tool_point(draws, geo, xyz_c_model, bc, model) - nominal, axis=-1) * 1e3  # (n, k)
+    nominal = tool_point(np.zeros((1, len(DEVIATIONS))), geo, xyz_model, bc, model=model)[0]
+    before = units.from_internal(np.linalg.norm(tool_point(theta[None], geo, xyz_model, bc, model=model)[0] - nominal,
+                                                axis=-1), "um")
+    resid = units.from_internal(np.linalg.norm(tool_point(draws, geo, xyz_c_model, bc, model=model) - nominal, axis=-1),
+                                "um")  # (n, k)
     info = {"method": method, "model": model, "point": point, "values": values,
             "uncertainty_from": source, "geometry_mm": {"R_B": geo.R_B, "Z_T": geo.Z_T, "X_T": geo.X_T, "Z_C": geo.Z_C},
-            "nc_origin_mm": origin.tolist(), "newton_miss_um": miss * 1e3,
+            "nc_origin_mm": origin.tolist(), "newton_miss_um": units.from_internal(miss, "um"),
             "deviations": {n: {"value": units.from_internal(v, DEVIATIONS[n].unit), "unit": DEVIATIONS[n].unit}
                            for n, v in zip(DEVIATIONS, theta) if v != 0.0}}
-    return CompensationResult(rewrite(program, xyz_c), xyz, xyz_c, resid.mean(axis=0),
+    return CompensationResult(rewrite(program, xyz_c), program.source, xyz, xyz_c, resid.mean(axis=0),
                               np.quantile(resid, 0.95, axis=0), before,
-                              not_compensable(theta, geo, xyz_model, bc, model), info)
+                              not_compensable(theta, geo, xyz_model, bc, model=model), info)

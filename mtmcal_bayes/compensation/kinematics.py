@@ -15,10 +15,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..models.htm import PIVOTS, CAxis, Geometry, t_ball
-from ..models.patterns import Commands
 from ..parameters import DEVIATIONS
+from ..patterns import Commands
 
 POINTS = ("tcp", "nose")
+#: distance along the tool from the compensated point at which the tilt's position error is stated, mm
+OFF_TOOL_MM = 100.0
 
 
 def deviation_dict(theta: np.ndarray) -> dict[str, np.ndarray]:
@@ -30,7 +32,7 @@ def deviation_dict(theta: np.ndarray) -> dict[str, np.ndarray]:
     return p
 
 
-def tool_point(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray, model: str = "htm-thesis",
+def tool_point(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray, *, model: str = "htm-thesis",
                point: str = "tcp") -> np.ndarray:
     """Tool point in the C-table frame, ``(n, k, 3)`` mm, for deviations ``(n, 13)`` and commands ``(k, 3)``/``(k, 2)``."""
     piv = PIVOTS[model]
@@ -48,7 +50,7 @@ def tool_point(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.nda
     return np.stack([x, y, Tc[..., 2]], axis=-1)
 
 
-def compensate_exact(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray,
+def compensate_exact(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray, *,
                      model: str = "htm-thesis", point: str = "tcp", iterations: int = 4) -> tuple[np.ndarray, float]:
     """X, Y, Z ``(k, 3)`` that bring the actual tool point onto the nominal one; and the largest miss, mm.
 
@@ -57,25 +59,26 @@ def compensate_exact(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: 
     iterations reach rounding level; four are done.
     """
     theta = np.atleast_2d(theta)[:1]
-    target = tool_point(np.zeros_like(theta), geo, xyz, bc_deg, model, point)[0]
+    target = tool_point(np.zeros_like(theta), geo, xyz, bc_deg, model=model, point=point)[0]
     x = np.array(xyz, dtype=float)
     for _ in range(iterations):
-        base = tool_point(theta, geo, x, bc_deg, model, point)[0]
-        J = np.stack([tool_point(theta, geo, x + e, bc_deg, model, point)[0] - base for e in np.eye(3)], axis=-1)
+        base = tool_point(theta, geo, x, bc_deg, model=model, point=point)[0]
+        J = np.stack([tool_point(theta, geo, x + e, bc_deg, model=model, point=point)[0] - base for e in np.eye(3)],
+                     axis=-1)
         x = x - np.linalg.solve(J, (base - target)[..., None])[..., 0]
-    miss = tool_point(theta, geo, x, bc_deg, model, point)[0] - target
+    miss = tool_point(theta, geo, x, bc_deg, model=model, point=point)[0] - target
     return x, float(np.abs(miss).max())
 
 
-def tool_axis_tilt(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray,
+def tool_axis_tilt(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray, *,
                    model: str = "htm-thesis") -> np.ndarray:
     """Tilt of the tool axis against the nominal one in the workpiece frame, ``(n, k)`` rad.
 
     Independent of the X/Y/Z commands: what moving the linear axes cannot correct.
     """
     def axis(th):
-        tip = tool_point(th, geo, xyz, bc_deg, model, "tcp")
-        nose = tool_point(th, geo, xyz, bc_deg, model, "nose")
+        tip = tool_point(th, geo, xyz, bc_deg, model=model, point="tcp")
+        nose = tool_point(th, geo, xyz, bc_deg, model=model, point="nose")
         v = tip - nose
         return v / np.linalg.norm(v, axis=-1, keepdims=True)
 

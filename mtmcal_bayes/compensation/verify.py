@@ -7,15 +7,16 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
+from .. import units
 from ..models.htm import nc_origin
 from ..models.kinematic import HTMModel
-from ..models.patterns import Commands
 from ..parameters import DEVIATIONS, ParameterSpace
+from ..patterns import Commands
 from .kinematics import compensate_exact
 from .thesis_method import compensate_thesis
 
 
-def resimulate(campaign, theta13: np.ndarray, model: str = "htm-thesis", method: str = "exact",
+def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", method: str = "exact",
                point: str = "tcp") -> pd.DataFrame:
     """Eccentricities (µm) of every observation before and after compensation, deviations ``theta13`` (13,).
 
@@ -33,12 +34,12 @@ def resimulate(campaign, theta13: np.ndarray, model: str = "htm-thesis", method:
         c = run.commands
         xyz, bc = np.c_[c.X, c.Y, c.Z], np.degrees(np.c_[c.B, c.C])
         if method == "exact":
-            xyz_c, _ = compensate_exact(theta13[None], run.geometry, xyz, bc, model, point)
+            xyz_c, _ = compensate_exact(theta13[None], run.geometry, xyz, bc, model=model, point=point)
         else:
             origin = nc_origin(run.geometry)
             xyz_c = compensate_thesis(d, xyz - origin, bc)[0] + origin
         htm.runs[i] = dataclasses.replace(run, commands=Commands(xyz_c[:, 0], xyz_c[:, 1], xyz_c[:, 2], c.B, c.C,
                                                                  c.psi))
     after = htm.predict(theta)[0]
-    return pd.DataFrame({"observation": htm.observations.labels, "before_um": before * 1e3,
-                         "after_um": after * 1e3}).set_index("observation")
+    return pd.DataFrame({"observation": htm.observations.labels, "before_um": units.from_internal(before, "um"),
+                         "after_um": units.from_internal(after, "um")}).set_index("observation")

@@ -17,17 +17,11 @@ def data_path(name: str):
     return resources.files(__name__).joinpath(name)
 
 
-def read_text(name: str) -> str:
+def builtin_text(name: str) -> str:
+    """Text of a shipped data file (UTF-8)."""
     return data_path(name).read_text(encoding="utf-8")
 
 
 def builtin_campaign_text() -> tuple[str, str]:
     """Text of the built-in thesis campaign and the label used for it in messages."""
-    return read_text(BUILTIN_CAMPAIGN), BUILTIN_LABEL
-
-
-def load_thesis_campaign():
-    """The thesis campaign as a :class:`~mtmcal_bayes.campaign.Campaign`."""
-    from ..campaign import load_campaign
-
-    return load_campaign(None)
+    return builtin_text(BUILTIN_CAMPAIGN), BUILTIN_LABEL

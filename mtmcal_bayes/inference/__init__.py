@@ -1,11 +1,24 @@
-"""Bayesian inference: priors, likelihood, log posterior, emcee ensembles, closed form, results."""
+"""Bayesian inference: priors, likelihood, log posterior, emcee ensembles, closed forms, results.
 
-from .analytic import GaussianPosterior, gaussian_posterior
-from .posterior import SAMPLED_DEVIATIONS, Posterior
-from .priors import Prior, PriorSet
-from .results import comparison, diagnostics_warnings, not_identified, summarize, to_inference_data
-from .sampling import SamplerSettings, SamplingResult, run_ensembles
+The engine only: it knows the campaign's data, the forward model and the
+priors, nothing of the thesis' deterministic method (the posterior feature,
+:mod:`mtmcal_bayes.posterior`, sets the two side by side).
+"""
 
-__all__ = ["GaussianPosterior", "gaussian_posterior", "SAMPLED_DEVIATIONS", "Posterior", "Prior", "PriorSet",
-           "comparison", "diagnostics_warnings", "not_identified", "summarize", "to_inference_data",
-           "SamplerSettings", "SamplingResult", "run_ensembles"]
+from .analytic import GaussianPosterior, gaussian_posterior, prior_sensitivity
+from .log_posterior import SAMPLED_DEVIATIONS, LogPosterior
+from .marginal import MarginalPosterior
+from .priors import Prior, PriorSet, make_prior
+from .results import (
+           diagnostics_warnings,
+           display_draws,
+           not_identified,
+           summarize,
+           to_inference_data,
+)
+from .sampling import SamplerSettings, SamplingResult, check_step_budget, run_ensembles
+
+__all__ = ["GaussianPosterior", "gaussian_posterior", "prior_sensitivity", "SAMPLED_DEVIATIONS", "LogPosterior",
+           "MarginalPosterior", "Prior", "PriorSet", "make_prior", "diagnostics_warnings", "display_draws",
+           "not_identified", "summarize", "to_inference_data", "SamplerSettings", "SamplingResult",
+           "check_step_budget", "run_ensembles"]

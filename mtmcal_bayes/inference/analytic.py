@@ -17,7 +17,8 @@ import numpy as np
 
 from ..errors import MtmcalError
 from ..models import jacobian
-from .posterior import Posterior
+from ..parameters import IDENTIFIABLE, weights
+from .log_posterior import LogPosterior
 
 
 @dataclass
@@ -43,7 +44,7 @@ class GaussianPosterior:
         return rng.multivariate_normal(self.mean, self.cov, size=n, method="cholesky")
 
 
-def gaussian_posterior(post: Posterior, sigma_model: float = 0.0, theta0: np.ndarray | None = None,
+def gaussian_posterior(post: LogPosterior, sigma_model: float = 0.0, *, theta0: np.ndarray | None = None,
                        allow_non_normal: bool = False, prior_scale: np.ndarray | None = None) -> GaussianPosterior:
     """Gaussian posterior of ``post``'s forward parameters at fixed ``sigma_model`` (mm).
 
@@ -83,7 +84,7 @@ WIDEN = 10.0
 NOT_IDENTIFIED_GROWTH = 2.0
 
 
-def prior_sensitivity(post: Posterior, sigma_model: float = 0.0) -> dict[str, float]:
+def prior_sensitivity(post: LogPosterior, sigma_model: float = 0.0) -> dict[str, float]:
     """How much each identifiable quantity's posterior sd grows when the deviation priors widen 10×.
 
     Closed form (linearised at zero), nuisance priors unchanged (they carry real
@@ -91,14 +92,11 @@ def prior_sensitivity(post: Posterior, sigma_model: float = 0.0) -> dict[str, fl
     data determine keeps its width (growth ≈ 1); one whose width is set by the
     priors grows with them (≈ 10).  Returns ``{name: growth}``.
     """
-    from ..parameters import IDENTIFIABLE
-
     scale = np.array([WIDEN if p.group == "deviation" else 1.0 for p in post.space.parameters])
     base = gaussian_posterior(post, sigma_model, allow_non_normal=True)
     wide = gaussian_posterior(post, sigma_model, allow_non_normal=True, prior_scale=scale)
     out = {}
     for name in IDENTIFIABLE:
-        w = {"dx_CZ": 1.0, "dx_BT": -1.0} if name == "dx_CZ_minus_dx_BT" else {name: 1.0}
-        w = {k: v for k, v in w.items() if k in base.names}
+        w = weights(name, base.names)
         out[name] = wide.linear_combination(w)[1] / base.linear_combination(w)[1]
     return out

@@ -20,8 +20,8 @@ import copy
 import numpy as np
 from scipy import stats
 
-from ..observations import Observations
-from ..simulate import REPEAT_SD_UM
+from .. import units
+from ..observations import TYPICAL_REPEAT_SD_UM, Observations
 
 
 class GaussianMeanLikelihood:
@@ -42,12 +42,12 @@ class GaussianMeanLikelihood:
             pooled = np.sqrt(np.sum((observations.n[repeated] - 1) * sd[repeated] ** 2)
                              / np.sum(observations.n[repeated] - 1))
         else:
-            pooled = REPEAT_SD_UM * 1e-3
+            pooled = units.to_internal(TYPICAL_REPEAT_SD_UM, "um")
         self.pooled_sd = float(pooled)  # mm: the repeat sd assumed for a component measured once
         self.repeat_sd = np.where(repeated, sd, pooled)  # (m,) mm
         self.base_var = self.repeat_sd**2 / observations.n + accuracy**2  # (m,) mm²
 
-    def with_means(self, y: np.ndarray) -> "GaussianMeanLikelihood":
+    def with_means(self, y: np.ndarray) -> GaussianMeanLikelihood:
         """The same likelihood (same repeat sds, counts and accuracy) for other means ``y`` (m,), mm."""
         out = copy.copy(self)
         out.y = np.asarray(y, dtype=float)

@@ -1,48 +1,36 @@
-"""Posterior results: ArviZ InferenceData, the per-quantity summary and the comparison (SPEC §5).
+"""Posterior results: ArviZ InferenceData, the per-quantity summary, diagnostics warnings (SPEC §5).
 
 Values in the InferenceData and the tables are in display units (″ and µm).
+Derived quantities (``dx_CZ_minus_dx_BT``) are added to the draws from their
+definition in :data:`~mtmcal_bayes.parameters.DERIVED`.
 """
 
 from __future__ import annotations
-
-import warnings
 
 import numpy as np
 import pandas as pd
 
 from .. import units
-from ..identify import IdentificationResult
-from ..parameters import IDENTIFIABLE, QUANTITIES, quantity_unit
+from ..arviz_import import az
+from ..parameters import DERIVED, IDENTIFIABLE, combine, quantity_unit, weights
 from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity
 from .sampling import SamplingResult
-
-with warnings.catch_warnings():
-    warnings.simplefilter("ignore", FutureWarning)
-    import arviz as az
 
 HDI_PROB = 0.95
 RHAT_MAX = 1.01
 ESS_MIN = 400
 
 
-def _unit_of(name: str) -> str:
-    return "um" if name == "sigma_model" else quantity_unit(name.split("[")[0])
-
-
-def _display(name: str, values: np.ndarray) -> np.ndarray:
-    return units.from_internal(values, _unit_of(name))
-
-
 def display_draws(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
-    """Dict of display-unit draws (…,) per name, plus dx_CZ_minus_dx_BT."""
-    out = {n: _display(n, draws[..., i]) for i, n in enumerate(names)}
-    dx_bt = out.get("dx_BT", 0.0)
-    out["dx_CZ_minus_dx_BT"] = out["dx_CZ"] - dx_bt
+    """Dict of display-unit draws (…,) per name of ``draws`` (…, len(names)), plus the derived quantities."""
+    out = {n: units.from_internal(draws[..., i], quantity_unit(n)) for i, n in enumerate(names)}
+    for name in DERIVED:
+        out[name] = combine(name, out)
     return out
 
 
 def to_inference_data(result: SamplingResult, n_prior: int = 4000, n_predictive: int = 1000,
-                      seed: int | None = None) -> "az.InferenceData":
+                      seed: int | None = None) -> az.InferenceData:
     """InferenceData with posterior, prior, posterior predictive, observed data and sample stats.
 
     Posterior draws: chain = ensemble, draw = the walkers' sequences one after the
@@ -65,13 +53,13 @@ def to_inference_data(result: SamplingResult, n_prior: int = 4000, n_predictive:
     idx = np.linspace(0, S * W - 1, min(n_predictive, S * W)).astype(int)
     sub = flat[:, idx, :].reshape(-1, q)
     pred = post.forward.predict(sub[:, : post.p])
-    rep = post.likelihood.replicate(pred, post.sigma(sub), rng).reshape(K, len(idx), -1) * 1e3
+    rep = units.from_internal(post.likelihood.replicate(pred, post.sigma(sub), rng).reshape(K, len(idx), -1), "um")
     obs = post.forward.observations
     idata = az.from_dict(
         posterior=posterior,
         prior=prior,
         posterior_predictive={"eccentricity": rep},
-        observed_data={"eccentricity": obs.mean * 1e3},
+        observed_data={"eccentricity": units.from_internal(obs.mean, "um")},
         sample_stats={"lp": lp},
         coords={"observation": obs.labels},
         dims={"eccentricity": ["observation"]},
@@ -88,10 +76,11 @@ def to_inference_data(result: SamplingResult, n_prior: int = 4000, n_predictive:
 
 
 def prior_sd(result_or_post, names) -> dict[str, float]:
-    """Prior sd (display units) of each name, including the derived dx_CZ_minus_dx_BT."""
+    """Prior sd (display units) of each name, including the derived quantities (independent priors)."""
     post = getattr(result_or_post, "posterior", result_or_post)
-    sd = {p.name: units.from_internal(p.sd, "um" if p.name == "sigma_model" else p.unit) for p in post.priors.priors}
-    sd["dx_CZ_minus_dx_BT"] = float(np.hypot(sd["dx_CZ"], sd.get("dx_BT", 0.0)))
+    sd = {p.name: units.from_internal(p.sd, quantity_unit(p.name)) for p in post.priors.priors}
+    for name in DERIVED:
+        sd[name] = float(np.hypot.reduce([w * sd[k] for k, w in weights(name, sd).items()]))
     return {n: sd[n] for n in names if n in sd}
 
 
@@ -108,11 +97,12 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none")
     s = s.rename(columns={"hdi_2.5%": "hdi_low", "hdi_97.5%": "hdi_high"})
     s["median"] = [float(idata.posterior[n].median()) for n in s.index]
-    s["unit"] = [_unit_of(n) if n != "dx_CZ_minus_dx_BT" else "um" for n in s.index]
+    s["unit"] = [quantity_unit(n) for n in s.index]
     psd = prior_sd(post, s.index)
     s["prior_sd"] = [psd.get(n, np.nan) for n in s.index]
     s["sd_ratio"] = s["sd"] / s["prior_sd"]
-    sigma0 = float(np.median(idata.posterior["sigma_model"])) * 1e-3 if "sigma_model" in idata.posterior else 0.0
+    sigma0 = (units.to_internal(float(np.median(idata.posterior["sigma_model"])), "um")
+              if "sigma_model" in idata.posterior else 0.0)
     growth = prior_sensitivity(post, sigma0)
     s["prior_growth"] = [growth.get(n, np.nan) for n in s.index]
     # None where no prior-sensitivity check applies (sigma_model)
@@ -137,29 +127,3 @@ def not_identified(summary: pd.DataFrame) -> list[str]:
             f"{WIDEN:g}× widens it {r['prior_growth']:.1f}×; posterior sd {r['sd']:.3g} {units.SYMBOL[r['unit']]} "
             f"= {r['sd_ratio']:.2f} × prior sd)"
             for n, r in summary.iterrows() if n in IDENTIFIABLE and r["identified"] is False]
-
-
-def comparison(summary: pd.DataFrame, ident: IdentificationResult) -> pd.DataFrame:
-    """Each quantity's posterior against the ball-bar and touch-probe values.
-
-    Rows: the identifiable quantities, then any other deviation of the summary
-    with a touch-probe value (dx_CZ, dx_BT, dz_BT).  For every reference value:
-    whether it lies in the 95 % HDI, and its distance from the posterior mean in
-    posterior sd.
-    """
-    rows = []
-    extra = [n for n in summary.index if n in QUANTITIES and n not in IDENTIFIABLE and n in ident.probe]
-    for name in [n for n in IDENTIFIABLE if n in summary.index] + extra:
-        r = summary.loc[name]
-        refs = {"ballbar": ident.ballbar.get(name).display if name in ident.ballbar else None}
-        probe = ident.probe.get(name)
-        refs["probe_reported"] = probe.reported_display if probe is not None and probe.reported else None
-        refs["probe_recomputed"] = probe.display if probe is not None else None
-        row = {"quantity": name, "unit": QUANTITIES[name].unit, "mean": r["mean"], "sd": r["sd"],
-               "hdi_low": r["hdi_low"], "hdi_high": r["hdi_high"]}
-        for key, v in refs.items():
-            row[key] = v
-            row[f"{key}_in_hdi"] = None if v is None else bool(r["hdi_low"] <= v <= r["hdi_high"])
-            row[f"{key}_z"] = None if v is None else (v - r["mean"]) / r["sd"]
-        rows.append(row)
-    return pd.DataFrame(rows).set_index("quantity")

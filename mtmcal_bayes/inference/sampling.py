@@ -34,9 +34,10 @@ from pathlib import Path
 import emcee
 import numpy as np
 
-from ..errors import MtmcalError
+from ..errors import MtmcalError, ParameterError
+from ..progress import Progress, ProgressEvent, emit
 from .analytic import gaussian_posterior
-from .posterior import Posterior
+from .log_posterior import LogPosterior
 
 
 @dataclass
@@ -49,6 +50,12 @@ class SamplerSettings:
     tau_tolerance: float = 0.05
     start_widening: float = 3.0
     seed: int | None = None
+
+    def __post_init__(self):
+        if self.n_ensembles < 2:
+            raise ParameterError("n_ensembles", "at least two independent ensembles are needed for R-hat "
+                                 "(four by default)")
+        check_step_budget(self.max_steps, self.check_every)
 
     def moves(self):
         return [(emcee.moves.DEMove(), 0.8), (emcee.moves.StretchMove(), 0.2)]
@@ -66,7 +73,7 @@ class SamplingResult:
     ``tau``: (K, q) in steps; ``n_steps``: total steps per ensemble; ``burn``.
     """
 
-    posterior: Posterior
+    posterior: LogPosterior
     chains: np.ndarray
     log_prob: np.ndarray
     tau: np.ndarray
@@ -90,7 +97,7 @@ def _tau(chain: np.ndarray) -> np.ndarray:
     return emcee.autocorr.integrated_time(chain[n // 4:], c=5, tol=0, quiet=True)
 
 
-def _starts(post: Posterior, n: int, rng: np.random.Generator, widen: float) -> np.ndarray:
+def _starts(post: LogPosterior, n: int, rng: np.random.Generator, widen: float) -> np.ndarray:
     """``n`` dispersed starting points in scaled coordinates ``(n, q)``, all of finite posterior."""
     sigma0 = post.fixed_sigma if post.fixed_sigma is not None else float(post.priors.priors[-1].frozen().median())
     g = gaussian_posterior(post, sigma_model=sigma0, allow_non_normal=True)
@@ -106,7 +113,7 @@ def _starts(post: Posterior, n: int, rng: np.random.Generator, widen: float) -> 
     raise MtmcalError("could not find starting points of finite posterior density (check [priors])")
 
 
-def _backend(checkpoint: Path | None, k: int, post: Posterior, walkers: int):
+def _backend(checkpoint: Path | None, k: int, post: LogPosterior, walkers: int):
     if checkpoint is None:
         return None
     backend = emcee.backends.HDFBackend(str(checkpoint), name=f"ensemble_{k}")
@@ -117,18 +124,21 @@ def _backend(checkpoint: Path | None, k: int, post: Posterior, walkers: int):
     return backend
 
 
-def run_ensembles(post: Posterior, settings: SamplerSettings | None = None, checkpoint: str | Path | None = None,
-                  progress=None) -> SamplingResult:
+def check_step_budget(max_steps: int, block: int) -> None:
+    """The ensembles run in whole blocks of ``block`` steps: a smaller budget would be overrun silently."""
+    if max_steps < block:
+        raise ParameterError("max_steps", f"{max_steps} is below one block of {block} steps")
+
+
+def run_ensembles(post: LogPosterior, settings: SamplerSettings | None = None, checkpoint: str | Path | None = None,
+                  progress: Progress | None = None) -> SamplingResult:
     """Sample ``post`` with independent emcee ensembles until converged (see module docstring).
 
-    ``progress(step, max_steps, tau_max)`` is called after every block.
+    ``progress`` receives a :class:`~mtmcal_bayes.progress.ProgressEvent` after every block
+    (task ``"sampling [<model>]"``, steps done and the budget).
     ``checkpoint``: HDF5 file; an existing one with the same run is resumed.
     """
     s = settings or SamplerSettings()
-    if s.n_ensembles < 2:
-        raise MtmcalError("at least two independent ensembles are needed for R-hat (four by default)")
-    if s.max_steps < s.check_every:  # the ensembles run in whole blocks: a smaller budget would be overrun silently
-        raise MtmcalError(f"--max-steps: {s.max_steps} is below one block of {s.check_every} steps")
     q, W = len(post), s.walkers(len(post))
     ckpt = Path(checkpoint) if checkpoint else None
     seeds = np.random.SeedSequence(s.seed).spawn(s.n_ensembles)
@@ -164,8 +174,9 @@ def run_ensembles(post: Posterior, settings: SamplerSettings | None = None, chec
         tp = prev_tau
         long_enough = bool(np.all(kept >= s.min_tau_multiple * t))
         stable = tp is not None and bool(np.all(np.abs(t - tp) <= s.tau_tolerance * t))
-        if progress:
-            progress(target, s.max_steps, float(t.max()))
+        elapsed = time.perf_counter() - t0
+        emit(progress, ProgressEvent(f"sampling [{post.model_name}]", f"step {target} (budget {s.max_steps}), "
+                                     f"τ_max ≈ {float(t.max()):.0f} steps, {elapsed:.0f} s", target, s.max_steps, elapsed))
         if (long_enough and stable) or target >= s.max_steps:
             break
         prev_tau = t

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .patterns import Commands
+from ..patterns import Commands
 
 
 @dataclass(frozen=True)
@@ -94,7 +94,7 @@ def _apply(R: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v @ Rt  # batched matmul: far faster than einsum here
 
 
-def t_ball(p: dict[str, np.ndarray], geo: Geometry, cmd: Commands, piv: Pivots,
+def t_ball(p: dict[str, np.ndarray], geo: Geometry, cmd: Commands, piv: Pivots, *,
            dummy: bool = False) -> np.ndarray:
     """Actual T-ball (or dummy-sphere) centre, shape ``(n, k, 3)``, mm.
 
@@ -170,7 +170,7 @@ class CAxis:
         return _apply(np.transpose(self.R, (0, 2, 1)), w - d - self.h) + self.h
 
 
-def w_ball(p: dict[str, np.ndarray], axis: CAxis, P0: np.ndarray, w_offset: np.ndarray,
+def w_ball(p: dict[str, np.ndarray], axis: CAxis, P0: np.ndarray, *, w_offset: np.ndarray,
            cmd: Commands) -> np.ndarray:
     """Actual W-ball centre ``(n, k, 3)``: placed at ``P0`` (n,3), offset by ``w_offset`` (n,3) in the C frame."""
     W_C = axis.to_table(P0) + w_offset  # Eq 2.21

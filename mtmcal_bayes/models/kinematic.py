@@ -14,10 +14,22 @@ import numpy as np
 
 from ..errors import MtmcalError
 from ..observations import Observations
-from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE, ParameterSpace, nuisance_name
-from ..patterns import B_PATTERNS, COMPONENTS, mount_conflict
+from ..parameters import (
+    DEVIATIONS,
+    MOUNT_NUISANCE,
+    SETUP_NUISANCE,
+    ParameterSpace,
+    nuisance_name,
+)
+from ..patterns import (
+    B_PATTERNS,
+    COMPONENTS,
+    Commands,
+    fit_eccentricity,
+    mount_conflict,
+    pattern_commands,
+)
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
-from .patterns import Commands, fit_eccentricity, pattern_commands
 
 
 @dataclass(frozen=True)
@@ -41,7 +53,7 @@ class HTMModel:
     b_angles_deg, c_angles_deg : angle grids (default 0–90° by 1°, 0–355° by 5°)
     """
 
-    def __init__(self, campaign, pivots: Pivots | str = "htm-thesis", space: ParameterSpace | None = None,
+    def __init__(self, campaign, pivots: Pivots | str = "htm-thesis", space: ParameterSpace | None = None, *,
                  b_angles_deg=None, c_angles_deg=None):
         self.pivots = PIVOTS[pivots] if isinstance(pivots, str) else pivots
         self.name = self.pivots.name
@@ -60,7 +72,8 @@ class HTMModel:
             geo = Geometry(s.R_B, s.Z_T, s.X_T, m.Z_C, m.R_C)
             if angles is None:
                 angles = b_angles_deg if pattern in B_PATTERNS else c_angles_deg
-            cmd = pattern_commands(pattern, s.R_B, m.Z_C, m.R_C, bb.length, angles, geometry)
+            cmd = pattern_commands(pattern, R_B=s.R_B, Z_C=m.Z_C, R_C=m.R_C, L_B=bb.length, angles_deg=angles,
+                                   cr_geometry=geometry)
             return _RunPlan(pattern, setup_id, mount_id, geo, cmd)
 
         self.runs = [plan(r.pattern, r.setup, r.mount) for r in bb.runs]
@@ -108,13 +121,13 @@ class HTMModel:
             T = t_ball(p, run.geometry, run.commands, self.pivots)
             axis = CAxis(p, run.geometry.Z_C, self.pivots)
             w_off = np.stack([p["xW"], p["yW"], p["zW"]], axis=-1)
-            W = w_ball(p, axis, placed[run.mount], w_off, run.commands)
+            W = w_ball(p, axis, placed[run.mount], w_offset=w_off, cmd=run.commands)
             dL = np.linalg.norm(T - W, axis=-1) - self.campaign.ballbar.length
             out.append((run.commands.psi, dL))
         return out
 
     def eccentricities(self, theta: np.ndarray):
-        """Per run, the :class:`~mtmcal_bayes.models.patterns.EccentricityFit` of its simulated trace."""
+        """Per run, the :class:`~mtmcal_bayes.patterns.EccentricityFit` of its simulated trace."""
         return [fit_eccentricity(run.pattern, psi, dL) for run, (psi, dL) in zip(self.runs, self.traces(theta))]
 
     def predict(self, theta: np.ndarray) -> np.ndarray:

@@ -11,16 +11,14 @@ mount brings its own nuisance offsets (a re-centred ball, a re-clamped ball).
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..campaign import Campaign, Mount, Setup, TomlReader
-from ..errors import InputError
-from ..models.patterns import pattern_commands
-from ..patterns import B_PATTERNS, C_PATTERNS, PATTERNS, mount_conflict
-from ..textfiles import read_text
+from ..campaign import Campaign, Mount, Setup
+from ..io.textfiles import read_user_text
+from ..io.toml_reader import TomlReader, parse_toml
+from ..patterns import PATTERNS, mount_conflict, pattern_commands
 
 #: extension bars of the catalogue, mm
 EXTENSIONS_MM = (25.0, 50.0, 75.0, 100.0, 125.0, 150.0)
@@ -53,32 +51,11 @@ class Candidate:
     extension: float | None = None
 
 
-def primary_setup(campaign: Campaign) -> Setup:
-    """The setup of the first BX run (the thesis' R_B), else the first setup."""
-    bb = campaign.ballbar
-    for run in bb.runs:
-        if run.pattern == "BX":
-            return bb.setups[run.setup]
-    return next(iter(bb.setups.values()))
-
-
-def mount_for(campaign: Campaign, pattern: str) -> Mount:
-    """The mount the campaign uses for patterns of the same axis (B or C), else a sensible one."""
-    bb = campaign.ballbar
-    family = B_PATTERNS if pattern in B_PATTERNS else C_PATTERNS
-    for run in bb.runs:
-        if run.pattern in family:
-            return bb.mounts[run.mount]
-    mounts = list(bb.mounts.values())
-    want_zero = pattern in B_PATTERNS
-    return next((m for m in mounts if (m.R_C == 0) == want_zero), mounts[0])
-
-
 def candidate_mount(campaign: Campaign, pattern: str) -> Mount:
-    """The mount of a new run of ``pattern``: :func:`mount_for`, except that a B pattern measures with the W
+    """The mount of a new run of ``pattern``: ``campaign.mount_for``, except that a B pattern measures with the W
     ball on the C axis (thesis Table 2.2) — without such a mount in the campaign, a new placement there
     (``<id>@R_C0``, at that mount's height, with its own W-ball offsets)."""
-    m = mount_for(campaign, pattern)
+    m = campaign.mount_for(pattern)
     if mount_conflict(pattern, m.id, m.R_C):
         return Mount(f"{m.id}@R_C0", m.Z_C, 0.0)
     return m
@@ -92,7 +69,7 @@ def extended_setup(base: Setup, extension: float) -> Setup:
 def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
     """The default candidates: tool lengths, unmeasured setups, repeats, other patterns, R_C and L_B."""
     bb = campaign.ballbar
-    base = primary_setup(campaign)
+    base = campaign.primary_setup()
     L = bb.length
     out: list[Candidate] = []
     for pattern in TOOL_LENGTH_PATTERNS:
@@ -114,7 +91,7 @@ def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
         if pattern not in done:
             out.append(Candidate(f"{pattern} @ {base.id}", "other pattern", pattern, base,
                                  candidate_mount(campaign, pattern), L, extension=0.0))
-    c_mount = mount_for(campaign, "CR")
+    c_mount = campaign.mount_for("CR")
     for R_C in OTHER_R_C_MM:
         if R_C != c_mount.R_C:
             m = Mount(f"{c_mount.id}@R_C{R_C:g}", c_mount.Z_C, R_C)
@@ -139,8 +116,8 @@ def feasibility(candidate: Candidate, campaign: Campaign) -> tuple[bool, str]:
     travel = campaign.machine.travel
     if not travel:
         return True, "no axis travels in [machine]: not checked"
-    cmd = pattern_commands(candidate.pattern, candidate.setup.R_B, candidate.mount.Z_C, candidate.mount.R_C,
-                           candidate.length, cr_geometry=campaign.ballbar.cr_geometry)
+    cmd = pattern_commands(candidate.pattern, R_B=candidate.setup.R_B, Z_C=candidate.mount.Z_C,
+                           R_C=candidate.mount.R_C, L_B=candidate.length, cr_geometry=campaign.ballbar.cr_geometry)
     over = []
     for axis, values in (("X", cmd.X), ("Y", cmd.Y), ("Z", cmd.Z)):
         span = float(np.ptp(values))
@@ -153,7 +130,7 @@ _USER_KEYS = {"name", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm",
               "repeats"}
 
 
-def _existing(r: TomlReader, t: dict, key: str, path: str, known: dict):
+def _existing(r: TomlReader, t: dict, key: str, *, path: str, known: dict):
     """The campaign's setup/mount named by ``key``, None when the candidate gives a new one."""
     if key not in t:
         return None
@@ -172,12 +149,8 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
     ``length_mm`` (bar length, default the campaign's), ``repeats`` (default 3)
     and ``name``.
     """
-    text = read_text(path, "candidates file")
+    doc = parse_toml(read_user_text(path, "candidates file"), str(path))
     r = TomlReader(str(path))
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), None, f"malformed TOML: {exc}") from None
     r.check_keys(doc, {"candidate"}, "")
     items = doc.get("candidate")
     if not isinstance(items, list) or not items:
@@ -192,10 +165,10 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
         pattern = r.string(t, "pattern", path_i, required=True)
         if pattern not in PATTERNS:
             r.fail(f"{path_i}.pattern", f"unknown pattern {pattern!r} (expected one of {' '.join(PATTERNS)})")
-        setup = _existing(r, t, "setup", path_i, bb.setups) or Setup(
+        setup = _existing(r, t, "setup", path=path_i, known=bb.setups) or Setup(
             f"user{i}", r.number(t, "R_B_mm", path_i, positive=True), r.number(t, "Z_T_mm", path_i),
             r.number(t, "X_T_mm", path_i))
-        mount = _existing(r, t, "mount", path_i, bb.mounts) or Mount(
+        mount = _existing(r, t, "mount", path=path_i, known=bb.mounts) or Mount(
             f"user{i}", r.number(t, "Z_C_mm", path_i), r.number(t, "R_C_mm", path_i, nonnegative=True))
         if conflict := mount_conflict(pattern, t.get("mount"), mount.R_C):
             r.fail(f"{path_i}.mount" if "mount" in t else f"{path_i}.R_C_mm", conflict)
@@ -205,5 +178,5 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
             r.fail(f"{path_i}.repeats", f"must be a whole number, got {repeats:g}")
         name = r.string(t, "name", path_i, default=f"{pattern} @ {setup.id}/{mount.id} (user)")
         out.append(Candidate(name, "user", pattern, setup, mount, length, int(repeats),
-                             extension=setup.R_B - primary_setup(campaign).R_B))
+                             extension=setup.R_B - campaign.primary_setup().R_B))
     return out

@@ -25,14 +25,14 @@ import numpy as np
 
 from .. import units
 from ..campaign import Run
-from ..errors import MtmcalError
+from ..errors import ParameterError
 from ..inference.analytic import NOT_IDENTIFIED_GROWTH, WIDEN
 from ..inference.likelihood import GaussianMeanLikelihood
-from ..inference.posterior import SAMPLED_DEVIATIONS
+from ..inference.log_posterior import SAMPLED_DEVIATIONS
 from ..inference.priors import make_prior
 from ..models.linear import LinearModel
 from ..observations import Observations
-from ..parameters import IDENTIFIABLE, QUANTITIES, ParameterSpace
+from ..parameters import IDENTIFIABLE, QUANTITIES, ParameterSpace, weights
 from ..patterns import COMPONENTS
 from .candidates import Candidate
 
@@ -40,17 +40,12 @@ from .candidates import Candidate
 MIN_GAIN = 0.01
 
 
-def target_weights(name: str) -> dict[str, float]:
-    """Parameter weights of a target: a deviation, or ``dx_CZ − dx_BT``."""
-    return {"dx_CZ": 1.0, "dx_BT": -1.0} if name == "dx_CZ_minus_dx_BT" else {name: 1.0}
-
-
 def check_targets(targets) -> list[str]:
     allowed = list(IDENTIFIABLE) + [d for d in SAMPLED_DEVIATIONS if d not in IDENTIFIABLE]
     targets = list(targets or IDENTIFIABLE)
     for t in targets:
         if t not in allowed:
-            raise MtmcalError(f"--target: unknown quantity {t!r} (expected one of: {', '.join(allowed)})")
+            raise ParameterError("targets", f"unknown quantity {t!r} (expected one of: {', '.join(allowed)})")
     return list(dict.fromkeys(targets))
 
 
@@ -93,7 +88,7 @@ class Planner:
     sigma_model : fixed model-discrepancy sd, mm (default :func:`default_sigma_model`)
     """
 
-    def __init__(self, campaign, candidates: list[Candidate], targets=None, sigma_model: float | None = None,
+    def __init__(self, campaign, candidates: list[Candidate], targets=None, *, sigma_model: float | None = None,
                  model: str = "linear"):
         self.campaign = campaign
         self.model = model
@@ -119,7 +114,7 @@ class Planner:
         self.V = lik.base_var + self.sigma_model**2
         self.T = np.zeros((len(self.targets), len(self.space)))
         for i, t in enumerate(self.targets):
-            for name, w in target_weights(t).items():
+            for name, w in weights(t).items():
                 self.T[i, self.space.index(name)] = w
         self.target_units = [QUANTITIES[t].unit for t in self.targets]
 

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.patches import Rectangle
 from matplotlib.ticker import ScalarFormatter
 
-from ..report.style import label, symbol
+from ..figure_style import label, new_figure, symbol
 
 RANKING_CAPTION = (
     "Candidate measurements ranked by the expected information they give about the targets "
@@ -30,7 +30,7 @@ def ranking_figure(result):
     t = result.table
     t = t[t["feasible"] & t["informative"]].head(MAX_BARS)
     n = max(len(t), 1)
-    fig, ax = plt.subplots(figsize=(11, 0.38 * n + 1.6))
+    fig, ax = new_figure(figsize=(11, 0.38 * n + 1.6))
     y = np.arange(len(t))[::-1]
     ax.barh(y, t["eig_bits"], color=[KIND_COLOURS.get(k, "0.5") for k in t["kind"]])
     ax.set_yticks(y, t["name"], fontsize=9)
@@ -45,7 +45,7 @@ def ranking_figure(result):
     ax.set_xlim(0, right * 1.45)
     ax.set_xlabel("expected information gain about the targets [bits]")
     kinds = list(dict.fromkeys(t["kind"]))
-    ax.legend(handles=[plt.Rectangle((0, 0), 1, 1, color=KIND_COLOURS.get(k, "0.5")) for k in kinds], labels=kinds,
+    ax.legend(handles=[Rectangle((0, 0), 1, 1, color=KIND_COLOURS.get(k, "0.5")) for k in kinds], labels=kinds,
               loc="lower right", fontsize=8)
     if not len(t):
         ax.text(0.5, 0.5, "no feasible candidate improves the targets", transform=ax.transAxes, ha="center")
@@ -60,7 +60,7 @@ def sweep_figure(result):
     k = len(result.targets)
     ncols = min(k, 2)
     nrows = int(np.ceil(k / ncols))
-    fig, axes = plt.subplots(nrows, ncols, figsize=(6.2 * ncols, 3.6 * nrows), squeeze=False)
+    fig, axes = new_figure(nrows, ncols, figsize=(6.2 * ncols, 3.6 * nrows), squeeze=False)
     x = s["extension_mm"].to_numpy()
     for ax, t in zip(axes.ravel(), result.targets):
         ax.plot(x, s[f"{t} sd_after"], color="#0072B2", lw=2, label=f"after {result.sweep_pattern} at R_B + Δ")

@@ -6,15 +6,15 @@ import json
 from pathlib import Path
 
 from .. import units
-from ..textfiles import atomic_directory
+from ..figure_style import save_png
+from ..io.textfiles import atomic_directory
 from .figures import ranking_figure, sweep_figure
-from .plan import PlanResult
 
 SHOWN = 15
 
 
-def format_plan(result: PlanResult) -> str:
-    """Human-readable ranking, sweep summary and Monte-Carlo check."""
+def format_plan(result) -> str:
+    """Human-readable ranking, sweep summary and Monte-Carlo check of a :class:`~.plan.PlanResult`."""
     sym = [units.SYMBOL[u] for u in result.target_units]
     t = result.table
     lines = [f"Candidate measurements for {', '.join(result.targets)}, best first "
@@ -57,16 +57,14 @@ def format_plan(result: PlanResult) -> str:
     return "\n".join(lines)
 
 
-def write_plan(result: PlanResult, out_dir) -> list[str]:
+def write_plan(result, out_dir) -> list[str]:
     """plan.csv, plan_sweep.csv, plan_check.csv, plan.json, plan_ranking.png, plan_sweep.png into ``out_dir``."""
-    from ..report.style import save_png
-
     files = []
     with atomic_directory(Path(out_dir)) as tmp:
         result.table.to_csv(tmp / "plan.csv", index=False, float_format="%.6g")
         result.sweep.to_csv(tmp / "plan_sweep.csv", index=False, float_format="%.6g")
         result.check.to_csv(tmp / "plan_check.csv", index=False, float_format="%.6g")
-        (tmp / "plan.json").write_text(json.dumps(result.to_json(), indent=2, ensure_ascii=False), encoding="utf-8")
+        (tmp / "plan.json").write_text(json.dumps(result.document(), indent=2, ensure_ascii=False), encoding="utf-8")
         save_png(ranking_figure(result), tmp / "plan_ranking.png")
         save_png(sweep_figure(result), tmp / "plan_sweep.png")
         files = sorted(p.name for p in tmp.iterdir())

@@ -8,7 +8,13 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from .candidates import Candidate, candidate_mount, catalogue, extended_setup, feasibility, primary_setup
+from .candidates import (
+    Candidate,
+    candidate_mount,
+    catalogue,
+    extended_setup,
+    feasibility,
+)
 from .design import Planner
 from .preposterior import realised_sd
 
@@ -30,8 +36,33 @@ class PlanResult:
     sweep_pattern: str
     model: str = "linear"
     notes: list[str] = field(default_factory=list)
+    campaign: str = ""
+    output: str | None = None  # directory written by :meth:`write`
+    files: list[str] = field(default_factory=list)
+
+    def write(self, out_dir) -> list[str]:
+        """Write plan.csv, plan_sweep.csv, plan_check.csv, plan.json and the figures into ``out_dir``."""
+        from .output import write_plan
+
+        self.files = write_plan(self, out_dir)
+        self.output = str(out_dir)
+        return self.files
 
     def to_json(self) -> dict:
+        """What ``plan --json`` prints: :meth:`document` and where it was written."""
+        return {**self.document(), "campaign": self.campaign, "output": self.output, "files": self.files}
+
+    def to_text(self) -> str:
+        """What ``plan`` prints."""
+        from .output import format_plan
+
+        text = format_plan(self)
+        if self.files:
+            text += f"\n\nplan written to {self.output}/: {', '.join(self.files)}"
+        return text
+
+    def document(self) -> dict:
+        """The plan as JSON (plan.json): ranked candidates, sweep, Monte-Carlo check, notes."""
         cands = []
         for _, r in self.table.iterrows():
             cands.append({
@@ -80,10 +111,10 @@ def _table(planner: Planner, candidates: list[Candidate], campaign) -> pd.DataFr
 
 def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP_MM) -> pd.DataFrame:
     """Expected target sds for ``pattern`` at the primary setup plus each extension (mm)."""
-    base = primary_setup(campaign)
+    base = campaign.primary_setup()
     cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
                        candidate_mount(campaign, pattern), campaign.ballbar.length, extension=float(e)) for e in extensions]
-    sub = Planner(campaign, cands, planner.targets, planner.sigma_model, planner.model)
+    sub = Planner(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model)
     ev = sub.evaluate()
     rows = []
     for k, (c, e) in enumerate(zip(cands, extensions)):
@@ -99,7 +130,7 @@ def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP
     return pd.DataFrame(rows)
 
 
-def monte_carlo_check(planner: Planner, table: pd.DataFrame, n: int = N_CHECKED, n_sim: int = 400,
+def monte_carlo_check(planner: Planner, table: pd.DataFrame, *, n: int = N_CHECKED, n_sim: int = 400,
                       seed: int = 0) -> pd.DataFrame:
     """Closed-form expected sd against the Monte-Carlo realised sd for the ``n`` best new runs."""
     index = {c.name: i for i, c in enumerate(planner.candidates)}
@@ -116,12 +147,12 @@ def monte_carlo_check(planner: Planner, table: pd.DataFrame, n: int = N_CHECKED,
     return pd.DataFrame(rows)
 
 
-def plan(campaign, targets=None, extra: list[Candidate] | None = None, sigma_model_um: float | None = None,
+def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_model_um: float | None = None,
          sweep_pattern: str | None = None, model: str = "linear") -> PlanResult:
     """Rank the catalogue (plus ``extra`` user candidates) for ``targets``; sweep; check three by Monte Carlo."""
     candidates = catalogue(campaign) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
-    planner = Planner(campaign, candidates, targets, sigma, model)
+    planner = Planner(campaign, candidates, targets, sigma_model=sigma, model=model)
     table = _table(planner, candidates, campaign)
     if sweep_pattern is None:
         best = table[table["kind"] == "tool length"]
@@ -139,4 +170,4 @@ def plan(campaign, targets=None, extra: list[Candidate] | None = None, sigma_mod
              "touch-probe measurements are not candidates: the probe data are compared with, not part of, the "
              "likelihood"]
     return PlanResult(table, sweep, check, planner.targets, planner.target_units,
-                      units.from_internal(planner.sigma_model, "um"), sweep_pattern, model, notes)
+                      units.from_internal(planner.sigma_model, "um"), sweep_pattern, model, notes, campaign.source)

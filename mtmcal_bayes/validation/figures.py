@@ -7,19 +7,16 @@ import warnings
 import numpy as np
 from scipy import stats
 
-from ..report.style import COLOURS, plt, symbol
-from .sbc import P_MIN, SBCResult
-
-with warnings.catch_warnings():
-    warnings.simplefilter("ignore", FutureWarning)
-    import arviz as az
+from ..arviz_import import az
+from ..figure_style import COLOURS, new_figure, symbol
+from .criteria import P_MIN
 
 NCOLS = 4
 
 
 def _grid(n: int, title: str):
     rows = -(-n // NCOLS)
-    fig, axes = plt.subplots(rows, NCOLS, figsize=(3.3 * NCOLS, 2.6 * rows), squeeze=False)
+    fig, axes = new_figure(rows, NCOLS, figsize=(3.3 * NCOLS, 2.6 * rows), squeeze=False)
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     fig.suptitle(title, fontsize=11)
@@ -32,7 +29,7 @@ def _flag(ax, p: float) -> None:
         ax.title.set_color("#C00000")
 
 
-def rank_histograms(result: SBCResult):
+def rank_histograms(result):
     """One rank histogram per quantity; grey band = 99 % range of a bin's count under uniform ranks."""
     counts, B, N = result.bin_counts(), result.n_bins, len(result.ranks)
     lo, hi = stats.binom.interval(0.99, N, 1.0 / B)
@@ -55,7 +52,7 @@ def rank_histograms(result: SBCResult):
     return fig
 
 
-def ecdf_differences(result: SBCResult):
+def ecdf_differences(result):
     """ECDF of the ranks minus the uniform CDF, with ArviZ's simultaneous 95 % band."""
     L1, N = result.settings.n_ranked + 1, len(result.ranks)
     uniform = stats.randint(0, L1)

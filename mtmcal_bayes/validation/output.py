@@ -5,15 +5,16 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..figure_style import save_png
+from ..io.textfiles import atomic_directory
 from ..parameters import IDENTIFIABLE
-from ..textfiles import atomic_directory
+from .criteria import INTERVALS, P_MIN
 from .figures import ecdf_differences, rank_histograms
-from .sbc import INTERVALS, P_MIN, SBCResult
 
 
-def format_sbc(result: SBCResult) -> str:
+def format_sbc(result) -> str:
     """Table of p-values and coverages per quantity, with the verdict."""
-    s, j = result.summary(), result.to_json()
+    s, j = result.summary(), result.document()
     st = result.settings
     lo, hi = j["coverage_90_band_99pct"]
     lines = [(f"Simulation-based calibration: {st.model} model, {st.sampler} sampler, N = {j['n']} replicates, "
@@ -40,12 +41,10 @@ def format_sbc(result: SBCResult) -> str:
     return "\n".join(lines)
 
 
-def write_sbc(result: SBCResult, out_dir) -> list[str]:
+def write_sbc(result, out_dir) -> list[str]:
     """sbc.json, sbc_summary.csv, sbc_replicates.csv, sbc_ranks.png, sbc_ecdf.png into ``out_dir``."""
-    from ..report.style import save_png
-
     with atomic_directory(Path(out_dir)) as tmp:
-        (tmp / "sbc.json").write_text(json.dumps(result.to_json(), indent=2, ensure_ascii=False), encoding="utf-8")
+        (tmp / "sbc.json").write_text(json.dumps(result.document(), indent=2, ensure_ascii=False), encoding="utf-8")
         result.summary().to_csv(tmp / "sbc_summary.csv", float_format="%.6g", index_label="quantity")
         result.replicates().to_csv(tmp / "sbc_replicates.csv", index=False, float_format="%.6g")
         save_png(rank_histograms(result), tmp / "sbc_ranks.png")

@@ -1,6 +1,6 @@
 """Posterior draws for one simulated data set: what simulation-based calibration checks.
 
-Two ways to draw from the posterior of a :class:`~mtmcal_bayes.inference.posterior.Posterior`:
+Two ways to draw from the posterior of a :class:`~mtmcal_bayes.inference.log_posterior.LogPosterior`:
 
 * :class:`EmceeDraws` — the package's sampler (:func:`run_ensembles`) with an SBC
   budget: two ensembles, stop at ≥ 10 τ kept (τ stable within 50 %: τ
@@ -28,9 +28,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import MtmcalError
-from ..inference.posterior import Posterior
-from ..inference.sampling import SamplerSettings, run_ensembles
+from ..errors import ParameterError
+from ..inference.log_posterior import LogPosterior
+from ..inference.marginal import MarginalPosterior
+from ..inference.sampling import SamplerSettings, check_step_budget, run_ensembles
 
 
 @dataclass
@@ -61,11 +62,10 @@ class EmceeDraws:
     start_widening: float = 1.0
     name: str = "emcee"
 
-    def check(self, post: Posterior) -> None:
-        if self.max_steps < self.check_every:
-            raise MtmcalError(f"--max-steps: {self.max_steps} is below one block of {self.check_every} steps")
+    def check(self, post: LogPosterior) -> None:
+        check_step_budget(self.max_steps, self.check_every)
 
-    def __call__(self, post: Posterior, n_ranked: int, rng: np.random.Generator) -> Draws:
+    def __call__(self, post: LogPosterior, n_ranked: int, rng: np.random.Generator) -> Draws:
         settings = SamplerSettings(n_ensembles=self.n_ensembles, check_every=self.check_every,
                                    max_steps=self.max_steps, min_tau_multiple=self.min_tau_multiple,
                                    tau_tolerance=self.tau_tolerance, start_widening=self.start_widening, seed=int(rng.integers(2**63 - 1)))
@@ -76,7 +76,8 @@ class EmceeDraws:
             thin //= 2
         thinned = r.chains[:, ::thin].reshape(-1, q)
         if len(thinned) < n_ranked:
-            raise MtmcalError(f"only {len(thinned)} posterior draws for {n_ranked} ranks: raise --max-steps")
+            raise ParameterError("max_steps", f"only {len(thinned)} posterior draws for {n_ranked} ranks: "
+                                 "raise the step budget")
         pick = rng.choice(len(thinned), size=n_ranked, replace=False)
         light = r.chains[:, :: max(1, thin // 8)].reshape(-1, q)
         return Draws(thinned[pick], light, r.converged, r.n_steps, float(r.tau.max()))
@@ -90,20 +91,18 @@ class ExactDraws:
     name: str = "exact"
     _cache: dict = field(default_factory=dict, repr=False)
 
-    def check(self, post: Posterior) -> None:
+    def check(self, post: LogPosterior) -> None:
         if post.model_name != "linear":
-            raise MtmcalError(f"--sampler exact: the exact posterior exists for the linear model only, "
-                              f"not {post.model_name} (use --sampler emcee)")
+            raise ParameterError("sampler", f"exact: the exact posterior exists for the linear model only, "
+                                 f"not {post.model_name} (use the emcee sampler)")
         bad = [p.name for p in post.priors.priors[: post.p] if p.dist != "normal" or p.loc != 0.0]
         if bad:
-            raise MtmcalError(f"--sampler exact needs zero-mean normal priors; {bad[0]} has another prior in "
-                              "[priors] (use --sampler emcee)")
+            raise ParameterError("sampler", f"exact needs zero-mean normal priors; {bad[0]} has another prior in "
+                                 "[priors] (use the emcee sampler)")
         if post.fixed_sigma is not None:
-            raise MtmcalError("--sampler exact marginalises sigma_model; it cannot be fixed")
+            raise ParameterError("sampler", "exact marginalises sigma_model; it cannot be fixed")
 
-    def _marginal(self, post: Posterior):
-        from ..planning.preposterior import MarginalPosterior
-
+    def _marginal(self, post: LogPosterior):
         key = id(post.forward)  # the data sets of one SBC run share the model, priors and noise
         if key not in self._cache:
             prior_var = np.array([p.sd for p in post.priors.priors[: post.p]]) ** 2
@@ -111,7 +110,7 @@ class ExactDraws:
                                                  post.priors.priors[-1].frozen())
         return self._cache[key]
 
-    def __call__(self, post: Posterior, n_ranked: int, rng: np.random.Generator) -> Draws:
+    def __call__(self, post: LogPosterior, n_ranked: int, rng: np.random.Generator) -> Draws:
         theta, sigma = self._marginal(post).draw(post.likelihood.y, n_ranked + self.n_all, rng)
         draws = np.column_stack([theta, sigma])
         return Draws(draws[:n_ranked], draws[n_ranked:])
@@ -123,4 +122,4 @@ def make_sampler(name: str, max_steps: int = 4000):
         return EmceeDraws(max_steps=max_steps)
     if name == "exact":
         return ExactDraws()
-    raise MtmcalError(f"unknown sampler {name!r} (emcee or exact)")
+    raise ParameterError("sampler", f"unknown sampler {name!r} (emcee or exact)")

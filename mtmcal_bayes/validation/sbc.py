@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import os
 import time
-import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 
@@ -28,22 +27,15 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from ..errors import MtmcalError
-from ..inference.posterior import Posterior
+from ..arviz_import import az
+from ..errors import ParameterError
+from ..inference.log_posterior import LogPosterior
 from ..inference.results import display_draws
+from ..models import check_model
 from ..parameters import IDENTIFIABLE
+from ..progress import Progress, ProgressEvent, emit
+from .criteria import INTERVALS, P_MIN, SBC_QUANTITIES
 from .samplers import make_sampler
-
-with warnings.catch_warnings():
-    warnings.simplefilter("ignore", FutureWarning)
-    import arviz as az
-
-#: ranked quantities: the eight of Table 4.5, then the other sampled deviations and sigma_model
-SBC_QUANTITIES: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT", "sigma_model")
-#: probabilities of the highest-density intervals whose coverage is counted
-INTERVALS: tuple[float, ...] = (0.5, 0.9, 0.95)
-#: a quantity fails when its uniformity p-value is below this
-P_MIN = 0.01
 
 
 @dataclass
@@ -63,9 +55,10 @@ class SBCSettings:
     seed: int = 1
 
     def check(self) -> None:
-        for name, value, low in (("--n", self.n, 2), ("--workers", self.workers, 1), ("--draws", self.n_ranked, 9)):
+        for name, value, low in (("n", self.n, 2), ("workers", self.workers, 1), ("n_ranked", self.n_ranked, 9)):
             if value < low:
-                raise MtmcalError(f"{name}: {value} is below {low}")
+                raise ParameterError(name, f"{value} is below {low}")
+        check_model(self.model)
 
 
 @dataclass
@@ -90,6 +83,8 @@ class SBCResult:
     tau_max: np.ndarray
     seconds: np.ndarray
     wall_time: float
+    output: str | None = None  # directory written by :meth:`write`
+    files: list[str] = field(default_factory=list)
 
     @property
     def n_bins(self) -> int:
@@ -130,7 +125,29 @@ class SBCResult:
             rows[q] = row
         return pd.DataFrame(rows).T.astype({"ok": bool})
 
+    def write(self, out_dir) -> list[str]:
+        """Write sbc.json, sbc_summary.csv, sbc_replicates.csv, sbc_ranks.png, sbc_ecdf.png into ``out_dir``."""
+        from .output import write_sbc
+
+        self.files = write_sbc(self, out_dir)
+        self.output = str(out_dir)
+        return self.files
+
     def to_json(self) -> dict:
+        """What ``validate sbc --json`` prints: :meth:`document` and where it was written."""
+        return {**self.document(), "output": self.output, "files": self.files}
+
+    def to_text(self) -> str:
+        """What ``validate sbc`` prints."""
+        from .output import format_sbc
+
+        text = format_sbc(self)
+        if self.files:
+            text += f"\n\nSBC written to {self.output}/: {', '.join(self.files)}"
+        return text
+
+    def document(self) -> dict:
+        """p_uniform and coverage_50/90/95 per quantity, the settings and the verdict (sbc.json)."""
         s = self.summary()
         lo, hi = self.coverage_band(0.9)
         return {
@@ -156,20 +173,20 @@ class SBCResult:
         return pd.DataFrame(cols)
 
 
-def quantity_values(post: Posterior, theta: np.ndarray) -> np.ndarray:
+def quantity_values(post: LogPosterior, theta: np.ndarray) -> np.ndarray:
     """The ranked quantities ``(n, Q)`` (display units) of parameter draws ``(n, q)`` (internal units)."""
     d = display_draws(post.names, theta)
     return np.column_stack([d[q] for q in SBC_QUANTITIES])
 
 
-def simulate_data(post: Posterior, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+def simulate_data(post: LogPosterior, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """A truth from the prior ``(q,)`` and repeat means simulated from the likelihood ``(m,)``, mm."""
     theta = post.priors.rvs(1, rng)
     pred = post.forward.predict(theta[:, : post.p])
     return theta[0], post.likelihood.replicate(pred, post.sigma(theta), rng)[0]
 
 
-def one_replicate(post: Posterior, sampler, n_ranked: int, seed: np.random.SeedSequence) -> dict:
+def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.SeedSequence) -> dict:
     """Simulate, sample and rank one replicate (see module docstring)."""
     rng = np.random.default_rng(seed)
     theta, y = simulate_data(post, rng)
@@ -192,24 +209,31 @@ _WORKER: dict = {}
 
 
 def _init_worker(campaign, model: str, sampler, n_ranked: int) -> None:
-    _WORKER.update(post=Posterior(campaign, model), sampler=sampler, n_ranked=n_ranked)
+    _WORKER.update(post=LogPosterior(campaign, model), sampler=sampler, n_ranked=n_ranked)
 
 
 def _run_one(seed: np.random.SeedSequence) -> dict:
     return one_replicate(_WORKER["post"], _WORKER["sampler"], _WORKER["n_ranked"], seed)
 
 
-def run_sbc(campaign, settings: SBCSettings | None = None, progress=None, sampler=None) -> SBCResult:
+def _replicate_done(progress: Progress | None, s: SBCSettings, done: int, elapsed: float) -> None:
+    eta = elapsed / done * (s.n - done)
+    emit(progress, ProgressEvent(f"sbc [{s.model}, {s.sampler}]",
+                                 f"{done}/{s.n} replicates, {elapsed:.0f} s, about {eta:.0f} s to go", done, s.n, elapsed))
+
+
+def run_sbc(campaign, settings: SBCSettings | None = None, progress: Progress | None = None,
+            sampler=None) -> SBCResult:
     """Simulation-based calibration of ``settings.model`` on the design of ``campaign``.
 
-    ``progress(done, n, elapsed_s)`` is called as replicates finish.  ``sampler``
+    ``progress`` receives a :class:`~mtmcal_bayes.progress.ProgressEvent` as replicates finish.  ``sampler``
     replaces the draw strategy named in the settings (any callable
     ``(posterior, L, rng) -> Draws`` with a ``check(posterior)`` method; the
     tests pass deliberately wrong ones to show that SBC catches them).
     """
     s = settings or SBCSettings()
     s.check()
-    post = Posterior(campaign, s.model)
+    post = LogPosterior(campaign, s.model)
     sampler = sampler or make_sampler(s.sampler, s.max_steps)
     sampler.check(post)
     *seeds, prior_seed = np.random.SeedSequence(s.seed).spawn(s.n + 1)  # one per replicate, one for the prior sd
@@ -219,16 +243,14 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress=None, sample
     if workers == 1:
         for i, seed in enumerate(seeds):
             out[i] = one_replicate(post, sampler, s.n_ranked, seed)
-            if progress:
-                progress(i + 1, s.n, time.perf_counter() - t0)
+            _replicate_done(progress, s, i + 1, time.perf_counter() - t0)
     else:
         with ProcessPoolExecutor(workers, initializer=_init_worker,
                                  initargs=(campaign, s.model, sampler, s.n_ranked)) as pool:
             futures = {pool.submit(_run_one, seed): i for i, seed in enumerate(seeds)}
             for done, f in enumerate(as_completed(futures), start=1):
                 out[futures[f]] = f.result()
-                if progress:
-                    progress(done, s.n, time.perf_counter() - t0)
+                _replicate_done(progress, s, done, time.perf_counter() - t0)
     stack = lambda key: np.array([r[key] for r in out])
     prior_theta = post.priors.rvs(20_000, np.random.default_rng(prior_seed))
     return SBCResult(

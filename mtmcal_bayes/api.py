@@ -1,0 +1,235 @@
+"""The Python API: one function per command of ``mtmcal-bayes``, each returning an object.
+
+Every function takes the campaign first — a :class:`~mtmcal_bayes.campaign.Campaign`,
+the path of a campaign TOML file, or ``None`` for the built-in thesis campaign —
+and everything else by keyword.  Nothing is printed: each result has
+``to_text()`` (what the command prints) and ``to_json()`` (what ``--json``
+prints), so every command's output can be had from Python.  Long work takes
+``progress=``, any callable receiving a :class:`~mtmcal_bayes.progress.ProgressEvent`
+(``print`` will do).  Where the command writes files, ``output=`` does the same:
+its directory is checked before any work, and nothing is written half-way.
+
+Features are imported when first called, so ``import mtmcal_bayes`` stays quick.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING
+
+from .campaign import Campaign
+from .io.campaign_reader import load_campaign
+from .io.textfiles import check_writable
+from .progress import Progress
+
+if TYPE_CHECKING:  # the result types, for the signatures only
+    from .compensation import CompensationResult
+    from .identification import IdentificationResult, ProbeFit
+    from .planning import PlanResult
+    from .posterior import ClosedFormResult, PosteriorResult
+    from .reporting import Report
+    from .simulation import SensitivityTable, Simulation
+    from .validation import SBCResult
+
+CampaignLike = Campaign | str | os.PathLike | None
+
+#: default step budget of each emcee ensemble
+MAX_STEPS = 20_000
+
+
+def campaign_of(campaign: CampaignLike) -> Campaign:
+    """A :class:`Campaign` from a campaign, a path to a campaign TOML, or None (the built-in thesis campaign)."""
+    return campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
+
+
+def _writable(path, what: str) -> None:
+    if path is not None:
+        check_writable(path, what)
+
+
+def identify(campaign: CampaignLike = None) -> IdentificationResult:
+    """The thesis' deterministic identification: ball bar (Eqs 4.10–4.18) and touch probe (Eqs 5.1–5.19),
+    each value beside the published one."""
+    from .identification import identify as identify_campaign
+
+    return identify_campaign(campaign_of(campaign))
+
+
+def probe_fit(path, *, stylus_radius_mm: float | None = None) -> ProbeFit:
+    """Least-squares sphere through the probed points of a DPRNT file (thesis Fig 5.13)."""
+    from .identification import probe_fit as fit
+
+    return fit(path, stylus_radius_mm=stylus_radius_mm)
+
+
+def simulate(campaign: CampaignLike = None, *, truth, model: str = "htm-thesis", noise: bool = False,
+             seed: int | None = None, output=None) -> Simulation:
+    """Predicted eccentricities of every run for a known ``truth`` (a TRUTH.toml path or a
+    :class:`~mtmcal_bayes.campaign.Truth`); with ``output``, also write a synthetic campaign there,
+    scattered like a real measurement when ``noise``."""
+    from .campaign import Truth
+    from .io.campaign_reader import load_truth
+    from .models import check_model
+    from .simulation import simulate_truth
+
+    c = campaign_of(campaign)
+    check_model(model)
+    _writable(output, "synthetic campaign")
+    source = "<truth>" if isinstance(truth, Truth) else str(truth)
+    t = truth if isinstance(truth, Truth) else load_truth(truth, c)
+    sim = simulate_truth(c, t, model=model, noise=noise, seed=seed, source=source)
+    if output is not None:
+        sim.save(output)
+    return sim
+
+
+def sensitivity(campaign: CampaignLike = None, *, model: str = "htm-thesis") -> SensitivityTable:
+    """Eccentricity of all 12 patterns per ″ / µm of every deviation and mounting offset (thesis Tables 2.4–2.6)."""
+    from .models import check_model
+    from .simulation import sensitivity as table
+
+    return table(campaign_of(campaign), model=check_model(model))
+
+
+def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | None = None, fix_dx_BT: bool = False,
+           max_steps: int = MAX_STEPS, checkpoint=None, output=None, progress: Progress | None = None) -> PosteriorResult:
+    """The posterior of the deviations and nuisance offsets by emcee (independent ensembles, adaptive length),
+    summarised beside the ball-bar and touch-probe values.
+
+    ``seed`` makes the draws reproducible; ``checkpoint`` (HDF5) is written as the run goes and resumed
+    if it exists; ``output`` receives the InferenceData as NetCDF.
+    """
+    from .inference.sampling import SamplerSettings
+    from .models import check_model
+    from .posterior import sample_posterior
+
+    c = campaign_of(campaign)
+    check_model(model)
+    _writable(output, "posterior")
+    _writable(checkpoint, "checkpoint")
+    settings = SamplerSettings(seed=seed, max_steps=max_steps)
+    result = sample_posterior(c, model=model, fix_dx_BT=fix_dx_BT, settings=settings, checkpoint=checkpoint,
+                              progress=progress)
+    if output is not None:
+        result.save(output)
+    return result
+
+
+def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, fix_dx_BT: bool = False,
+                model: str = "linear") -> ClosedFormResult:
+    """The instant Gaussian posterior of the eight quantities: linear model, sigma_model fixed (µm)."""
+    from .posterior import closed_form as gaussian
+
+    return gaussian(campaign_of(campaign), sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT, model=model)
+
+
+def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,
+           fix_dx_BT: bool = False, compare_models: bool = False, max_steps: int = MAX_STEPS,
+           posterior: PosteriorResult | None = None, progress: Progress | None = None, command: str = "") -> Report:
+    """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
+
+    ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
+    ``compare_models`` adds the same campaign under all three forward models.
+    """
+    from .inference.sampling import SamplerSettings
+    from .models import check_model
+    from .reporting import build_report
+
+    c = campaign_of(campaign)
+    check_model(model)
+    settings = SamplerSettings(seed=seed, max_steps=max_steps)
+    return build_report(c, output, model=model, settings=settings, fix_dx_BT=fix_dx_BT, compare_models=compare_models,
+                        posterior=posterior, progress=progress, command=command)
+
+
+def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
+         sigma_model_um: float | None = None, sweep_pattern: str | None = None, output=None) -> PlanResult:
+    """Rank candidate extra measurements by how much they would reduce the uncertainty of ``targets``
+    (default the eight identified quantities).
+
+    ``candidates``: a TOML file of your own ``[[candidate]]`` tables, or a list of
+    :class:`~mtmcal_bayes.planning.Candidate`, ranked with the catalogue.
+    """
+    import math
+
+    from .errors import ParameterError
+    from .models import check_model
+    from .planning import plan as rank
+    from .planning import read_candidates
+
+    c = campaign_of(campaign)
+    check_model(model)
+    _writable(output, "plan")
+    if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
+        raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a non-negative number")
+    extra = read_candidates(candidates, c) if isinstance(candidates, (str, os.PathLike)) else list(candidates or [])
+    result = rank(c, targets, extra=extra, sigma_model_um=sigma_model_um, sweep_pattern=sweep_pattern, model=model)
+    if output is not None:
+        result.write(output)
+    return result
+
+
+def ncgen(pattern: str, *, campaign: CampaignLike = None, R_B_mm: float | None = None, start=None,
+          step_deg: float = 2.5, feed: float | None = None, n: int | None = None, setup: str | None = None,
+          mount: str | None = None, output=None) -> str:
+    """The measuring NC program of ``pattern`` (thesis Fig 4.30(a) for BX), as text; ``output`` receives it.
+
+    ``start`` = (x0, y0, z0) mm places the first block, else the setup's NC origin is used.  Without a
+    campaign but with both ``R_B_mm`` and ``start`` the program needs none (bar 100 mm, R_C = Z_C = 0).
+    """
+    from .compensation import measuring_program
+    from .io.textfiles import write_text_atomic
+
+    if campaign is not None or R_B_mm is None or start is None:
+        campaign = campaign_of(campaign)
+    _writable(output, "program")
+    text = measuring_program(pattern, campaign, R_B_mm=R_B_mm, start=start, step_deg=step_deg, feed=feed, n=n,
+                             setup=setup, mount=mount)
+    if output is not None:
+        write_text_atomic(output, text)
+    return text
+
+
+def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",
+               model: str = "htm-thesis", values: str = "posterior", posterior=None, point: str = "tcp",
+               setup: str | None = None, mount: str | None = None) -> CompensationResult:
+    """Rewrite X/Y/Z of an NC program (a path) so the tool point reaches the programmed points, with the
+    residual error from the posterior and the tool tilts X/Y/Z cannot correct; ``output`` receives the program.
+
+    ``method``: ``"exact"`` inversion or ``"thesis"`` (Eqs 3.4–3.13 as printed); ``values``:
+    ``"posterior"`` mean or ``"ballbar"``; ``posterior``: draws, as a NetCDF file, a :func:`sample` result or an InferenceData (default:
+    the closed form).
+    """
+    from .compensation import compensate as rewrite_program
+    from .io.gcode import read_program
+
+    c = campaign_of(campaign)
+    parsed = read_program(program)
+    _writable(output, "compensated program")
+    result = rewrite_program(c, parsed, method=method, model=model, values=values, posterior=posterior, point=point,
+                             setup=setup, mount=mount)
+    if output is not None:
+        result.save(output)
+    return result
+
+
+def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", sampler: str = "emcee",
+        n_ranked: int = 99, max_steps: int = 4000, workers: int | None = None, seed: int = 1, output=None,
+        progress: Progress | None = None) -> SBCResult:
+    """Simulation-based calibration (Talts et al. 2018) of the posterior on the design of the campaign:
+    ``n`` truths from the prior, each ranked among ``n_ranked`` posterior draws; ``workers`` processes
+    (default the CPU count); ``output`` receives the JSON, CSV files and figures."""
+    from .validation import SBCSettings, run_sbc
+
+    c = campaign_of(campaign)
+    _writable(output, "SBC")
+    settings = SBCSettings(n=n, model=model, sampler=sampler, n_ranked=n_ranked, max_steps=max_steps,
+                           workers=(os.cpu_count() or 1) if workers is None else workers, seed=seed)
+    result = run_sbc(c, settings, progress)
+    if output is not None:
+        result.write(output)
+    return result
+
+
+__all__ = ["campaign_of", "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report",
+           "plan", "ncgen", "compensate", "sbc"]

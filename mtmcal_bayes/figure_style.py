@@ -1,0 +1,73 @@
+"""The shared look of every figure the package draws: labels with units, colours, new figures, PNG output.
+
+Figures are built with matplotlib's object API (:class:`matplotlib.figure.Figure`),
+never through ``pyplot``: drawing a report selects no backend and opens no
+window, so importing or running the package in a notebook leaves the user's
+own plotting alone.  A figure module returns a ``Figure``; :func:`save_png`
+writes it, and in a notebook it displays as any figure does.
+"""
+
+from __future__ import annotations
+
+from matplotlib.figure import Figure
+
+from . import units
+from .models import MODELS
+from .parameters import quantity_unit
+
+#: colours of what the figures compare (colour-blind-safe Okabe–Ito palette)
+COLOURS = {
+    "posterior": "#0072B2",
+    "ballbar": "#D55E00",
+    "probe_reported": "#009E73",
+    "probe_recomputed": "#CC79A7",
+    "observed": "#000000",
+    "prior": "#999999",
+}
+#: one colour per forward model in model comparisons, in the order of :data:`~mtmcal_bayes.models.MODELS`
+MODEL_COLOURS = dict(zip(MODELS, ("#0072B2", "#E69F00", "#009E73")))
+
+REFERENCE_LABELS = {
+    "ballbar": "ball bar, deterministic (Eqs 4.10–4.18)",
+    "probe_reported": "touch probe, as printed (Table 5.3)",
+    "probe_recomputed": "touch probe, recomputed (Eqs 5.1–5.19)",
+}
+
+_GREEK = {"alpha": r"\alpha", "beta": r"\beta", "gamma": r"\gamma"}
+DPI = 130
+
+
+def new_figure(nrows: int = 1, ncols: int = 1, **subplots_kw) -> tuple[Figure, object]:
+    """A figure and its axes (``Figure.subplots``): ``figsize`` and the other figure options go to the figure."""
+    fig_kw = {k: subplots_kw.pop(k) for k in ("figsize", "dpi") if k in subplots_kw}
+    fig = Figure(**fig_kw)
+    return fig, fig.subplots(nrows, ncols, **subplots_kw)
+
+
+def symbol(name: str) -> str:
+    """Mathtext symbol of a quantity: ``beta_XB`` → ``$\\beta_{XB}$``; ``dx_CZ`` → ``$\\delta x_{CZ}$``."""
+    if name == "dx_CZ_minus_dx_BT":
+        return r"$\delta x_{CZ} - \delta x_{BT}$"
+    if name == "sigma_model":
+        return r"$\sigma_{model}$"
+    head, _, sub = name.partition("_")
+    if head in _GREEK:
+        return f"${_GREEK[head]}_{{{sub}}}$"
+    if head in ("dx", "dy", "dz"):
+        return rf"$\delta {head[1]}_{{{sub}}}$"
+    return name
+
+
+def unit_symbol(name: str) -> str:
+    """Display unit symbol of a quantity (″ or µm)."""
+    return units.SYMBOL[quantity_unit(name)]
+
+
+def label(name: str) -> str:
+    """Axis label: symbol and unit, e.g. ``$\\beta_{XB}$ [″]``."""
+    return f"{symbol(name)} [{unit_symbol(name)}]"
+
+
+def save_png(fig: Figure, path) -> None:
+    """Write ``fig`` as PNG at the report resolution."""
+    fig.savefig(path, dpi=DPI, bbox_inches="tight")

@@ -1,0 +1,89 @@
+"""Results of the thesis' deterministic identification, each value beside the published one."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .. import units
+from ..campaign import ReportedValue
+from ..parameters import QUANTITIES
+
+
+@dataclass
+class Identified:
+    """One recomputed quantity.
+
+    ``value`` is in internal units (mm, rad), ``None`` when the data do not
+    allow it (``missing`` says why).  ``reported`` is the published value, if any.
+    """
+
+    name: str
+    value: float | None
+    equation: str
+    missing: str | None = None
+    reported: ReportedValue | None = None
+    note: str | None = None
+
+    @property
+    def unit(self) -> str:
+        return QUANTITIES[self.name].unit
+
+    @property
+    def display(self) -> float | None:
+        """Value in the display unit (″ or µm)."""
+        return None if self.value is None else units.from_internal(self.value, self.unit)
+
+    @property
+    def reported_display(self) -> float | None:
+        return None if self.reported is None else units.from_internal(self.reported.value, self.reported.unit)
+
+    @property
+    def difference(self) -> float | None:
+        """Recomputed minus reported, display unit."""
+        if self.value is None or self.reported is None:
+            return None
+        return self.display - self.reported_display
+
+    @property
+    def reproduced(self) -> bool | None:
+        """Whether the recomputed value rounds to the printed one (``None`` if nothing to compare)."""
+        if self.difference is None:
+            return None
+        half_step = 0.5 * 10.0 ** (-self.reported.decimals)
+        return abs(self.difference) <= half_step * (1 + 1e-9)
+
+    def to_json(self) -> dict:
+        d = {"value": self.display, "unit": self.unit, "equation": self.equation}
+        if self.missing:
+            d["missing"] = self.missing
+        if self.reported is not None:
+            d.update(reported=self.reported_display, difference=self.difference, reproduced=self.reproduced)
+        if self.note:
+            d["note"] = self.note
+        return d
+
+
+@dataclass
+class IdentificationResult:
+    """Recomputed ball-bar and probe values, thesis consistency checks and stated assumptions."""
+
+    ballbar: dict[str, Identified]
+    probe: dict[str, Identified]
+    checks: list[str] = field(default_factory=list)
+    assumptions: list[str] = field(default_factory=list)
+    source: str = ""
+
+    def to_json(self) -> dict:
+        return {
+            "campaign": self.source,
+            "ballbar": {k: v.to_json() for k, v in self.ballbar.items()},
+            "probe": {k: v.to_json() for k, v in self.probe.items()},
+            "checks": self.checks,
+            "assumptions": self.assumptions,
+        }
+
+    def to_text(self) -> str:
+        """What ``mtmcal-bayes identify`` prints."""
+        from .output import format_identification
+
+        return format_identification(self)

@@ -1,0 +1,306 @@
+"""Reading campaign TOML files (``mtmcal-campaign/1``) with validation, and truth files.
+
+A campaign file (see ``docs/campaign-format.md``) describes one calibration:
+the machine, the ball-bar setups, mounts and runs, touch-probe data, published
+results, optional priors and, for synthetic campaigns, the truth.
+:func:`load_campaign` reads and validates it into the dataclasses of
+:mod:`mtmcal_bayes.campaign` (internal units, mm and rad); every problem is an
+:class:`~mtmcal_bayes.errors.InputError` naming the file and the key.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .. import units
+from ..campaign import (
+    Ballbar,
+    BAxisProbe,
+    Campaign,
+    CAxisProbe,
+    Machine,
+    Mount,
+    Probe,
+    ReportedValue,
+    Run,
+    Setup,
+    Stylus,
+    Truth,
+)
+from ..datasets import builtin_campaign_text
+from ..parameters import DEVIATIONS, MOUNT_NUISANCE, QUANTITIES, SETUP_NUISANCE
+from ..patterns import COMPONENTS, CR_GEOMETRIES, PATTERNS, mount_conflict
+from .textfiles import read_user_text
+from .toml_reader import TomlReader, kind_of, parse_toml
+from .tomlio import printed_decimals
+from .traces import read_trace
+
+FORMAT = "mtmcal-campaign/1"
+PRIOR_DISTS = {"normal": ("sd",), "halfnormal": ("sd",), "uniform": ("low", "high")}
+
+
+# --------------------------------------------------------------------------- loading
+def load_campaign(path: str | os.PathLike | None = None) -> Campaign:
+    """Load and validate a campaign TOML file; ``None`` loads the built-in thesis campaign.
+
+    Raises :class:`~mtmcal_bayes.errors.InputError` (one line: file, key, problem)
+    for a missing, empty or malformed file or any invalid content.
+    """
+    if path is None:
+        text, source = builtin_campaign_text()
+        return parse_campaign(text, source=source, base_dir=None)
+    p = Path(path)
+    text = read_user_text(p, "campaign file")
+    return parse_campaign(text, source=str(p), base_dir=p.parent)
+
+
+def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None = None) -> Campaign:
+    """Parse and validate campaign TOML ``text``; ``source`` names it in error messages."""
+    r = TomlReader(source)
+    doc = parse_toml(text, source, f"a campaign TOML with format = \"{FORMAT}\"")
+    r.check_keys(doc, {"format", "machine", "ballbar", "probe", "reported", "priors", "truth"}, "")
+    fmt = r.string(doc, "format", "", required=True)
+    if fmt != FORMAT:
+        r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
+
+    machine = _machine(r, r.table(doc, "machine", "", required=False) or {})
+    ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir)
+    probe_t = r.table(doc, "probe", "", required=False)
+    probe = _probe(r, probe_t) if probe_t is not None else None
+    reported = _reported(r, r.table(doc, "reported", "", required=False) or {}, text)
+    priors = _priors(r, r.table(doc, "priors", "", required=False) or {})
+    truth_t = r.table(doc, "truth", "", required=False)
+    truth = parse_truth(r, truth_t, "truth", ballbar) if truth_t is not None else None
+    return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir)
+
+
+def _machine(r: TomlReader, t: dict) -> Machine:
+    allowed = {"name", "configuration"} | {f"travel_{a}_mm" for a in "XYZ"}
+    r.check_keys(t, allowed, "machine")
+    travel = {a: r.number(t, f"travel_{a}_mm", "machine", positive=True)
+              for a in "XYZ" if f"travel_{a}_mm" in t}
+    return Machine(r.string(t, "name", "machine"), r.string(t, "configuration", "machine"), travel)
+
+
+def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
+    P = "ballbar"
+    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry",
+                     "setups", "mounts", "runs"}, P)
+    cr_geometry = r.string(t, "cr_geometry", P, default="RC-LB")
+    if cr_geometry not in CR_GEOMETRIES:
+        r.fail(f"{P}.cr_geometry", f"unknown CR geometry {cr_geometry!r} (expected {' or '.join(CR_GEOMETRIES)})")
+    length = r.number(t, "length_mm", P, positive=True)
+    accuracy = units.to_internal(r.number(t, "accuracy_um", P, positive=True), "um")
+    feed = r.number(t, "feed_mm_per_min", P, required=False, positive=True)
+
+    setups: dict[str, Setup] = {}
+    for sid, path, s in r.subtables(t, "setups", P, allowed={"R_B_mm", "Z_T_mm", "X_T_mm"}, what="tool setup"):
+        setups[sid] = Setup(sid, r.number(s, "R_B_mm", path, positive=True),
+                            r.number(s, "Z_T_mm", path), r.number(s, "X_T_mm", path))
+    _distinct_tool_lengths(r, [(f"{P}.setups.{s.id}", s.R_B, s.Z_T) for s in setups.values()])
+
+    mounts: dict[str, Mount] = {}
+    for mid, path, m in r.subtables(t, "mounts", P, allowed={"Z_C_mm", "R_C_mm"}, what="W-ball mount"):
+        mounts[mid] = Mount(mid, r.number(m, "Z_C_mm", path, nonnegative=True),
+                            r.number(m, "R_C_mm", path, nonnegative=True))
+
+    raw_runs = t.get("runs")
+    if raw_runs is None:
+        r.fail(f"{P}.runs", "missing: at least one [[ballbar.runs]] is needed")
+    if not isinstance(raw_runs, list) or not all(isinstance(x, dict) for x in raw_runs) or not raw_runs:
+        r.fail(f"{P}.runs", "expected one or more [[ballbar.runs]] tables")
+    runs = [_run(r, x, f"{P}.runs[{i}]", setups=setups, mounts=mounts, base_dir=base_dir, L_B=length,
+                 cr_geometry=cr_geometry) for i, x in enumerate(raw_runs)]
+    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry)
+
+
+def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]]) -> None:
+    """Two tool lengths that are equal make the second one carry no information."""
+    for i, (pa, rb_a, zt_a) in enumerate(items):
+        for pb, rb_b, zt_b in items[i + 1:]:
+            if rb_a == rb_b:
+                r.fail(f"{pb}.R_B_mm", f"equal to {pa}.R_B_mm ({rb_a:g} mm): a second tool length "
+                       "equal to the first carries no information")
+            if zt_a == zt_b:
+                r.fail(f"{pb}.Z_T_mm", f"equal to {pa}.Z_T_mm ({zt_a:g} mm) although R_B differs: "
+                       "Z_T + R_B must stay constant between tool lengths")
+
+
+def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: float, cr_geometry: str) -> Run:
+    allowed = {"pattern", "setup", "mount", "trace_csv"} | {f"{c}_um" for c in ("ex", "ey", "ez")}
+    r.check_keys(t, allowed, path)
+    pattern = r.string(t, "pattern", path, required=True)
+    if pattern not in PATTERNS:
+        r.fail(f"{path}.pattern", f"unknown pattern {pattern!r} (expected one of {' '.join(PATTERNS)})")
+    setup = r.string(t, "setup", path, required=True)
+    if setup not in setups:
+        r.fail(f"{path}.setup", f"names setup {setup!r}, which is not in [ballbar.setups] "
+               f"(have: {', '.join(setups)})")
+    mount = r.string(t, "mount", path, required=True)
+    if mount not in mounts:
+        r.fail(f"{path}.mount", f"names mount {mount!r}, which is not in [ballbar.mounts] "
+               f"(have: {', '.join(mounts)})")
+    if conflict := mount_conflict(pattern, mount, mounts[mount].R_C):
+        r.fail(f"{path}.mount", conflict)
+    repeats = {}
+    for c in ("ex", "ey", "ez"):
+        key = f"{c}_um"
+        if key in t:
+            if c not in COMPONENTS[pattern]:
+                r.fail(f"{path}.{key}", f"pattern {pattern} has no component {c} "
+                       f"(it gives {' and '.join(COMPONENTS[pattern])})")
+            repeats[c] = units.to_internal(r.array(t, key, path, (None,)), "um")
+            too_big = np.flatnonzero(np.abs(repeats[c]) >= L_B)
+            if too_big.size:  # also keeps the models and the planner away from overflow
+                i = int(too_big[0])
+                r.fail(f"{path}.{key}[{i}]", f"{units.from_internal(repeats[c][i], 'um'):g} µm is not below the "
+                       f"bar length L_B = {L_B:g} mm: not an eccentricity")
+    traces = rms = None
+    if "trace_csv" in t:
+        if repeats:
+            r.fail(f"{path}.trace_csv", "a run carries either eccentricity repeats or traces, not both")
+        raw = t["trace_csv"]
+        traces = [raw] if isinstance(raw, str) else raw
+        if not isinstance(traces, list) or not traces or not all(isinstance(x, str) and x for x in traces):
+            r.fail(f"{path}.trace_csv", "expected a file name or an array of file names")
+        extracted, rms = [], []
+        for name in traces:
+            fpath = (base_dir / name) if base_dir is not None else Path(name)
+            if not fpath.exists():
+                r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} not found")
+            if fpath.is_dir():
+                r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} is a directory")
+            ex = read_trace(fpath, pattern, L_B, cr_geometry)
+            extracted.append(ex.values)
+            rms.append(ex.rms)
+        repeats = {c: np.array([e[c] for e in extracted]) for c in COMPONENTS[pattern]}
+    if not repeats:
+        r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])} "
+               "or trace_csv")
+    return Run(pattern, setup, mount, repeats, traces, rms)
+
+
+def _probe(r: TomlReader, t: dict) -> Probe:
+    P = "probe"
+    r.check_keys(t, {"instrument", "repeatability_um", "c_axis", "b_axis"}, P)
+    rep = r.number(t, "repeatability_um", P, required=False, positive=True)
+    probe = Probe(r.string(t, "instrument", P), units.to_internal(rep, "um") if rep is not None else None)
+    c = r.table(t, "c_axis", P, required=False)
+    if c is not None:
+        path = f"{P}.c_axis"
+        r.check_keys(c, {"R_C_mm", "Z_C_mm", "axis_xy_mm", "angles_deg", "centres_mm"}, path)
+        angles = r.array(c, "angles_deg", path, (None,))
+        probe.c_axis = CAxisProbe(
+            r.number(c, "R_C_mm", path, positive=True), r.number(c, "Z_C_mm", path, nonnegative=True),
+            r.array(c, "axis_xy_mm", path, (2,)), angles,
+            r.array(c, "centres_mm", path, (None, len(angles), 3)))
+    b = r.table(t, "b_axis", P, required=False)
+    if b is not None:
+        path = f"{P}.b_axis"
+        r.check_keys(b, {"X_T_mm", "angles_deg", "styli"}, path)
+        angles = r.array(b, "angles_deg", path, (2,))
+        if list(angles) != [0.0, 90.0]:  # identify's Eqs 5.8–5.19 take the rows as B = 0° and B = 90°
+            r.fail(f"{path}.angles_deg", f"must be [0, 90] (the B-axis equations use the centres at B = 0° "
+                   f"and 90°), got [{', '.join(f'{a:g}' for a in angles)}]")
+        bax = BAxisProbe(r.number(b, "X_T_mm", path), angles)
+        for sid, sp, s in r.subtables(b, "styli", path, allowed={"R_B_mm", "nominal_mm", "centres_mm"}, what="stylus"):
+            bax.styli[sid] = Stylus(sid, r.number(s, "R_B_mm", sp, positive=True),
+                                    r.array(s, "nominal_mm", sp, (2, 3)),
+                                    r.array(s, "centres_mm", sp, (None, 2, 3)))
+        for i, (sa, a) in enumerate(bax.styli.items()):
+            for sb, bb in list(bax.styli.items())[i + 1:]:
+                if a.R_B == bb.R_B:
+                    r.fail(f"{path}.styli.{sb}.R_B_mm", f"equal to styli.{sa}.R_B_mm ({a.R_B:g} mm): "
+                           "a second stylus length equal to the first carries no information")
+        probe.b_axis = bax
+    return probe
+
+
+def _reported(r: TomlReader, t: dict, text: str) -> dict[str, dict[str, ReportedValue]]:
+    out: dict[str, dict[str, ReportedValue]] = {}
+    for method, vals in t.items():
+        path = f"reported.{method}"
+        if not isinstance(vals, dict):
+            r.fail(path, f"expected a table, got {kind_of(vals)}")
+        decimals = printed_decimals(text, path)
+        out[method] = {}
+        for key in vals:
+            name, unit = units.split_unit_key(key)
+            q = QUANTITIES.get(name)
+            if q is None or unit != q.unit:
+                r.fail(f"{path}.{key}", "unknown quantity: expected <name>_arcsec for angles or <name>_um "
+                       "for lengths, with a canonical deviation name")
+            v = r.number(vals, key, path)
+            out[method][name] = ReportedValue(units.to_internal(v, unit), unit, decimals.get(key, 2))
+    return out
+
+
+def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
+    known = {**{k: q.unit for k, q in DEVIATIONS.items()},
+             **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE}.items()},
+             "sigma_model": "um"}
+    out = {}
+    for name, spec in t.items():
+        path = f"priors.{name}"
+        if name not in known:
+            r.fail(path, "unknown parameter (expected a deviation name, one of xT yT zT dRB xW yW zW, "
+                   "or sigma_model)")
+        if not isinstance(spec, dict):
+            r.fail(path, "expected an inline table such as {dist = \"normal\", sd_arcsec = 30}")
+        dist = r.string(spec, "dist", path, required=True)
+        if dist not in PRIOR_DISTS:
+            r.fail(f"{path}.dist", f"unknown distribution {dist!r} (expected one of {', '.join(PRIOR_DISTS)})")
+        unit = known[name]
+        params = PRIOR_DISTS[dist] + (("mean",) if dist == "normal" else ())
+        r.check_keys(spec, {"dist"} | {f"{p}_{unit}" for p in params}, path)
+        parsed = {"dist": dist}
+        for p in params:
+            v = r.number(spec, f"{p}_{unit}", path, required=(p != "mean"), positive=(p == "sd"),
+                         default=0.0)
+            parsed[p] = units.to_internal(v, unit)
+        if dist == "uniform" and parsed["high"] <= parsed["low"]:
+            r.fail(f"{path}.high_{unit}", "must be greater than low")
+        if name == "sigma_model":  # a standard deviation: the sampler only visits sigma_model > 0
+            for p in ("low", "mean"):
+                if parsed.get(p, 0.0) < 0:
+                    r.fail(f"{path}.{p}_{unit}", f"must not be negative for sigma_model (a standard deviation), "
+                           f"got {units.from_internal(parsed[p], unit):g}")
+        out[name] = parsed
+    return out
+
+
+def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar) -> Truth:
+    """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``) located at ``path``."""
+    r.check_keys(t, {"deviations", "setups", "mounts"}, path)
+    truth = Truth()
+    dev = r.table(t, "deviations", path, required=False) or {}
+    for key in dev:
+        name, unit = units.split_unit_key(key)
+        q = DEVIATIONS.get(name)
+        if q is None or unit != q.unit:
+            r.fail(f"{path}.deviations.{key}", "unknown deviation: expected <name>_arcsec or <name>_um "
+                   f"with one of {', '.join(DEVIATIONS)}")
+        truth.deviations[name] = units.to_internal(r.number(dev, key, f"{path}.deviations"), unit)
+    for group, table, owners in (("setups", SETUP_NUISANCE, ballbar.setups),
+                                 ("mounts", MOUNT_NUISANCE, ballbar.mounts)):
+        for oid, vals in (r.table(t, group, path, required=False) or {}).items():
+            op = f"{path}.{group}.{oid}"
+            if oid not in owners:
+                r.fail(op, f"no such {group[:-1]} in [ballbar.{group}] (have: {', '.join(owners)})")
+            if not isinstance(vals, dict):
+                r.fail(op, f"expected a table, got {kind_of(vals)}")
+            r.check_keys(vals, {f"{k}_um" for k in table}, op)
+            getattr(truth, group)[oid] = {k[:-3]: units.to_internal(r.number(vals, k, op), "um") for k in vals}
+    return truth
+
+
+
+
+def load_truth(path, campaign: Campaign) -> Truth:
+    """Read a TRUTH.toml: ``[deviations]``, ``[setups.<id>]``, ``[mounts.<id>]`` at top level."""
+    text = read_user_text(path, "truth file")
+    doc = parse_toml(text, str(path), "[deviations], [setups.<id>], [mounts.<id>] tables")
+    return parse_truth(TomlReader(str(path)), doc, "", campaign.ballbar)

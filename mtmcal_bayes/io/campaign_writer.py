@@ -1,0 +1,98 @@
+"""Writing campaigns as TOML (``mtmcal-campaign/1``): file units, traces relative to the file, atomically."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from .. import units
+from ..campaign import Campaign, Probe, Truth
+from ..parameters import DEVIATIONS
+from .campaign_reader import FORMAT
+from .textfiles import write_text_atomic
+from .tomlio import Fixed, dumps
+
+
+def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
+    """The TOML document of a campaign (file units), as nested dicts.
+
+    Trace files are written relative to ``save_dir`` (absolute when ``None``).
+    """
+    um = lambda v: units.from_internal(v, "um")
+    doc: dict = {"format": FORMAT}
+    doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
+                      **{f"travel_{a}_mm": v for a, v in c.machine.travel.items()}}
+    bb = c.ballbar
+    b: dict = {}
+    if bb.instrument:
+        b["instrument"] = bb.instrument
+    b["length_mm"] = bb.length
+    b["accuracy_um"] = um(bb.accuracy)
+    if bb.feed_mm_per_min is not None:
+        b["feed_mm_per_min"] = bb.feed_mm_per_min
+    if bb.cr_geometry != "RC-LB":
+        b["cr_geometry"] = bb.cr_geometry
+    b["setups"] = {s.id: {"R_B_mm": s.R_B, "Z_T_mm": s.Z_T, "X_T_mm": s.X_T} for s in bb.setups.values()}
+    b["mounts"] = {m.id: {"Z_C_mm": m.Z_C, "R_C_mm": m.R_C} for m in bb.mounts.values()}
+    b["runs"] = []
+    for run in bb.runs:
+        d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount}
+        if run.trace_csv:
+            d["trace_csv"] = [str(Path(c.base_dir or ".", f).resolve()) if save_dir is None
+                              else os.path.relpath(Path(c.base_dir or ".", f).resolve(), save_dir)
+                              for f in run.trace_csv]
+        else:
+            d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
+        b["runs"].append(d)
+    doc["ballbar"] = b
+    if c.probe is not None:
+        doc["probe"] = _probe_dict(c.probe)
+    if c.reported:
+        doc["reported"] = {m: {f"{n}_{v.unit}": Fixed(units.from_internal(v.value, v.unit), v.decimals)
+                               for n, v in vals.items()} for m, vals in c.reported.items()}
+    if c.priors:
+        doc["priors"] = {}
+        for name, spec in c.priors.items():
+            unit = DEVIATIONS[name].unit if name in DEVIATIONS else "um"
+            doc["priors"][name] = {"dist": spec["dist"], **{f"{k}_{unit}": units.from_internal(v, unit)
+                                                            for k, v in spec.items() if k != "dist"}}
+    if c.truth is not None:
+        doc["truth"] = truth_to_dict(c.truth)
+    return doc
+
+
+def truth_to_dict(t: Truth) -> dict:
+    d: dict = {"deviations": {f"{n}_{DEVIATIONS[n].unit}": units.from_internal(v, DEVIATIONS[n].unit)
+                              for n, v in t.deviations.items()}}
+    for group in ("setups", "mounts"):
+        vals = getattr(t, group)
+        if vals:
+            d[group] = {oid: {f"{k}_um": units.from_internal(v, "um") for k, v in kv.items()}
+                        for oid, kv in vals.items()}
+    return d
+
+
+def _probe_dict(p: Probe) -> dict:
+    d: dict = {}
+    if p.instrument:
+        d["instrument"] = p.instrument
+    if p.repeatability is not None:
+        d["repeatability_um"] = units.from_internal(p.repeatability, "um")
+    if p.c_axis is not None:
+        c = p.c_axis
+        d["c_axis"] = {"R_C_mm": c.R_C, "Z_C_mm": c.Z_C, "axis_xy_mm": c.axis_xy,
+                       "angles_deg": c.angles_deg, "centres_mm": c.centres}
+    if p.b_axis is not None:
+        b = p.b_axis
+        d["b_axis"] = {"X_T_mm": b.X_T, "angles_deg": b.angles_deg,
+                       "styli": {s.id: {"R_B_mm": s.R_B, "nominal_mm": s.nominal, "centres_mm": s.centres}
+                                 for s in b.styli.values()}}
+    return d
+
+
+def save_campaign(campaign: Campaign, path: str | os.PathLike, header: str | None = None) -> None:
+    """Write ``campaign`` as TOML to ``path`` (atomically); ``header`` becomes a leading comment."""
+    text = dumps(campaign_to_dict(campaign, Path(path).resolve().parent))
+    if header:
+        text = "".join(f"# {line}\n" for line in header.splitlines()) + "\n" + text
+    write_text_atomic(path, text)

@@ -1,0 +1,127 @@
+"""One call from a campaign to its posterior: draws, summary, diagnostics, and the thesis values beside them."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import pandas as pd
+
+from ..identification import identify
+from ..inference.log_posterior import LogPosterior
+from ..inference.results import (
+    diagnostics_warnings,
+    not_identified,
+    summarize,
+    to_inference_data,
+)
+from ..inference.sampling import SamplerSettings, SamplingResult, run_ensembles
+from ..io.netcdf import write_netcdf_atomic
+from ..parameters import IDENTIFIABLE
+from ..progress import Progress
+from .checks import linear_model_check
+from .comparison import comparison
+
+
+@dataclass(frozen=True)
+class SamplerDiagnostics:
+    """How the sampler run went: convergence, sizes, autocorrelation, ESS and R-hat, and what to heed.
+
+    ``min_ess_bulk`` and ``ess_bulk_per_second`` are over the eight quantities of Table 4.5;
+    ``max_r_hat`` over every summarised quantity.
+    """
+
+    converged: bool
+    n_ensembles: int
+    n_walkers: int
+    n_steps: int
+    burn_in: int
+    tau_max_steps: float
+    kept_draws: int
+    acceptance: list[float]
+    wall_time_s: float
+    min_ess_bulk: float
+    ess_bulk_per_second: float
+    max_r_hat: float
+    warnings: list[str]
+    not_identified: list[str]
+    messages: list[str]
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class PosteriorResult:
+    """The posterior of a campaign under one forward model.
+
+    Attributes
+    ----------
+    idata : arviz.InferenceData
+        posterior (display units: ″, µm), prior, posterior predictive, observed data, sample stats.
+    summary : pandas.DataFrame
+        one row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd,
+        identified (:func:`~mtmcal_bayes.inference.results.summarize`).
+    comparison : pandas.DataFrame
+        each quantity's posterior beside the ball-bar and touch-probe values.
+    sampling : SamplingResult
+        the chains of every ensemble in internal units, and the sampler's own facts.
+    warnings, not_identified : sentences to heed.
+    """
+
+    idata: object
+    summary: pd.DataFrame
+    comparison: pd.DataFrame
+    sampling: SamplingResult
+    warnings: list[str] = field(default_factory=list)
+    not_identified: list[str] = field(default_factory=list)
+    output: str | None = None  # where :meth:`save` wrote the NetCDF
+
+    @property
+    def log_posterior(self) -> LogPosterior:
+        return self.sampling.posterior
+
+    @property
+    def model(self) -> str:
+        return self.log_posterior.model_name
+
+    @property
+    def diagnostics(self) -> SamplerDiagnostics:
+        r = self.sampling
+        ess = self.summary.loc[[n for n in IDENTIFIABLE if n in self.summary.index], "ess_bulk"]
+        return SamplerDiagnostics(
+            converged=r.converged, n_ensembles=r.chains.shape[0], n_walkers=r.chains.shape[2], n_steps=r.n_steps,
+            burn_in=r.burn, tau_max_steps=float(r.tau.max()), kept_draws=r.n_draws,
+            acceptance=r.acceptance.tolist(), wall_time_s=r.wall_time, min_ess_bulk=float(ess.min()),
+            ess_bulk_per_second=float(ess.min() / r.wall_time), max_r_hat=float(self.summary["r_hat"].max()),
+            warnings=self.warnings, not_identified=self.not_identified, messages=r.messages)
+
+    def save(self, path) -> None:
+        """Write the InferenceData as NetCDF (atomically); ``compensate --posterior`` reads it."""
+        write_netcdf_atomic(self.idata, path)
+        self.output = str(path)
+
+    def to_json(self) -> dict:
+        """What ``sample --json`` prints: summary and comparison per quantity, diagnostics (SPEC §10)."""
+        from .output import posterior_json
+
+        return {**posterior_json(self), "output": self.output}
+
+    def to_text(self) -> str:
+        """What ``sample`` prints: the summary beside the thesis values, diagnostics, the dx_BT = 0 effect."""
+        from .output import format_sample
+
+        return format_sample(self)
+
+
+def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False,
+                     settings: SamplerSettings | None = None, checkpoint=None,
+                     progress: Progress | None = None) -> PosteriorResult:
+    """Sample the posterior of ``campaign`` and summarise it against the deterministic results."""
+    post = LogPosterior(campaign, model, fix_dx_BT=fix_dx_BT)
+    result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress)
+    seed = settings.seed if settings else None
+    idata = to_inference_data(result, seed=seed)
+    summary = summarize(idata, post)
+    comp = comparison(summary, identify(campaign))
+    warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary)
+    return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary))

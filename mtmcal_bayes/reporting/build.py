@@ -1,0 +1,345 @@
+"""``mtmcal-bayes report``: sample the posterior and write the report directory (SPEC §8).
+
+The directory receives ``index.html`` (self-contained), every figure as PNG,
+every table as CSV and the posterior as NetCDF.  Everything is written into a
+temporary directory first and moved into place at the end, so a failure leaves
+nothing half-written.
+"""
+
+from __future__ import annotations
+
+import datetime
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from ..errors import MtmcalError
+from ..figure_style import save_png
+from ..identification import IdentificationResult, identify
+from ..identification.output import identification_table
+from ..inference.sampling import SamplerSettings
+from ..io.netcdf import write_netcdf_atomic
+from ..io.textfiles import atomic_directory
+from ..models import MODELS
+from ..parameters import IDENTIFIABLE
+from ..planning import figures as plan_figures
+from ..planning.plan import PlanResult, plan
+from ..posterior.checks import thesis_assumption_effect
+from ..posterior.output import format_posterior, posterior_json
+from ..posterior.sample import PosteriorResult, sample_posterior
+from ..progress import Progress, ProgressEvent, emit
+from ..version import __version__
+from . import compare, corner_plot, forest, mcmc_plots, polar, ppc, widths
+from .html import Page
+from .missing import missing_data
+
+SUMMARY_COLUMNS = ["unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
+                   "prior_sd", "sd_ratio", "identified"]
+REFERENCE_COLUMNS = ["ballbar", "ballbar_in_hdi", "ballbar_z", "probe_reported", "probe_reported_in_hdi",
+                     "probe_reported_z", "probe_recomputed", "probe_recomputed_in_hdi", "probe_recomputed_z"]
+
+
+@dataclass
+class Report:
+    """What :func:`build_report` wrote: the directory, file names, the summary table and console text."""
+
+    directory: Path
+    files: list[str]
+    summary: pd.DataFrame
+    console: str
+    wall_time: float
+    posterior: PosteriorResult
+    missing: list[str]
+
+    def to_json(self) -> dict:
+        """What ``report --json`` prints: the posterior's JSON and what was written."""
+        return {**posterior_json(self.posterior), "directory": str(self.directory), "files": self.files,
+                "missing": self.missing, "wall_time_s": self.wall_time}
+
+    def to_text(self) -> str:
+        """What ``report`` prints."""
+        return self.console
+
+
+@dataclass
+class ReportContent:
+    """Everything the HTML page shows, computed before it is written."""
+
+    campaign: object
+    model: str
+    posterior: PosteriorResult
+    compared: dict[str, PosteriorResult] | None  # all models, when they are compared
+    ident: IdentificationResult
+    missing: list[str]
+    summary: pd.DataFrame
+    ppc: pd.DataFrame
+    diagnostics: pd.DataFrame
+    thesis_effect: pd.DataFrame | None
+    off_scale: list[str]
+    sigma_um: float
+    fix_dx_BT: bool
+    planned: PlanResult
+
+
+def summary_table(rep: PosteriorResult) -> pd.DataFrame:
+    """summary.csv: one row per quantity with the posterior and the deterministic values beside it."""
+    s = rep.summary[SUMMARY_COLUMNS].copy()
+    c = rep.comparison.reindex(s.index)
+    for col in REFERENCE_COLUMNS:
+        s[col] = c[col] if col in c else None
+    s.index.name = "quantity"
+    return s
+
+
+def priors_table(post) -> pd.DataFrame:
+    return pd.DataFrame([{"parameter": p.name, "prior": p.describe(), "reason": p.reason}
+                         for p in post.priors.priors]).set_index("parameter")
+
+
+def _check_output_dir(out_dir: Path) -> None:
+    if out_dir.exists() and not out_dir.is_dir():
+        raise MtmcalError(f"{out_dir}: cannot write the report: it exists and is not a directory")
+    if not out_dir.resolve().parent.is_dir():
+        raise MtmcalError(f"{out_dir}: cannot write the report: directory {out_dir.resolve().parent} does not exist")
+
+
+def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerSettings | None = None,
+                 fix_dx_BT: bool = False, compare_models: bool = False, posterior: PosteriorResult | None = None,
+                 progress: Progress | None = None, command: str = "") -> Report:
+    """Sample, draw, tabulate and write the report of ``campaign`` into ``out_dir``.
+
+    ``posterior``: a posterior of this campaign already sampled (its model and
+    dx_BT assumption then hold); else one is sampled with ``settings``.
+    ``progress`` receives the sampler's events and one ``"report"`` event per stage.
+    """
+    t0 = time.perf_counter()
+    out_dir = Path(out_dir)
+    _check_output_dir(out_dir)
+    settings = settings or SamplerSettings()
+
+    def say(text: str) -> None:
+        emit(progress, ProgressEvent("report", text))
+
+    if posterior is not None:
+        model, fix_dx_BT = posterior.model, posterior.log_posterior.fix_dx_BT
+        rep = posterior
+    else:
+        say(f"sampling the posterior ({model})")
+        rep = sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress)
+    reports = {model: rep}
+    if compare_models:
+        for other in MODELS:
+            if other != model:
+                say(f"sampling the posterior ({other}) for the model comparison")
+                reports[other] = sample_posterior(campaign, model=other, fix_dx_BT=fix_dx_BT, settings=settings,
+                                                  progress=progress)
+        reports = {m: reports[m] for m in MODELS}
+    ident = identify(campaign)
+    missing = missing_data(campaign, ident)
+    summary = summary_table(rep)
+    ppc_df = ppc.ppc_table(rep.idata, campaign)
+    diag = mcmc_plots.diagnostics_table(rep.summary, rep.sampling)
+    sigma_um = float(rep.summary.loc["sigma_model", "median"])
+
+    files: list[str] = []
+    with atomic_directory(out_dir) as tmp:
+        def png(name, fig):
+            say(f"drawing {name}")
+            save_png(fig, tmp / name)
+            files.append(name)
+
+        def csv(name, df, index=True):
+            df.to_csv(tmp / name, index=index, float_format="%.6g")
+            files.append(name)
+
+        corner_fig, off_scale = corner_plot.corner_figure(rep.idata, rep.comparison)
+        png("corner.png", corner_fig)
+        png("forest.png", forest.forest_figure({model: rep.summary}, rep.comparison))
+        png("ppc.png", ppc.ppc_figure({model: ppc_df}, campaign))
+        png("polar.png", polar.polar_figure(rep.sampling, campaign))
+        png("widths.png", widths.widths_figure(rep.summary))
+        png("rank.png", mcmc_plots.rank_figure(rep.idata))
+        png("trace.png", mcmc_plots.trace_figure(rep.sampling))
+        csv("summary.csv", summary)
+        csv("ppc.csv", ppc_df)
+        csv("diagnostics.csv", diag)
+        csv("priors.csv", priors_table(rep.log_posterior))
+        csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
+        if ident.probe:
+            csv("identification_probe.csv", identification_table(ident.probe), index=False)
+        effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um)
+        if effect is not None:
+            csv("thesis_assumption_dx_BT.csv", effect)
+        if compare_models:
+            png("compare_forest.png", forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison))
+            png("compare_ppc.png", ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign) for m, r in reports.items()},
+                                                  campaign))
+            csv("compare_models.csv", compare.model_comparison_table(reports), index=False)
+            csv("compare_fit.csv", compare.model_fit_table(reports, campaign))
+        say("planning the next measurement")
+        planned = _planning(campaign, rep)
+        png("plan_ranking.png", plan_figures.ranking_figure(planned))
+        png("plan_sweep.png", plan_figures.sweep_figure(planned))
+        csv("plan.csv", planned.table, index=False)
+        say("writing posterior.nc")
+        write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
+        files.append("posterior.nc")
+        content = ReportContent(campaign, model, rep, reports if compare_models else None, ident, missing, summary,
+                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned)
+        page = _page(content, tmp)
+        elapsed = time.perf_counter() - t0
+        files.insert(0, "index.html")
+        seed = rep.sampling.settings.seed
+        page.write(tmp / "index.html", _meta(campaign, model, seed, command=command, elapsed=elapsed))
+    console = _console(rep, missing, out_dir=out_dir, files=files, elapsed=elapsed)
+    return Report(out_dir, files, summary, console, elapsed, rep, missing)
+
+
+def _meta(campaign, model, seed, *, command, elapsed) -> str:
+    now = datetime.datetime.now().strftime("%Y-%m-%d %H:%M")
+    seed = "none (not reproducible)" if seed is None else seed
+    return (f"Campaign {campaign.source} · model {model} · seed {seed} · mtmcal-bayes {__version__} · "
+            f"generated {now} in {elapsed:.0f} s" + (f" · command: {command}" if command else ""))
+
+
+def _console(rep, missing, *, out_dir, files, elapsed) -> str:
+    lines = [format_posterior(rep)]
+    if rep.warnings:
+        lines += ["", "Warnings:"] + [f"  - {w}" for w in rep.warnings]
+    if missing:
+        lines += ["", "Missing from this campaign:"] + [f"  - {m}" for m in missing]
+    lines += ["", f"report written to {out_dir}/ in {elapsed:.0f} s: " + ", ".join(files),
+              f"open {out_dir / 'index.html'} in a browser"]
+    return "\n".join(lines)
+
+
+def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
+    s = summary.loc[[n for n in IDENTIFIABLE if n in summary.index] +
+                    [n for n in summary.index if n not in IDENTIFIABLE]]
+    unit = s["unit"].map({"arcsec": "″", "um": "µm"})
+    out = pd.DataFrame({"unit": unit, "mean": s["mean"], "sd": s["sd"], "HDI 2.5 %": s["hdi_low"],
+                        "HDI 97.5 %": s["hdi_high"], "ball bar": s["ballbar"], "in HDI": s["ballbar_in_hdi"],
+                        "probe (thesis)": s["probe_reported"], "in HDI ": s["probe_reported_in_hdi"],
+                        "probe (recomputed)": s["probe_recomputed"], "in HDI  ": s["probe_recomputed_in_hdi"],
+                        "R-hat": s["r_hat"], "bulk ESS": s["ess_bulk"].round(0).astype(int),
+                        "identified": s["identified"]})
+    return out
+
+
+def _planning(campaign, rep):
+    """The plan for the quantities the data do not identify, else for all eight."""
+    targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
+    return plan(campaign, targets or None)
+
+
+def _page(c: ReportContent, tmp: Path) -> Page:
+    campaign, model, rep, reports, ident = c.campaign, c.model, c.posterior, c.compared, c.ident
+    summary, ppc_df, diag, effect, planned, sigma_um = c.summary, c.ppc, c.diagnostics, c.thesis_effect, c.planned, c.sigma_um
+    d = rep.diagnostics
+    page = Page("Bayesian calibration report — B and C axes of a turn-mill machine")
+    page.box("missing", "Missing from this campaign", c.missing)
+    page.box("warn", "Warnings", rep.warnings + rep.not_identified)
+
+    page.section("results", "Results")
+    page.paragraph(
+        f"Posterior of the eight quantities the thesis identifies (and the deviations sampled beside them) under the "
+        f"{model} model{' with the thesis assumption dx_BT = 0' if c.fix_dx_BT else ''}: mean, sd and 95 % highest-density "
+        "interval, beside the deterministic ball-bar values (thesis Eqs 4.10–4.18 recomputed from this campaign) and "
+        "the touch-probe values (as printed in Table 5.3 and as recomputed from Table 5.2). 'in HDI' says whether "
+        "that value lies inside the 95 % HDI. Angles in arc seconds, lengths in micrometres. Full table: summary.csv.")
+    page.table(_results_table(summary), digits={"R-hat": 3})
+
+    page.section("corner", "Joint posterior")
+    page.figure(tmp / "corner.png", corner_plot.CAPTION + (" Off scale, not drawn: " + "; ".join(c.off_scale) + "."
+                                                            if c.off_scale else ""), "corner plot")
+    page.section("forest", "Intervals against the deterministic methods")
+    page.figure(tmp / "forest.png", forest.CAPTION, "forest plot")
+
+    page.section("ppc", "Posterior predictive check")
+    page.figure(tmp / "ppc.png", ppc.CAPTION, "posterior predictive check")
+    n_out = int((~ppc_df["inside_95"]).sum())
+    q = len(rep.log_posterior.names)
+    page.paragraph(f"{n_out} of {len(ppc_df)} observed means fall outside their 95 % predictive interval. "
+                   f"σ_model (what the model leaves out), posterior median {sigma_um:.2f} µm. Table: ppc.csv."
+                   + (f" With {len(ppc_df)} observed means and {q} sampled parameters the model can match every "
+                      "mean, so this check has little power here: tension between measurements shows in the "
+                      "parameters (wide or shifted intervals, e.g. beta_XB against dx_BT) rather than in the "
+                      "residuals." if q >= len(ppc_df) else ""))
+    page.table(ppc_df[["observed_mean_um", "repeat_sd_um", "n_repeats", "predictive_mean_um", "predictive_sd_um",
+                       "z", "inside_95"]], digits={"z": 2})
+
+    page.section("polar", "Ball-bar trajectories")
+    page.figure(tmp / "polar.png", polar.CAPTION, "polar trajectories")
+
+    page.section("widths", "What the data taught")
+    page.figure(tmp / "widths.png", widths.CAPTION, "prior and posterior widths")
+    page.paragraph("Priors, each with its reason (priors.csv):")
+    page.table(priors_table(rep.log_posterior))
+
+    page.section("plan", "Which measurement next")
+    best = planned.table.iloc[0]
+    page.paragraph(
+        f"Targets: {', '.join(planned.targets)}"
+        + (" (the quantities this campaign does not identify)" if len(planned.targets) < len(IDENTIFIABLE) else "")
+        + f". Best candidate: {best['name']}, expected information gain {best['eig_bits']:.2f} bits"
+        + (f", which identifies {best['newly_identified']}" if best["newly_identified"] else "")
+        + ". Closed form for the linear model; the full ranking is in plan.csv, and mtmcal-bayes plan "
+          "ranks for any targets (docs/planning.md).")
+    page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
+    shown = planned.table.head(10)
+    cols = ["name", "eig_bits", "verdict", "newly_identified"] + [f"{t} sd_after" for t in planned.targets[:4]]
+    page.table(shown[cols].rename(columns={"newly_identified": "identifies"}), digits=3, index=False)
+    page.figure(tmp / "plan_sweep.png", plan_figures.SWEEP_CAPTION, "tool-length sweep")
+    if len(planned.check):
+        page.paragraph("Monte-Carlo check of the closed form (data simulated from the posterior predictive, "
+                       "sigma_model learnt from them):")
+        page.table(planned.check[["candidate", "target", "sd_after_closed_form", "sd_after_monte_carlo",
+                                  "relative_difference"]], digits=3, index=False)
+
+    page.section("diagnostics", "Sampler diagnostics")
+    page.paragraph(
+        f"{d.n_ensembles} independent emcee ensembles × {d.n_walkers} walkers, {d.n_steps} steps each "
+        f"(burn-in {d.burn_in}), largest integrated autocorrelation time {d.tau_max_steps:.0f} steps, "
+        f"{'converged' if d.converged else 'NOT converged'} by the rule length ≥ 50 τ with τ stable; "
+        f"max R-hat {d.max_r_hat:.3f}, min bulk ESS of the eight {d.min_ess_bulk:.0f}, "
+        f"acceptance {min(d.acceptance):.2f}–{max(d.acceptance):.2f}, sampling {d.wall_time_s:.0f} s. "
+        "R-hat is computed across the independent ensembles (the walkers of one ensemble are not independent chains).")
+    page.table(diag.assign(ess_bulk=diag["ess_bulk"].round().astype(int), ess_tail=diag["ess_tail"].round().astype(int)),
+               digits={"r_hat": 3, "tau_steps": 0})
+    page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
+    page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
+
+    page.section("thesis", "Thesis values recomputed")
+    page.paragraph("The deterministic identification of the thesis, recomputed from this campaign beside the values "
+                   "printed in the thesis, with its flags (identification_ballbar.csv, identification_probe.csv).")
+    page.raw("<h3>Ball bar (Table 4.5, Eqs 4.10–4.18)</h3>")
+    page.table(identification_table(ident.ballbar), index=False)
+    page.raw("<h3>Touch probe (Table 5.3, Eqs 5.1–5.19)</h3>")
+    if ident.probe:
+        page.table(identification_table(ident.probe), index=False)
+    else:
+        page.paragraph("No touch-probe data in this campaign.")
+    page.box("missing", "Checks the deterministic method leaves out", ident.checks)
+    page.box("missing", "Assumptions", ident.assumptions)
+    if effect is not None:
+        page.paragraph("The thesis assumes dx_BT = 0 (Eq 4.2). Its effect on beta_XB and dx_CZ − dx_BT, closed form "
+                       f"at σ_model = {sigma_um:.2f} µm (thesis_assumption_dx_BT.csv):")
+        page.table(effect)
+
+    if reports is not None:
+        page.section("models", "Model comparison")
+        page.figure(tmp / "compare_forest.png", compare.CAPTION_FOREST, "intervals under three models")
+        fit = compare.model_fit_table(reports, campaign)
+        page.table(fit, digits={"rms_z": 3, "max_abs_z": 3})
+        worst = float(fit["max_abs_z"].max())
+        page.box("warn", "Where the models disagree", compare.disagreements(reports))
+        if worst < 2:
+            page.paragraph(f"Every model reproduces every measured mean (largest |z| {worst:.2f}), so the data "
+                           "cannot tell the models apart: where their intervals differ, that difference is "
+                           "model-form uncertainty the measurement does not resolve, and the choice of model "
+                           "(which pivots the thesis relations assume, SPEC §3.2) decides the answer.")
+        page.figure(tmp / "compare_ppc.png", compare.CAPTION_PPC, "predictive fit under three models")
+        page.paragraph("All numbers: compare_models.csv, compare_fit.csv.")
+    return page

@@ -1,0 +1,116 @@
+"""Corner plot of the eight identified quantities with the deterministic values marked."""
+
+from __future__ import annotations
+
+import corner
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from ..figure_style import COLOURS, REFERENCE_LABELS, label, symbol, unit_symbol
+from ..parameters import IDENTIFIABLE
+
+#: probability mass inside the 2-D contours (corner's own default is 0.5σ…2σ of a 2-D Gaussian)
+LEVELS = (0.68, 0.95)
+#: a reference value further than this many posterior sd from the mean is not drawn, but listed
+OFF_SCALE_SD = 8.0
+MAX_POINTS = 40_000
+
+CAPTION = (
+    "Corner plot of the posterior of the eight quantities the thesis identifies. Diagonal: marginal "
+    "histograms with the posterior mean ± sd as title. Off-diagonal: 2-D histograms of the draws "
+    "with contours enclosing 68 % and 95 % of the posterior mass (set explicitly; corner's default "
+    "levels would be 11.8/39.3/67.5/86.5 %, the 0.5σ–2σ levels of a 2-D Gaussian), individual draws "
+    "outside them. Orange lines: the ball-bar deterministic values (thesis Eqs 4.10–4.18 recomputed); "
+    "green: the touch-probe values as printed (Table 5.3); pink dashed: the touch-probe values "
+    "recomputed from Table 5.2 (Eqs 5.1–5.19). Strong diagonal ridges are quantities the data tie "
+    "together (e.g. β_XB with δx_CZ − δx_BT through dx_BT)."
+)
+
+
+def _draws(idata, names: list[str], seed: int = 0) -> np.ndarray:
+    """(N, len(names)) posterior draws, at most :data:`MAX_POINTS`, evenly chosen."""
+    cols = [np.asarray(idata.posterior[n]).ravel() for n in names]
+    x = np.column_stack(cols)
+    if len(x) > MAX_POINTS:
+        x = x[np.random.default_rng(seed).choice(len(x), MAX_POINTS, replace=False)]
+    return x
+
+
+def _ranges(x: np.ndarray, refs: dict[str, list], names) -> tuple[list, list[str]]:
+    """Axis range per quantity covering the draws and the reference values within reach."""
+    ranges, off = [], []
+    mean, sd = x.mean(axis=0), x.std(axis=0)
+    for i, n in enumerate(names):
+        lo, hi = np.quantile(x[:, i], [0.001, 0.999])
+        for key, values in refs.items():
+            v = values[i]
+            if v is None:
+                continue
+            if abs(v - mean[i]) > OFF_SCALE_SD * sd[i]:
+                off.append(f"{n}: {REFERENCE_LABELS[key]} {v:.2f} {unit_symbol(n)} "
+                           f"({(v - mean[i]) / sd[i]:+.0f} sd, off scale)")
+            else:
+                lo, hi = min(lo, v), max(hi, v)
+        pad = 0.05 * (hi - lo)
+        ranges.append((lo - pad, hi + pad))
+    return ranges, off
+
+
+def reference_values(comparison: pd.DataFrame, names) -> dict[str, list]:
+    """Per reference kind, a list aligned with ``names`` of values (display units) or None."""
+    out = {}
+    for key in ("ballbar", "probe_reported", "probe_recomputed"):
+        vals = []
+        for n in names:
+            v = comparison.loc[n, key] if n in comparison.index and key in comparison else None
+            vals.append(None if v is None or not np.isfinite(v) else float(v))
+        out[key] = vals
+    return out
+
+
+def _corner_size(K: int) -> float:
+    """Side of corner's own figure for K quantities, inches (corner sizes only the figures it creates)."""
+    factor, whspace = 2.0, 0.05
+    return 0.5 * factor + factor * K + factor * (K - 1.0) * whspace + 0.2 * factor
+
+
+def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
+    """The corner figure and a list of reference values left off the axes (too far away)."""
+    names = [n for n in names if n in idata.posterior]
+    x = _draws(idata, names)
+    refs = reference_values(comparison, names)
+    ranges, off = _ranges(x, refs, names)
+    fig = corner.corner(
+        x, fig=Figure(figsize=(_corner_size(len(names)),) * 2), labels=[label(n) for n in names], range=ranges, bins=30, smooth=1.0, levels=LEVELS,
+        color=COLOURS["posterior"], truths=refs["ballbar"], truth_color=COLOURS["ballbar"],
+        plot_datapoints=True, data_kwargs={"alpha": 0.02, "ms": 1.5}, label_kwargs={"fontsize": 13},
+        max_n_ticks=4, labelpad=0.08,
+    )
+    K = len(names)
+    axes = np.array(fig.axes).reshape(K, K)
+    mean, sd = x.mean(axis=0), x.std(axis=0)
+    for i, n in enumerate(names):
+        axes[i, i].set_title(f"{symbol(n)} = {mean[i]:.1f} ± {sd[i]:.1f} {unit_symbol(n)}", fontsize=11)
+    styles = {"probe_reported": dict(color=COLOURS["probe_reported"], ls="-", marker="s"),
+              "probe_recomputed": dict(color=COLOURS["probe_recomputed"], ls="--", marker="D")}
+    for key, st in styles.items():
+        v = refs[key]
+        for i in range(K):
+            if v[i] is None or not ranges[i][0] <= v[i] <= ranges[i][1]:
+                continue
+            for r in range(i, K):
+                axes[r, i].axvline(v[i], color=st["color"], ls=st["ls"], lw=1.3)
+            for c in range(i):
+                axes[i, c].axhline(v[i], color=st["color"], ls=st["ls"], lw=1.3)
+                if v[c] is not None and ranges[c][0] <= v[c] <= ranges[c][1]:
+                    axes[i, c].plot(v[c], v[i], marker=st["marker"], color=st["color"], ms=6, mec="white")
+    handles = [Line2D([], [], color=COLOURS["posterior"], lw=6, alpha=0.5, label="posterior (68 % / 95 % contours)"),
+               Line2D([], [], color=COLOURS["ballbar"], lw=1.5, label=REFERENCE_LABELS["ballbar"])]
+    for key, st in styles.items():
+        if any(v is not None for v in refs[key]):
+            handles.append(Line2D([], [], color=st["color"], ls=st["ls"], marker=st["marker"], lw=1.3,
+                                  label=REFERENCE_LABELS[key]))
+    fig.legend(handles=handles, loc="upper right", bbox_to_anchor=(0.95, 0.95), fontsize=14, frameon=False)
+    return fig, off

@@ -1,0 +1,88 @@
+"""Forest plot: 95 % HDIs of the eight quantities beside the deterministic values."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.lines import Line2D
+
+from ..figure_style import (
+    COLOURS,
+    MODEL_COLOURS,
+    REFERENCE_LABELS,
+    new_figure,
+    symbol,
+    unit_symbol,
+)
+from ..parameters import IDENTIFIABLE
+from .corner_plot import OFF_SCALE_SD, reference_values
+
+CAPTION = (
+    "One row per quantity, each with its own scale (″ for angles, µm for lengths): posterior mean (dot) and "
+    "95 % highest-density interval (bar), and below it the deterministic values: ball bar (thesis Eqs "
+    "4.10–4.18 recomputed from the campaign), touch probe as printed (Table 5.3) and touch probe recomputed "
+    f"(Eqs 5.1–5.19). A reference value outside the bar is outside the 95 % HDI. Values more than "
+    f"{OFF_SCALE_SD:g} posterior sd away are not drawn to scale: an arrow at the edge gives the value."
+)
+
+_REF_STYLE = {"ballbar": dict(marker="o", ms=9, mfc="none", mew=2),
+              "probe_reported": dict(marker="s", ms=8, mfc="none", mew=2),
+              "probe_recomputed": dict(marker="D", ms=7, mfc="none", mew=1.5)}
+
+
+def _colour(label: str, several: bool) -> str:
+    return MODEL_COLOURS.get(label, COLOURS["posterior"]) if several else COLOURS["posterior"]
+
+
+def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame | None, names=IDENTIFIABLE):
+    """One row per quantity, one interval per entry of ``summaries`` (label → summary table).
+
+    ``comparison`` (from :func:`~mtmcal_bayes.inference.results.comparison`) supplies the
+    reference values; None draws the intervals only.
+    """
+    names = [n for n in names if all(n in s.index for s in summaries.values())]
+    refs = reference_values(comparison, names) if comparison is not None else {}
+    k = len(summaries)
+    fig, axes = new_figure(len(names), 1, figsize=(10, (0.55 + 0.22 * k) * len(names) + 1.3), squeeze=False)
+    for i, (ax, n) in enumerate(zip(axes[:, 0], names)):
+        rows = {lab: s.loc[n] for lab, s in summaries.items()}
+        ys = 1.0 + np.arange(k)[::-1] * 0.6
+        for (lab, r), y in zip(rows.items(), ys):
+            ax.hlines(y, r["hdi_low"], r["hdi_high"], color=_colour(lab, k > 1), lw=5, alpha=0.85)
+            ax.plot(r["mean"], y, "o", color="white", mec=_colour(lab, k > 1), ms=6, mew=1.5)
+        lo = min(r["hdi_low"] for r in rows.values())
+        hi = max(r["hdi_high"] for r in rows.values())
+        mean = np.mean([r["mean"] for r in rows.values()])
+        sd = max(r["sd"] for r in rows.values())
+        near = [refs[key][i] for key in _REF_STYLE if refs and refs[key][i] is not None
+                and abs(refs[key][i] - mean) <= OFF_SCALE_SD * sd]
+        lo, hi = min([lo, mean - 4 * sd] + near), max([hi, mean + 4 * sd] + near)
+        pad = 0.04 * (hi - lo)
+        xlim = (lo - pad, hi + pad)
+        for key, st in _REF_STYLE.items():
+            v = refs[key][i] if refs else None
+            if v is None:
+                continue
+            if xlim[0] <= v <= xlim[1]:
+                ax.plot(v, 0.0, color=COLOURS[key], ls="none", **st)
+            else:
+                right = v > xlim[1]
+                ax.annotate(f"{v:.0f}", xy=(xlim[1] if right else xlim[0], 0.0), xytext=(-30 if right else 30, 0),
+                            textcoords="offset points", ha="center", va="center", fontsize=8, color=COLOURS[key],
+                            arrowprops=dict(arrowstyle="->", color=COLOURS[key]))
+        ax.set_xlim(xlim)
+        ax.set_ylim(-0.6, ys[0] + 0.6)
+        ax.set_yticks([])
+        ax.set_ylabel(f"{symbol(n)}\n[{unit_symbol(n)}]", rotation=0, ha="right", va="center", fontsize=12)
+        if xlim[0] < 0 < xlim[1]:
+            ax.axvline(0, color="0.6", lw=0.8, zorder=0)
+        ax.grid(axis="x", alpha=0.3)
+        ax.tick_params(axis="x", labelsize=9)
+    handles = [Line2D([], [], color=_colour(lab, k > 1), lw=5, marker="o", mfc="white",
+                      label=f"{lab}: mean, 95 % HDI" if k > 1 else "posterior: mean, 95 % HDI") for lab in summaries]
+    for key, st in _REF_STYLE.items():
+        if refs and any(v is not None for v in refs[key]):
+            handles.append(Line2D([], [], color=COLOURS[key], ls="none", label=REFERENCE_LABELS[key], **st))
+    fig.tight_layout(rect=(0, 0.7 / fig.get_figheight(), 1, 1), h_pad=0.6)
+    fig.legend(handles=handles, loc="lower center", ncol=2, fontsize=9.5, frameon=False)
+    return fig

@@ -1,0 +1,91 @@
+"""Polar ΔL trajectories of each ball-bar run, magnified as ball-bar software shows them."""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+from .. import units
+from ..figure_style import COLOURS
+from ..observations import Observations
+from ..patterns import B_ANGLES_DEG, B_PATTERNS, COMPONENTS, polar_basis
+
+CAPTION = (
+    "Ball-bar trajectories as ball-bar software draws them: the change of bar length ΔL along the "
+    "pattern, magnified radially (the dotted ring is ΔL = 0, radial ticks in µm) against the polar-plot "
+    "angle: the B angle for B patterns over their 0–90° arc; for C patterns the direction of the bar over a "
+    "full turn (the C angle, or C + 180° for CR with the T ball inside the W ball). Only the eccentricity part "
+    "ΔL = e_a·u_a + e_b·u_b is drawn (the mean radius change is not modelled). Black: the eccentricity circle "
+    "of the mean of the measured repeats; grey: each repeat; blue band: 95 % of the posterior's predicted "
+    "trajectories (the model with the sampled deviations and mounting offsets, no measurement noise)."
+)
+N_BAND_DRAWS = 400
+C_GRID_DEG = np.linspace(0.0, 360.0, 181)
+
+
+def _runs(campaign):
+    """(run index, run, list of (observation index, component)) for every run with observations."""
+    keys = Observations.from_campaign(campaign).keys
+    out = {}
+    for j, k in enumerate(keys):
+        out.setdefault(k.run, []).append((j, k.component))
+    return [(i, campaign.ballbar.runs[i], comps) for i, comps in sorted(out.items())]
+
+
+def _dL(pattern: str, angles_rad: np.ndarray, comps: list[str], values: np.ndarray) -> np.ndarray:
+    """ΔL (..., k) from component values (..., len(comps)) over the pattern's polar angles."""
+    B = polar_basis(pattern, angles_rad)
+    cols = [1 + COMPONENTS[pattern].index(c) for c in comps]
+    return values @ B[:, cols].T
+
+
+def polar_figure(result, campaign, seed: int = 0):
+    """One polar panel per run: measured circle, repeats and the posterior band (µm)."""
+    post = result.posterior
+    flat = result.chains.reshape(-1, result.chains.shape[-1])
+    rng = np.random.default_rng(seed)
+    sub = flat[rng.choice(len(flat), min(N_BAND_DRAWS, len(flat)), replace=False)]
+    pred = units.from_internal(post.forward.predict(sub[:, : post.p]), "um")  # (n, m)
+    runs = _runs(campaign)
+    ncols = min(3, len(runs))
+    nrows = int(np.ceil(len(runs) / ncols))
+    fig = Figure(figsize=(5.0 * ncols, 5.2 * nrows + 0.6))
+    for panel, (i, run, comps) in enumerate(runs, start=1):
+        ax = fig.add_subplot(nrows, ncols, panel, projection="polar")
+        idx = [j for j, _ in comps]
+        names = [c for _, c in comps]
+        is_b = run.pattern in B_PATTERNS
+        deg = B_ANGLES_DEG if is_b else C_GRID_DEG
+        psi = np.deg2rad(deg)
+        reps = np.column_stack([units.from_internal(run.repeats[c], "um") for c in names])  # (r, len(comps))
+        measured = _dL(run.pattern, psi, names, reps.mean(axis=0))
+        band = np.quantile(_dL(run.pattern, psi, names, pred[:, idx]), [0.025, 0.975], axis=0)
+        repeat_lines = _dL(run.pattern, psi, names, reps)
+        M = 1.15 * max(np.abs(measured).max(), np.abs(band).max(), np.abs(repeat_lines).max(), 1.0)
+        ax.fill_between(psi, band[0], band[1], color=COLOURS["posterior"], alpha=0.35, lw=0)
+        for r in repeat_lines:
+            ax.plot(psi, r, color="0.55", lw=0.7)
+        ax.plot(psi, measured, color=COLOURS["observed"], lw=1.6)
+        ax.plot(psi, np.zeros_like(psi), color="0.3", lw=1.0, ls=":")
+        ax.set_rorigin(-1.6 * M)
+        ax.set_rlim(-M, M)
+        ticks = np.array([-1, 0, 1]) * float(f"{M * 0.7:.1g}")
+        ax.set_rticks(ticks, [f"{t:+g} µm" if t else "0" for t in ticks], fontsize=8)
+        ax.set_rlabel_position(45 if is_b else 112.5)
+        if is_b:
+            ax.set_thetamin(0)
+            ax.set_thetamax(90)
+        ax.tick_params(axis="x", labelsize=8)
+        s = campaign.ballbar.setups[run.setup]
+        m_ = campaign.ballbar.mounts[run.mount]
+        e = ", ".join(f"{c} {v:+.1f}" for c, v in zip(names, reps.mean(axis=0)))
+        ax.set_title(f"{run.pattern} @ {run.setup}/{run.mount}  (R_B {s.R_B:g} mm, R_C {m_.R_C:g} mm)\n"
+                     f"measured: {e} µm", fontsize=9.5, pad=12)
+    handles = [Line2D([], [], color=COLOURS["observed"], lw=1.6, label="measured (mean of repeats)"),
+               Line2D([], [], color="0.55", lw=0.7, label="each repeat"),
+               Line2D([], [], color=COLOURS["posterior"], lw=8, alpha=0.35, label="posterior 95 % band"),
+               Line2D([], [], color="0.3", lw=1.0, ls=":", label="ΔL = 0")]
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=9, frameon=False)
+    fig.tight_layout(rect=(0, 0.5 / fig.get_figheight(), 1, 1), h_pad=2.5)
+    return fig

@@ -1,0 +1,85 @@
+"""``simulate``: the predicted eccentricities of a truth as a result object, and the synthetic campaign."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .. import units
+from ..campaign import Campaign, Truth
+from ..io.campaign_writer import save_campaign
+from ..models import first_order_gap
+from ..observations import Observations
+from ..parameters import ParameterSpace
+from .simulate import (
+    eccentricity_records,
+    predict_truth,
+    synthetic_campaign,
+    truth_vector,
+)
+
+
+@dataclass
+class Simulation:
+    """Noise-free eccentricities ``predicted`` (m,), mm, of every observed component of ``campaign``
+    under ``model`` for ``truth``; ``noise``/``seed`` say how :meth:`synthetic_campaign` scatters them."""
+
+    campaign: Campaign
+    truth: Truth
+    truth_source: str
+    model: str
+    observations: Observations
+    predicted: np.ndarray
+    noise: bool = False
+    seed: int | None = None
+    warnings: list[str] = field(default_factory=list)
+    output: str | None = None
+
+    @property
+    def eccentricities(self) -> pd.DataFrame:
+        """One row per component: pattern, setup, mount, component, value_um."""
+        return pd.DataFrame(eccentricity_records(self.observations, self.predicted))
+
+    def synthetic_campaign(self) -> Campaign:
+        """A copy of the campaign whose runs carry the simulated data and whose ``[truth]`` is the truth."""
+        return synthetic_campaign(self.campaign, self.truth, self.model, noise=self.noise, seed=self.seed)
+
+    def describe_noise(self) -> str:
+        return f"with noise (seed {self.seed})" if self.noise else "noise-free"
+
+    def save(self, path) -> None:
+        """Write :meth:`synthetic_campaign` as a campaign TOML with a header saying how it was made."""
+        save_campaign(self.synthetic_campaign(), path, header=(
+            f"Synthetic campaign simulated by mtmcal-bayes with model {self.model}, {self.describe_noise()},\n"
+            f"from {self.campaign.source} and truth {self.truth_source}."))
+        self.output = str(path)
+
+    def to_json(self) -> dict:
+        return {"model": self.model, "eccentricities": eccentricity_records(self.observations, self.predicted)}
+
+    def to_text(self) -> str:
+        if self.output:
+            return (f"wrote {self.output}: {len(self.observations)} eccentricity components, {self.describe_noise()}, "
+                    f"model {self.model}")
+        lines = [f"Predicted eccentricities (µm), model {self.model}, truth {self.truth_source}"]
+        for rec in eccentricity_records(self.observations, self.predicted):
+            lines.append(f"  {rec['pattern']:2s} {rec['setup']:>6s} {rec['mount']:>4s}  {rec['component']}  "
+                         f"{rec['value_um']:10.3f}")
+        return "\n".join(lines)
+
+
+def simulate_truth(campaign: Campaign, truth: Truth, *, model: str = "htm-thesis", noise: bool = False,
+                   seed: int | None = None, source: str = "<truth>") -> Simulation:
+    """Predict every component for ``truth``; warn when the linear model is asked for a truth too large for it."""
+    obs, pred = predict_truth(campaign, truth, model, source=source)
+    warnings = []
+    if model == "linear":  # first order: say so when the truth is too large for it
+        space = ParameterSpace.for_campaign(campaign)
+        gap = first_order_gap(campaign, truth_vector(space, truth, source), space)
+        if gap > campaign.ballbar.accuracy:
+            warnings.append(f"the linear model is first order and this truth is too large for it: htm-thesis "
+                            f"predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} µm away (instrument "
+                            f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm)")
+    return Simulation(campaign, truth, source, model, obs, pred, noise, seed, warnings)

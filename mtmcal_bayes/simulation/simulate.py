@@ -1,0 +1,109 @@
+"""Synthetic ball-bar data: predicted eccentricities for a known truth, with realistic scatter.
+
+A truth (``[truth]`` of a campaign, or a TRUTH.toml with the same tables at top
+level) gives the parameter vector; a forward model predicts every component of
+every run.  With noise, each component gets, like a real measurement, an
+instrument error shared by the run's repeats (sd = the ball bar's accuracy)
+and a repeat scatter per repeat, rounded to the instrument resolution.  This is
+the data-generating process the likelihood assumes (SPEC §5).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from .. import units
+from ..campaign import Campaign, Truth
+from ..errors import InputError
+from ..models import make_model
+from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_observations
+from ..parameters import ParameterSpace, nuisance_name
+
+#: resolution of the ball-bar readings (thesis Table 4.1)
+RESOLUTION_UM = 0.1
+
+
+def truth_vector(space: ParameterSpace, truth: Truth, source: str = "<truth>") -> np.ndarray:
+    """Parameter vector ``(p,)`` (internal units) of a truth; missing values are zero."""
+    values = dict(truth.deviations)
+    for group in (truth.setups, truth.mounts):
+        for owner, kv in group.items():
+            values.update({nuisance_name(k, owner): v for k, v in kv.items()})
+    missing = [k for k in values if k not in space.names]
+    if missing:
+        raise InputError(source, missing[0], "not a parameter of this campaign")
+    return space.vector(values)
+
+
+def truth_from_vector(space: ParameterSpace, theta: np.ndarray) -> Truth:
+    """The :class:`Truth` of a parameter vector; ``theta`` may be longer than the space (extra columns ignored)."""
+    t = Truth()
+    for i, p in enumerate(space.parameters):
+        if p.group == "deviation":
+            t.deviations[p.name] = float(theta[i])
+        else:
+            getattr(t, p.group + "s").setdefault(p.owner, {})[p.base] = float(theta[i])
+    return t
+
+
+def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *,
+                  source: str = "<truth>") -> tuple[Observations, np.ndarray]:
+    """Noise-free eccentricities ``(m,)`` (mm) of every observed component under ``model``.
+
+    A truth so large that an eccentricity is not finite or not below the bar
+    length (no ball-bar could measure it) is an error naming ``source``.
+    """
+    fm = make_model(model, campaign)
+    pred = fm.predict(truth_vector(fm.space, truth, source))
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(pred) < campaign.ballbar.length)
+    if bad.any():
+        k = fm.observations.keys[int(np.argmax(bad))]
+        raise InputError(source, None, f"this truth gives {k.component} of {k.pattern} = "
+                         f"{units.from_internal(pred[bad][0], 'um'):.4g} µm under {model}, not below the bar length "
+                         f"L_B = {campaign.ballbar.length:g} mm: the deviations are too large to be measured")
+    return fm.observations, pred
+
+
+def noisy_repeats(mean: np.ndarray, n_repeats: np.ndarray, accuracy: float, rng: np.random.Generator, *,
+                  repeat_sd: float = units.to_internal(TYPICAL_REPEAT_SD_UM, "um"),
+                  resolution: float = units.to_internal(RESOLUTION_UM, "um")) -> list[np.ndarray]:
+    """Repeats around ``mean`` (m,), mm: shared instrument error N(0, accuracy) + N(0, repeat_sd) each, rounded."""
+    out = []
+    for mu, r in zip(mean, n_repeats):
+        vals = mu + rng.normal(0.0, accuracy) + rng.normal(0.0, repeat_sd, size=int(r))
+        out.append(np.round(vals / resolution) * resolution)
+    return out
+
+
+def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
+                       seed: int | None = None, repeats: int | None = None) -> Campaign:
+    """A copy of ``campaign`` whose runs carry simulated data and whose ``[truth]`` is ``truth``.
+
+    Noise-free: one repeat per component equal to the prediction.  With
+    ``noise``: as many repeats as the original run (or ``repeats``), scattered
+    as described in the module docstring.  Probe data and published results
+    are dropped (they belong to the real measurement).
+    """
+    obs, pred = predict_truth(campaign, truth, model)
+    if noise:
+        rng = np.random.default_rng(seed)
+        n = np.full(len(obs), repeats) if repeats else obs.n
+        values = noisy_repeats(pred, n, campaign.ballbar.accuracy, rng)
+    else:
+        values = [np.array([v]) for v in pred]
+    out = with_observations(campaign, np.zeros(len(obs)))
+    for key, v in zip(obs.keys, values):
+        out.ballbar.runs[key.run].repeats[key.component] = v
+        out.ballbar.runs[key.run].trace_csv = None
+    out.probe = None
+    out.truth = copy.deepcopy(truth)
+    return out
+
+
+def eccentricity_records(obs: Observations, values: np.ndarray) -> list[dict]:
+    """JSON records ``{"pattern", "setup", "mount", "component", "value_um"}`` of ``values`` (m,), mm."""
+    return [{"pattern": k.pattern, "setup": k.setup, "mount": k.mount, "component": k.component,
+             "value_um": units.from_internal(v, "um")} for k, v in zip(obs.keys, values)]
