@@ -221,6 +221,10 @@ def test_one_model_registry():
     places = [m for m, t in _literals((ast.Tuple, ast.List, ast.Dict, ast.Set))
               if {"htm-literal", "htm-thesis"} <= _strings(t)]
     assert places == ["mtmcal_bayes.models"], places
+    tests = Path(__file__).parent
+    copies = [p.name for p in tests.glob("*.py") if p.name != Path(__file__).name
+              and '("linear", "htm-literal", "htm-thesis")' in p.read_text(encoding="utf-8")]
+    assert not copies, f"tests keep their own list of models: {copies} (use mtmcal_bayes.MODELS)"
 
 
 def test_units_are_converted_by_the_units_module():

@@ -15,7 +15,7 @@ import re
 import numpy as np
 import pytest
 
-from mtmcal_bayes import load_campaign
+from mtmcal_bayes import MODELS, load_campaign
 
 from .conftest import DATA
 
@@ -170,7 +170,7 @@ def test_deviations_of_degrees(run_cli, tmp_path):
     truth = write(tmp_path, "degrees.toml", DEGREES)
     camp = write(tmp_path, "c.toml", MINIMAL)
     pred = {}
-    for model in ("linear", "htm-literal", "htm-thesis"):
+    for model in MODELS:
         doc = finite_json(assert_clean(run_cli("simulate", camp, "--truth", truth, "--model", model, "--json"))[0])
         pred[model] = np.array([r["value_um"] for r in doc["eccentricities"]], dtype=float)
         assert np.isfinite(pred[model]).all() and np.abs(pred[model]).max() > 1000.0  # mm-sized eccentricities

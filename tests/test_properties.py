@@ -39,7 +39,7 @@ from mtmcal_bayes.errors import MtmcalError
 from mtmcal_bayes.io.dprnt import parse_dprnt
 from mtmcal_bayes.io.gcode import block_line, parse_program, rewrite
 from mtmcal_bayes.io.traces import read_trace
-from mtmcal_bayes.models import HTMModel, LinearModel, jacobian, make_model
+from mtmcal_bayes.models import MODELS, HTMModel, LinearModel, jacobian, make_model
 from mtmcal_bayes.models.linear import LEFT_OUT
 from mtmcal_bayes.models.probe import fit_sphere
 from mtmcal_bayes.parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
@@ -53,7 +53,6 @@ from mtmcal_bayes.patterns import (
     polar_basis,
 )
 
-MODELS = ("linear", "htm-literal", "htm-thesis")
 HTM = ("htm-literal", "htm-thesis")
 ARCSEC = units.ARCSEC
 
