@@ -1,6 +1,6 @@
 """ESS per second: the vectorised log posterior against a scalar one (one Python call per walker).
 
-    python bench/sampler_ess.py [--steps 3000] [--model linear]
+    python bench/sampler_ess.py [--steps 200] [--model linear]
 
 Same posterior, same seed, same ensembles and step budget; the scalar version
 wraps the same function so that emcee calls it once per walker
@@ -38,6 +38,8 @@ class ScalarPosterior:
         return len(self.post)
 
     def __call__(self, z):
+        if np.ndim(z) == 2:  # the sampler's own starting-point check passes a batch
+            return np.array([self(row) for row in z])
         return float(self.post(z[None, :])[0])
 
 
@@ -52,7 +54,7 @@ def run(post, steps, vectorize, seed):
     try:
         target = post if vectorize else ScalarPosterior(post)
         t0 = time.perf_counter()
-        res = run_ensembles(target, SamplerSettings(seed=seed, check_every=steps, max_steps=steps))
+        res = run_ensembles(target, SamplerSettings(seed=seed, min_steps=steps, max_steps=steps))
         wall = time.perf_counter() - t0
     finally:
         emcee.EnsembleSampler.__init__ = original
@@ -63,7 +65,7 @@ def run(post, steps, vectorize, seed):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--steps", type=int, default=3000)
+    ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--model", default="linear")
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()

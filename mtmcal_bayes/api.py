@@ -35,6 +35,8 @@ CampaignLike = Campaign | str | os.PathLike | None
 
 #: default step budget of each emcee ensemble
 MAX_STEPS = 20_000
+#: default bulk and tail ESS of each of the eight quantities at which sampling stops
+TARGET_ESS = 1000.0
 
 
 def campaign_of(campaign: CampaignLike) -> Campaign:
@@ -92,12 +94,14 @@ def sensitivity(campaign: CampaignLike = None, *, model: str = "htm-thesis") -> 
 
 
 def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | None = None, fix_dx_BT: bool = False,
-           max_steps: int = MAX_STEPS, checkpoint=None, output=None, progress: Progress | None = None) -> PosteriorResult:
-    """The posterior of the deviations and nuisance offsets by emcee (independent ensembles, adaptive length),
-    summarised beside the ball-bar and touch-probe values.
+           target_ess: float = TARGET_ESS, sampler: str = "emcee", max_steps: int = MAX_STEPS, checkpoint=None,
+           output=None, progress: Progress | None = None) -> PosteriorResult:
+    """The posterior of the deviations and nuisance offsets, summarised beside the ball-bar and touch-probe values.
 
-    ``seed`` makes the draws reproducible; ``checkpoint`` (HDF5) is written as the run goes and resumed
-    if it exists; ``output`` receives the InferenceData as NetCDF.
+    emcee ensembles run until the bulk and tail ESS of the eight quantities reach ``target_ess`` and R-hat
+    ≤ 1.01 (``sampler="exact"``: independent draws of the exact posterior, linear model only).  ``seed``
+    makes the draws reproducible; ``checkpoint`` (HDF5) is written as the run goes and resumed if it
+    exists; ``output`` receives the InferenceData as NetCDF.
     """
     from .inference.sampling import SamplerSettings
     from .models import check_model
@@ -107,7 +111,7 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     check_model(model)
     _writable(output, "posterior")
     _writable(checkpoint, "checkpoint")
-    settings = SamplerSettings(seed=seed, max_steps=max_steps)
+    settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     result = sample_posterior(c, model=model, fix_dx_BT=fix_dx_BT, settings=settings, checkpoint=checkpoint,
                               progress=progress)
     if output is not None:
@@ -124,8 +128,9 @@ def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, f
 
 
 def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,
-           fix_dx_BT: bool = False, compare_models: bool = False, max_steps: int = MAX_STEPS,
-           posterior: PosteriorResult | None = None, progress: Progress | None = None, command: str = "") -> Report:
+           fix_dx_BT: bool = False, compare_models: bool = False, target_ess: float = TARGET_ESS,
+           sampler: str = "emcee", max_steps: int = MAX_STEPS, posterior: PosteriorResult | None = None,
+           progress: Progress | None = None, command: str = "") -> Report:
     """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
 
     ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
@@ -137,7 +142,7 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
     c = campaign_of(campaign)
     check_model(model)
-    settings = SamplerSettings(seed=seed, max_steps=max_steps)
+    settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     return build_report(c, output, model=model, settings=settings, fix_dx_BT=fix_dx_BT, compare_models=compare_models,
                         posterior=posterior, progress=progress, command=command)
 
@@ -214,7 +219,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
 
 
 def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", sampler: str = "emcee",
-        n_ranked: int = 99, max_steps: int = 4000, workers: int | None = None, seed: int = 1, output=None,
+        n_ranked: int = 99, max_steps: int = MAX_STEPS, workers: int | None = None, seed: int = 1, output=None,
         progress: Progress | None = None) -> SBCResult:
     """Simulation-based calibration (Talts et al. 2018) of the posterior on the design of the campaign:
     ``n`` truths from the prior, each ranked among ``n_ranked`` posterior draws; ``workers`` processes

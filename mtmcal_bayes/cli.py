@@ -75,8 +75,8 @@ def cmd_sample(args) -> int:
         return _show(api.closed_form(args.campaign, sigma_model_um=args.sigma_model_um, fix_dx_BT=args.fix_dx_BT,
                                      model=args.model), args)
     result = api.sample(args.campaign, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
-                        max_steps=args.max_steps, checkpoint=args.checkpoint, output=args.output,
-                        progress=_progress(args))
+                        target_ess=args.target_ess, sampler=args.sampler, max_steps=args.max_steps,
+                        checkpoint=args.checkpoint, output=args.output, progress=_progress(args))
     _warn(result.warnings)
     return _show(result, args)
 
@@ -84,8 +84,8 @@ def cmd_sample(args) -> int:
 def cmd_report(args) -> int:
     command = " ".join([PROG] + (sys.argv[1:] if args.argv is None else args.argv))
     rep = api.report(args.campaign, output=args.output, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
-                     compare_models=args.compare_models, max_steps=args.max_steps, progress=_progress(args),
-                     command=command)
+                     compare_models=args.compare_models, target_ess=args.target_ess, sampler=args.sampler,
+                     max_steps=args.max_steps, progress=_progress(args), command=command)
     _warn(rep.posterior.warnings)
     return _show(rep, args)
 
@@ -143,6 +143,10 @@ def _model(s, default: str, choices=MODELS, help: str | None = None) -> None:
 def _sampler_options(s) -> None:
     """Options of the commands that run the sampler (sample, report)."""
     s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
+    s.add_argument("--target-ess", type=float, default=api.TARGET_ESS, help="stop when the bulk and tail ESS of "
+                   f"each of the eight quantities reach this (default {api.TARGET_ESS:g}) and R-hat ≤ 1.01")
+    s.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
+                   help="emcee ensembles (default) or independent draws of the exact posterior (linear model)")
     s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
@@ -150,8 +154,7 @@ def _sampler_options(s) -> None:
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
     p.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    sub.required = True
+    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser, required=True)
 
     _command(sub, "identify", cmd_identify, "deterministic ball-bar and touch-probe identification (thesis Eqs 4.10–4.18, 5.1–5.19)")
 
@@ -237,9 +240,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--setup", default=None, help="campaign setup of the tool (R_B, NC origin; default: that of BX)")
     s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
 
-    s = sub.add_parser("validate", help="check the inference itself: simulation-based calibration")
-    vsub = s.add_subparsers(dest="check", metavar="CHECK", parser_class=_Parser)
-    vsub.required = True
+    vsub = sub.add_parser("validate", help="check the inference itself: simulation-based calibration").add_subparsers(
+        dest="check", metavar="CHECK", parser_class=_Parser, required=True)
     v = _command(vsub, "sbc", cmd_validate_sbc, "simulation-based calibration (Talts et al. 2018): rank histograms, "
                  "coverage", campaign="campaign whose design (runs, repeats, priors) to simulate (default: thesis)",
                  json_help="print JSON: p_uniform and coverage_50/90/95 per quantity")
@@ -249,7 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="emcee (default: what sample/report use) or the exact linear posterior (checks SBC itself)")
     v.add_argument("--draws", dest="n_ranked", type=int, default=99,
                    help="posterior draws each truth is ranked among (default 99)")
-    v.add_argument("--max-steps", type=int, default=4000, help="emcee step budget per ensemble (default 4000)")
+    v.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"emcee step budget per ensemble (default {api.MAX_STEPS})")
     v.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                    help=f"parallel processes (default: the CPU count, {os.cpu_count() or 1})")
     v.add_argument("--seed", type=int, default=1, help="random seed (default 1)")

@@ -1,4 +1,5 @@
 import io
+import warnings
 from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
@@ -17,15 +18,21 @@ def thesis():
 
 @pytest.fixture
 def run_cli():
-    """Run the CLI in-process: returns (exit status, stdout, stderr)."""
+    """Run the CLI in-process: returns (exit status, stdout, stderr).
+
+    Python warnings raised on the way are appended to stderr as the interpreter would print them
+    (pytest would otherwise capture them, hiding what a user sees on the terminal).
+    """
 
     def run(*argv):
         out, err = io.StringIO(), io.StringIO()
-        with redirect_stdout(out), redirect_stderr(err):
+        with redirect_stdout(out), redirect_stderr(err), warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
             try:
                 code = main([str(a) for a in argv])
             except SystemExit as exc:  # argparse
                 code = exc.code
-        return code, out.getvalue(), err.getvalue()
+        shown = "".join(warnings.formatwarning(w.message, w.category, w.filename, w.lineno) for w in caught)
+        return code, out.getvalue(), err.getvalue() + shown
 
     return run

@@ -93,7 +93,7 @@ def test_campaign_argument_takes_a_campaign_a_path_or_nothing(thesis, tmp_path):
 
 
 @pytest.mark.parametrize("call,parameter", [
-    (lambda: mb.sample(max_steps=100), "max_steps"),
+    (lambda: mb.sample(max_steps=10), "max_steps"),
     (lambda: mb.sample(model="quadratic"), "model"),
     (lambda: mb.plan(targets=["nope"]), "targets"),
     (lambda: mb.sbc(n=1), "n"),

@@ -279,11 +279,10 @@ def test_all_zero_data(run_cli, tmp_path):
 
 
 # --------------------------------------------------------------------------- sampler budget
-@pytest.mark.parametrize("steps", ["100", "0", "-5"])
-def test_step_budget_below_one_block(run_cli, steps):
-    """The ensembles advance in blocks of 500 steps: a smaller budget used to be overrun silently (and then
-    reported as reached); now it is an error."""
-    assert_error(run_cli("sample", "--max-steps", steps, "--quiet"), "--max-steps", "below one block of 500 steps")
+@pytest.mark.parametrize("steps", ["49", "0", "-5"])
+def test_step_budget_below_the_shortest_run(run_cli, steps):
+    """A run is at least 50 steps (its first check): a smaller budget would be overrun silently; it is an error."""
+    assert_error(run_cli("sample", "--max-steps", steps, "--quiet"), "--max-steps", "below the shortest run of 50 steps")
 
 
 def test_simulate_truth_too_large_for_any_ballbar(run_cli, tmp_path):

@@ -17,7 +17,7 @@ from . import variants
 
 REQUIRED = ["index.html", "corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png",
             "summary.csv", "ppc.csv", "diagnostics.csv", "priors.csv", "identification_ballbar.csv", "posterior.nc"]
-QUICK = ("--max-steps", "1000", "--seed", "2", "--quiet")
+QUICK = ("--seed", "2", "--quiet")  # the default run: converged in seconds
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +64,17 @@ def test_html_is_self_contained_with_captions(thesis_report):
     assert "68 %" in html and "95 %" in html and "corner's default" in html
     text = re.sub(r"<img[^>]*>", "", html)
     assert not re.search(r"\bnan\b", text, re.IGNORECASE)
-    assert "step budget of 1000 reached" in html  # an unconverged run says so
+    assert "converged by the rule" in html and "NOT converged" not in html
+    assert "against the exact σ-marginal posterior: means within" in html  # the accuracy check
+
+
+def test_unconverged_report_says_so(run_cli, tmp_path):
+    code, _out, err = run_cli("report", "-o", tmp_path / "rep", "--max-steps", "60", "--target-ess", "1e6",
+                              "--seed", "2", "--quiet")
+    assert code == 0, err
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    assert "step budget of 60 reached" in html and "NOT converged" in html
+    assert "WARNING: step budget of 60 reached" in err
 
 
 def test_corner_lists_reference_values_it_cannot_draw(thesis_report):

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pandas as pd
 
@@ -38,8 +36,7 @@ def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", meth
         else:
             origin = nc_origin(run.geometry)
             xyz_c = compensate_thesis(d, xyz - origin, bc)[0] + origin
-        htm.runs[i] = dataclasses.replace(run, commands=Commands(xyz_c[:, 0], xyz_c[:, 1], xyz_c[:, 2], c.B, c.C,
-                                                                 c.psi))
+        htm.replace_commands(i, Commands(xyz_c[:, 0], xyz_c[:, 1], xyz_c[:, 2], c.B, c.C, c.psi))
     after = htm.predict(theta)[0]
     return pd.DataFrame({"observation": htm.observations.labels, "before_um": units.from_internal(before, "um"),
                          "after_um": units.from_internal(after, "um")}).set_index("observation")

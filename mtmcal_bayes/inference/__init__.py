@@ -6,6 +6,7 @@ priors, nothing of the thesis' deterministic method (the posterior feature,
 """
 
 from .analytic import GaussianPosterior, gaussian_posterior, prior_sensitivity
+from .approximation import IndependenceMove, PosteriorApproximation
 from .log_posterior import SAMPLED_DEVIATIONS, LogPosterior
 from .marginal import MarginalPosterior
 from .priors import Prior, PriorSet, make_prior
@@ -16,9 +17,16 @@ from .results import (
            summarize,
            to_inference_data,
 )
-from .sampling import SamplerSettings, SamplingResult, check_step_budget, run_ensembles
+from .sampling import (
+           SAMPLERS,
+           SamplerSettings,
+           SamplingResult,
+           check_step_budget,
+           run_ensembles,
+           run_exact,
+)
 
-__all__ = ["GaussianPosterior", "gaussian_posterior", "prior_sensitivity", "SAMPLED_DEVIATIONS", "LogPosterior",
-           "MarginalPosterior", "Prior", "PriorSet", "make_prior", "diagnostics_warnings", "display_draws",
-           "not_identified", "summarize", "to_inference_data", "SamplerSettings", "SamplingResult",
-           "check_step_budget", "run_ensembles"]
+__all__ = ["GaussianPosterior", "gaussian_posterior", "prior_sensitivity", "IndependenceMove",
+           "PosteriorApproximation", "SAMPLED_DEVIATIONS", "LogPosterior", "MarginalPosterior", "Prior", "PriorSet",
+           "make_prior", "diagnostics_warnings", "display_draws", "not_identified", "summarize", "to_inference_data",
+           "SAMPLERS", "SamplerSettings", "SamplingResult", "check_step_budget", "run_ensembles", "run_exact"]

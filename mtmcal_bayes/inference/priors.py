@@ -1,19 +1,25 @@
 """Priors of the Bayesian analysis (SPEC §5): defaults with their reasons, campaign overrides.
 
-Every prior is a :mod:`scipy.stats` distribution in internal units (mm, rad).
-:class:`PriorSet` evaluates the joint log-density of a batch ``(n, q)`` with one
-scipy call per distribution family, and gives each parameter a centre and a
-width used to scale the sampling coordinates.
+Every prior is a :mod:`scipy.stats` distribution in internal units (mm, rad)
+(:meth:`Prior.frozen`: draws, quantiles, moments).  In the sampler's hot loop
+:class:`PriorSet` evaluates the joint log-density of a batch ``(n, q)`` in plain
+numpy, one expression per distribution family (the tests hold it to
+``scipy.stats``), and gives each parameter a centre and a width used to scale
+the sampling coordinates.
 """
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
 
 from .. import units
+
+_LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
 
 #: default prior of each kind of parameter: (dist, sd in display units, reason)
 DEFAULTS = {
@@ -46,15 +52,19 @@ class Prior:
     reason: str
 
     def frozen(self):
-        """The :mod:`scipy.stats` frozen distribution."""
+        """The :mod:`scipy.stats` frozen distribution (made once)."""
+        return self._frozen
+
+    @functools.cached_property
+    def _frozen(self):
         return {"normal": stats.norm, "halfnormal": stats.halfnorm, "uniform": stats.uniform}[self.dist](
             loc=self.loc, scale=self.scale)
 
-    @property
+    @functools.cached_property
     def sd(self) -> float:
         return float(self.frozen().std())
 
-    @property
+    @functools.cached_property
     def centre(self) -> float:
         """Centre of the sampling coordinate (mean, or 0 for half-normal)."""
         return 0.0 if self.dist == "halfnormal" else float(self.frozen().mean())
@@ -89,20 +99,42 @@ class PriorSet:
         self.priors = list(priors)
         self.names = [p.name for p in self.priors]
         self._groups = {}
-        for dist, fam in (("normal", stats.norm), ("halfnormal", stats.halfnorm), ("uniform", stats.uniform)):
+        for dist in ("normal", "halfnormal", "uniform"):
             idx = np.array([i for i, p in enumerate(self.priors) if p.dist == dist], dtype=int)
             if len(idx):
-                self._groups[dist] = (fam, idx, np.array([self.priors[i].loc for i in idx]),
-                                      np.array([self.priors[i].scale for i in idx]))
+                loc = np.array([self.priors[i].loc for i in idx])
+                scale = np.array([self.priors[i].scale for i in idx])
+                self._groups[dist] = (idx, loc, scale, self._log_norm(dist, scale))
         self.centre = np.array([p.centre for p in self.priors])
         self.width = np.array([p.sd for p in self.priors])
 
+    @staticmethod
+    def _log_norm(dist: str, scale: np.ndarray) -> float:
+        """Sum over a family of the log normalising constants of its densities."""
+        if dist == "normal":
+            return float(-np.sum(np.log(scale)) - len(scale) * _LOG_SQRT_2PI)
+        if dist == "halfnormal":
+            return float(len(scale) * math.log(2.0) - np.sum(np.log(scale)) - len(scale) * _LOG_SQRT_2PI)
+        return float(-np.sum(np.log(scale)))
+
     def logpdf(self, theta: np.ndarray) -> np.ndarray:
-        """Joint log-density ``(n,)`` of a batch ``(n, q)`` (internal units); −inf outside the support."""
+        """Joint log-density ``(n,)`` of a batch ``(n, q)`` (internal units); −inf outside the support.
+
+        Plain numpy: normal ``−½((x−μ)/s)² − log s − log√(2π)``; half-normal the same
+        plus ``log 2`` on ``x ≥ loc``; uniform ``−log(width)`` on ``[low, high]``.
+        """
         theta = np.atleast_2d(theta)
         out = np.zeros(theta.shape[0])
-        for fam, idx, loc, scale in self._groups.values():
-            out += fam.logpdf(theta[:, idx], loc=loc, scale=scale).sum(axis=1)
+        for dist, (idx, loc, scale, log_norm) in self._groups.items():
+            x = theta[:, idx]
+            if dist == "uniform":
+                inside = np.all((x >= loc) & (x <= loc + scale), axis=1)
+                out += np.where(inside, log_norm, -np.inf)
+                continue
+            u = (x - loc) / scale
+            out += log_norm - 0.5 * np.einsum("ij,ij->i", u, u)
+            if dist == "halfnormal":
+                out[np.any(x < loc, axis=1)] = -np.inf
         return out
 
     def rvs(self, n: int, rng: np.random.Generator) -> np.ndarray:

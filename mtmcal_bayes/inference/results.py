@@ -14,11 +14,12 @@ from .. import units
 from ..arviz_import import az
 from ..parameters import DERIVED, IDENTIFIABLE, combine, quantity_unit, weights
 from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity
-from .sampling import SamplingResult
 
 HDI_PROB = 0.95
 RHAT_MAX = 1.01
 ESS_MIN = 400
+#: posterior draws kept per chain in the InferenceData (the file stays a few MB; the ESS is kept)
+MAX_DRAWS_PER_CHAIN = 4000
 
 
 def display_draws(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
@@ -29,18 +30,20 @@ def display_draws(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-def to_inference_data(result: SamplingResult, n_prior: int = 4000, n_predictive: int = 1000,
+def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
                       seed: int | None = None) -> az.InferenceData:
-    """InferenceData with posterior, prior, posterior predictive, observed data and sample stats.
+    """InferenceData of a :class:`~.sampling.SamplingResult`: posterior, prior, posterior predictive, observed data
+    and sample stats.
 
     Posterior draws: chain = ensemble, draw = the walkers' sequences one after the
     other, so that ArviZ's autocorrelation-based ESS sees each walker's own
     autocorrelation (interleaving walkers step by step would hide it).
     """
     post = result.posterior
-    # thin by a quarter of the deviations' median τ: the ESS is kept, the file stays small
+    # thin by a quarter of the deviations' median τ (the ESS is kept), and to at most MAX_DRAWS_PER_CHAIN
     dev = [i for i, p in enumerate(post.space.parameters) if p.group == "deviation"]
-    thin = max(1, int(np.median(result.tau[:, dev]) // 4))
+    steps, walkers = result.chains.shape[1:3]
+    thin = max(1, int(np.median(result.tau[:, dev]) // 4), -(-steps * walkers // MAX_DRAWS_PER_CHAIN))
     chains, logp = result.chains[:, ::thin], result.log_prob[:, ::thin]
     K, S, W, q = chains.shape
     flat = np.swapaxes(chains, 1, 2).reshape(K, W * S, q)
@@ -67,7 +70,9 @@ def to_inference_data(result: SamplingResult, n_prior: int = 4000, n_predictive:
     idata.posterior.attrs.update({
         "model": post.model_name, "campaign": post.campaign.source, "fix_dx_BT": int(post.fix_dx_BT),
         "n_ensembles": K, "n_walkers": W, "n_steps": result.n_steps, "burn_in": result.burn, "thin": thin,
-        "tau_max_steps": float(result.tau.max()), "converged": int(result.converged),
+        "tau_max_steps": float(np.nanmax(result.tau)), "converged": int(result.converged),
+        "sampler": result.settings.sampler, "target_ess": float(result.settings.target_ess),
+        "independence_acceptance": float(result.independence_acceptance),
         "seed": -1 if result.settings.seed is None else int(result.settings.seed),
         "units": "arc seconds for angles, micrometres for lengths",
     })
@@ -85,7 +90,8 @@ def prior_sd(result_or_post, names) -> dict[str, float]:
 
 
 def summarize(idata, post, names=None) -> pd.DataFrame:
-    """One row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd, identified.
+    """One row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd, identified,
+    and the Monte-Carlo standard errors of mean and sd.
 
     ``sd_ratio`` is posterior sd / prior sd; ``prior_growth`` how much the
     posterior sd grows when the deviation priors widen tenfold
@@ -108,7 +114,7 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     # None where no prior-sensitivity check applies (sigma_model)
     s["identified"] = [None if np.isnan(g) else bool(g <= NOT_IDENTIFIED_GROWTH) for g in s["prior_growth"]]
     return s[["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
-              "prior_sd", "sd_ratio", "prior_growth", "identified"]]
+              "prior_sd", "sd_ratio", "prior_growth", "identified", "mcse_mean", "mcse_sd"]]
 
 
 def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:

@@ -11,7 +11,7 @@ C-axis frame, offset by (xW, yW, zW), and turned with C::
 
     W(θ) = M_CZ E_C(θ) (M_CZ⁻¹ P0 + w),      ΔL = |T − W| − L_B
 
-Rotations are exact (``expm([ε]×)`` through :mod:`scipy.spatial.transform`).
+Rotations are exact (``expm([ε]×)``, Rodrigues' formula).
 Where each angular deviation pivots is an explicit :class:`Pivots`
 configuration; two are named:
 
@@ -25,7 +25,9 @@ configuration; two are named:
   2·Z_C, where dx_CZ, dy_CZ are its offsets; linear-axis squareness about the NC
   origin.  The NC origin is at (X_T, 0, Z_C + R_B + Z_T) in the model frame.
 
-Everything is vectorised over the parameter batch (n) and the angle grid (k).
+Everything is vectorised over the parameter batch (n) and the evaluation points (k): the points of
+all runs and mount placements of a campaign go through the chain in one pass, each with its own
+geometry (lever arms as arrays of shape (k,)) and nuisance terms (arrays (n, k)).
 """
 
 from __future__ import annotations
@@ -33,7 +35,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..patterns import Commands
 
@@ -82,8 +83,19 @@ def nc_origin(geo: Geometry) -> np.ndarray:
 
 
 def rotation(rotvec: np.ndarray) -> np.ndarray:
-    """Exact rotation matrices ``expm([ε]×)`` for rotation vectors ``(n, 3)`` -> ``(n, 3, 3)``."""
-    return Rotation.from_rotvec(np.atleast_2d(rotvec)).as_matrix()
+    """Exact rotation matrices ``expm([ε]×)`` for rotation vectors ``(n, 3)`` -> ``(n, 3, 3)`` (Rodrigues).
+
+    ``R = I + sinc(θ)·K + ½·sinc²(θ/2)·K²`` with ``K = [ε]×`` and ``θ = |ε|``: no cancellation for small θ.
+    """
+    v = np.atleast_2d(np.asarray(rotvec, dtype=float))
+    K = np.zeros((len(v), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
+    with np.errstate(invalid="ignore", over="ignore"):  # absurd angles give NaN, which the callers report
+        theta = np.sqrt(np.einsum("ni,ni->n", v, v))
+        a = np.sinc(theta / np.pi)[:, None, None]
+        b = 0.5 * np.sinc(theta / (2 * np.pi))[:, None, None] ** 2
+        return np.eye(3) + a * K + b * (K @ K)
 
 
 def _apply(R: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -94,69 +106,94 @@ def _apply(R: np.ndarray, v: np.ndarray) -> np.ndarray:
     return v @ Rt  # batched matmul: far faster than einsum here
 
 
+def _rotate(angles: list[np.ndarray], v: np.ndarray) -> np.ndarray:
+    """``v`` (n, k, 3) turned by the rotation vectors whose components are ``angles`` (each (n,) or 0);
+    unchanged, exactly, where all are zero (the linear-axis squareness is often held at zero)."""
+    n = v.shape[0]
+    vec = np.stack([np.broadcast_to(np.asarray(a, dtype=float), (n,)) for a in angles], axis=-1)
+    return v if not vec.any() else _apply(rotation(vec), v)
+
+
+def _per_point(v, k: int) -> np.ndarray:
+    """A geometry value as an array ``(k,)``."""
+    return np.broadcast_to(np.asarray(v, dtype=float), (k,))
+
+
+def _column(v) -> np.ndarray:
+    """A parameter as ``(n, 1)`` (one value per draw) or ``(n, k)`` (one per point)."""
+    v = np.asarray(v, dtype=float)
+    return v[:, None] if v.ndim == 1 else v
+
+
 def t_ball(p: dict[str, np.ndarray], geo: Geometry, cmd: Commands, piv: Pivots, *,
-           dummy: bool = False) -> np.ndarray:
+           dummy=False) -> np.ndarray:
     """Actual T-ball (or dummy-sphere) centre, shape ``(n, k, 3)``, mm.
 
-    ``p`` maps parameter base names to arrays ``(n,)`` (internal units):
-    the 13 deviations and, for this run's setup, ``xT, yT, zT, dRB``.
-    ``dummy=True`` gives the dummy sphere: true tool length, no ball offset.
+    ``p`` maps parameter base names to arrays ``(n,)`` (internal units): the 13 deviations and
+    the setup's ``xT, yT, zT, dRB``, which may also be ``(n, k)``, one per point.  ``geo``'s lever
+    arms are scalars or ``(k,)``.  ``dummy`` (bool or ``(k,)``) marks the dummy sphere: true tool
+    length, no ball offset.
     """
-    n = len(p["dx_BT"])
-    zero = np.zeros(n)
-    length = geo.R_B + p["dRB"]
-    if dummy:
-        t = np.stack([zero, zero, -length], axis=-1)
-    else:
-        t = np.stack([p["xT"], p["yT"], -length + p["zT"]], axis=-1)  # Eq 2.20
+    n, k = len(p["dx_BT"]), len(cmd.B)
+    R_B, Z_T, X_T, Z_C = (_per_point(v, k) for v in (geo.R_B, geo.Z_T, geo.X_T, geo.Z_C))
+    real = ~np.broadcast_to(np.asarray(dummy, dtype=bool), (k,))
+    t = np.empty((n, k, 3))  # Eq 2.20
+    t[..., 0] = _column(p["xT"]) * real
+    t[..., 1] = _column(p["yT"]) * real
+    t[..., 2] = -(R_B + _column(p["dRB"])) + _column(p["zT"]) * real
 
     # M_BT: alpha_BT about X at the pivot, then the offsets dx_BT, dz_BT (Eq 2.2)
-    q = np.array([0.0, 0.0, geo.Z_T - geo.R_B if piv.alpha_BT == "tool-Z_T" else 0.0])
-    R_bt = rotation(np.stack([p["alpha_BT"], zero, zero], axis=-1))
-    t1 = q + _apply(R_bt, t - q) + np.stack([p["dx_BT"], zero, p["dz_BT"]], axis=-1)
+    q = np.zeros((k, 3))
+    if piv.alpha_BT == "tool-Z_T":
+        q[:, 2] = Z_T - R_B
+    t1 = q + _rotate([p["alpha_BT"], 0, 0], t - q)
+    t1[..., 0] += _column(p["dx_BT"])
+    t1[..., 2] += _column(p["dz_BT"])
 
-    # E_B: B rotation about +Y (Eq 2.4), per angle
+    # E_B: B rotation about +Y (Eq 2.4), per point
     cB, sB = np.cos(cmd.B), np.sin(cmd.B)
-    E_B = np.zeros((len(cmd.B), 3, 3))
-    E_B[:, 0, 0], E_B[:, 0, 2], E_B[:, 1, 1], E_B[:, 2, 0], E_B[:, 2, 2] = cB, sB, 1.0, -sB, cB
-    t2 = np.swapaxes(t1 @ np.transpose(E_B, (0, 2, 1)), 0, 1)  # (n, k, 3)
+    t2 = np.empty_like(t1)
+    t2[..., 0] = cB * t1[..., 0] + sB * t1[..., 2]
+    t2[..., 1] = t1[..., 1]
+    t2[..., 2] = cB * t1[..., 2] - sB * t1[..., 0]
 
     # M_XB (Eq 2.3)
+    pivot = np.zeros((k, 3))
     if piv.xb_angles == "slide-X_T-Z_T":
-        pivot = np.array([geo.X_T, 0.0, geo.Z_T - geo.R_B])
-    else:
-        pivot = np.zeros(3)
-    beta_in_head = p["beta_XB"] if piv.beta_XB == "b-centre" else zero
-    R_xb = rotation(np.stack([p["alpha_XB"], beta_in_head, p["gamma_XB"]], axis=-1))
-    t3 = pivot + _apply(R_xb, t2 - pivot)
+        pivot[:, 0], pivot[:, 2] = X_T, Z_T - R_B
+    beta_in_head = p["beta_XB"] if piv.beta_XB == "b-centre" else 0
+    t3 = pivot + _rotate([p["alpha_XB"], beta_in_head, p["gamma_XB"]], t2 - pivot)
 
     # travels with squareness (Eqs 2.5–2.9) about the frame or NC origin
-    O = nc_origin(geo) if piv.origin == "nc" else np.zeros(3)
-    R_xy = rotation(np.stack([zero, zero, p["gamma_XY"]], axis=-1))
-    R_yz = rotation(np.stack([p["alpha_YZ"], p["beta_YZ"], zero], axis=-1))
-    k = len(cmd.X)
+    O = np.zeros((k, 3))
+    if piv.origin == "nc":
+        O[:, 0], O[:, 2] = X_T, Z_C + R_B + Z_T  # nc_origin, per point
     x_travel = np.zeros((k, 3))
-    x_travel[:, 0] = cmd.X - O[0]
+    x_travel[:, 0] = cmd.X - O[:, 0]
     y_travel = np.zeros((k, 3))
-    y_travel[:, 1] = cmd.Y - O[1]
+    y_travel[:, 1] = cmd.Y - O[:, 1]
     z_travel = np.zeros((k, 3))
-    z_travel[:, 2] = cmd.Z - O[2]
-    inner = _apply(R_yz, y_travel + _apply(R_xy, x_travel + t3))
+    z_travel[:, 2] = cmd.Z - O[:, 2]
+    inner = _rotate([p["alpha_YZ"], p["beta_YZ"], 0], y_travel + _rotate([0, 0, p["gamma_XY"]], x_travel + t3))
     if piv.beta_XB == "z-travel":
-        R_zt = rotation(np.stack([zero, p["beta_XB"], zero], axis=-1))
-        z_part = z_travel @ np.transpose(R_zt, (0, 2, 1))
+        z_part = _rotate([0, p["beta_XB"], 0], np.broadcast_to(z_travel, inner.shape))
     else:
-        z_part = np.broadcast_to(z_travel, inner.shape)
+        z_part = z_travel
     return O + z_part + inner
 
 
 class CAxis:
-    """The actual C axis of a mount: ``A(v) = R (v − h·e_z) + h·e_z + d`` (Eq 2.11 with its pivot height)."""
+    """The actual C axis of a mount: ``A(v) = R (v − h·e_z) + h·e_z + d`` (Eq 2.11 with its pivot height).
 
-    def __init__(self, p: dict[str, np.ndarray], Z_C: float, piv: Pivots):
+    ``Z_C`` is a scalar or ``(k,)``, one per point (points of several mounts in one pass).
+    """
+
+    def __init__(self, p: dict[str, np.ndarray], Z_C, piv: Pivots):
         zero = np.zeros_like(p["dx_CZ"])
         self.R = rotation(np.stack([p["alpha_CZ"], p["beta_CZ"], zero], axis=-1))
-        self.h = np.array([0.0, 0.0, 2.0 * Z_C if piv.c_tilt_height == "2Z_C" else 0.0])
+        height = 2.0 * np.asarray(Z_C, dtype=float) if piv.c_tilt_height == "2Z_C" else np.zeros(np.shape(Z_C))
+        self.h = np.zeros(np.shape(height) + (3,))
+        self.h[..., 2] = height
         self.d = np.stack([p["dx_CZ"], p["dy_CZ"], zero], axis=-1)
 
     def to_machine(self, v: np.ndarray) -> np.ndarray:
@@ -172,9 +209,14 @@ class CAxis:
 
 def w_ball(p: dict[str, np.ndarray], axis: CAxis, P0: np.ndarray, *, w_offset: np.ndarray,
            cmd: Commands) -> np.ndarray:
-    """Actual W-ball centre ``(n, k, 3)``: placed at ``P0`` (n,3), offset by ``w_offset`` (n,3) in the C frame."""
+    """Actual W-ball centre ``(n, k, 3)``: placed at ``P0`` (n,3) or (n,k,3), offset by ``w_offset`` (same shape)
+    in the C frame, turned by C."""
     W_C = axis.to_table(P0) + w_offset  # Eq 2.21
+    if W_C.ndim == 2:
+        W_C = np.broadcast_to(W_C[:, None, :], (len(W_C), len(cmd.C), 3))
     cC, sC = np.cos(cmd.C), np.sin(cmd.C)
-    E_C = np.zeros((len(cmd.C), 3, 3))
-    E_C[:, 0, 0], E_C[:, 0, 1], E_C[:, 1, 0], E_C[:, 1, 1], E_C[:, 2, 2] = cC, -sC, sC, cC, 1.0
-    return axis.to_machine(np.swapaxes(W_C @ np.transpose(E_C, (0, 2, 1)), 0, 1))
+    turned = np.empty(W_C.shape)
+    turned[..., 0] = cC * W_C[..., 0] - sC * W_C[..., 1]
+    turned[..., 1] = sC * W_C[..., 0] + cC * W_C[..., 1]
+    turned[..., 2] = W_C[..., 2]
+    return axis.to_machine(turned)

@@ -31,6 +31,25 @@ from ..patterns import (
 )
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
 
+#: rows of a parameter batch evaluated at once (memory: a few MB per temporary)
+CHUNK = 256
+
+
+@dataclass(frozen=True)
+class _Points:
+    """The evaluation points of a model in one table (k points): commands, lever arms, dummy-sphere flags,
+    the point of each one's mount placement, the slices of the runs, and the parameter columns to read
+    (−1: absent, zero)."""
+
+    cmd: Commands
+    geometry: Geometry
+    dummy: np.ndarray
+    placement: np.ndarray
+    runs: list
+    deviation_cols: dict
+    setup_cols: dict
+    mount_cols: dict
+
 
 @dataclass(frozen=True)
 class _RunPlan:
@@ -89,42 +108,62 @@ class HTMModel:
         comp_index = {(k.run, k.component): i for i, k in enumerate(self.observations.keys)}
         self._columns = [[(comp_index.get((i, c)), j) for j, c in enumerate(COMPONENTS[r.pattern])]
                          for i, r in enumerate(bb.runs)]
+        self._points = None
 
-    # ------------------------------------------------------------------ parameters
-    def _params(self, theta: np.ndarray, setup: str, mount: str | None = None) -> dict[str, np.ndarray]:
-        n = theta.shape[0]
-        col = self.space.index
+    def replace_commands(self, run: int, commands: Commands) -> None:
+        """Simulate run ``run`` with other commands (e.g. a compensated program) from now on."""
+        self.runs[run] = _RunPlan(self.runs[run].pattern, self.runs[run].setup, self.runs[run].mount,
+                                  self.runs[run].geometry, commands)
+        self._points = None
 
-        def get(name):
-            try:
-                return theta[:, col(name)]
-            except KeyError:
-                return np.zeros(n)
-
-        p = {d: get(d) for d in DEVIATIONS}
-        p.update({b: get(nuisance_name(b, setup)) for b in SETUP_NUISANCE})
-        if mount is not None:
-            p.update({b: get(nuisance_name(b, mount)) for b in MOUNT_NUISANCE})
-        return p
+    # ------------------------------------------------------------------ the evaluation points
+    def _point_table(self) -> _Points:
+        """Every evaluation point of every run, and one per mount for its dummy sphere, in one table."""
+        if self._points is None:
+            plans = list(self.placements.values()) + self.runs
+            sizes = [len(pl.commands.B) for pl in plans]
+            starts = np.concatenate([[0], np.cumsum(sizes)])
+            cat = lambda f: np.concatenate([np.broadcast_to(f(pl), (n,)) for pl, n in zip(plans, sizes)])  # noqa: E731
+            cmd = Commands(*(cat(lambda pl, a=a: getattr(pl.commands, a)) for a in ("X", "Y", "Z", "B", "C", "psi")))
+            geo = Geometry(*(cat(lambda pl, a=a: getattr(pl.geometry, a)) for a in ("R_B", "Z_T", "X_T", "Z_C", "R_C")))
+            n_place = len(self.placements)
+            place_index = {m: starts[i] for i, m in enumerate(self.placements)}
+            col = {name: i for i, name in enumerate(self.space.names)}  # absent parameters: column -1, a zero
+            setup_cols = {b: cat(lambda pl, b=b: col.get(nuisance_name(b, pl.setup), -1)).astype(int)
+                          for b in SETUP_NUISANCE}
+            mount_cols = {b: cat(lambda pl, b=b: col.get(nuisance_name(b, pl.mount), -1)).astype(int)
+                          for b in MOUNT_NUISANCE}
+            self._points = _Points(
+                cmd=cmd, geometry=geo, dummy=np.arange(starts[-1]) < starts[n_place],
+                placement=cat(lambda pl: place_index[pl.mount]).astype(int),
+                runs=[slice(starts[n_place + i], starts[n_place + i + 1]) for i in range(len(self.runs))],
+                deviation_cols={d: col.get(d, -1) for d in DEVIATIONS}, setup_cols=setup_cols, mount_cols=mount_cols)
+        return self._points
 
     # ------------------------------------------------------------------ simulation
+    def _dL(self, theta: np.ndarray) -> np.ndarray:
+        """ΔL ``(n, k)`` mm at every point of the table, for a batch ``(n, p)``."""
+        pts = self._point_table()
+        ext = np.concatenate([theta, np.zeros((len(theta), 1))], axis=1)  # column -1 holds zero
+        p = {d: ext[:, c] for d, c in pts.deviation_cols.items()}
+        p.update({b: ext[:, c] for b, c in pts.setup_cols.items()})  # (n, k)
+        T = t_ball(p, pts.geometry, pts.cmd, self.pivots, dummy=pts.dummy)
+        axis = CAxis(p, pts.geometry.Z_C, self.pivots)
+        w_off = np.stack([ext[:, pts.mount_cols[b]] for b in MOUNT_NUISANCE], axis=-1)  # (n, k, 3)
+        W = w_ball(p, axis, T[:, pts.placement, :], w_offset=w_off, cmd=pts.cmd)
+        diff = T - W
+        return np.sqrt(np.einsum("nki,nki->nk", diff, diff)) - self.campaign.ballbar.length
+
     def traces(self, theta: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-        """ΔL traces of every run: list of ``(psi (k,), dL (n, k))`` in rad and mm."""
+        """ΔL traces of every run: list of ``(psi (k,), dL (n, k))`` in rad and mm.
+
+        Batches are evaluated :data:`CHUNK` rows at a time: the chain's temporaries are (rows, k, 3)
+        arrays, and a few thousand rows at once would take hundreds of MB for no gain in speed.
+        """
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        placed = {}
-        for mount, pl in self.placements.items():
-            p = self._params(theta, pl.setup)
-            placed[mount] = t_ball(p, pl.geometry, pl.commands, self.pivots, dummy=True)[:, 0, :]
-        out = []
-        for run in self.runs:
-            p = self._params(theta, run.setup, run.mount)
-            T = t_ball(p, run.geometry, run.commands, self.pivots)
-            axis = CAxis(p, run.geometry.Z_C, self.pivots)
-            w_off = np.stack([p["xW"], p["yW"], p["zW"]], axis=-1)
-            W = w_ball(p, axis, placed[run.mount], w_offset=w_off, cmd=run.commands)
-            dL = np.linalg.norm(T - W, axis=-1) - self.campaign.ballbar.length
-            out.append((run.commands.psi, dL))
-        return out
+        dL = np.concatenate([self._dL(theta[i:i + CHUNK]) for i in range(0, len(theta), CHUNK)]) \
+            if len(theta) > CHUNK else self._dL(theta)
+        return [(run.commands.psi, dL[:, sl]) for run, sl in zip(self.runs, self._point_table().runs)]
 
     def eccentricities(self, theta: np.ndarray):
         """Per run, the :class:`~mtmcal_bayes.patterns.EccentricityFit` of its simulated trace."""

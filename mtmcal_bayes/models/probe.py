@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from ..errors import MtmcalError
 
@@ -58,6 +57,10 @@ def fit_sphere(points: np.ndarray, stylus_radius: float = 0.0) -> SphereFit:
 
     def resid(x):
         return np.linalg.norm(Q - x[:3], axis=1) - x[3]
+
+    from scipy.optimize import (
+        least_squares,  # here: the package imports quickly for commands that never fit
+    )
 
     res = least_squares(resid, np.r_[c0, r0], method="lm", xtol=1e-15, ftol=1e-15)
     centre, r = res.x[:3] + shift, abs(res.x[3])

@@ -1,6 +1,10 @@
-"""Checks a posterior owes its reader: does the linear model's first order hold, what dx_BT = 0 would change."""
+"""Checks a posterior owes its reader: how far it is from the exact (or linearised) posterior, does the linear
+model's first order hold, what dx_BT = 0 would change."""
 
 from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
 
 import pandas as pd
 
@@ -9,7 +13,7 @@ from ..inference.analytic import gaussian_posterior
 from ..inference.log_posterior import LogPosterior
 from ..inference.sampling import SamplingResult
 from ..models import first_order_gap
-from ..parameters import weights
+from ..parameters import IDENTIFIABLE, weights
 
 
 def linear_model_check(result: SamplingResult) -> list[str]:
@@ -50,3 +54,69 @@ def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: fl
                        "dx_CZ_minus_dx_BT mean µm": units.from_internal(d_mean, "um"),
                        "dx_CZ_minus_dx_BT sd µm": units.from_internal(d_sd, "um")}
     return pd.DataFrame(rows).T
+
+
+@dataclass(frozen=True)
+class ReferenceCheck:
+    """The sampled posterior against a reference: the exact σ-marginal posterior (``linear``, normal priors),
+    else the linearised one, where the difference is model-form information, not sampler error.
+
+    Per quantity the reference mean and sd (display units), ``mean_diff_sd`` = (sampled − reference mean) /
+    reference sd and ``sd_diff_pct`` = sampled / reference sd − 1 in %; the largest absolute differences over
+    the eight quantities of Table 4.5.
+    """
+
+    reference: str
+    exact: bool
+    max_mean_diff_sd: float
+    max_sd_diff_pct: float
+    reference_mean: dict[str, float]
+    reference_sd: dict[str, float]
+    mean_diff_sd: dict[str, float]
+    sd_diff_pct: dict[str, float]
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+    def sentence(self) -> str:
+        what = "the exact σ-marginal posterior" if self.exact else f"the {self.reference} (model-form information)"
+        return (f"against {what}: means within {self.max_mean_diff_sd:.3f} sd and sds within "
+                f"{self.max_sd_diff_pct:.1f} % for the eight quantities")
+
+
+#: an exact reference further than this many Monte-Carlo standard errors away is a warning
+REFERENCE_MCSE = 4.0
+
+
+def reference_check(result: SamplingResult, summary) -> ReferenceCheck | None:
+    """Compare ``summary`` (from :func:`~mtmcal_bayes.inference.results.summarize`) with the approximation the
+    sampler started from; None when the run has none or it gives no finite moments for the eight."""
+    approx = result.approximation
+    if approx is None:
+        return None
+    ref = {n: v for n, v in approx.moments(list(summary.index)).items()
+           if all(map(math.isfinite, v)) and v[1] > 0}
+    names = [n for n in summary.index if n in ref]
+    eight = [n for n in IDENTIFIABLE if n in names]
+    if not eight:
+        return None
+    mean = {n: float((summary.loc[n, "mean"] - ref[n][0]) / ref[n][1]) for n in names}
+    sd = {n: float(100.0 * (summary.loc[n, "sd"] / ref[n][1] - 1.0)) for n in names}
+    return ReferenceCheck(approx.kind, approx.exact, max(abs(mean[n]) for n in eight), max(abs(sd[n]) for n in eight),
+                          {n: ref[n][0] for n in names}, {n: ref[n][1] for n in names}, mean, sd)
+
+
+def reference_warnings(check: ReferenceCheck | None, summary) -> list[str]:
+    """Quantities whose posterior is further from the exact posterior than Monte-Carlo error explains."""
+    if check is None or not check.exact:
+        return []
+    out = []
+    for n in check.mean_diff_sd:
+        r = summary.loc[n]
+        off_mean = abs(r["mean"] - check.reference_mean[n]) > REFERENCE_MCSE * r["mcse_mean"]
+        off_sd = abs(r["sd"] - check.reference_sd[n]) > REFERENCE_MCSE * r["mcse_sd"]
+        if off_mean or off_sd:
+            out.append(f"{n}: the sampled posterior differs from the exact one by more than {REFERENCE_MCSE:g} "
+                       f"Monte-Carlo standard errors (mean {check.mean_diff_sd[n]:+.3f} sd, sd "
+                       f"{check.sd_diff_pct[n]:+.1f} %): do not trust this run")
+    return out

@@ -48,9 +48,13 @@ def format_posterior(result) -> str:
     if result.not_identified:
         lines += ["", "Not identified by the data:"] + [f"  - {m}" for m in result.not_identified]
     d = result.diagnostics
-    lines += ["", f"Diagnostics: converged {d.converged}, τ_max {d.tau_max_steps:.0f} steps, burn-in "
-              f"{d.burn_in}, min bulk ESS {d.min_ess_bulk:.0f} ({d.ess_bulk_per_second:.0f}/s), "
-              f"max R-hat {d.max_r_hat:.3f}"]
+    lines += ["", f"Diagnostics: converged {d.converged}, τ_max {d.tau_max_steps:.1f} steps, burn-in "
+              f"{d.burn_in}, min bulk / tail ESS {d.min_ess_bulk:.0f} / {d.min_ess_tail:.0f} (target "
+              f"{d.target_ess:g}; {d.ess_bulk_per_second:.0f}/s), max R-hat {d.max_r_hat:.3f}"
+              + (f", independence proposals accepted {100 * d.independence_acceptance:.0f} %"
+                 if d.independence_acceptance == d.independence_acceptance else "")]
+    if result.reference is not None:
+        lines.append(f"Accuracy {result.reference.sentence()}")
     return "\n".join(lines)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+import numpy as np
 import pandas as pd
 
 from ..identification import identify
@@ -18,7 +19,12 @@ from ..inference.sampling import SamplerSettings, SamplingResult, run_ensembles
 from ..io.netcdf import write_netcdf_atomic
 from ..parameters import IDENTIFIABLE
 from ..progress import Progress
-from .checks import linear_model_check
+from .checks import (
+    ReferenceCheck,
+    linear_model_check,
+    reference_check,
+    reference_warnings,
+)
 from .comparison import comparison
 
 
@@ -26,8 +32,10 @@ from .comparison import comparison
 class SamplerDiagnostics:
     """How the sampler run went: convergence, sizes, autocorrelation, ESS and R-hat, and what to heed.
 
-    ``min_ess_bulk`` and ``ess_bulk_per_second`` are over the eight quantities of Table 4.5;
-    ``max_r_hat`` over every summarised quantity.
+    ``min_ess_bulk``, ``min_ess_tail`` and ``ess_bulk_per_second`` are over the eight quantities of Table 4.5;
+    ``max_r_hat`` over every summarised quantity; ``independence_acceptance`` how often the independence
+    proposal from the linearised posterior was accepted; ``checks`` the stopping checks (steps, burn-in,
+    R-hat, smallest ESS over its target); ``reference`` the comparison with the exact or linearised posterior.
     """
 
     converged: bool
@@ -45,6 +53,12 @@ class SamplerDiagnostics:
     warnings: list[str]
     not_identified: list[str]
     messages: list[str]
+    sampler: str
+    target_ess: float
+    min_ess_tail: float
+    independence_acceptance: float
+    checks: list[dict]
+    reference: dict | None
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -74,6 +88,7 @@ class PosteriorResult:
     sampling: SamplingResult
     warnings: list[str] = field(default_factory=list)
     not_identified: list[str] = field(default_factory=list)
+    reference: ReferenceCheck | None = None
     output: str | None = None  # where :meth:`save` wrote the NetCDF
 
     @property
@@ -87,13 +102,19 @@ class PosteriorResult:
     @property
     def diagnostics(self) -> SamplerDiagnostics:
         r = self.sampling
-        ess = self.summary.loc[[n for n in IDENTIFIABLE if n in self.summary.index], "ess_bulk"]
+        eight = self.summary.loc[[n for n in IDENTIFIABLE if n in self.summary.index]]
+        ess = eight["ess_bulk"]
         return SamplerDiagnostics(
             converged=r.converged, n_ensembles=r.chains.shape[0], n_walkers=r.chains.shape[2], n_steps=r.n_steps,
-            burn_in=r.burn, tau_max_steps=float(r.tau.max()), kept_draws=r.n_draws,
+            burn_in=r.burn, tau_max_steps=float(np.nanmax(r.tau)), kept_draws=r.n_draws,
             acceptance=r.acceptance.tolist(), wall_time_s=r.wall_time, min_ess_bulk=float(ess.min()),
             ess_bulk_per_second=float(ess.min() / r.wall_time), max_r_hat=float(self.summary["r_hat"].max()),
-            warnings=self.warnings, not_identified=self.not_identified, messages=r.messages)
+            warnings=self.warnings, not_identified=self.not_identified, messages=r.messages,
+            sampler=r.settings.sampler, target_ess=r.settings.target_ess, min_ess_tail=float(eight["ess_tail"].min()),
+            independence_acceptance=r.independence_acceptance,
+            checks=[{"steps": c.steps, "burn_in": c.burn, "max_r_hat": c.max_rhat, "min_ess_over_target": c.min_ess_ratio}
+                    for c in r.checks],
+            reference=None if self.reference is None else self.reference.to_json())
 
     def save(self, path) -> None:
         """Write the InferenceData as NetCDF (atomically); ``compensate --posterior`` reads it."""
@@ -123,5 +144,6 @@ def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False
     idata = to_inference_data(result, seed=seed)
     summary = summarize(idata, post)
     comp = comparison(summary, identify(campaign))
-    warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary)
-    return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary))
+    ref = reference_check(result, summary)
+    warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary) + reference_warnings(ref, summary)
+    return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref)

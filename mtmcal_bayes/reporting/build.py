@@ -16,7 +16,6 @@ from pathlib import Path
 import pandas as pd
 
 from ..errors import MtmcalError
-from ..figure_style import save_png
 from ..identification import IdentificationResult, identify
 from ..identification.output import identification_table
 from ..inference.sampling import SamplerSettings
@@ -32,6 +31,7 @@ from ..posterior.sample import PosteriorResult, sample_posterior
 from ..progress import Progress, ProgressEvent, emit
 from ..version import __version__
 from . import compare, corner_plot, forest, mcmc_plots, polar, ppc, widths
+from .drawing import draw_figures
 from .html import Page
 from .missing import missing_data
 
@@ -143,25 +143,33 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     diag = mcmc_plots.diagnostics_table(rep.summary, rep.sampling)
     sigma_um = float(rep.summary.loc["sigma_model", "median"])
 
+    effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um)
+    say("planning the next measurement")
+    planned = _planning(campaign, rep)
+    figures = [("corner.png", lambda: corner_plot.corner_figure(rep.idata, rep.comparison)),
+               ("forest.png", lambda: forest.forest_figure({model: rep.summary}, rep.comparison)),
+               ("ppc.png", lambda: ppc.ppc_figure({model: ppc_df}, campaign)),
+               ("polar.png", lambda: polar.polar_figure(rep.sampling, campaign)),
+               ("widths.png", lambda: widths.widths_figure(rep.summary)),
+               ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata)),
+               ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling))]
+    if compare_models:
+        figures += [("compare_forest.png",
+                     lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
+                    ("compare_ppc.png", lambda: ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign)
+                                                                 for m, r in reports.items()}, campaign))]
+    figures += [("plan_ranking.png", lambda: plan_figures.ranking_figure(planned)),
+                ("plan_sweep.png", lambda: plan_figures.sweep_figure(planned))]
+
     files: list[str] = []
     with atomic_directory(out_dir) as tmp:
-        def png(name, fig):
-            say(f"drawing {name}")
-            save_png(fig, tmp / name)
-            files.append(name)
-
         def csv(name, df, index=True):
             df.to_csv(tmp / name, index=index, float_format="%.6g")
             files.append(name)
 
-        corner_fig, off_scale = corner_plot.corner_figure(rep.idata, rep.comparison)
-        png("corner.png", corner_fig)
-        png("forest.png", forest.forest_figure({model: rep.summary}, rep.comparison))
-        png("ppc.png", ppc.ppc_figure({model: ppc_df}, campaign))
-        png("polar.png", polar.polar_figure(rep.sampling, campaign))
-        png("widths.png", widths.widths_figure(rep.summary))
-        png("rank.png", mcmc_plots.rank_figure(rep.idata))
-        png("trace.png", mcmc_plots.trace_figure(rep.sampling))
+        say("drawing " + ", ".join(name for name, _ in figures))
+        off_scale = draw_figures(figures, tmp)["corner.png"]
+        files += [name for name, _ in figures[:7]]
         csv("summary.csv", summary)
         csv("ppc.csv", ppc_df)
         csv("diagnostics.csv", diag)
@@ -169,19 +177,13 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
         csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
         if ident.probe:
             csv("identification_probe.csv", identification_table(ident.probe), index=False)
-        effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um)
         if effect is not None:
             csv("thesis_assumption_dx_BT.csv", effect)
         if compare_models:
-            png("compare_forest.png", forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison))
-            png("compare_ppc.png", ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign) for m, r in reports.items()},
-                                                  campaign))
+            files += ["compare_forest.png", "compare_ppc.png"]
             csv("compare_models.csv", compare.model_comparison_table(reports), index=False)
             csv("compare_fit.csv", compare.model_fit_table(reports, campaign))
-        say("planning the next measurement")
-        planned = _planning(campaign, rep)
-        png("plan_ranking.png", plan_figures.ranking_figure(planned))
-        png("plan_sweep.png", plan_figures.sweep_figure(planned))
+        files += ["plan_ranking.png", "plan_sweep.png"]
         csv("plan.csv", planned.table, index=False)
         say("writing posterior.nc")
         write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
@@ -228,6 +230,30 @@ def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
+def sampler_paragraph(rep: PosteriorResult) -> str:
+    """How the posterior was sampled and by what rule it stopped, in words."""
+    d, s = rep.diagnostics, rep.sampling.settings
+    if d.sampler == "exact":
+        return (f"{d.kept_draws} independent draws of the exact σ-marginal posterior of the linear model in "
+                f"{d.n_ensembles} chains, no MCMC ({d.wall_time_s:.1f} s).")
+    ref = rep.sampling.approximation.kind if rep.sampling.approximation is not None else "prior"
+    return (f"{d.n_ensembles} independent emcee ensembles × {d.n_walkers} walkers, started from draws of the {ref}; "
+            f"moves: independence proposals from it (accepted {100 * d.independence_acceptance:.0f} %) and "
+            f"differential evolution. {d.n_steps} steps each (burn-in {d.burn_in}, detected), largest integrated "
+            f"autocorrelation time {d.tau_max_steps:.1f} steps, {'converged' if d.converged else 'NOT converged'} "
+            f"by the rule: R-hat ≤ {s.max_rhat} across the ensembles and their halves in time, bulk and tail ESS ≥ "
+            f"{s.target_ess:g} for each of the eight quantities and ≥ {s.target_ess_sigma:g} for sigma_model; "
+            f"max R-hat {d.max_r_hat:.3f}, min bulk / tail ESS of the eight {d.min_ess_bulk:.0f} / "
+            f"{d.min_ess_tail:.0f}, sampling {d.wall_time_s:.1f} s. R-hat is computed across the independent "
+            "ensembles (the walkers of one ensemble are not independent chains).")
+
+
+def reference_table(check) -> pd.DataFrame:
+    """Per quantity: reference mean and sd, and the sampled posterior's differences from them."""
+    return pd.DataFrame({"reference mean": check.reference_mean, "reference sd": check.reference_sd,
+                         "mean difference [sd]": check.mean_diff_sd, "sd difference [%]": check.sd_diff_pct})
+
+
 def _planning(campaign, rep):
     """The plan for the quantities the data do not identify, else for all eight."""
     targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
@@ -237,7 +263,6 @@ def _planning(campaign, rep):
 def _page(c: ReportContent, tmp: Path) -> Page:
     campaign, model, rep, reports, ident = c.campaign, c.model, c.posterior, c.compared, c.ident
     summary, ppc_df, diag, effect, planned, sigma_um = c.summary, c.ppc, c.diagnostics, c.thesis_effect, c.planned, c.sigma_um
-    d = rep.diagnostics
     page = Page("Bayesian calibration report — B and C axes of a turn-mill machine")
     page.box("missing", "Missing from this campaign", c.missing)
     page.box("warn", "Warnings", rep.warnings + rep.not_identified)
@@ -299,13 +324,13 @@ def _page(c: ReportContent, tmp: Path) -> Page:
                                   "relative_difference"]], digits=3, index=False)
 
     page.section("diagnostics", "Sampler diagnostics")
-    page.paragraph(
-        f"{d.n_ensembles} independent emcee ensembles × {d.n_walkers} walkers, {d.n_steps} steps each "
-        f"(burn-in {d.burn_in}), largest integrated autocorrelation time {d.tau_max_steps:.0f} steps, "
-        f"{'converged' if d.converged else 'NOT converged'} by the rule length ≥ 50 τ with τ stable; "
-        f"max R-hat {d.max_r_hat:.3f}, min bulk ESS of the eight {d.min_ess_bulk:.0f}, "
-        f"acceptance {min(d.acceptance):.2f}–{max(d.acceptance):.2f}, sampling {d.wall_time_s:.0f} s. "
-        "R-hat is computed across the independent ensembles (the walkers of one ensemble are not independent chains).")
+    page.paragraph(sampler_paragraph(rep))
+    if rep.reference is not None:
+        page.paragraph(f"Accuracy {rep.reference.sentence()}. Per quantity, the difference of the sampled "
+                       "mean (in reference sd) and sd (in %):" + ("" if rep.reference.exact else
+                       " the kinematic posterior against its linearisation, i.e. what the nonlinearity of the "
+                       "model changes, not sampler error."))
+        page.table(reference_table(rep.reference), digits={"mean difference [sd]": 3, "sd difference [%]": 1})
     page.table(diag.assign(ess_bulk=diag["ess_bulk"].round().astype(int), ess_tail=diag["ess_tail"].round().astype(int)),
                digits={"r_hat": 3, "tau_steps": 0})
     page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")

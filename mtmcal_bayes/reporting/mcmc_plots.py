@@ -66,7 +66,7 @@ def trace_figure(result, names=IDENTIFIABLE):
 def diagnostics_table(summary: pd.DataFrame, result) -> pd.DataFrame:
     """Per quantity R-hat, bulk/tail ESS, the largest τ over the ensembles (steps) and the verdict."""
     post = result.posterior
-    tau = dict(zip(post.names, result.tau.max(axis=0)))
+    tau = {n: float(t.max()) for n, t in zip(post.names, result.tau.T) if not np.isnan(t).any()}
     rows = []
     for n, r in summary.iterrows():
         ok = r["r_hat"] <= RHAT_MAX and r["ess_bulk"] >= ESS_MIN

@@ -56,8 +56,9 @@ def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *
     length (no ball-bar could measure it) is an error naming ``source``.
     """
     fm = make_model(model, campaign)
-    pred = fm.predict(truth_vector(fm.space, truth, source))
-    with np.errstate(invalid="ignore"):
+    theta = truth_vector(fm.space, truth, source)
+    with np.errstate(all="ignore"):  # an absurd truth overflows; the check below names it
+        pred = fm.predict(theta)
         bad = ~(np.abs(pred) < campaign.ballbar.length)
     if bad.any():
         k = fm.observations.keys[int(np.argmax(bad))]

@@ -21,8 +21,8 @@ def format_sbc(result) -> str:
              f"L = {st.n_ranked} ranked draws, seed {st.seed}, {st.workers} worker(s)"),
              f"  wall time {result.wall_time:.0f} s; median {j['replicate_seconds_median']:.1f} s per replicate"]
     if st.sampler == "emcee":
-        lines.append(f"  step budget {st.max_steps} per ensemble; {j['replicates_not_converged']} of {j['n']} "
-                     "replicates stopped at the budget before the τ criterion (≥ 10 τ, τ stable)")
+        lines.append(f"  production sampler, step budget {st.max_steps} per ensemble; {j['replicates_not_converged']} "
+                     f"of {j['n']} replicates stopped at the budget before the ESS and R-hat targets")
     head = (f"{'quantity':18s} {'p_uniform':>9s} " + " ".join(f"{f'cov{round(100 * p)}':>6s}" for p in INTERVALS)
             + f" {'z mean':>7s} {'z sd':>5s} {'contraction':>11s}  verdict")
     lines += ["", head]

@@ -2,18 +2,13 @@
 
 Two ways to draw from the posterior of a :class:`~mtmcal_bayes.inference.log_posterior.LogPosterior`:
 
-* :class:`EmceeDraws` — the package's sampler (:func:`run_ensembles`) with an SBC
-  budget: two ensembles, stop at ≥ 10 τ kept (τ stable within 50 %: τ
-  estimates from so short a chain are noisy) or at ``max_steps``, started
-  from the linearised posterior itself rather than widened threefold.  (With
-  the threefold widening that ``sample`` uses for R-hat, this short budget
-  does not forget the start: on 8 replicates the posterior sds came out 7 %
-  too wide and sigma_model 0.19 sd too high against the exact posterior, and
-  SBC showed it as ∩-shaped rank histograms.  ``sample`` runs 4× longer
-  and discards 4× more.)  The kept chain is thinned by the largest integrated
-  autocorrelation time τ of any parameter, so the draws ranked by SBC are
-  close to independent (autocorrelated draws distort the rank histogram
-  even when the sampler is right).
+* :class:`EmceeDraws` — the package's sampler exactly as ``sample`` runs it
+  (:func:`~mtmcal_bayes.inference.sampling.run_ensembles` with the default
+  :class:`~mtmcal_bayes.inference.sampling.SamplerSettings`: started from the
+  linearised posterior, stopped at the ESS and R-hat targets).  The kept chain
+  is thinned by the largest integrated autocorrelation time τ of the ranked
+  quantities, so the draws ranked by SBC are close to independent
+  (autocorrelated draws distort the rank histogram even when the sampler is right).
 * :class:`ExactDraws` — the exact posterior of the ``linear`` model with
   sigma_model marginalised on a grid (:class:`MarginalPosterior`): independent
   draws, no sampler.  It checks the simulation/ranking machinery itself and is
@@ -39,7 +34,7 @@ class Draws:
     """Posterior draws of one data set.
 
     ``ranked``: (L, q) near-independent draws, ranked against the truth;
-    ``all``: (n, q) every kept (lightly thinned) draw, for the intervals;
+    ``all``: (n, q) every kept draw, for the intervals;
     ``converged``/``n_steps``/``tau_max`` describe the sampler run (exact: True, 0, 1).
     """
 
@@ -52,35 +47,24 @@ class Draws:
 
 @dataclass
 class EmceeDraws:
-    """The package's emcee sampler with the SBC budget (see module docstring)."""
+    """The package's emcee sampler with the production settings (see module docstring)."""
 
-    max_steps: int = 4000
-    check_every: int = 1000
-    n_ensembles: int = 2
-    min_tau_multiple: float = 10.0
-    tau_tolerance: float = 0.5
-    start_widening: float = 1.0
+    max_steps: int = SamplerSettings.max_steps
     name: str = "emcee"
 
     def check(self, post: LogPosterior) -> None:
-        check_step_budget(self.max_steps, self.check_every)
+        check_step_budget(self.max_steps, SamplerSettings.min_steps)
 
     def __call__(self, post: LogPosterior, n_ranked: int, rng: np.random.Generator) -> Draws:
-        settings = SamplerSettings(n_ensembles=self.n_ensembles, check_every=self.check_every,
-                                   max_steps=self.max_steps, min_tau_multiple=self.min_tau_multiple,
-                                   tau_tolerance=self.tau_tolerance, start_widening=self.start_widening, seed=int(rng.integers(2**63 - 1)))
-        r = run_ensembles(post, settings)
+        r = run_ensembles(post, SamplerSettings(max_steps=self.max_steps, seed=int(rng.integers(2**63 - 1))))
         K, S, W, q = r.chains.shape
-        thin = max(1, int(np.ceil(r.tau.max())))
-        while thin > 1 and K * W * len(range(0, S, thin)) < n_ranked:
-            thin //= 2
-        thinned = r.chains[:, ::thin].reshape(-1, q)
+        tau = float(np.nanmax(r.tau))
+        thinned = r.chains[:, :: max(1, int(np.ceil(tau)))].reshape(-1, q)
         if len(thinned) < n_ranked:
             raise ParameterError("max_steps", f"only {len(thinned)} posterior draws for {n_ranked} ranks: "
                                  "raise the step budget")
         pick = rng.choice(len(thinned), size=n_ranked, replace=False)
-        light = r.chains[:, :: max(1, thin // 8)].reshape(-1, q)
-        return Draws(thinned[pick], light, r.converged, r.n_steps, float(r.tau.max()))
+        return Draws(thinned[pick], r.chains.reshape(-1, q), r.converged, r.n_steps, tau)
 
 
 @dataclass
@@ -95,9 +79,9 @@ class ExactDraws:
         if post.model_name != "linear":
             raise ParameterError("sampler", f"exact: the exact posterior exists for the linear model only, "
                                  f"not {post.model_name} (use the emcee sampler)")
-        bad = [p.name for p in post.priors.priors[: post.p] if p.dist != "normal" or p.loc != 0.0]
+        bad = [p.name for p in post.priors.priors[: post.p] if p.dist != "normal"]
         if bad:
-            raise ParameterError("sampler", f"exact needs zero-mean normal priors; {bad[0]} has another prior in "
+            raise ParameterError("sampler", f"exact needs normal priors; {bad[0]} has another prior in "
                                  "[priors] (use the emcee sampler)")
         if post.fixed_sigma is not None:
             raise ParameterError("sampler", "exact marginalises sigma_model; it cannot be fixed")
@@ -105,9 +89,10 @@ class ExactDraws:
     def _marginal(self, post: LogPosterior):
         key = id(post.forward)  # the data sets of one SBC run share the model, priors and noise
         if key not in self._cache:
-            prior_var = np.array([p.sd for p in post.priors.priors[: post.p]]) ** 2
-            self._cache[key] = MarginalPosterior(post.forward.design, post.likelihood.base_var, prior_var,
-                                                 post.priors.priors[-1].frozen())
+            priors = post.priors.priors[: post.p]
+            self._cache[key] = MarginalPosterior(post.forward.design, post.likelihood.base_var,
+                                                 np.array([p.sd for p in priors]) ** 2, post.priors.priors[-1].frozen(),
+                                                 prior_mean=np.array([p.loc for p in priors]))
         return self._cache[key]
 
     def __call__(self, post: LogPosterior, n_ranked: int, rng: np.random.Generator) -> Draws:
@@ -116,7 +101,7 @@ class ExactDraws:
         return Draws(draws[:n_ranked], draws[n_ranked:])
 
 
-def make_sampler(name: str, max_steps: int = 4000):
+def make_sampler(name: str, max_steps: int = SamplerSettings.max_steps):
     """The draw strategy called ``name`` (``"emcee"`` or ``"exact"``)."""
     if name == "emcee":
         return EmceeDraws(max_steps=max_steps)

@@ -31,6 +31,7 @@ from ..arviz_import import az
 from ..errors import ParameterError
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import display_draws
+from ..inference.sampling import SamplerSettings
 from ..models import check_model
 from ..parameters import IDENTIFIABLE
 from ..progress import Progress, ProgressEvent, emit
@@ -50,7 +51,7 @@ class SBCSettings:
     model: str = "linear"
     sampler: str = "emcee"
     n_ranked: int = 99
-    max_steps: int = 4000
+    max_steps: int = SamplerSettings.max_steps
     workers: int = field(default_factory=lambda: os.cpu_count() or 1)
     seed: int = 1
 

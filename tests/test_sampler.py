@@ -1,0 +1,219 @@
+"""The sampler's parts: plain-numpy densities against scipy.stats, the approximation it starts from and
+proposes with, the Hastings correction, burn-in detection, the exact sampler, the kinematic chain.
+
+Statistical tolerances are stated in units of the posterior sd.
+"""
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+from scipy.spatial.transform import Rotation
+
+from mtmcal_bayes import IDENTIFIABLE
+from mtmcal_bayes.inference import (
+    LogPosterior,
+    PosteriorApproximation,
+    SamplerSettings,
+    gaussian_posterior,
+    run_ensembles,
+    summarize,
+    to_inference_data,
+)
+from mtmcal_bayes.inference.marginal import MarginalPosterior
+from mtmcal_bayes.inference.priors import Prior, PriorSet
+from mtmcal_bayes.io import parse_campaign
+from mtmcal_bayes.models.htm import rotation
+from mtmcal_bayes.models.kinematic import CHUNK, HTMModel
+from mtmcal_bayes.parameters import weights
+
+from . import variants
+
+
+# --------------------------------------------------------------------------- densities
+def test_prior_logpdf_is_scipy_stats():
+    """Plain numpy against scipy.stats for every family, inside and outside the support (oracle to 1e-12)."""
+    priors = [Prior("a", "normal", 0.3, 2.0, "um", ""), Prior("b", "halfnormal", 0.0, 1.5, "um", ""),
+              Prior("c", "uniform", -1.0, 3.0, "um", ""), Prior("d", "normal", -4.0, 0.5, "arcsec", "")]
+    ps = PriorSet(priors)
+    x = np.random.default_rng(0).normal(size=(200, 4)) * 2.0
+    x[:5, 1] = -0.1  # outside the half-normal's support
+    x[5:9, 2] = 2.5  # outside the uniform's
+    ref = sum(p.frozen().logpdf(x[:, i]) for i, p in enumerate(priors))
+    got = ps.logpdf(x)
+    assert np.array_equal(np.isneginf(got), np.isneginf(ref))
+    ok = np.isfinite(ref)
+    np.testing.assert_allclose(got[ok], ref[ok], rtol=0, atol=1e-12)
+
+
+def test_likelihood_is_scipy_stats(thesis):
+    post = LogPosterior(thesis, "linear")
+    theta = post.to_theta(np.random.default_rng(1).normal(size=(20, len(post))))
+    pred, sigma = post.forward.predict(theta[:, : post.p]), post.sigma(theta)
+    ref = stats.norm.logpdf(post.likelihood.y, loc=pred, scale=np.sqrt(post.likelihood.variance(sigma))).sum(axis=1)
+    np.testing.assert_allclose(post.likelihood.loglike(pred, sigma), ref, rtol=1e-12)
+
+
+def test_rotation_is_scipy_rotation():
+    """Rodrigues' formula against scipy.spatial.transform, from 1e-12 rad to 3 rad (no cancellation)."""
+    rng = np.random.default_rng(2)
+    v = rng.normal(size=(60, 3)) * np.repeat(10.0 ** np.arange(-12, 0.5, 1.0), 5)[:60, None] * 3.0
+    np.testing.assert_allclose(rotation(v), Rotation.from_rotvec(v).as_matrix(), rtol=0, atol=2e-15)
+
+
+# --------------------------------------------------------------------------- the approximation
+def test_marginal_posterior_at_fixed_sigma_is_the_closed_form(thesis):
+    """The grid posterior with one cell equals the closed-form Gaussian of analytic.py (two implementations)."""
+    sigma = 0.4e-3
+    post = LogPosterior(thesis, "linear", sigma_model=sigma)
+    g = gaussian_posterior(post, sigma)
+    prior_var = np.array([p.sd for p in post.priors.priors[: post.p]]) ** 2
+    m = MarginalPosterior(post.forward.design, post.likelihood.base_var, prior_var, sigma_fixed=sigma)
+    np.testing.assert_allclose(m.means(post.likelihood.y[None])[0, 0], g.mean, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(m.cov[0], g.cov, rtol=1e-9, atol=1e-20)
+
+
+def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):
+    """Data that only a sigma_model far beyond the prior's 0.99999 quantile explains (50 µm noise added, seeded):
+    the grid reaches where they put sigma_model, and its posterior mean and sd of sigma_model are those of an
+    independent quadrature (scipy.integrate.quad of scipy.stats.multivariate_normal), within 1e-4 posterior sd."""
+    post = LogPosterior(thesis, "linear")
+    a = PosteriorApproximation(post)
+    assert a.exact and a.kind == "exact σ-marginal posterior"
+    sigma_prior = post.priors.priors[-1].frozen()
+    assert a.marginal.edges[-1] >= sigma_prior.ppf(0.99999)
+
+    y = post.likelihood.y + np.random.default_rng(8).normal(scale=0.05, size=len(post.likelihood.y))
+    far = PosteriorApproximation(post.with_means(y)).marginal
+    mean, sd = far.sigma_moments(y)
+    A, base = post.forward.design, post.likelihood.base_var
+    S0 = (A * np.array([q.sd for q in post.priors.priors[: post.p]]) ** 2) @ A.T
+
+    def log_post(s):
+        return stats.multivariate_normal(cov=S0 + np.diag(base + s * s)).logpdf(y) + sigma_prior.logpdf(s)
+
+    mode = 0.015  # mm, near the quadrature's peak; only normalises the integrand
+    def moment(k):
+        return integrate.quad(lambda s: s**k * np.exp(log_post(s) - log_post(mode)), 0, 0.2, points=[mode],
+                              limit=200)[0]
+
+    z = moment(0)
+    ref_mean = moment(1) / z
+    ref_sd = np.sqrt(moment(2) / z - ref_mean**2)
+    assert mean > 1.5 * sigma_prior.ppf(0.99999)  # the data, not the prior, place sigma_model
+    assert far.edges[-1] > mean + 8 * sd
+    assert abs(mean - ref_mean) < 1e-4 * ref_sd and abs(sd / ref_sd - 1) < 1e-4
+
+
+def test_kinematic_approximation_is_its_linearisation(thesis):
+    post = LogPosterior(thesis, "htm-thesis")
+    a = PosteriorApproximation(post)
+    assert not a.exact and a.kind == "linearised posterior"
+    lin = PosteriorApproximation(LogPosterior(thesis, "linear"))
+    names = list(IDENTIFIABLE)
+    ma, ml = a.moments(names), lin.moments(names)
+    for n in names:  # thesis magnitudes: the htm-thesis posterior linearised is the linear one, within 0.05 sd
+        assert abs(ma[n][0] - ml[n][0]) < 0.05 * ml[n][1], n
+
+
+# --------------------------------------------------------------------------- the sampler
+def _eight_moments(result, post):
+    s = summarize(to_inference_data(result, seed=0), post)
+    return {n: (s.loc[n, "mean"], s.loc[n, "sd"]) for n in IDENTIFIABLE}
+
+
+def test_hastings_correction_keeps_a_wrong_proposal_exact(thesis, monkeypatch):
+    """Independence moves only, from an approximation shifted by 0.5 (Mahalanobis) along a random direction and
+    15 % too narrow in every direction: the Metropolis–Hastings test must still give the exact posterior (means
+    within 0.1 sd, sds within 5 %, i.e. about 4 MCSE at ESS 3000), and accept less often than the right proposal.
+    Without the Hastings factor the same run gives sds 35 % too small (checked by hand when the test was written)."""
+    import mtmcal_bayes.inference.sampling as sampling
+
+    post = LogPosterior(thesis, "linear", sigma_model=0.4e-3)
+    right = run_ensembles(post, SamplerSettings(seed=3, independence_weight=1.0))
+    exact = right.approximation.moments(list(IDENTIFIABLE))
+
+    class Wrong(PosteriorApproximation):
+        def __init__(self, p):
+            super().__init__(p)
+            g = self.proposal
+            u = np.random.default_rng(0).normal(size=g.P)
+            g.mean = g.mean + 0.5 * np.einsum("gij,j->gi", g.chol, u / np.linalg.norm(u))
+            g.chol, g.chol_inv = 0.85 * g.chol, g.chol_inv / 0.85
+            g.log_det = g.log_det + 2 * g.P * np.log(0.85)
+
+    monkeypatch.setattr(sampling, "PosteriorApproximation", Wrong)
+    wrong = run_ensembles(post, SamplerSettings(seed=3, independence_weight=1.0, target_ess=3000))
+    assert wrong.converged
+    assert wrong.independence_acceptance < right.independence_acceptance - 0.2
+    got = _eight_moments(wrong, post)
+    for n in IDENTIFIABLE:
+        m, s = exact[n]
+        assert abs(got[n][0] - m) < 0.1 * s, (n, got[n], exact[n])
+        assert abs(got[n][1] / s - 1) < 0.05, (n, got[n], exact[n])
+
+
+def test_a_start_not_forgotten_is_detected(thesis, monkeypatch):
+    """Walkers started 6 posterior sd away, DE moves only: the time-split R-hat sees the start, the burn-in
+    grows beyond 2τ, and the kept draws still match the exact posterior (means within 0.15 sd)."""
+    import mtmcal_bayes.inference.sampling as sampling
+
+    post = LogPosterior(thesis, "linear", sigma_model=0.4e-3)
+    starts = sampling._starts
+
+    def far_starts(p, approx, n, random):
+        z = starts(p, approx, n, random)
+        return z + 6.0 * z.std(axis=0)
+
+    monkeypatch.setattr(sampling, "_starts", far_starts)
+    r = run_ensembles(post, SamplerSettings(seed=4, independence_weight=0.0, max_steps=4000))
+    assert r.checks[0].max_rhat > 1.01 or r.checks[0].burn > 2 * np.nanmax(r.tau) + 1
+    assert r.burn >= r.n_steps // 4 and r.converged
+    exact = r.approximation.moments(list(IDENTIFIABLE))
+    got = _eight_moments(r, post)
+    for n in IDENTIFIABLE:
+        assert abs(got[n][0] - exact[n][0]) < 0.15 * exact[n][1], n
+
+
+def test_exact_sampler_draws_the_exact_posterior(thesis):
+    """--sampler exact: independent draws whose moments are the reference's (means within 0.05 sd, sds 4 %)."""
+    post = LogPosterior(thesis, "linear")
+    r = run_ensembles(post, SamplerSettings(seed=5, sampler="exact"))
+    assert r.converged and r.chains.shape[2] == 1 and r.burn == 0
+    exact = r.approximation.moments(list(IDENTIFIABLE))
+    got = _eight_moments(r, post)
+    for n in IDENTIFIABLE:
+        assert abs(got[n][0] - exact[n][0]) < 0.05 * exact[n][1], n
+        assert abs(got[n][1] / exact[n][1] - 1) < 0.04, n
+
+
+def test_exact_sampler_refuses_the_kinematic_models(thesis):
+    from mtmcal_bayes.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="exact"):
+        run_ensembles(LogPosterior(thesis, "htm-thesis"), SamplerSettings(sampler="exact"))
+
+
+def test_campaign_without_second_tool_length_still_converges_quickly():
+    """Not identified is not hard to sample: the linearised posterior is still the posterior."""
+    c = parse_campaign(variants.without_second_tool_length(), "no_cr2.toml")
+    r = run_ensembles(LogPosterior(c, "linear"), SamplerSettings(seed=6))
+    assert r.converged and r.n_steps == 50 and r.independence_acceptance > 0.9
+
+
+# --------------------------------------------------------------------------- the kinematic chain
+def test_kinematic_chunks_are_the_whole_batch(thesis):
+    """A batch larger than the chunk gives the rows it gives one chunk at a time (memory bound, same numbers)."""
+    m = HTMModel(thesis, "htm-thesis")
+    theta = np.random.default_rng(7).normal(size=(CHUNK + 37, len(m.space))) * m.space.display_scale() * 30
+    whole = m.predict(theta)
+    parts = np.vstack([m.predict(theta[:50]), m.predict(theta[50:])])
+    np.testing.assert_allclose(whole, parts, rtol=0, atol=1e-15)
+
+
+def test_derived_weights_reach_the_reference(thesis):
+    """dx_CZ − dx_BT's reference moments come from the parameter layer's weights."""
+    post = LogPosterior(thesis, "linear")
+    a = PosteriorApproximation(post)
+    m = a.moments(["dx_CZ", "dx_BT", "dx_CZ_minus_dx_BT"])
+    assert weights("dx_CZ_minus_dx_BT") == {"dx_CZ": 1.0, "dx_BT": -1.0}
+    assert m["dx_CZ_minus_dx_BT"][1] < min(m["dx_CZ"][1], m["dx_BT"][1])  # the combination is what the data fix
