@@ -50,10 +50,10 @@ from .errors import InputError, MtmcalError, ParameterError
 from .identification import identify_ballbar, identify_probe
 from .io import load_campaign, parse_campaign, read_dprnt, save_campaign
 from .models import MODELS, HTMModel, LinearModel, make_model
-from .models.probe import fit_sphere
 from .observations import Observations
 from .parameters import DEVIATIONS, IDENTIFIABLE, ParameterSpace
 from .progress import ProgressEvent
+from .sphere import fit_sphere
 from .version import __version__
 
 __all__ = [

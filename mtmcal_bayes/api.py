@@ -95,25 +95,27 @@ def sensitivity(campaign: CampaignLike = None, *, model: str = "htm-thesis") -> 
 
 def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | None = None, fix_dx_BT: bool = False,
            target_ess: float = TARGET_ESS, sampler: str = "emcee", max_steps: int = MAX_STEPS, checkpoint=None,
-           output=None, progress: Progress | None = None) -> PosteriorResult:
+           output=None, progress: Progress | None = None, data: str = "ballbar") -> PosteriorResult:
     """The posterior of the deviations and nuisance offsets, summarised beside the ball-bar and touch-probe values.
 
     emcee ensembles run until the bulk and tail ESS of the eight quantities reach ``target_ess`` and R-hat
     ≤ 1.01 (``sampler="exact"``: independent draws of the exact posterior, linear model only).  ``seed``
     makes the draws reproducible; ``checkpoint`` (HDF5) is written as the run goes and resumed if it
-    exists; ``output`` receives the InferenceData as NetCDF.
+    exists; ``output`` receives the InferenceData as NetCDF.  ``data``: the likelihood's measurements,
+    ``"ballbar"`` (default), ``"probe"`` (touch-probe readings) or ``"both"`` (fused).
     """
     from .inference.sampling import SamplerSettings
-    from .models import check_model
+    from .models import check_data, check_model
     from .posterior import sample_posterior
 
     c = campaign_of(campaign)
     check_model(model)
+    check_data(data, c)
     _writable(output, "posterior")
     _writable(checkpoint, "checkpoint")
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     result = sample_posterior(c, model=model, fix_dx_BT=fix_dx_BT, settings=settings, checkpoint=checkpoint,
-                              progress=progress)
+                              progress=progress, data=data)
     if output is not None:
         result.save(output)
     return result
@@ -130,21 +132,24 @@ def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, f
 def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,
            fix_dx_BT: bool = False, compare_models: bool = False, target_ess: float = TARGET_ESS,
            sampler: str = "emcee", max_steps: int = MAX_STEPS, posterior: PosteriorResult | None = None,
-           progress: Progress | None = None, command: str = "") -> Report:
+           progress: Progress | None = None, command: str = "", data: str = "ballbar") -> Report:
     """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
 
     ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
-    ``compare_models`` adds the same campaign under all three forward models.
+    ``compare_models`` adds the same campaign under all three forward models.  ``data`` as for
+    :func:`sample`; a campaign with touch-probe readings also gets its ball-bar-only, probe-only and
+    fused posteriors side by side and the instruments' consistency check.
     """
     from .inference.sampling import SamplerSettings
-    from .models import check_model
+    from .models import check_data, check_model
     from .reporting import build_report
 
     c = campaign_of(campaign)
     check_model(model)
+    check_data(data, c)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     return build_report(c, output, model=model, settings=settings, fix_dx_BT=fix_dx_BT, compare_models=compare_models,
-                        posterior=posterior, progress=progress, command=command)
+                        posterior=posterior, progress=progress, command=command, data=data)
 
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
@@ -220,16 +225,19 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
 
 def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", sampler: str = "emcee",
         n_ranked: int = 99, max_steps: int = MAX_STEPS, workers: int | None = None, seed: int = 1, output=None,
-        progress: Progress | None = None) -> SBCResult:
+        progress: Progress | None = None, data: str = "ballbar") -> SBCResult:
     """Simulation-based calibration (Talts et al. 2018) of the posterior on the design of the campaign:
     ``n`` truths from the prior, each ranked among ``n_ranked`` posterior draws; ``workers`` processes
-    (default the CPU count); ``output`` receives the JSON, CSV files and figures."""
+    (default the CPU count); ``output`` receives the JSON, CSV files and figures; ``data`` the measurements
+    simulated and fitted (``"ballbar"``, ``"probe"``, ``"both"``)."""
+    from .models import check_data
     from .validation import SBCSettings, run_sbc
 
     c = campaign_of(campaign)
+    check_data(data, c)
     _writable(output, "SBC")
     settings = SBCSettings(n=n, model=model, sampler=sampler, n_ranked=n_ranked, max_steps=max_steps,
-                           workers=(os.cpu_count() or 1) if workers is None else workers, seed=seed)
+                           workers=(os.cpu_count() or 1) if workers is None else workers, seed=seed, data=data)
     result = run_sbc(c, settings, progress)
     if output is not None:
         result.write(output)

@@ -76,28 +76,54 @@ class Ballbar:
 
 @dataclass
 class CAxisProbe:
-    """Sphere centres measured at several C angles (thesis Table 5.2), mm."""
+    """A sphere on the table probed at several C angles with B = 0 (thesis Table 5.2), mm.
+
+    ``centres`` (r, a, 3): r repeats of the sphere centre read at each of the a angles, in the
+    reading frame (machine coordinates of the stylus's tool point).  ``centre_cov`` (r, a, 3, 3),
+    mm², where a centre was fitted from DPRNT points (NaN where given directly).  ``stylus``
+    names a stylus of ``[probe.b_axis.styli]``, or ``R_B`` gives the stylus length of a stylus of
+    this run's own.  ``datum``: ``"machine"`` (the readings are in a frame whose C-axis
+    centreline is ``axis_xy``) or ``"first"`` (the reading frame was zeroed on the sphere; its
+    X, Y position carries no information).
+    """
 
     R_C: float
     Z_C: float
     axis_xy: np.ndarray  # (2,) nominal C-axis centreline in machine X, Y
     angles_deg: np.ndarray  # (a,)
     centres: np.ndarray  # (r, a, 3)
+    stylus: str | None = None
+    R_B: float | None = None
+    ball_radius: float = 0.0
+    datum: str = "machine"
+    dprnt: list[str] | None = None
+    centre_cov: np.ndarray | None = None  # (r, a, 3, 3) mm², NaN where not fitted
 
 
 @dataclass
 class Stylus:
+    """A stylus of the B-axis run: length, readings at each B angle (r, b, 3), mm.
+
+    ``R_B`` is the programmed tool length; ``ball_radius`` the stylus-ball radius when that
+    length runs to the ball's tip (0: to its centre).  ``nominal`` (b, 3) is needed only by the
+    thesis equations (5.8–5.19); the likelihood does not use it.
+    """
+
     id: str
     R_B: float
-    nominal: np.ndarray  # (2, 3) nominal centre readings at B = 0, 90 deg
-    centres: np.ndarray  # (r, 2, 3)
+    nominal: np.ndarray | None  # (b, 3) nominal centre readings, or None
+    centres: np.ndarray  # (r, b, 3)
+    ball_radius: float = 0.0
+    dprnt: list[str] | None = None
+    centre_cov: np.ndarray | None = None  # (r, b, 3, 3) mm², NaN where not fitted
 
 
 @dataclass
 class BAxisProbe:
     X_T: float
-    angles_deg: np.ndarray  # (2,)
+    angles_deg: np.ndarray  # (b,)
     styli: dict[str, Stylus] = field(default_factory=dict)
+    Z_C: float | None = None  # sphere height above the table, mm (default: the C-axis sphere's)
 
 
 @dataclass
@@ -106,6 +132,33 @@ class Probe:
     repeatability: float | None = None  # mm
     c_axis: CAxisProbe | None = None
     b_axis: BAxisProbe | None = None
+
+    #: owner of the C-axis run's own stylus (when it names none of the B-axis run) and of each run's sphere terms
+    C_RUN, B_RUN = "c_axis", "b_axis"
+
+    def stylus_of_c_run(self) -> str:
+        """Owner of the stylus the C-axis run probes with: a B-axis stylus id, or ``"c_axis"``."""
+        return self.c_axis.stylus or self.C_RUN
+
+    def styli_used(self) -> list[str]:
+        """Owners of every stylus with readings, C-axis run first."""
+        out = [self.stylus_of_c_run()] if self.c_axis is not None else []
+        if self.b_axis is not None:
+            out += [s for s in self.b_axis.styli if s not in out]
+        return out
+
+    def nuisance_terms(self) -> list[tuple[str, str]]:
+        """The probe's nuisance parameters as ``(owner, base)`` pairs (see ``parameters.PROBE_NUISANCE``):
+        per stylus ``xS, yS, dRS, rS``; the C-axis sphere's placement ``xP, yP`` and the datum of its
+        readings (``zD``; also ``xD, yD`` when the frame was zeroed on the sphere); the B-axis sphere's
+        position ``xD, yD, zD``."""
+        out = [(s, b) for s in self.styli_used() for b in ("xS", "yS", "dRS", "rS")]
+        if self.c_axis is not None:
+            out += [(self.C_RUN, b) for b in ("xP", "yP")]
+            out += [(self.C_RUN, b) for b in (("xD", "yD", "zD") if self.c_axis.datum == "first" else ("zD",))]
+        if self.b_axis is not None and self.b_axis.styli:
+            out += [(self.B_RUN, b) for b in ("xD", "yD", "zD")]
+        return out
 
 
 @dataclass
@@ -124,6 +177,15 @@ class Truth:
     deviations: dict[str, float] = field(default_factory=dict)
     setups: dict[str, dict[str, float]] = field(default_factory=dict)
     mounts: dict[str, dict[str, float]] = field(default_factory=dict)
+    probe: dict[str, dict[str, float]] = field(default_factory=dict)  # owner -> {base: value}
+
+    def ballbar_part(self) -> Truth:
+        """The deviations and the ball-bar nuisance terms."""
+        return Truth(self.deviations, self.setups, self.mounts)
+
+    def probe_part(self) -> Truth:
+        """The deviations and the touch-probe nuisance terms."""
+        return Truth(self.deviations, probe=self.probe)
 
 
 @dataclass
@@ -136,6 +198,11 @@ class Campaign:
     truth: Truth | None = None
     source: str = "<campaign>"
     base_dir: Path | None = None
+
+    def has_probe_readings(self) -> bool:
+        """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""
+        p = self.probe
+        return p is not None and (p.c_axis is not None or (p.b_axis is not None and bool(p.b_axis.styli)))
 
     def runs_of(self, pattern: str) -> list[Run]:
         return [r for r in self.ballbar.runs if r.pattern == pattern]

@@ -1,11 +1,9 @@
 """The ``mtmcal-bayes`` command line: parse the arguments, call one API function, print its result.
 
-Every command works without a campaign argument on the built-in thesis
-campaign.  ``--json`` prints a result's ``to_json()``, otherwise its
-``to_text()`` is printed.  Problems with the input are one line on stderr and
-exit status 2, never a traceback; an API parameter named in an error is shown
-as the flag that sets it (set ``MTMCAL_DEBUG=1`` to see a traceback for an
-unexpected internal error).
+Every command works without a campaign argument on the built-in thesis campaign.  ``--json`` prints a
+result's ``to_json()``, otherwise its ``to_text()``.  Problems with the input are one line on stderr and exit
+status 2, never a traceback; an API parameter named in an error is shown as the flag that sets it (set
+``MTMCAL_DEBUG=1`` to see a traceback for an unexpected internal error).
 """
 
 from __future__ import annotations
@@ -18,13 +16,14 @@ import time
 from . import api
 from .errors import MtmcalError, ParameterError
 from .io.json_text import json_text
-from .models import MODELS
+from .models import DATA, MODELS
 from .progress import StderrProgress
 from .version import __version__
 
 PROG = "mtmcal-bayes"
 #: API parameters set by something other than the flag of the same name
 FLAG_OF = {"start": "--x0/--y0/--z0"}
+DATA_OPTION = dict(choices=DATA, default="ballbar", help="measurements in the likelihood: ball bar (default), probe, or both")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -76,7 +75,7 @@ def cmd_sample(args) -> int:
                                      model=args.model), args)
     result = api.sample(args.campaign, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                         target_ess=args.target_ess, sampler=args.sampler, max_steps=args.max_steps,
-                        checkpoint=args.checkpoint, output=args.output, progress=_progress(args))
+                        checkpoint=args.checkpoint, output=args.output, progress=_progress(args), data=args.data)
     _warn(result.warnings)
     return _show(result, args)
 
@@ -85,7 +84,7 @@ def cmd_report(args) -> int:
     command = " ".join([PROG] + (sys.argv[1:] if args.argv is None else args.argv))
     rep = api.report(args.campaign, output=args.output, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                      compare_models=args.compare_models, target_ess=args.target_ess, sampler=args.sampler,
-                     max_steps=args.max_steps, progress=_progress(args), command=command)
+                     max_steps=args.max_steps, progress=_progress(args), command=command, data=args.data)
     _warn(rep.posterior.warnings)
     return _show(rep, args)
 
@@ -115,10 +114,9 @@ def cmd_compensate(args) -> int:
 
 def cmd_validate_sbc(args) -> int:
     t0 = time.perf_counter()
-    result = api.sbc(args.campaign, n=args.n, model=args.model, sampler=args.sampler, n_ranked=args.n_ranked,
-                     max_steps=args.max_steps, workers=args.workers, seed=args.seed, output=args.output,
-                     progress=_progress(args))
-    _show(result, args)
+    _show(api.sbc(args.campaign, n=args.n, model=args.model, sampler=args.sampler, n_ranked=args.n_ranked, data=args.data,
+                  max_steps=args.max_steps, workers=args.workers, seed=args.seed, output=args.output,
+                  progress=_progress(args)), args)
     if not args.quiet:
         print(f"sbc: done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     return 0
@@ -142,6 +140,7 @@ def _model(s, default: str, choices=MODELS, help: str | None = None) -> None:
 
 def _sampler_options(s) -> None:
     """Options of the commands that run the sampler (sample, report)."""
+    s.add_argument("--data", **DATA_OPTION)
     s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
     s.add_argument("--target-ess", type=float, default=api.TARGET_ESS, help="stop when the bulk and tail ESS of "
                    f"each of the eight quantities reach this (default {api.TARGET_ESS:g}) and R-hat ≤ 1.01")
@@ -247,6 +246,7 @@ def build_parser() -> argparse.ArgumentParser:
                  json_help="print JSON: p_uniform and coverage_50/90/95 per quantity")
     v.add_argument("--n", type=int, default=200, help="replicates: truths drawn from the prior (default 200)")
     _model(v, "linear")
+    v.add_argument("--data", **DATA_OPTION)
     v.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
                    help="emcee (default: what sample/report use) or the exact linear posterior (checks SBC itself)")
     v.add_argument("--draws", dest="n_ranked", type=int, default=99,

@@ -26,6 +26,8 @@ COLOURS = {
 }
 #: one colour per forward model in model comparisons, in the order of :data:`~mtmcal_bayes.models.MODELS`
 MODEL_COLOURS = dict(zip(MODELS, ("#0072B2", "#E69F00", "#009E73")))
+#: the ball-bar-only, probe-only and fused posteriors
+DATA_COLOURS = {"ball bar only": "#0072B2", "probe only": "#CC79A7", "fused": "#000000"}
 
 REFERENCE_LABELS = {
     "ballbar": "ball bar, deterministic (Eqs 4.10–4.18)",

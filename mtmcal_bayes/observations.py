@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import units
+
 #: typical repeat scatter of one eccentricity component, µm (thesis Table 4.4: 0.05–0.54 µm, typically 0.25):
 #: the repeat sd assumed where a campaign gives none, and that of simulated repeats
 TYPICAL_REPEAT_SD_UM = 0.25
@@ -64,6 +66,21 @@ class Observations:
     def labels(self) -> list[str]:
         return [k.label for k in self.keys]
 
+    def noise_variance(self, accuracy: float) -> np.ndarray:
+        """Variance of each mean without sigma_model, ``(m,)`` mm²: ``s²/n + accuracy²``.
+
+        A component measured once takes the pooled repeat sd of the repeated ones
+        (:meth:`pooled_sd`)."""
+        repeated = self.n > 1
+        return np.where(repeated, self.sd, self.pooled_sd()) ** 2 / self.n + accuracy**2
+
+    def pooled_sd(self) -> float:
+        """Pooled repeat sd of the repeated components, mm; 0.25 µm when none was repeated."""
+        repeated = self.n > 1
+        if not repeated.any():
+            return units.to_internal(TYPICAL_REPEAT_SD_UM, "um")
+        return float(np.sqrt(np.sum((self.n[repeated] - 1) * self.sd[repeated] ** 2) / np.sum(self.n[repeated] - 1)))
+
 
 def with_observations(campaign, values: np.ndarray):
     """A copy of ``campaign`` whose runs carry ``values`` instead of their measured repeats.
@@ -85,3 +102,87 @@ def with_observations(campaign, values: np.ndarray):
     for key, v in zip(keys, values):
         out.ballbar.runs[key.run].repeats[key.component] = v.copy()
     return out
+
+
+@dataclass(frozen=True)
+class ProbeKey:
+    """Which touch-probe reading an observation is: run (``"c_axis"``/``"b_axis"``), stylus owner, indexed
+    angle (C of the C-axis run, B of the B-axis run, degrees) and component (``X, Y, Z``; ``u1..u3`` along
+    the principal axes of a DPRNT fit's covariance)."""
+
+    run: str
+    stylus: str
+    angle_deg: float
+    component: str
+
+    @property
+    def group(self) -> str:
+        """The reading group: the C-axis run, or the B-axis run of one stylus."""
+        return "probe C axis" if self.run == "c_axis" else f"probe B axis, stylus {self.stylus}"
+
+    @property
+    def label(self) -> str:
+        axis = "C" if self.run == "c_axis" else "B"
+        return f"{self.component}@{axis}{self.angle_deg:g}/{self.stylus}"
+
+
+@dataclass(frozen=True)
+class ProbeObservations:
+    """Touch-probe readings as observations: each sphere centre minus its nominal reading, mm.
+
+    Attributes (``m`` = 3 per indexed position)
+    -------------------------------------------
+    keys : tuple of ProbeKey, length m
+    mean : (m,) mean of the repeats minus the nominal reading, mm (rotated where the centre has a fit covariance)
+    base_var : (m,) noise variance without sigma_model, mm²
+    n : (m,) number of repeats
+    """
+
+    keys: tuple[ProbeKey, ...]
+    mean: np.ndarray
+    base_var: np.ndarray
+    n: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.keys)
+
+    @property
+    def labels(self) -> list[str]:
+        return [k.label for k in self.keys]
+
+    def noise_variance(self, accuracy: float | None = None) -> np.ndarray:
+        """Noise variance of each reading without sigma_model ``(m,)``, mm² (the probe's own)."""
+        return self.base_var
+
+
+@dataclass(frozen=True)
+class JointObservations:
+    """Ball-bar eccentricities followed by touch-probe readings: ``parts`` in order, one vector."""
+
+    parts: tuple
+
+    @property
+    def keys(self) -> tuple:
+        return tuple(k for p in self.parts for k in p.keys)
+
+    @property
+    def mean(self) -> np.ndarray:
+        return np.concatenate([p.mean for p in self.parts])
+
+    @property
+    def labels(self) -> list[str]:
+        return [lab for p in self.parts for lab in p.labels]
+
+    def __len__(self) -> int:
+        return sum(len(p) for p in self.parts)
+
+    def noise_variance(self, accuracy: float) -> np.ndarray:
+        return np.concatenate([p.noise_variance(accuracy) for p in self.parts])
+
+    def slices(self) -> list[tuple[object, slice]]:
+        """Each part with its slice of the joint vector."""
+        out, start = [], 0
+        for p in self.parts:
+            out.append((p, slice(start, start + len(p))))
+            start += len(p)
+        return out

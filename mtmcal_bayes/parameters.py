@@ -113,11 +113,34 @@ MOUNT_NUISANCE: dict[str, Quantity] = {
 }
 
 
+#: nuisance quantities of each touch-probe stylus (its tool point is the stylus-ball centre, like the T ball's)
+STYLUS_NUISANCE: dict[str, Quantity] = {
+    "xS": Quantity("xS", "length", "stylus-ball centre offset along X of the spindle frame"),
+    "yS": Quantity("yS", "length", "stylus-ball centre offset along Y of the spindle frame"),
+    "dRS": Quantity("dRS", "length", "stylus tool-length error, true minus programmed"),
+    "rS": Quantity("rS", "length", "effective stylus-ball radius error (pre-travel): moves a probed sphere "
+                   "centre along the stylus axis, towards the spindle"),
+}
+
+#: nuisance quantities of a probed sphere: its placement on the C table (C frame), and the datum of the
+#: readings (where the sphere is in the reading frame; broad: readings are often zeroed on the sphere)
+SPHERE_NUISANCE: dict[str, Quantity] = {
+    "xP": Quantity("xP", "length", "sphere placement on the C table, radial (C frame, X at C = 0)"),
+    "yP": Quantity("yP", "length", "sphere placement on the C table, tangential (C frame, Y at C = 0)"),
+    "xD": Quantity("xD", "length", "reading datum along X: sphere position / zero of the reading frame"),
+    "yD": Quantity("yD", "length", "reading datum along Y: sphere position / zero of the reading frame"),
+    "zD": Quantity("zD", "length", "reading datum along Z: sphere position / zero of the reading frame"),
+}
+
+#: every touch-probe nuisance quantity, by base name
+PROBE_NUISANCE: dict[str, Quantity] = {**STYLUS_NUISANCE, **SPHERE_NUISANCE}
+
+
 def quantity_unit(name: str) -> str:
     """Display unit (``"arcsec"`` or ``"um"``) of a deviation, derived quantity, nuisance parameter
     (base name ``"xT"`` or full name ``"xT[RB1]"``) or ``sigma_model``."""
     base = name.split("[")[0]
-    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, {SIGMA_MODEL.name: SIGMA_MODEL}):
+    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, PROBE_NUISANCE, {SIGMA_MODEL.name: SIGMA_MODEL}):
         if base in table:
             return table[base].unit
     raise KeyError(name)
@@ -133,7 +156,7 @@ class Parameter:
 
     name: str
     base: str
-    group: str  # "deviation", "setup" or "mount"
+    group: str  # "deviation", "setup", "mount" or "probe"
     owner: str | None
     kind: str
 
@@ -148,7 +171,7 @@ def nuisance_name(base: str, owner: str) -> str:
 
 
 class ParameterSpace:
-    """Ordered parameters of a campaign: 13 deviations, then per setup, then per mount.
+    """Ordered parameters of a campaign: deviations, then per setup, per mount, then the probe terms.
 
     Parameters
     ----------
@@ -157,21 +180,30 @@ class ParameterSpace:
     deviations:
         Names of the deviations to include (default all 13, in Table 2.1 order);
         forward models hold the others at zero.
+    probe:
+        Touch-probe nuisance terms as ``(owner, base)`` pairs, in order (e.g. ``("short", "xS")``,
+        ``("c_axis", "xP")``); see :data:`PROBE_NUISANCE`.
     """
 
-    def __init__(self, setups, mounts, deviations=None):
+    def __init__(self, setups, mounts, deviations=None, probe=()):
         names = list(DEVIATIONS) if deviations is None else [d for d in DEVIATIONS if d in set(deviations)]
         params = [Parameter(n, n, "deviation", None, DEVIATIONS[n].kind) for n in names]
         for s in setups:
             params += [Parameter(nuisance_name(q.name, s), q.name, "setup", s, q.kind) for q in SETUP_NUISANCE.values()]
         for m in mounts:
             params += [Parameter(nuisance_name(q.name, m), q.name, "mount", m, q.kind) for q in MOUNT_NUISANCE.values()]
+        params += [Parameter(nuisance_name(b, o), b, "probe", o, PROBE_NUISANCE[b].kind) for o, b in probe]
         self.parameters: tuple[Parameter, ...] = tuple(params)
         self._index = {p.name: i for i, p in enumerate(self.parameters)}
 
     @classmethod
-    def for_campaign(cls, campaign, deviations=None) -> ParameterSpace:
-        return cls(list(campaign.ballbar.setups), list(campaign.ballbar.mounts), deviations)
+    def for_campaign(cls, campaign, deviations=None, data: str = "ballbar") -> ParameterSpace:
+        """The space of ``campaign`` for the data ``"ballbar"``, ``"probe"`` or ``"both"``: the
+        ball-bar nuisance terms with ball-bar data, the probe terms with probe data."""
+        bb = data in ("ballbar", "both")
+        probe = campaign.probe.nuisance_terms() if data in ("probe", "both") and campaign.probe else ()
+        return cls(list(campaign.ballbar.setups) if bb else [], list(campaign.ballbar.mounts) if bb else [],
+                   deviations, probe)
 
     def __len__(self) -> int:
         return len(self.parameters)

@@ -108,14 +108,25 @@ def test_api_errors_name_the_parameter_not_a_flag(call, parameter):
 
 
 def test_report_reuses_a_posterior_without_sampling_again(tmp_path, monkeypatch):
+    """The given posterior is not sampled again; the thesis campaign's probe readings add only the probe-only
+    and fused posteriors (the instruments' comparison)."""
     from mtmcal_bayes.reporting import build
 
     post = mb.sample(seed=3, max_steps=500)
-    monkeypatch.setattr(build, "sample_posterior", lambda *a, **k: pytest.fail("sampled again"))
+    real = build.sample_posterior
+    sampled = []
+
+    def only_other_data(*a, **k):
+        assert k.get("data", "ballbar") != "ballbar", "sampled the given posterior again"
+        sampled.append(k["data"])
+        return real(*a, **k)
+
+    monkeypatch.setattr(build, "sample_posterior", only_other_data)
     events = []
     rep = mb.report(output=tmp_path / "r", posterior=post, progress=events.append)
     assert rep.posterior is post and (tmp_path / "r" / "index.html").exists()
-    assert all(e.task == "report" for e in events) and any("drawing corner.png" in e.message for e in events)
+    assert sorted(sampled) == ["both", "probe"]
+    assert any("drawing corner.png" in e.message for e in events)
     assert rep.to_json()["summary"] == post.to_json()["summary"]
 
 

@@ -41,7 +41,6 @@ from mtmcal_bayes.io.gcode import block_line, parse_program, rewrite
 from mtmcal_bayes.io.traces import read_trace
 from mtmcal_bayes.models import MODELS, HTMModel, LinearModel, jacobian, make_model
 from mtmcal_bayes.models.linear import LEFT_OUT
-from mtmcal_bayes.models.probe import fit_sphere
 from mtmcal_bayes.parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
 from mtmcal_bayes.patterns import (
     B_ANGLES_DEG,
@@ -52,6 +51,7 @@ from mtmcal_bayes.patterns import (
     PATTERNS,
     polar_basis,
 )
+from mtmcal_bayes.sphere import fit_sphere
 
 HTM = ("htm-literal", "htm-thesis")
 ARCSEC = units.ARCSEC
@@ -539,7 +539,7 @@ def full_campaigns(draw):
         c.reported = {"ballbar": reported}
 
     if draw(st.booleans()):
-        a = draw(st.integers(1, 4))
+        a = draw(st.integers(3, 4))  # a circle needs three C angles
         cax = CAxisProbe(draw(st.floats(1.0, 200.0)), draw(st.floats(0.0, 200.0)), np.array([-490.0, 0.0]),
                          np.arange(a) * 90.0, draw(arrays(np.float64, (2, a, 3), elements=st.floats(-600, 600))))
         styli = {sid: Stylus(sid, r, draw(arrays(np.float64, (2, 3), elements=st.floats(-600, 600))),

@@ -58,7 +58,10 @@ def identify_probe(campaign: Campaign) -> tuple[dict[str, Identified], list[str]
                 "(the thesis does not say how it formed ΔX_center, ΔY_center)")
 
     b = probe.b_axis
-    if b is not None and b.styli:
+    if b is not None and b.styli and (list(b.angles_deg) != [0.0, 90.0]
+                                      or any(s.nominal is None for s in b.styli.values())):
+        assumptions.append("B-axis probe: Eqs 5.8–5.19 need B = 0° and 90° and every stylus's nominal_mm: not applied")
+    elif b is not None and b.styli:
         styli = sorted(b.styli.values(), key=lambda s: s.R_B)
         short = styli[0]
         D = {s.id: s.centres.mean(axis=0) - s.nominal for s in styli}  # (2, 3): rows B=0°, 90°

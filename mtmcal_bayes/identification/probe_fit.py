@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from .. import units
 from ..errors import MtmcalError, ParameterError
 from ..io.dprnt import read_dprnt
-from ..models.probe import SphereFit, fit_sphere
+from ..sphere import SphereFit, fit_sphere
 
 
 @dataclass

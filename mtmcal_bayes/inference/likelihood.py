@@ -20,32 +20,21 @@ import math
 
 import numpy as np
 
-from .. import units
-from ..observations import TYPICAL_REPEAT_SD_UM, Observations
-
 
 class GaussianMeanLikelihood:
     """Normal likelihood of the repeat means.
 
     Parameters
     ----------
-    observations : Observations (m components)
-    accuracy : instrument accuracy u_inst, mm
+    observations : Observations, ProbeObservations or JointObservations (m entries): anything with
+        ``mean`` (m,) and ``noise_variance(accuracy)`` (m,)
+    accuracy : ball-bar instrument accuracy u_inst, mm (the probe's readings carry their own noise)
     """
 
-    def __init__(self, observations: Observations, accuracy: float):
+    def __init__(self, observations, accuracy: float):
         self.observations = observations
         self.y = observations.mean  # (m,) mm
-        sd = observations.sd.copy()
-        repeated = observations.n > 1
-        if repeated.any():
-            pooled = np.sqrt(np.sum((observations.n[repeated] - 1) * sd[repeated] ** 2)
-                             / np.sum(observations.n[repeated] - 1))
-        else:
-            pooled = units.to_internal(TYPICAL_REPEAT_SD_UM, "um")
-        self.pooled_sd = float(pooled)  # mm: the repeat sd assumed for a component measured once
-        self.repeat_sd = np.where(repeated, sd, pooled)  # (m,) mm
-        self.base_var = self.repeat_sd**2 / observations.n + accuracy**2  # (m,) mm²
+        self.base_var = observations.noise_variance(accuracy)  # (m,) mm²
 
     def with_means(self, y: np.ndarray) -> GaussianMeanLikelihood:
         """The same likelihood (same repeat sds, counts and accuracy) for other means ``y`` (m,), mm."""

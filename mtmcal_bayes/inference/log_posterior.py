@@ -17,7 +17,7 @@ import copy
 
 import numpy as np
 
-from ..models import make_model
+from ..models import check_data, make_model
 from ..parameters import ParameterSpace
 from .likelihood import GaussianMeanLikelihood
 from .priors import PriorSet, make_prior
@@ -36,6 +36,8 @@ class LogPosterior:
     model : ``"linear"``, ``"htm-literal"`` or ``"htm-thesis"``
     fix_dx_BT : impose the thesis assumption dx_BT = 0 (Eq 4.2)
     sigma_model : fix the model-discrepancy scale (mm) instead of sampling it
+    data : ``"ballbar"`` (eccentricities), ``"probe"`` (touch-probe readings) or ``"both"``; one
+        sigma_model for all (SPEC §12)
 
     Attributes
     ----------
@@ -44,13 +46,15 @@ class LogPosterior:
     forward : the forward model, over the first ``p`` names
     """
 
-    def __init__(self, campaign, model: str = "linear", fix_dx_BT: bool = False, sigma_model: float | None = None):
+    def __init__(self, campaign, model: str = "linear", fix_dx_BT: bool = False, sigma_model: float | None = None, *,
+                 data: str = "ballbar"):
         self.campaign = campaign
         self.model_name = model
         self.fix_dx_BT = fix_dx_BT
+        self.data = check_data(data, campaign)
         devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
-        self.space = ParameterSpace.for_campaign(campaign, devs)
-        self.forward = make_model(model, campaign, self.space)
+        self.space = ParameterSpace.for_campaign(campaign, devs, data=data)
+        self.forward = make_model(model, campaign, self.space, data)
         self.likelihood = GaussianMeanLikelihood(self.forward.observations, campaign.ballbar.accuracy)
         priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
         self.fixed_sigma = sigma_model

@@ -32,6 +32,15 @@ DEFAULTS = {
     "xW": ("normal", 35.0, "the W ball shifts 10–60 µm in a random direction when clamped (thesis Sec 2.5.2)"),
     "yW": ("normal", 35.0, "the W ball shifts 10–60 µm in a random direction when clamped (thesis Sec 2.5.2)"),
     "zW": ("normal", 35.0, "the W ball shifts 10–60 µm in a random direction when clamped (thesis Sec 2.5.2)"),
+    "xS": ("normal", 10.0, "stylus ball centred on the spindle axis to ~10 µm (probe on-centre adjustment)"),
+    "yS": ("normal", 10.0, "stylus ball centred on the spindle axis to ~10 µm (probe on-centre adjustment)"),
+    "dRS": ("normal", 10.0, "stylus length from a tool setter, like the ball bar's dRB"),
+    "rS": ("normal", 5.0, "effective radius after calibration on a reference: pre-travel leaves a few µm"),
+    "xP": ("normal", 300.0, "sphere placed on the table by hand: a few hundred µm"),
+    "yP": ("normal", 300.0, "sphere placed on the table by hand: a few hundred µm"),
+    "xD": ("normal", 1000.0, "broad: where the sphere sits in the reading frame is not stated"),
+    "yD": ("normal", 1000.0, "broad: where the sphere sits in the reading frame is not stated"),
+    "zD": ("normal", 1000.0, "broad: where the sphere sits in the reading frame is not stated"),
     "sigma_model": ("halfnormal", 2.0, "dynamics, thermal drift and pitch error are not in the model"),
 }
 

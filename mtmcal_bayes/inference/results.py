@@ -12,6 +12,7 @@ import pandas as pd
 
 from .. import units
 from ..arviz_import import az
+from ..observations import JointObservations, ProbeObservations
 from ..parameters import DERIVED, IDENTIFIABLE, combine, quantity_unit, weights
 from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity
 
@@ -28,6 +29,14 @@ def display_draws(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
     for name in DERIVED:
         out[name] = combine(name, out)
     return out
+
+
+def observation_parts(observations) -> list[tuple[str, object, slice]]:
+    """``(variable name, observations, slice)`` of each kind of measurement in ``observations``:
+    ``"eccentricity"`` for the ball bar's, ``"probe_reading"`` for the probe's."""
+    parts = observations.slices() if isinstance(observations, JointObservations) else [
+        (observations, slice(0, len(observations)))]
+    return [("probe_reading" if isinstance(o, ProbeObservations) else "eccentricity", o, sl) for o, sl in parts]
 
 
 def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
@@ -57,18 +66,27 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
     sub = flat[:, idx, :].reshape(-1, q)
     pred = post.forward.predict(sub[:, : post.p])
     rep = units.from_internal(post.likelihood.replicate(pred, post.sigma(sub), rng).reshape(K, len(idx), -1), "um")
-    obs = post.forward.observations
+    observed, predictive, coords, dims = {}, {}, {}, {}
+    for var, obs, sl in observation_parts(post.forward.observations):
+        coords[f"{var}_observation"] = obs.labels
+        dims[var] = [f"{var}_observation"]
+        predictive[var] = rep[..., sl]
+        observed[var] = units.from_internal(obs.mean, "um")
+    if "eccentricity" in dims:  # the ball bar's keep their historical name
+        coords["observation"] = coords.pop("eccentricity_observation")
+        dims["eccentricity"] = ["observation"]
     idata = az.from_dict(
         posterior=posterior,
         prior=prior,
-        posterior_predictive={"eccentricity": rep},
-        observed_data={"eccentricity": units.from_internal(obs.mean, "um")},
+        posterior_predictive=predictive,
+        observed_data=observed,
         sample_stats={"lp": lp},
-        coords={"observation": obs.labels},
-        dims={"eccentricity": ["observation"]},
+        coords=coords,
+        dims=dims,
     )
     idata.posterior.attrs.update({
         "model": post.model_name, "campaign": post.campaign.source, "fix_dx_BT": int(post.fix_dx_BT),
+        "data": post.data,
         "n_ensembles": K, "n_walkers": W, "n_steps": result.n_steps, "burn_in": result.burn, "thin": thin,
         "tau_max_steps": float(np.nanmax(result.tau)), "converged": int(result.converged),
         "sampler": result.settings.sampler, "target_ess": float(result.settings.target_ess),
@@ -76,7 +94,7 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
         "seed": -1 if result.settings.seed is None else int(result.settings.seed),
         "units": "arc seconds for angles, micrometres for lengths",
     })
-    idata.observed_data.attrs["unit"] = "um (mean of the repeats)"
+    idata.observed_data.attrs["unit"] = "um (mean of the repeats; probe readings minus their nominal)"
     return idata
 
 

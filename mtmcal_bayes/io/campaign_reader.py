@@ -30,9 +30,18 @@ from ..campaign import (
     Stylus,
     Truth,
 )
-from ..datasets import builtin_campaign_text
-from ..parameters import DEVIATIONS, MOUNT_NUISANCE, QUANTITIES, SETUP_NUISANCE
+from ..datasets import builtin_campaign_text, data_path
+from ..errors import InputError, MtmcalError
+from ..parameters import (
+    DEVIATIONS,
+    MOUNT_NUISANCE,
+    PROBE_NUISANCE,
+    QUANTITIES,
+    SETUP_NUISANCE,
+)
 from ..patterns import COMPONENTS, CR_GEOMETRIES, PATTERNS, mount_conflict
+from ..sphere import fit_sphere
+from .dprnt import read_dprnt
 from .textfiles import read_user_text
 from .toml_reader import TomlReader, kind_of, parse_toml
 from .tomlio import printed_decimals
@@ -69,11 +78,11 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     machine = _machine(r, r.table(doc, "machine", "", required=False) or {})
     ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir)
     probe_t = r.table(doc, "probe", "", required=False)
-    probe = _probe(r, probe_t) if probe_t is not None else None
+    probe = _probe(r, probe_t, base_dir) if probe_t is not None else None
     reported = _reported(r, r.table(doc, "reported", "", required=False) or {}, text)
     priors = _priors(r, r.table(doc, "priors", "", required=False) or {})
     truth_t = r.table(doc, "truth", "", required=False)
-    truth = parse_truth(r, truth_t, "truth", ballbar) if truth_t is not None else None
+    truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe) if truth_t is not None else None
     return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir)
 
 
@@ -183,40 +192,96 @@ def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: fl
     return Run(pattern, setup, mount, repeats, traces, rms)
 
 
-def _probe(r: TomlReader, t: dict) -> Probe:
+def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
     P = "probe"
     r.check_keys(t, {"instrument", "repeatability_um", "c_axis", "b_axis"}, P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
     probe = Probe(r.string(t, "instrument", P), units.to_internal(rep, "um") if rep is not None else None)
-    c = r.table(t, "c_axis", P, required=False)
-    if c is not None:
-        path = f"{P}.c_axis"
-        r.check_keys(c, {"R_C_mm", "Z_C_mm", "axis_xy_mm", "angles_deg", "centres_mm"}, path)
-        angles = r.array(c, "angles_deg", path, (None,))
-        probe.c_axis = CAxisProbe(
-            r.number(c, "R_C_mm", path, positive=True), r.number(c, "Z_C_mm", path, nonnegative=True),
-            r.array(c, "axis_xy_mm", path, (2,)), angles,
-            r.array(c, "centres_mm", path, (None, len(angles), 3)))
     b = r.table(t, "b_axis", P, required=False)
     if b is not None:
         path = f"{P}.b_axis"
-        r.check_keys(b, {"X_T_mm", "angles_deg", "styli"}, path)
-        angles = r.array(b, "angles_deg", path, (2,))
-        if list(angles) != [0.0, 90.0]:  # identify's Eqs 5.8–5.19 take the rows as B = 0° and B = 90°
-            r.fail(f"{path}.angles_deg", f"must be [0, 90] (the B-axis equations use the centres at B = 0° "
-                   f"and 90°), got [{', '.join(f'{a:g}' for a in angles)}]")
-        bax = BAxisProbe(r.number(b, "X_T_mm", path), angles)
-        for sid, sp, s in r.subtables(b, "styli", path, allowed={"R_B_mm", "nominal_mm", "centres_mm"}, what="stylus"):
-            bax.styli[sid] = Stylus(sid, r.number(s, "R_B_mm", sp, positive=True),
-                                    r.array(s, "nominal_mm", sp, (2, 3)),
-                                    r.array(s, "centres_mm", sp, (None, 2, 3)))
+        r.check_keys(b, {"X_T_mm", "Z_C_mm", "angles_deg", "styli"}, path)
+        angles = r.array(b, "angles_deg", path, (None,))
+        if len(np.unique(angles)) < 2:
+            r.fail(f"{path}.angles_deg", f"needs at least two different B angles (only differences between indexed "
+                   f"positions inform the deviations), got [{', '.join(f'{a:g}' for a in angles)}]")
+        bax = BAxisProbe(r.number(b, "X_T_mm", path), angles, Z_C=r.number(b, "Z_C_mm", path, required=False))
+        for sid, sp, st in r.subtables(b, "styli", path, what="stylus",
+                                       allowed={"R_B_mm", "nominal_mm", "centres_mm", "dprnt", "ball_radius_mm"}):
+            centres, cov, files = _readings(r, st, sp, len(angles), base_dir=base_dir)
+            bax.styli[sid] = Stylus(sid, r.number(st, "R_B_mm", sp, positive=True),
+                                    r.array(st, "nominal_mm", sp, (len(angles), 3), required=False), centres,
+                                    ball_radius=r.number(st, "ball_radius_mm", sp, required=False, nonnegative=True,
+                                                         default=0.0),
+                                    dprnt=files, centre_cov=cov)
         for i, (sa, a) in enumerate(bax.styli.items()):
             for sb, bb in list(bax.styli.items())[i + 1:]:
                 if a.R_B == bb.R_B:
                     r.fail(f"{path}.styli.{sb}.R_B_mm", f"equal to styli.{sa}.R_B_mm ({a.R_B:g} mm): "
                            "a second stylus length equal to the first carries no information")
         probe.b_axis = bax
+    c = r.table(t, "c_axis", P, required=False)
+    if c is not None:
+        path = f"{P}.c_axis"
+        r.check_keys(c, {"R_C_mm", "Z_C_mm", "axis_xy_mm", "angles_deg", "centres_mm", "dprnt", "stylus", "R_B_mm",
+                         "ball_radius_mm", "datum"}, path)
+        angles = r.array(c, "angles_deg", path, (None,))
+        if len(np.unique(np.mod(angles, 360.0))) < 3:
+            r.fail(f"{path}.angles_deg", f"needs at least three different C angles (a circle through the sphere "
+                   f"centres), got [{', '.join(f'{a:g}' for a in angles)}]")
+        centres, cov, files = _readings(r, c, path, len(angles), base_dir=base_dir)
+        stylus = r.string(c, "stylus", path, default="") or None
+        R_B = r.number(c, "R_B_mm", path, required=False, positive=True)
+        if stylus is not None:
+            if probe.b_axis is None or stylus not in probe.b_axis.styli:
+                have = ", ".join(probe.b_axis.styli) if probe.b_axis else "none"
+                r.fail(f"{path}.stylus", f"no stylus {stylus!r} in [probe.b_axis.styli] (have: {have})")
+            if R_B is not None:
+                r.fail(f"{path}.R_B_mm", "give either stylus (a stylus of [probe.b_axis.styli]) or R_B_mm, not both")
+        datum = r.string(c, "datum", path, default="machine")
+        if datum not in ("machine", "first"):
+            r.fail(f"{path}.datum", f"unknown datum {datum!r} (expected \"machine\": the readings are machine "
+                   "coordinates with the C axis at axis_xy_mm, or \"first\": the reading frame was zeroed on the sphere)")
+        probe.c_axis = CAxisProbe(
+            r.number(c, "R_C_mm", path, positive=True), r.number(c, "Z_C_mm", path, nonnegative=True),
+            r.array(c, "axis_xy_mm", path, (2,)), angles, centres, stylus=stylus, R_B=R_B,
+            ball_radius=r.number(c, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0),
+            datum=datum, dprnt=files, centre_cov=cov)
     return probe
+
+
+#: fewest probed points of a sphere fit whose centre covariance the likelihood can use (4 fit it exactly)
+MIN_DPRNT_POINTS = 5
+
+
+def _readings(r: TomlReader, t: dict, path: str, n_angles: int, *, base_dir: Path | None):
+    """Sphere centres of a probe run: ``centres_mm`` (r, a, 3), or one DPRNT file per angle, each fitted
+    (one repeat, with the centre covariance of the fit).  Returns ``(centres, cov or None, files or None)``."""
+    has_c, has_d = "centres_mm" in t, "dprnt" in t
+    if has_c == has_d:
+        r.fail(path, "no readings: give centres_mm (repeats x angles x 3) or dprnt (one DPRNT file per angle)"
+               if not has_c else "give either centres_mm or dprnt, not both")
+    if has_c:
+        return r.array(t, "centres_mm", path, (None, n_angles, 3)), None, None
+    files = t["dprnt"]
+    key = f"{path}.dprnt"
+    if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
+        r.fail(key, f"expected an array of file names, got {kind_of(files)}")
+    if len(files) != n_angles:
+        r.fail(key, f"{len(files)} files for {n_angles} angles: give one DPRNT file per indexed position")
+    centres, cov = np.empty((1, n_angles, 3)), np.empty((1, n_angles, 3, 3))
+    for i, name in enumerate(files):
+        fpath = (base_dir / name) if base_dir is not None else data_path(name)
+        try:
+            pts = read_dprnt(fpath).xyz
+            if len(pts) < MIN_DPRNT_POINTS:
+                raise MtmcalError(f"{len(pts)} probed points; a sphere fit with a covariance needs at least "
+                                  f"{MIN_DPRNT_POINTS}")
+            fit = fit_sphere(pts)
+        except MtmcalError as err:
+            r.fail(f"{key}[{i}]", str(err) if isinstance(err, InputError) else f"{name}: {err}")
+        centres[0, i], cov[0, i] = fit.centre, fit.centre_cov
+    return centres, cov, list(files)
 
 
 def _reported(r: TomlReader, t: dict, text: str) -> dict[str, dict[str, ReportedValue]]:
@@ -240,14 +305,14 @@ def _reported(r: TomlReader, t: dict, text: str) -> dict[str, dict[str, Reported
 
 def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
     known = {**{k: q.unit for k, q in DEVIATIONS.items()},
-             **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE}.items()},
+             **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE, **PROBE_NUISANCE}.items()},
              "sigma_model": "um"}
     out = {}
     for name, spec in t.items():
         path = f"priors.{name}"
         if name not in known:
             r.fail(path, "unknown parameter (expected a deviation name, one of xT yT zT dRB xW yW zW, "
-                   "or sigma_model)")
+                   f"a probe term ({' '.join(PROBE_NUISANCE)}) or sigma_model)")
         if not isinstance(spec, dict):
             r.fail(path, "expected an inline table such as {dist = \"normal\", sd_arcsec = 30}")
         dist = r.string(spec, "dist", path, required=True)
@@ -272,9 +337,9 @@ def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
     return out
 
 
-def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar) -> Truth:
-    """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``) located at ``path``."""
-    r.check_keys(t, {"deviations", "setups", "mounts"}, path)
+def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: Probe | None = None) -> Truth:
+    """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``, ``probe.<owner>``) located at ``path``."""
+    r.check_keys(t, {"deviations", "setups", "mounts", "probe"}, path)
     truth = Truth()
     dev = r.table(t, "deviations", path, required=False) or {}
     for key in dev:
@@ -284,12 +349,15 @@ def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar) -> Truth:
             r.fail(f"{path}.deviations.{key}", "unknown deviation: expected <name>_arcsec or <name>_um "
                    f"with one of {', '.join(DEVIATIONS)}")
         truth.deviations[name] = units.to_internal(r.number(dev, key, f"{path}.deviations"), unit)
+    probe_owners = {o for o, _ in probe.nuisance_terms()} if probe is not None else set()
     for group, table, owners in (("setups", SETUP_NUISANCE, ballbar.setups),
-                                 ("mounts", MOUNT_NUISANCE, ballbar.mounts)):
+                                 ("mounts", MOUNT_NUISANCE, ballbar.mounts),
+                                 ("probe", PROBE_NUISANCE, probe_owners)):
         for oid, vals in (r.table(t, group, path, required=False) or {}).items():
             op = f"{path}.{group}.{oid}"
             if oid not in owners:
-                r.fail(op, f"no such {group[:-1]} in [ballbar.{group}] (have: {', '.join(owners)})")
+                where = "[probe] (its styli, c_axis, b_axis)" if group == "probe" else f"[ballbar.{group}]"
+                r.fail(op, f"no such {group.rstrip('s')} in {where} (have: {', '.join(owners) or 'none'})")
             if not isinstance(vals, dict):
                 r.fail(op, f"expected a table, got {kind_of(vals)}")
             r.check_keys(vals, {f"{k}_um" for k in table}, op)
@@ -300,7 +368,7 @@ def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar) -> Truth:
 
 
 def load_truth(path, campaign: Campaign) -> Truth:
-    """Read a TRUTH.toml: ``[deviations]``, ``[setups.<id>]``, ``[mounts.<id>]`` at top level."""
+    """Read a TRUTH.toml: ``[deviations]``, ``[setups.<id>]``, ``[mounts.<id>]``, ``[probe.<owner>]`` at top level."""
     text = read_user_text(path, "truth file")
     doc = parse_toml(text, str(path), "[deviations], [setups.<id>], [mounts.<id>] tables")
-    return parse_truth(TomlReader(str(path)), doc, "", campaign.ballbar)
+    return parse_truth(TomlReader(str(path)), doc, "", campaign.ballbar, probe=campaign.probe)

@@ -38,22 +38,20 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
     for run in bb.runs:
         d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount}
         if run.trace_csv:
-            d["trace_csv"] = [str(Path(c.base_dir or ".", f).resolve()) if save_dir is None
-                              else os.path.relpath(Path(c.base_dir or ".", f).resolve(), save_dir)
-                              for f in run.trace_csv]
+            d["trace_csv"] = [_relative(c, f, save_dir) for f in run.trace_csv]
         else:
             d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
         b["runs"].append(d)
     doc["ballbar"] = b
     if c.probe is not None:
-        doc["probe"] = _probe_dict(c.probe)
+        doc["probe"] = _probe_dict(c.probe, c, save_dir)
     if c.reported:
         doc["reported"] = {m: {f"{n}_{v.unit}": Fixed(units.from_internal(v.value, v.unit), v.decimals)
                                for n, v in vals.items()} for m, vals in c.reported.items()}
     if c.priors:
         doc["priors"] = {}
         for name, spec in c.priors.items():
-            unit = DEVIATIONS[name].unit if name in DEVIATIONS else "um"
+            unit = DEVIATIONS[name].unit if name in DEVIATIONS else "um"  # nuisance terms are lengths
             doc["priors"][name] = {"dist": spec["dist"], **{f"{k}_{unit}": units.from_internal(v, unit)
                                                             for k, v in spec.items() if k != "dist"}}
     if c.truth is not None:
@@ -64,7 +62,7 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
 def truth_to_dict(t: Truth) -> dict:
     d: dict = {"deviations": {f"{n}_{DEVIATIONS[n].unit}": units.from_internal(v, DEVIATIONS[n].unit)
                               for n, v in t.deviations.items()}}
-    for group in ("setups", "mounts"):
+    for group in ("setups", "mounts", "probe"):
         vals = getattr(t, group)
         if vals:
             d[group] = {oid: {f"{k}_um": units.from_internal(v, "um") for k, v in kv.items()}
@@ -72,22 +70,49 @@ def truth_to_dict(t: Truth) -> dict:
     return d
 
 
-def _probe_dict(p: Probe) -> dict:
+def _probe_dict(p: Probe, c: Campaign, save_dir: Path | None) -> dict:
     d: dict = {}
     if p.instrument:
         d["instrument"] = p.instrument
     if p.repeatability is not None:
         d["repeatability_um"] = units.from_internal(p.repeatability, "um")
-    if p.c_axis is not None:
-        c = p.c_axis
-        d["c_axis"] = {"R_C_mm": c.R_C, "Z_C_mm": c.Z_C, "axis_xy_mm": c.axis_xy,
-                       "angles_deg": c.angles_deg, "centres_mm": c.centres}
+
+    def readings(run) -> dict:  # DPRNT files relative to the saved file, else the centres
+        if run.dprnt:
+            return {"dprnt": [_relative(c, f, save_dir) for f in run.dprnt]}
+        return {"centres_mm": run.centres}
+
     if p.b_axis is not None:
         b = p.b_axis
-        d["b_axis"] = {"X_T_mm": b.X_T, "angles_deg": b.angles_deg,
-                       "styli": {s.id: {"R_B_mm": s.R_B, "nominal_mm": s.nominal, "centres_mm": s.centres}
-                                 for s in b.styli.values()}}
+        styli = {}
+        for s in b.styli.values():
+            sd = {"R_B_mm": s.R_B}
+            if s.ball_radius:
+                sd["ball_radius_mm"] = s.ball_radius
+            if s.nominal is not None:
+                sd["nominal_mm"] = s.nominal
+            styli[s.id] = {**sd, **readings(s)}
+        d["b_axis"] = {"X_T_mm": b.X_T, **({"Z_C_mm": b.Z_C} if b.Z_C is not None else {}),
+                       "angles_deg": b.angles_deg, "styli": styli}
+    if p.c_axis is not None:
+        x = p.c_axis
+        cd = {"R_C_mm": x.R_C, "Z_C_mm": x.Z_C, "axis_xy_mm": x.axis_xy, "angles_deg": x.angles_deg}
+        if x.stylus:
+            cd["stylus"] = x.stylus
+        if x.R_B is not None:
+            cd["R_B_mm"] = x.R_B
+        if x.ball_radius:
+            cd["ball_radius_mm"] = x.ball_radius
+        if x.datum != "machine":
+            cd["datum"] = x.datum
+        d["c_axis"] = {**cd, **readings(x)}
     return d
+
+
+def _relative(c: Campaign, name: str, save_dir: Path | None) -> str:
+    """A file named in ``c`` (relative to its folder), as seen from ``save_dir`` (absolute when ``None``)."""
+    path = Path(c.base_dir or ".", name).resolve()
+    return str(path) if save_dir is None else os.path.relpath(path, save_dir)
 
 
 def save_campaign(campaign: Campaign, path: str | os.PathLike, header: str | None = None) -> None:

@@ -12,8 +12,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
+from ..parameters import ParameterSpace
+from .joint import JointModel
 from .kinematic import HTMModel, jacobian
 from .linear import LinearModel, linear_coefficients
+from .probe_model import LinearProbeModel, ProbeModel
 
 #: the kinematic (homogeneous-transform) models, which can also compensate NC programs
 KINEMATIC_MODELS = ("htm-literal", "htm-thesis")
@@ -28,11 +31,32 @@ def check_model(name: str, allowed=MODELS, parameter: str = "model") -> str:
     return name
 
 
-def make_model(name: str, campaign, space=None):
-    """The forward model ``name`` (one of :data:`MODELS`) for ``campaign``."""
-    if check_model(name) == "linear":
-        return LinearModel(campaign, space)
-    return HTMModel(campaign, name, space)
+#: which measurements a likelihood uses: ball-bar eccentricities, touch-probe readings, or both
+DATA = ("ballbar", "probe", "both")
+
+
+def check_data(data: str, campaign=None, parameter: str = "data") -> str:
+    """``data`` if it is one of :data:`DATA` (and ``campaign`` has probe readings when it asks for them)."""
+    if data not in DATA:
+        raise ParameterError(parameter, f"unknown data {data!r} (expected one of {', '.join(DATA)})")
+    if data != "ballbar" and campaign is not None and not campaign.has_probe_readings():
+        raise ParameterError(parameter, f"{data!r} needs touch-probe readings, and the campaign {campaign.source} "
+                             "has no [probe.c_axis] or [probe.b_axis.styli]")
+    return data
+
+
+def make_model(name: str, campaign, space=None, data: str = "ballbar"):
+    """The forward model ``name`` (one of :data:`MODELS`) for ``campaign``'s ``data`` (one of :data:`DATA`)."""
+    check_model(name)
+    check_data(data, campaign)
+    if space is None:
+        space = ParameterSpace.for_campaign(campaign, data=data)
+    parts = []
+    if data in ("ballbar", "both"):
+        parts.append(LinearModel(campaign, space) if name == "linear" else HTMModel(campaign, name, space))
+    if data in ("probe", "both"):
+        parts.append(LinearProbeModel(campaign, space) if name == "linear" else ProbeModel(campaign, name, space))
+    return parts[0] if len(parts) == 1 else JointModel(parts)
 
 
 def first_order_gap(campaign, theta: np.ndarray, space=None) -> float:
@@ -45,5 +69,6 @@ def first_order_gap(campaign, theta: np.ndarray, space=None) -> float:
     return float(np.abs(kinematic.predict(theta) - linear.predict(theta)).max())
 
 
-__all__ = ["MODELS", "KINEMATIC_MODELS", "check_model", "make_model", "first_order_gap", "LinearModel", "HTMModel",
+__all__ = ["MODELS", "KINEMATIC_MODELS", "DATA", "check_model", "check_data", "make_model", "ProbeModel",
+           "LinearProbeModel", "JointModel", "first_order_gap", "LinearModel", "HTMModel",
            "jacobian", "linear_coefficients"]

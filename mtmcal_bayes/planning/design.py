@@ -109,7 +109,7 @@ class Planner:
         obs = Observations.from_campaign(campaign)
         lik = GaussianMeanLikelihood(obs, bb.accuracy)
         self.observations = obs
-        self.pooled_sd = lik.pooled_sd
+        self.pooled_sd = obs.pooled_sd()
         self.A = self._design(campaign) if len(obs) else np.zeros((0, len(self.space)))
         self.V = lik.base_var + self.sigma_model**2
         self.T = np.zeros((len(self.targets), len(self.space)))

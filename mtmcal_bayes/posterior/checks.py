@@ -37,7 +37,8 @@ def linear_model_check(result: SamplingResult) -> list[str]:
             f"away from it (instrument accuracy {units.from_internal(accuracy, 'um'):g} µm); use the htm-thesis model"]
 
 
-def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: float = 0.3) -> pd.DataFrame:
+def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: float = 0.3,
+                             data: str = "ballbar") -> pd.DataFrame:
     """beta_XB and dx_CZ − dx_BT with and without dx_BT = 0, closed form (linearised) at fixed sigma_model.
 
     Columns: mean and sd of each quantity, by default and with the thesis' Eq 4.2 assumption.
@@ -45,7 +46,7 @@ def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: fl
     sigma = units.to_internal(sigma_model_um, "um")
     rows = {}
     for label, fix in (("default", False), ("dx_BT = 0", True)):
-        g = gaussian_posterior(LogPosterior(campaign, model, fix_dx_BT=fix, sigma_model=sigma),
+        g = gaussian_posterior(LogPosterior(campaign, model, fix_dx_BT=fix, sigma_model=sigma, data=data),
                                sigma_model=sigma, allow_non_normal=True)
         b_mean, b_sd = g.linear_combination(weights("beta_XB"))
         d_mean, d_sd = g.linear_combination(weights("dx_CZ_minus_dx_BT", g.names))

@@ -16,7 +16,7 @@ def posterior_json(result) -> dict:
     diagnostics."""
     post = result.log_posterior
     return {
-        "model": post.model_name, "campaign": post.campaign.source, "fix_dx_BT": post.fix_dx_BT,
+        "model": post.model_name, "data": post.data, "campaign": post.campaign.source, "fix_dx_BT": post.fix_dx_BT,
         "summary": {n: {c: (row[c] if c == "unit" else float(row[c])) for c in JSON_COLUMNS}
                     for n, row in result.summary.iterrows()},
         "comparison": {n: {k: (None if v is None or (isinstance(v, float) and math.isnan(v)) else v)
@@ -29,7 +29,8 @@ def format_posterior(result) -> str:
     """Human-readable posterior summary, comparison with the deterministic results, diagnostics."""
     r = result.sampling
     s = result.summary
-    lines = [f"Posterior, model {result.model} ({r.chains.shape[0]} ensembles × {r.chains.shape[2]} walkers, "
+    data = {"ballbar": "", "probe": ", touch-probe data", "both": ", ball-bar and touch-probe data"}[result.data]
+    lines = [f"Posterior, model {result.model}{data} ({r.chains.shape[0]} ensembles × {r.chains.shape[2]} walkers, "
              f"{r.n_steps} steps, {r.wall_time:.0f} s); 95 % HDI"]
     hdr = f"{'quantity':18s} {'unit':>4s} {'mean':>9s} {'sd':>7s} {'95 % HDI':>20s} {'R-hat':>6s} {'ESS':>7s}  ball bar  probe(thesis)"
     lines.append(hdr)
@@ -66,7 +67,7 @@ def format_sample(result) -> str:
         sigma_um = float(result.summary.loc["sigma_model", "median"])
         lines += ["", f"The thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = {sigma_um:.2f} µm "
                   "(the posterior median; fix_dx_BT, on the command line --fix-dx-BT, samples it):",
-                  thesis_assumption_effect(post.campaign, post.model_name, sigma_um).round(2).to_string()]
+                  thesis_assumption_effect(post.campaign, post.model_name, sigma_um, post.data).round(2).to_string()]
     if result.output:
         lines += ["", f"posterior written to {result.output} (ArviZ InferenceData, NetCDF)"]
     return "\n".join(lines)

@@ -100,6 +100,11 @@ class PosteriorResult:
         return self.log_posterior.model_name
 
     @property
+    def data(self) -> str:
+        """Which measurements the likelihood used: ``"ballbar"``, ``"probe"`` or ``"both"``."""
+        return self.log_posterior.data
+
+    @property
     def diagnostics(self) -> SamplerDiagnostics:
         r = self.sampling
         eight = self.summary.loc[[n for n in IDENTIFIABLE if n in self.summary.index]]
@@ -136,9 +141,10 @@ class PosteriorResult:
 
 def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False,
                      settings: SamplerSettings | None = None, checkpoint=None,
-                     progress: Progress | None = None) -> PosteriorResult:
-    """Sample the posterior of ``campaign`` and summarise it against the deterministic results."""
-    post = LogPosterior(campaign, model, fix_dx_BT=fix_dx_BT)
+                     progress: Progress | None = None, data: str = "ballbar") -> PosteriorResult:
+    """Sample the posterior of ``campaign`` given its ``data`` (``"ballbar"``, ``"probe"`` or ``"both"``) and
+    summarise it against the deterministic results."""
+    post = LogPosterior(campaign, model, fix_dx_BT=fix_dx_BT, data=data)
     result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress)
     seed = settings.seed if settings else None
     idata = to_inference_data(result, seed=seed)

@@ -26,6 +26,11 @@ from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.checks import thesis_assumption_effect
+from ..posterior.consistency import (
+    DATA_LABELS,
+    InstrumentComparison,
+    compare_instruments,
+)
 from ..posterior.output import format_posterior, posterior_json
 from ..posterior.sample import PosteriorResult, sample_posterior
 from ..progress import Progress, ProgressEvent, emit
@@ -81,6 +86,7 @@ class ReportContent:
     sigma_um: float
     fix_dx_BT: bool
     planned: PlanResult
+    instruments: InstrumentComparison | None = None  # ball bar, probe, fused: when the campaign has probe readings
 
 
 def summary_table(rep: PosteriorResult) -> pd.DataFrame:
@@ -107,12 +113,14 @@ def _check_output_dir(out_dir: Path) -> None:
 
 def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerSettings | None = None,
                  fix_dx_BT: bool = False, compare_models: bool = False, posterior: PosteriorResult | None = None,
-                 progress: Progress | None = None, command: str = "") -> Report:
+                 progress: Progress | None = None, command: str = "", data: str = "ballbar") -> Report:
     """Sample, draw, tabulate and write the report of ``campaign`` into ``out_dir``.
 
     ``posterior``: a posterior of this campaign already sampled (its model and
     dx_BT assumption then hold); else one is sampled with ``settings``.
-    ``progress`` receives the sampler's events and one ``"report"`` event per stage.
+    ``progress`` receives the sampler's events and one ``"report"`` event per stage.  ``data``: the
+    measurements of the main posterior (``"ballbar"``, ``"probe"``, ``"both"``); a campaign with
+    touch-probe readings also gets the three posteriors side by side and the instruments' consistency.
     """
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
@@ -123,11 +131,20 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
         emit(progress, ProgressEvent("report", text))
 
     if posterior is not None:
-        model, fix_dx_BT = posterior.model, posterior.log_posterior.fix_dx_BT
+        model, fix_dx_BT, data = posterior.model, posterior.log_posterior.fix_dx_BT, posterior.data
         rep = posterior
     else:
-        say(f"sampling the posterior ({model})")
-        rep = sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress)
+        say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
+        rep = sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
+                               data=data)
+    instruments = None
+    if campaign.has_probe_readings():
+        def other(d):
+            say(f"sampling the posterior ({model}, {DATA_LABELS[d]}) to compare the instruments")
+            return sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
+                                    data=d)
+        instruments = compare_instruments(campaign, {data: rep}, other)
+    bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:
         for other in MODELS:
@@ -139,17 +156,17 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     ident = identify(campaign)
     missing = missing_data(campaign, ident)
     summary = summary_table(rep)
-    ppc_df = ppc.ppc_table(rep.idata, campaign)
+    ppc_df = ppc.ppc_table(bb_rep.idata, campaign)
     diag = mcmc_plots.diagnostics_table(rep.summary, rep.sampling)
     sigma_um = float(rep.summary.loc["sigma_model", "median"])
 
-    effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um)
+    effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um, data)
     say("planning the next measurement")
     planned = _planning(campaign, rep)
     figures = [("corner.png", lambda: corner_plot.corner_figure(rep.idata, rep.comparison)),
                ("forest.png", lambda: forest.forest_figure({model: rep.summary}, rep.comparison)),
                ("ppc.png", lambda: ppc.ppc_figure({model: ppc_df}, campaign)),
-               ("polar.png", lambda: polar.polar_figure(rep.sampling, campaign)),
+               ("polar.png", lambda: polar.polar_figure(bb_rep.sampling, campaign)),
                ("widths.png", lambda: widths.widths_figure(rep.summary)),
                ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata)),
                ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling))]
@@ -158,6 +175,9 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                      lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
                     ("compare_ppc.png", lambda: ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign)
                                                                  for m, r in reports.items()}, campaign))]
+    if instruments is not None:
+        figures += [("instruments_forest.png", lambda: forest.forest_figure(
+            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison))]
     figures += [("plan_ranking.png", lambda: plan_figures.ranking_figure(planned)),
                 ("plan_sweep.png", lambda: plan_figures.sweep_figure(planned))]
 
@@ -183,13 +203,18 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             files += ["compare_forest.png", "compare_ppc.png"]
             csv("compare_models.csv", compare.model_comparison_table(reports), index=False)
             csv("compare_fit.csv", compare.model_fit_table(reports, campaign))
+        if instruments is not None:
+            files.append("instruments_forest.png")
+            csv("instruments.csv", instruments.intervals, index=False)
+            csv("consistency.csv", instruments.consistency.groups, index=False)
+            csv("consistency_readings.csv", instruments.consistency.readings, index=False)
         files += ["plan_ranking.png", "plan_sweep.png"]
         csv("plan.csv", planned.table, index=False)
         say("writing posterior.nc")
         write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
         files.append("posterior.nc")
         content = ReportContent(campaign, model, rep, reports if compare_models else None, ident, missing, summary,
-                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned)
+                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned, instruments)
         page = _page(content, tmp)
         elapsed = time.perf_counter() - t0
         files.insert(0, "index.html")
@@ -254,6 +279,26 @@ def reference_table(check) -> pd.DataFrame:
                          "mean difference [sd]": check.mean_diff_sd, "sd difference [%]": check.sd_diff_pct})
 
 
+def _instruments_section(page: Page, ins: InstrumentComparison, tmp: Path) -> None:
+    page.section("instruments", "Ball bar and touch probe: each alone and fused")
+    cons = ins.consistency
+    page.paragraph(
+        "The touch-probe readings (sphere centres at indexed B and C) enter the likelihood through the same "
+        "kinematic chain as the ball bar (docs/probe.md). Do the instruments agree? Each instrument's readings "
+        "are predicted from the other's posterior (its own nuisance terms from their priors); per reading group "
+        "a χ² of the standardised residuals gives the verdict (disagree: p < 0.01). "
+        + " ".join(f"{g['group']} given the {g['given']}-only posterior: {g['verdict']} (χ² = {g['chi2']:.1f} on "
+                   f"{g['dof']} dof, p = {g['p_value']:.2g}, largest |z| = {g['max_abs_z']:.1f} at {g['worst']})."
+                   for _, g in cons.groups.iterrows()))
+    if cons.disagreeing:
+        page.paragraph("Where a group disagrees, the fused posterior combines measurements the model cannot "
+                       "reconcile: its σ_model grows to cover the conflict and its intervals are not to be trusted "
+                       "until the cause is found. " + " ".join(ins.disagreements))
+    page.figure(tmp / "instruments_forest.png", forest.CAPTION_DATA, "intervals by data")
+    sd = ins.intervals.pivot(index="quantity", columns="data", values="sd")[list(DATA_LABELS.values())]
+    page.table(sd.rename(columns=lambda c: f"sd, {c}"), digits=2)
+
+
 def _planning(campaign, rep):
     """The plan for the quantities the data do not identify, else for all eight."""
     targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
@@ -281,6 +326,9 @@ def _page(c: ReportContent, tmp: Path) -> Page:
                                                             if c.off_scale else ""), "corner plot")
     page.section("forest", "Intervals against the deterministic methods")
     page.figure(tmp / "forest.png", forest.CAPTION, "forest plot")
+
+    if c.instruments is not None:
+        _instruments_section(page, c.instruments, tmp)
 
     page.section("ppc", "Posterior predictive check")
     page.figure(tmp / "ppc.png", ppc.CAPTION, "posterior predictive check")

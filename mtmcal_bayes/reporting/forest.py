@@ -8,6 +8,7 @@ from matplotlib.lines import Line2D
 
 from ..figure_style import (
     COLOURS,
+    DATA_COLOURS,
     MODEL_COLOURS,
     REFERENCE_LABELS,
     new_figure,
@@ -25,13 +26,19 @@ CAPTION = (
     f"{OFF_SCALE_SD:g} posterior sd away are not drawn to scale: an arrow at the edge gives the value."
 )
 
+CAPTION_DATA = (
+    "The same quantities from three posteriors of one model: the ball-bar eccentricities only, the touch-probe "
+    "readings only, and both (fused). Where the ball-bar-only and probe-only bars do not overlap the instruments "
+    "disagree about that quantity; a probe-only bar as wide as its prior means the probe does not inform it."
+)
+
 _REF_STYLE = {"ballbar": dict(marker="o", ms=9, mfc="none", mew=2),
               "probe_reported": dict(marker="s", ms=8, mfc="none", mew=2),
               "probe_recomputed": dict(marker="D", ms=7, mfc="none", mew=1.5)}
 
 
 def _colour(label: str, several: bool) -> str:
-    return MODEL_COLOURS.get(label, COLOURS["posterior"]) if several else COLOURS["posterior"]
+    return {**MODEL_COLOURS, **DATA_COLOURS}.get(label, COLOURS["posterior"]) if several else COLOURS["posterior"]
 
 
 def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame | None, names=IDENTIFIABLE):

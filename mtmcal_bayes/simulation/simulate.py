@@ -28,7 +28,7 @@ RESOLUTION_UM = 0.1
 def truth_vector(space: ParameterSpace, truth: Truth, source: str = "<truth>") -> np.ndarray:
     """Parameter vector ``(p,)`` (internal units) of a truth; missing values are zero."""
     values = dict(truth.deviations)
-    for group in (truth.setups, truth.mounts):
+    for group in (truth.setups, truth.mounts, truth.probe):
         for owner, kv in group.items():
             values.update({nuisance_name(k, owner): v for k, v in kv.items()})
     missing = [k for k in values if k not in space.names]
@@ -44,7 +44,8 @@ def truth_from_vector(space: ParameterSpace, theta: np.ndarray) -> Truth:
         if p.group == "deviation":
             t.deviations[p.name] = float(theta[i])
         else:
-            getattr(t, p.group + "s").setdefault(p.owner, {})[p.base] = float(theta[i])
+            table = t.probe if p.group == "probe" else getattr(t, p.group + "s")
+            table.setdefault(p.owner, {})[p.base] = float(theta[i])
     return t
 
 
@@ -56,7 +57,7 @@ def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *
     length (no ball-bar could measure it) is an error naming ``source``.
     """
     fm = make_model(model, campaign)
-    theta = truth_vector(fm.space, truth, source)
+    theta = truth_vector(fm.space, truth.ballbar_part(), source)
     with np.errstate(all="ignore"):  # an absurd truth overflows; the check below names it
         pred = fm.predict(theta)
         bad = ~(np.abs(pred) < campaign.ballbar.length)
@@ -85,8 +86,9 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
 
     Noise-free: one repeat per component equal to the prediction.  With
     ``noise``: as many repeats as the original run (or ``repeats``), scattered
-    as described in the module docstring.  Probe data and published results
-    are dropped (they belong to the real measurement).
+    as described in the module docstring.  Touch-probe readings are simulated too
+    (:func:`simulated_probe`) when the campaign has them; published results are
+    dropped (they belong to the real measurement).
     """
     obs, pred = predict_truth(campaign, truth, model)
     if noise:
@@ -99,8 +101,39 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
     for key, v in zip(obs.keys, values):
         out.ballbar.runs[key.run].repeats[key.component] = v
         out.ballbar.runs[key.run].trace_csv = None
-    out.probe = None
+    out.probe = simulated_probe(campaign, truth, model, noise=noise, rng=rng if noise else None, repeats=repeats)
     out.truth = copy.deepcopy(truth)
+    return out
+
+
+def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
+                    rng: np.random.Generator | None = None, repeats: int | None = None):
+    """The campaign's ``[probe]`` with sphere centres simulated for ``truth`` (``None`` without probe readings).
+
+    The readings are those of the probe model (:class:`~mtmcal_bayes.models.ProbeModel`; ``linear``: its
+    first order) in the campaign's reading frame.  Noise-free: one repeat equal to the prediction.  With
+    ``noise``: as many repeats as measured (or ``repeats``), each scattered by the probe's repeatability.
+    DPRNT file names and fit covariances are dropped: the readings are centres now.
+    """
+    if not campaign.has_probe_readings() or campaign.probe.repeatability is None:
+        return copy.deepcopy(campaign.probe) if campaign.probe is not None else None
+    fm = make_model(model, campaign, data="probe")
+    theta = truth_vector(fm.space, truth.probe_part())
+    layout = fm.layout
+    flat = fm.predict(theta)  # observations: Qᵀ (reading − nominal)
+    dev = np.einsum("kij,kj->ki", layout.rotation, flat.reshape(-1, 3))  # back to reading-frame axes
+    readings = layout.nominal + dev  # (k, 3) mm
+    out = copy.deepcopy(campaign.probe)
+    runs = ([out.c_axis] if out.c_axis is not None else []) + (list(out.b_axis.styli.values()) if out.b_axis else [])
+    start = 0
+    for run in runs:
+        a = run.centres.shape[1]
+        r = (repeats or run.centres.shape[0]) if noise else 1
+        centres = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
+        if noise:
+            centres += rng.normal(0.0, campaign.probe.repeatability, size=centres.shape)
+        run.centres, run.centre_cov, run.dprnt = centres, None, None
+        start += a
     return out
 
 

@@ -32,7 +32,7 @@ from ..errors import ParameterError
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import display_draws
 from ..inference.sampling import SamplerSettings
-from ..models import check_model
+from ..models import check_data, check_model
 from ..parameters import IDENTIFIABLE
 from ..progress import Progress, ProgressEvent, emit
 from .criteria import INTERVALS, P_MIN, SBC_QUANTITIES
@@ -54,12 +54,14 @@ class SBCSettings:
     max_steps: int = SamplerSettings.max_steps
     workers: int = field(default_factory=lambda: os.cpu_count() or 1)
     seed: int = 1
+    data: str = "ballbar"  # the likelihood's measurements: "ballbar", "probe" or "both"
 
     def check(self) -> None:
         for name, value, low in (("n", self.n, 2), ("workers", self.workers, 1), ("n_ranked", self.n_ranked, 9)):
             if value < low:
                 raise ParameterError(name, f"{value} is below {low}")
         check_model(self.model)
+        check_data(self.data)
 
 
 @dataclass
@@ -209,8 +211,9 @@ def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.Se
 _WORKER: dict = {}
 
 
-def _init_worker(campaign, model: str, sampler, n_ranked: int) -> None:
-    _WORKER.update(post=LogPosterior(campaign, model), sampler=sampler, n_ranked=n_ranked)
+def _init_worker(posterior_args: tuple, sampler, n_ranked: int) -> None:
+    campaign, model, data = posterior_args
+    _WORKER.update(post=LogPosterior(campaign, model, data=data), sampler=sampler, n_ranked=n_ranked)
 
 
 def _run_one(seed: np.random.SeedSequence) -> dict:
@@ -234,7 +237,7 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress: Progress | 
     """
     s = settings or SBCSettings()
     s.check()
-    post = LogPosterior(campaign, s.model)
+    post = LogPosterior(campaign, s.model, data=s.data)
     sampler = sampler or make_sampler(s.sampler, s.max_steps)
     sampler.check(post)
     *seeds, prior_seed = np.random.SeedSequence(s.seed).spawn(s.n + 1)  # one per replicate, one for the prior sd
@@ -247,7 +250,7 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress: Progress | 
             _replicate_done(progress, s, i + 1, time.perf_counter() - t0)
     else:
         with ProcessPoolExecutor(workers, initializer=_init_worker,
-                                 initargs=(campaign, s.model, sampler, s.n_ranked)) as pool:
+                                 initargs=((campaign, s.model, s.data), sampler, s.n_ranked)) as pool:
             futures = {pool.submit(_run_one, seed): i for i, seed in enumerate(seeds)}
             for done, f in enumerate(as_completed(futures), start=1):
                 out[futures[f]] = f.result()

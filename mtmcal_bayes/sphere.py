@@ -1,4 +1,4 @@
-"""Touch-probe geometry: least-squares sphere fit of probed points."""
+"""Touch-probe geometry: least-squares sphere fit of probed points, with the covariance of its centre."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MtmcalError
+from .errors import MtmcalError
 
 
 @dataclass
@@ -15,7 +15,9 @@ class SphereFit:
 
     ``centre`` (3,); ``radius`` of the probed sphere (fitted radius of the
     stylus-centre points minus the stylus-ball radius); ``residuals`` (n,)
-    signed radial residuals; ``rms`` their root mean square.
+    signed radial residuals; ``rms`` their root mean square; ``centre_cov`` (3, 3) mm², the
+    covariance of the centre from the residual scatter (``s² (JᵀJ)⁻¹`` of the geometric fit over
+    centre and radius, ``s²`` = residual sum of squares / (n − 4)); NaN with only four points.
     """
 
     centre: np.ndarray
@@ -23,6 +25,7 @@ class SphereFit:
     fitted_radius: float
     stylus_radius: float
     residuals: np.ndarray
+    centre_cov: np.ndarray | None = None
 
     @property
     def rms(self) -> float:
@@ -66,4 +69,10 @@ def fit_sphere(points: np.ndarray, stylus_radius: float = 0.0) -> SphereFit:
     centre, r = res.x[:3] + shift, abs(res.x[3])
     if stylus_radius < 0 or stylus_radius >= r:
         raise MtmcalError(f"stylus radius {stylus_radius:g} mm must be >= 0 and below the fitted radius {r:.4f} mm")
-    return SphereFit(centre, r - stylus_radius, r, stylus_radius, resid(res.x))
+    residuals = resid(res.x)
+    dof = len(P) - 4
+    cov = np.full((3, 3), np.nan)
+    if dof > 0:
+        J = res.jac
+        cov = (residuals @ residuals / dof) * np.linalg.pinv(J.T @ J)[:3, :3]
+    return SphereFit(centre, r - stylus_radius, r, stylus_radius, residuals, 0.5 * (cov + cov.T))
