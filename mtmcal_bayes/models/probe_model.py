@@ -38,7 +38,13 @@ import numpy as np
 
 from ..errors import InputError
 from ..observations import ProbeKey, ProbeObservations
-from ..parameters import DEVIATIONS, ParameterSpace, nuisance_name
+from ..parameters import (
+    DEVIATIONS,
+    PROBE_NUISANCE,
+    STYLUS_NUISANCE,
+    ParameterSpace,
+    nuisance_name,
+)
 from ..patterns import Commands
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
 
@@ -102,29 +108,32 @@ class ProbeLayout:
         self.length = np.array([p.length for p in positions])
         self.is_c = np.array([p.run == "c_axis" for p in positions])
         # readings: mean over repeats (k, 3), their variance (k, 3, 3) and the frame of each (k, 3, 3)
-        mean, cov, n = [], [], []
+        mean, cov, n, fitted = [], [], [], []
         u2 = probe.repeatability**2
         for run, owner, centres, fit_cov in runs:
-            r = centres.shape[0]
+            r, a = centres.shape[:2]
             mean.append(centres.mean(axis=0))
             if fit_cov is not None:  # one fitted centre per position: its fit covariance plus the repeatability
                 cov.append(fit_cov[0] + u2 * np.eye(3))
             else:  # the pooled scatter of the run's repeats (the repeatability when not repeated), plus it
-                s2 = np.sum(np.var(centres, axis=0, ddof=1)) / (centres.shape[1] * 3) if r > 1 else u2
-                cov.append(np.broadcast_to((s2 / r + u2) * np.eye(3), (centres.shape[1], 3, 3)))
-            n += [r] * centres.shape[1]
+                s2 = np.sum(np.var(centres, axis=0, ddof=1)) / (a * 3) if r > 1 else u2
+                cov.append(np.broadcast_to((s2 / r + u2) * np.eye(3), (a, 3, 3)))
+            n += [r] * a
+            fitted += [fit_cov is not None] * a
         self.reading_mean = np.concatenate(mean)  # (k, 3) mm, reading frame
         cov = np.concatenate(cov)
-        lam, Q = np.linalg.eigh(cov)  # readings turned into the principal axes of their covariance: diagonal
-        diagonal = np.all(np.abs(cov - np.eye(3) * cov[:, [0], [0]][:, :, None]) == 0.0, axis=(1, 2))
-        Q[diagonal] = np.eye(3)
-        lam[diagonal] = cov[diagonal][:, [0, 1, 2], [0, 1, 2]]
+        fitted = np.array(fitted)
+        # fitted centres turned into the principal axes of their covariance, so the likelihood stays diagonal
+        Q = np.broadcast_to(np.eye(3), cov.shape).copy()
+        lam = np.diagonal(cov, axis1=1, axis2=2).copy()
+        if fitted.any():
+            lam[fitted], Q[fitted] = np.linalg.eigh(cov[fitted])
         self.rotation = Q  # (k, 3, 3): observation = Qᵀ (reading − nominal)
         zero = ProbeChain(self, PIVOTS["htm-thesis"]).readings({}, 1)[0]  # model frame, all terms zero
         self.frame = self._datum_frame(campaign, zero)  # (k, 3) model frame -> reading frame
         self.nominal = zero + self.frame  # (k, 3) nominal readings
         y = np.einsum("kji,kj->ki", Q, self.reading_mean - self.nominal)
-        keys = [ProbeKey(p.run, p.stylus, p.angle_deg, COMPONENTS[j] if diagonal[i] else f"u{j + 1}")
+        keys = [ProbeKey(p.run, p.stylus, p.angle_deg, f"u{j + 1}" if fitted[i] else COMPONENTS[j])
                 for i, p in enumerate(positions) for j in range(3)]
         self.observations = ProbeObservations(tuple(keys), y.reshape(-1), lam.reshape(-1),
                                               np.repeat(np.array(n, dtype=int), 3))
@@ -220,11 +229,9 @@ class ProbeModel:
         col = {name: i for i, name in enumerate(self.space.names)}
         pos = self.layout.positions
         self._dev_cols = {d: col[d] for d in DEVIATIONS if d in col}
-        owner = {"xS": lambda q: q.stylus, "yS": lambda q: q.stylus, "dRS": lambda q: q.stylus,
-                 "rS": lambda q: q.stylus, "xP": lambda q: q.run, "yP": lambda q: q.run,
-                 "xD": lambda q: q.run, "yD": lambda q: q.run, "zD": lambda q: q.run}
-        self._point_cols = {b: np.array([col.get(nuisance_name(b, f(q)), -1) for q in pos], dtype=int)
-                            for b, f in owner.items()}
+        owner = lambda b, q: q.stylus if b in STYLUS_NUISANCE else q.run  # noqa: E731  (sphere terms: the run's)
+        self._point_cols = {b: np.array([col.get(nuisance_name(b, owner(b, q)), -1) for q in pos], dtype=int)
+                            for b in PROBE_NUISANCE}
 
     def readings(self, theta: np.ndarray) -> np.ndarray:
         """Readings ``(n, k, 3)`` in the reading frame, mm, for a batch ``(n, p)``."""
