@@ -44,6 +44,15 @@ def campaign_of(campaign: CampaignLike) -> Campaign:
     return campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
 
 
+def tolerances_of(tolerances) -> dict | None:
+    """``{name: Tolerance}`` from a ``[tolerances]`` TOML path, a dict of them, or None (the campaign's own)."""
+    if tolerances is None or isinstance(tolerances, dict):
+        return tolerances
+    from .io.tolerances import load_tolerances
+
+    return load_tolerances(tolerances)
+
+
 def _writable(path, what: str) -> None:
     if path is not None:
         check_writable(path, what)
@@ -95,27 +104,33 @@ def sensitivity(campaign: CampaignLike = None, *, model: str = "htm-thesis") -> 
 
 def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | None = None, fix_dx_BT: bool = False,
            target_ess: float = TARGET_ESS, sampler: str = "emcee", max_steps: int = MAX_STEPS, checkpoint=None,
-           output=None, progress: Progress | None = None, data: str = "ballbar") -> PosteriorResult:
+           output=None, progress: Progress | None = None, data: str = "ballbar", tolerances=None) -> PosteriorResult:
     """The posterior of the deviations and nuisance offsets, summarised beside the ball-bar and touch-probe values.
 
     emcee ensembles run until the bulk and tail ESS of the eight quantities reach ``target_ess`` and R-hat
     ≤ 1.01 (``sampler="exact"``: independent draws of the exact posterior, linear model only).  ``seed``
     makes the draws reproducible; ``checkpoint`` (HDF5) is written as the run goes and resumed if it
     exists; ``output`` receives the InferenceData as NetCDF.  ``data``: the likelihood's measurements,
-    ``"ballbar"`` (default), ``"probe"`` (touch-probe readings) or ``"both"`` (fused).
+    ``"ballbar"`` (default), ``"probe"`` (touch-probe readings) or ``"both"`` (fused).  ``tolerances``: a
+    TOML file with ``[tolerances]`` or ``{name: Tolerance}`` (default the campaign's own ``[tolerances]``):
+    each toleranced quantity gets its probability of nonconformance, a verdict and, when undecided, the
+    planner's next measurement for it.
     """
     from .inference.sampling import SamplerSettings
     from .models import check_data, check_model
     from .posterior import sample_posterior
+    from .reporting.decisions import add_suggestions
 
     c = campaign_of(campaign)
     check_model(model)
     check_data(data, c)
     _writable(output, "posterior")
     _writable(checkpoint, "checkpoint")
+    tol = tolerances_of(tolerances)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     result = sample_posterior(c, model=model, fix_dx_BT=fix_dx_BT, settings=settings, checkpoint=checkpoint,
-                              progress=progress, data=data)
+                              progress=progress, data=data, tolerances=tol)
+    add_suggestions(result, c)
     if output is not None:
         result.save(output)
     return result
@@ -132,13 +147,13 @@ def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, f
 def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,
            fix_dx_BT: bool = False, compare_models: bool = False, target_ess: float = TARGET_ESS,
            sampler: str = "emcee", max_steps: int = MAX_STEPS, posterior: PosteriorResult | None = None,
-           progress: Progress | None = None, command: str = "", data: str = "ballbar") -> Report:
+           progress: Progress | None = None, command: str = "", data: str = "ballbar", tolerances=None) -> Report:
     """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
 
     ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
     ``compare_models`` adds the same campaign under all three forward models.  ``data`` as for
     :func:`sample`; a campaign with touch-probe readings also gets its ball-bar-only, probe-only and
-    fused posteriors side by side and the instruments' consistency check.
+    fused posteriors side by side and the instruments' consistency check.  ``tolerances`` as for :func:`sample`.
     """
     from .inference.sampling import SamplerSettings
     from .models import check_data, check_model
@@ -149,7 +164,8 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     check_data(data, c)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     return build_report(c, output, model=model, settings=settings, fix_dx_BT=fix_dx_BT, compare_models=compare_models,
-                        posterior=posterior, progress=progress, command=command, data=data)
+                        posterior=posterior, progress=progress, command=command, data=data,
+                        tolerances=tolerances_of(tolerances))
 
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
@@ -202,19 +218,20 @@ def ncgen(pattern: str, *, campaign: CampaignLike = None, R_B_mm: float | None =
 
 def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",
                model: str = "htm-thesis", values: str = "posterior", posterior=None, point: str = "tcp",
-               setup: str | None = None, mount: str | None = None) -> CompensationResult:
+               setup: str | None = None, mount: str | None = None, integer_unit: str | None = None) -> CompensationResult:
     """Rewrite X/Y/Z of an NC program (a path) so the tool point reaches the programmed points, with the
     residual error from the posterior and the tool tilts X/Y/Z cannot correct; ``output`` receives the program.
 
     ``method``: ``"exact"`` inversion or ``"thesis"`` (Eqs 3.4–3.13 as printed); ``values``:
     ``"posterior"`` mean or ``"ballbar"``; ``posterior``: draws, as a NetCDF file, a :func:`sample` result or an InferenceData (default:
-    the closed form).
+    the closed form); ``integer_unit``: how X/Y/Z/B/C words without a decimal point (``X100``) are read, ``"um"``
+    (increments of 1 µm / 0.001°) or ``"mm"`` (mm / °); by default they are refused (zeros are accepted).
     """
     from .compensation import compensate as rewrite_program
     from .io.gcode import read_program
 
     c = campaign_of(campaign)
-    parsed = read_program(program)
+    parsed = read_program(program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     result = rewrite_program(c, parsed, method=method, model=model, values=values, posterior=posterior, point=point,
                              setup=setup, mount=mount)

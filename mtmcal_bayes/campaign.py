@@ -188,6 +188,17 @@ class Truth:
         return Truth(self.deviations, probe=self.probe)
 
 
+@dataclass(frozen=True)
+class Tolerance:
+    """Tolerance of one quantity, internal units (mm, rad): ``low`` ≤ value ≤ ``high``; None = open
+    (a one-sided tolerance).  ``key`` is where it was given (``tolerances.alpha_XB_arcsec``)."""
+
+    name: str
+    low: float | None
+    high: float | None
+    key: str = ""
+
+
 @dataclass
 class Campaign:
     machine: Machine
@@ -198,6 +209,7 @@ class Campaign:
     truth: Truth | None = None
     source: str = "<campaign>"
     base_dir: Path | None = None
+    tolerances: dict[str, Tolerance] = field(default_factory=dict)  # by thesis name
 
     def has_probe_readings(self) -> bool:
         """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""

@@ -32,17 +32,13 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _show(result, args) -> int:
-    print(json_text(result.to_json()) if args.json else result.to_text())
+    markdown = getattr(args, "markdown", False)
+    print(result.to_markdown() if markdown else json_text(result.to_json()) if args.json else result.to_text())
     return 0
 
 
 def _warn(warnings) -> None:
-    for w in warnings:
-        print(f"WARNING: {w}", file=sys.stderr)
-
-
-def _progress(args):
-    return None if args.quiet else StderrProgress()
+    print("".join(f"WARNING: {w}\n" for w in warnings), end="", file=sys.stderr)
 
 
 # --------------------------------------------------------------------------- commands
@@ -62,11 +58,7 @@ def cmd_simulate(args) -> int:
 
 
 def cmd_sensitivity(args) -> int:
-    table = api.sensitivity(args.campaign, model=args.model)
-    if args.markdown:
-        print(table.to_markdown())
-        return 0
-    return _show(table, args)
+    return _show(api.sensitivity(args.campaign, model=args.model), args)
 
 
 def cmd_sample(args) -> int:
@@ -75,7 +67,8 @@ def cmd_sample(args) -> int:
                                      model=args.model), args)
     result = api.sample(args.campaign, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                         target_ess=args.target_ess, sampler=args.sampler, max_steps=args.max_steps,
-                        checkpoint=args.checkpoint, output=args.output, progress=_progress(args), data=args.data)
+                        checkpoint=args.checkpoint, output=args.output, progress=None if args.quiet else StderrProgress(), data=args.data,
+                        tolerances=args.tolerances)
     _warn(result.warnings)
     return _show(result, args)
 
@@ -84,7 +77,8 @@ def cmd_report(args) -> int:
     command = " ".join([PROG] + (sys.argv[1:] if args.argv is None else args.argv))
     rep = api.report(args.campaign, output=args.output, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                      compare_models=args.compare_models, target_ess=args.target_ess, sampler=args.sampler,
-                     max_steps=args.max_steps, progress=_progress(args), command=command, data=args.data)
+                     max_steps=args.max_steps, progress=None if args.quiet else StderrProgress(), command=command, data=args.data,
+                     tolerances=args.tolerances)
     _warn(rep.posterior.warnings)
     return _show(rep, args)
 
@@ -107,16 +101,18 @@ def cmd_ncgen(args) -> int:
 
 
 def cmd_compensate(args) -> int:
-    return _show(api.compensate(args.program, campaign=args.campaign, output=args.output, method=args.method,
-                                model=args.model, values=args.values, posterior=args.posterior, point=args.point,
-                                setup=args.setup, mount=args.mount), args)
+    result = api.compensate(args.program, campaign=args.campaign, output=args.output, method=args.method,
+                            model=args.model, values=args.values, posterior=args.posterior, point=args.point,
+                            setup=args.setup, mount=args.mount, integer_unit=args.integer_unit)
+    _warn(result.warnings)
+    return _show(result, args)
 
 
 def cmd_validate_sbc(args) -> int:
     t0 = time.perf_counter()
     _show(api.sbc(args.campaign, n=args.n, model=args.model, sampler=args.sampler, n_ranked=args.n_ranked, data=args.data,
                   max_steps=args.max_steps, workers=args.workers, seed=args.seed, output=args.output,
-                  progress=_progress(args)), args)
+                  progress=None if args.quiet else StderrProgress()), args)
     if not args.quiet:
         print(f"sbc: done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     return 0
@@ -147,6 +143,8 @@ def _sampler_options(s) -> None:
     s.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
                    help="emcee ensembles (default) or independent draws of the exact posterior (linear model)")
     s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")
+    s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances] to decide conformity against "
+                   "(default: the campaign's own section, if any)")
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
 
@@ -238,6 +236,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="compensate the tool centre point (default) or the spindle nose as the thesis does")
     s.add_argument("--setup", default=None, help="campaign setup of the tool (R_B, NC origin; default: that of BX)")
     s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
+    s.add_argument("--integer-unit", choices=("um", "mm"), default=None, help="how to read X/Y/Z/B/C words "
+                   "without a decimal point (X100): increments of 1 µm / 0.001°, or mm / ° (default: refuse them)")
 
     vsub = sub.add_parser("validate", help="check the inference itself: simulation-based calibration").add_subparsers(
         dest="check", metavar="CHECK", parser_class=_Parser, required=True)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from matplotlib.figure import Figure
 
 from . import units
+from .iso import iso_symbol
 from .models import MODELS
 from .parameters import quantity_unit
 
@@ -60,14 +61,21 @@ def symbol(name: str) -> str:
     return name
 
 
+def iso_mathtext(name: str) -> str:
+    """Mathtext of a quantity's ISO 230-7 symbol (``E_A0B`` → ``$E_{A0B}$``), or "" where it has none."""
+    s = iso_symbol(name)
+    return f"$E_{{{s[2:]}}}$" if s else ""
+
+
 def unit_symbol(name: str) -> str:
     """Display unit symbol of a quantity (″ or µm)."""
     return units.SYMBOL[quantity_unit(name)]
 
 
 def label(name: str) -> str:
-    """Axis label: symbol and unit, e.g. ``$\\beta_{XB}$ [″]``."""
-    return f"{symbol(name)} [{unit_symbol(name)}]"
+    """Axis label: symbol, ISO 230-7 symbol where there is one, and unit, e.g. ``$\\beta_{XB}$ ($E_{B0B}$) [″]``."""
+    iso = iso_mathtext(name)
+    return f"{symbol(name)}{f' ({iso})' if iso else ''} [{unit_symbol(name)}]"
 
 
 def save_png(fig: Figure, path) -> None:

@@ -135,6 +135,16 @@ SPHERE_NUISANCE: dict[str, Quantity] = {
 #: every touch-probe nuisance quantity, by base name
 PROBE_NUISANCE: dict[str, Quantity] = {**STYLUS_NUISANCE, **SPHERE_NUISANCE}
 
+#: what each nuisance base name stands for, in a calibration engineer's words (for sentences naming a prior)
+NUISANCE_MEANING: dict[str, str] = {
+    "xT": "T-ball centring, X", "yT": "T-ball centring, Y", "zT": "T-ball centre along the spindle axis",
+    "dRB": "tool-length error, dial gauge", "xW": "W-ball clamping, X", "yW": "W-ball clamping, Y",
+    "zW": "W-ball clamping, Z", "xS": "stylus centring, X", "yS": "stylus centring, Y",
+    "dRS": "stylus length", "rS": "stylus-ball radius / pre-travel", "xP": "sphere placement, radial",
+    "yP": "sphere placement, tangential", "xD": "reading datum, X", "yD": "reading datum, Y",
+    "zD": "reading datum, Z",
+}
+
 
 def quantity_unit(name: str) -> str:
     """Display unit (``"arcsec"`` or ``"um"``) of a deviation, derived quantity, nuisance parameter

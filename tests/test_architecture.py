@@ -20,7 +20,7 @@ PACKAGE = Path(mtmcal_bayes.__file__).parent
 #: lower layers; units of one layer are siblings and may not import each other
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "units", "progress", "version", "datasets", "arviz_import"),  # foundation: nothing of the package
-    ("parameters", "patterns", "sphere"),                          # names of quantities, measuring patterns, sphere fit
+    ("parameters", "patterns", "sphere", "iso"),                   # names of quantities (and their ISO symbols), patterns, sphere fit
     ("campaign", "observations"),                                  # the data of a calibration
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models

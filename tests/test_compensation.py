@@ -41,10 +41,10 @@ def test_gcode_round_trip_and_modal_axes():
 
 
 @pytest.mark.parametrize("text, where, what", [
-    ("G01 X1 Y2 Z3\nG01 X- Y2 Z3\n", "line 2", "has no number"),
-    ("G91 G01 X1 Y2 Z3\n", "line 1", "G91"),
-    ("G01 X1 Y2\n", "line 1", "axis Z not known"),
-    ("G02 X1 Y2 Z3 I1 J0\n", "line 1", "circular"),
+    ("G01 X1. Y2. Z3.\nG01 X- Y2. Z3.\n", "line 2", "has no number"),
+    ("G91 G01 X1. Y2. Z3.\n", "line 1", "G91"),
+    ("G01 X1. Y2.\n", "line 1", "axis Z not known"),
+    ("G02 X1. Y2. Z3. I1 J0\n", "line 1", "circular"),
 ])
 def test_malformed_programs_name_the_line(run_cli, tmp_path, text, where, what):
     f = tmp_path / "bad.nc"

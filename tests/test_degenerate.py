@@ -116,7 +116,7 @@ def test_r_c_zero(run_cli, tmp_path):
 
     assert_clean(run_cli("simulate", f, "--truth", write(tmp_path, "t.toml", "[deviations]\nbeta_CZ_arcsec = 20\n")))
     out, _ = assert_clean(run_cli("sample", f, *QUICK))
-    assert "Not identified by the data:" in out
+    assert "Identifiability (closed-form prior-sensitivity check):" in out
     assert "  - alpha_CZ: not identified by the data" in out and "  - beta_CZ: not identified by the data" in out
 
     doc = finite_json(assert_clean(run_cli("plan", f, "--json"))[0])
@@ -235,7 +235,7 @@ def test_single_run(run_cli, tmp_path):
     rep = tmp_path / "rep"
     out, _ = assert_clean(run_cli("report", f, "-o", rep, *QUICK), rep)
     assert (rep / "index.html").exists() and (rep / "summary.csv").exists()
-    assert "Not identified by the data:" in out
+    assert "Identifiability (closed-form prior-sensitivity check):" in out
 
 
 def test_single_bx_run_plan(run_cli, tmp_path):

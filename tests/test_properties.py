@@ -266,13 +266,16 @@ def test_linear_superposition_and_homogeneity_exact(c, data):
 
     Superposition to fp: each component is a sum of p ≤ 30 products, so the rounding is below
     30·2.2e-16·Σ|A_ij||θ_j|; 1e-13 relative to Σ|A||a| + Σ|A||b| covers it.  Scaling by a power
-    of two is exact in floating point, so that one is compared bit for bit."""
+    of two is exact in floating point, so that one is compared bit for bit, except in the subnormal range
+    (|x| < 2.2e-308, reached with R_C = 2.2e-308 mm): there each product is rounded to the grid of 2^-1074,
+    which a factor 2^k magnifies, so the difference may be p·2^-1074·max(1, 2^k) (≈1e-316), nothing more."""
     fm = LinearModel(c)
     a, b = data.draw(thetas(fm.space, n=3)), data.draw(thetas(fm.space, n=3))
     scale = np.abs(a) @ np.abs(fm.design.T) + np.abs(b) @ np.abs(fm.design.T)
     assert np.all(np.abs(fm.predict(a + b) - fm.predict(a) - fm.predict(b)) <= 1e-13 * scale + 1e-300)
     k = data.draw(st.integers(-20, 20))
-    np.testing.assert_array_equal(fm.predict(2.0**k * a), 2.0**k * fm.predict(a))
+    diff = np.abs(fm.predict(2.0**k * a) - 2.0**k * fm.predict(a))
+    assert np.all(diff <= a.shape[1] * 2.0**-1074 * max(1.0, 2.0**k)), diff.max()
 
 
 @FAST
@@ -498,7 +501,10 @@ def full_campaigns(draw):
         comps = sorted(draw(st.lists(st.sampled_from(COMPONENTS[p]), min_size=1, max_size=2, unique=True)))
         reps = {comp: units.to_internal(np.array(draw(st.lists(VALUE_UM, min_size=1, max_size=5))), "um")
                 for comp in comps}
-        runs.append(Run(p, draw(st.sampled_from(sids)), mount, reps))
+        sid = draw(st.sampled_from(sids))
+        if any((r.pattern, r.setup, r.mount) == (p, sid, mount) for r in runs):
+            continue  # the loader refuses a second run of one pattern, setup and mount
+        runs.append(Run(p, sid, mount, reps))
     bb = Ballbar(L_B, units.to_internal(draw(st.floats(0.01, 5.0)), "um"), draw(st.sampled_from(["", "QC20-W"])),
                  draw(st.one_of(st.none(), st.floats(100.0, 5000.0))), {s.id: s for s in setups},
                  {m.id: m for m in mounts}, runs, draw(st.sampled_from(CR_GEOMETRIES)))
@@ -662,8 +668,9 @@ def programs(draw):
 @given(text=programs())
 def test_gcode_identity_rewrite_is_byte_for_byte(text):
     """Rewriting every motion block with the positions it already has changes nothing (whatever the number
-    spelling): a diff of a compensated program shows the corrections only."""
-    prog = parse_program(text)
+    spelling): a diff of a compensated program shows the corrections only.  Words without a decimal point
+    (X100) are read as mm."""
+    prog = parse_program(text, integer_unit="mm")
     assert rewrite(prog, prog.positions()[:, :3]) == text
 
 
@@ -673,11 +680,11 @@ def test_gcode_rewrite_then_parse_gives_the_new_positions(text, data):
     """New X/Y/Z come back from the rewritten text to the rounding of the decimals written: the word's own but
     at least 3 (X100. or X12.5 must not round a µm correction away); an axis added to a modal block gets the
     block's decimals (4 when it has no X/Y/Z word), at least 3.  Everything else — B, C, F, the other lines —
-    is unchanged."""
-    prog = parse_program(text)
+    is unchanged.  Words without a decimal point (X100) are read as mm."""
+    prog = parse_program(text, integer_unit="mm")
     pos = prog.positions()
     new = pos[:, :3] + data.draw(arrays(np.float64, (len(pos), 3), elements=st.floats(-0.1, 0.1)))
-    again = parse_program(rewrite(prog, new))
+    again = parse_program(rewrite(prog, new), integer_unit="mm")
     assert len(again.blocks) == len(prog.blocks)
     got = again.positions()
     np.testing.assert_array_equal(got[:, 3:], pos[:, 3:])

@@ -17,6 +17,8 @@ import numpy as np
 
 from .. import units
 from ..errors import ParameterError
+from ..inference.analytic import NOT_IDENTIFIED_GROWTH, prior_sensitivity
+from ..inference.log_posterior import LogPosterior
 from ..io.gcode import Program, rewrite
 from ..io.textfiles import write_text_atomic
 from ..models import KINEMATIC_MODELS, check_model
@@ -30,7 +32,7 @@ from .kinematics import (
     tool_point,
 )
 from .thesis_method import compensate_thesis
-from .values import VALUES, ballbar_values, posterior_draws
+from .values import SIGMA_MODEL_UM, VALUES, ballbar_values, posterior_draws
 
 METHODS = ("exact", "thesis")
 
@@ -49,6 +51,7 @@ class CompensationResult:
     not_compensable: list[dict] = field(default_factory=list)
     info: dict = field(default_factory=dict)
     output: str | None = None  # where :meth:`save` wrote the compensated program
+    warnings: list[str] = field(default_factory=list)  # values the data identify only through priors
 
     def save(self, path) -> None:
         """Write the compensated program to ``path`` (atomically)."""
@@ -78,6 +81,7 @@ class CompensationResult:
                             "p95_max": float(self.residual_p95_um.max()),
                             "per_block_p95": [float(v) for v in self.residual_p95_um]},
             "not_compensable": self.not_compensable,
+            "warnings": self.warnings,
         }
 
 
@@ -151,6 +155,29 @@ def compensate(campaign, program: Program, *, method: str = "exact", model: str 
             "nc_origin_mm": origin.tolist(), "newton_miss_um": units.from_internal(miss, "um"),
             "deviations": {n: {"value": units.from_internal(v, DEVIATIONS[n].unit), "unit": DEVIATIONS[n].unit}
                            for n, v in zip(DEVIATIONS, theta) if v != 0.0}}
+    warnings = prior_only_values(campaign, theta, posterior) if values == "posterior" else []
     return CompensationResult(rewrite(program, xyz_c), program.source, xyz, xyz_c, resid.mean(axis=0),
                               np.quantile(resid, 0.95, axis=0), before,
-                              not_compensable(theta, geo, xyz_model, bc, model=model), info)
+                              not_compensable(theta, geo, xyz_model, bc, model=model), info, warnings=warnings)
+
+
+def prior_only_values(campaign, theta: np.ndarray, posterior=None) -> list[str]:
+    """A warning for each deviation compensated with a value the data do not identify, or identify only through
+    a nuisance prior (closed-form check of :func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`, at the
+    posterior median of sigma_model when the posterior has one)."""
+    idata = getattr(posterior, "idata", posterior)
+    sigma_um = (float(np.median(idata.posterior["sigma_model"])) if hasattr(idata, "posterior")
+                and "sigma_model" in idata.posterior else SIGMA_MODEL_UM)
+    sens = prior_sensitivity(LogPosterior(campaign, "linear"), units.to_internal(sigma_um, "um"))
+    out = []
+    for i, name in enumerate(DEVIATIONS):
+        if name not in sens.through or theta[i] == 0.0:
+            continue
+        shown = f"{name} = {units.from_internal(theta[i], DEVIATIONS[name].unit):.3g} {units.SYMBOL[DEVIATIONS[name].unit]}"
+        if sens.deviation_growth[name] > NOT_IDENTIFIED_GROWTH:
+            out.append(f"compensating with {shown}, which the data do not identify (its value follows the prior)")
+        elif sens.through[name]:
+            out.append(f"compensating with {shown}, which the data identify only through the prior"
+                       f"{'s' if len(sens.through[name]) > 1 else ''} on {' and '.join(sens.through[name])}: the "
+                       "correction is as good as that set-up knowledge (docs/metrology.md)")
+    return out

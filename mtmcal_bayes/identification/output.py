@@ -5,6 +5,7 @@ from __future__ import annotations
 import pandas as pd
 
 from .. import units
+from ..iso import iso_symbol
 
 
 def identification_table(values: dict) -> pd.DataFrame:
@@ -18,6 +19,7 @@ def identification_table(values: dict) -> pd.DataFrame:
             flag = "reproduced" if ident.reproduced else "NOT REPRODUCED"
         rows.append({
             "quantity": name,
+            "ISO 230-7": iso_symbol(name) or "—",
             "unit": units.SYMBOL[ident.unit],
             "recomputed": "—" if ident.display is None else f"{ident.display:.2f}",
             "thesis": "—" if ident.reported is None else f"{ident.reported_display:.{ident.reported.decimals}f}",

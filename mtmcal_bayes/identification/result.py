@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 from .. import units
 from ..campaign import ReportedValue
+from ..iso import iso_symbol
 from ..parameters import QUANTITIES
 
 
@@ -76,8 +77,8 @@ class IdentificationResult:
     def to_json(self) -> dict:
         return {
             "campaign": self.source,
-            "ballbar": {k: v.to_json() for k, v in self.ballbar.items()},
-            "probe": {k: v.to_json() for k, v in self.probe.items()},
+            "ballbar": {k: {**v.to_json(), "iso": iso_symbol(k)} for k, v in self.ballbar.items()},
+            "probe": {k: {**v.to_json(), "iso": iso_symbol(k)} for k, v in self.probe.items()},
             "checks": self.checks,
             "assumptions": self.assumptions,
         }

@@ -12,9 +12,11 @@ import pandas as pd
 
 from .. import units
 from ..arviz_import import az
+from ..iso import iso_symbol
 from ..observations import JointObservations, ProbeObservations
-from ..parameters import DERIVED, IDENTIFIABLE, combine, quantity_unit, weights
-from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity
+from ..parameters import DERIVED, NUISANCE_MEANING, combine, quantity_unit, weights
+from .analytic import NOT_IDENTIFIED_GROWTH, REPORTED, WIDEN, prior_sensitivity
+from .gum import gum_table
 
 HDI_PROB = 0.95
 RHAT_MAX = 1.01
@@ -108,31 +110,38 @@ def prior_sd(result_or_post, names) -> dict[str, float]:
 
 
 def summarize(idata, post, names=None) -> pd.DataFrame:
-    """One row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd, identified,
-    and the Monte-Carlo standard errors of mean and sd.
+    """One row per quantity: its ISO 230-7 symbol, mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit,
+    prior sd, identifiability, the Monte-Carlo standard errors of mean and sd, and the GUM statement
+    (:data:`~mtmcal_bayes.inference.gum.GUM_COLUMNS`).
 
-    ``sd_ratio`` is posterior sd / prior sd; ``prior_growth`` how much the
-    posterior sd grows when the deviation priors widen tenfold
-    (:func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`); a quantity
-    whose growth exceeds 2 is not identified by the data.
+    ``sd_ratio`` is posterior sd / prior sd; ``prior_growth`` how much the posterior sd grows when the
+    deviation priors widen tenfold, ``nuisance_growth`` when the nuisance priors do
+    (:func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`).  A quantity whose ``prior_growth``
+    exceeds 2 is not identified by the data (``identified`` False); one whose ``nuisance_growth`` does is
+    identified only through the nuisance priors named in ``identified_through`` (comma-separated base names,
+    empty otherwise).  ``identified`` is None where no check applies (sigma_model).
     """
-    names = list(names or (list(IDENTIFIABLE) + ["dx_CZ", "dx_BT", "dz_BT", "sigma_model"]))
+    names = list(names or (list(REPORTED) + ["sigma_model"]))
     names = [n for n in names if n in idata.posterior]
     s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none")
     s = s.rename(columns={"hdi_2.5%": "hdi_low", "hdi_97.5%": "hdi_high"})
     s["median"] = [float(idata.posterior[n].median()) for n in s.index]
     s["unit"] = [quantity_unit(n) for n in s.index]
+    s["iso"] = [iso_symbol(n) for n in s.index]
     psd = prior_sd(post, s.index)
     s["prior_sd"] = [psd.get(n, np.nan) for n in s.index]
     s["sd_ratio"] = s["sd"] / s["prior_sd"]
     sigma0 = (units.to_internal(float(np.median(idata.posterior["sigma_model"])), "um")
               if "sigma_model" in idata.posterior else 0.0)
-    growth = prior_sensitivity(post, sigma0)
-    s["prior_growth"] = [growth.get(n, np.nan) for n in s.index]
-    # None where no prior-sensitivity check applies (sigma_model)
+    sens = prior_sensitivity(post, sigma0)
+    s["prior_growth"] = [sens.deviation_growth.get(n, np.nan) for n in s.index]
+    s["nuisance_growth"] = [sens.nuisance_growth.get(n, np.nan) for n in s.index]
     s["identified"] = [None if np.isnan(g) else bool(g <= NOT_IDENTIFIED_GROWTH) for g in s["prior_growth"]]
-    return s[["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
-              "prior_sd", "sd_ratio", "prior_growth", "identified", "mcse_mean", "mcse_sd"]]
+    s["identified_through"] = [", ".join(sens.through[n]) if n in sens.through else None for n in s.index]
+    s = s[["iso", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
+           "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identified_through",
+           "mcse_mean", "mcse_sd"]]
+    return pd.concat([s, gum_table(idata, s)], axis=1)
 
 
 def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:
@@ -147,7 +156,23 @@ def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:
 
 
 def not_identified(summary: pd.DataFrame) -> list[str]:
-    return [f"{n}: not identified by the data — its width follows the priors (widening the deviation priors "
-            f"{WIDEN:g}× widens it {r['prior_growth']:.1f}×; posterior sd {r['sd']:.3g} {units.SYMBOL[r['unit']]} "
-            f"= {r['sd_ratio']:.2f} × prior sd)"
-            for n, r in summary.iterrows() if n in IDENTIFIABLE and r["identified"] is False]
+    """Sentences for the quantities the data do not identify, and for those identified only through
+    nuisance priors (naming them)."""
+    out = []
+    for n, r in summary.iterrows():
+        if r["identified"] is False:
+            out.append(f"{n}: not identified by the data — its width follows the priors (widening the deviation "
+                       f"priors {WIDEN:g}× widens it {r['prior_growth']:.1f}×; posterior sd {r['sd']:.3g} "
+                       f"{units.SYMBOL[r['unit']]} = {r['sd_ratio']:.2f} × prior sd)")
+        if isinstance(r["identified_through"], str) and r["identified_through"]:
+            out.append(identified_through_sentence(n, r["identified_through"].split(", "), r["nuisance_growth"]))
+    return out
+
+
+def identified_through_sentence(name: str, bases: list[str], growth: float) -> str:
+    """"dz_BT: identified only through the priors on dRB (…) and zT (…)": the nuisance priors it rests on."""
+    what = [f"{b} ({NUISANCE_MEANING[b]})" for b in bases]
+    listed = what[0] if len(what) == 1 else ", ".join(what[:-1]) + " and " + what[-1]
+    return (f"{name}: identified only through the prior{'s' if len(what) > 1 else ''} on {listed} — widening the "
+            f"nuisance priors {WIDEN:g}× widens it {growth:.1f}×; its interval states that set-up knowledge as much "
+            "as the machine")

@@ -43,12 +43,19 @@ from ..patterns import COMPONENTS, CR_GEOMETRIES, PATTERNS, mount_conflict
 from ..sphere import fit_sphere
 from .dprnt import read_dprnt
 from .textfiles import read_user_text
+from .tolerances import parse_tolerances
 from .toml_reader import TomlReader, kind_of, parse_toml
 from .tomlio import printed_decimals
 from .traces import read_trace
 
 FORMAT = "mtmcal-campaign/1"
 PRIOR_DISTS = {"normal": ("sd",), "halfnormal": ("sd",), "uniform": ("low", "high")}
+#: largest |number| of a [priors] entry, in its unit (1°, 10 mm): no geometric deviation or offset of a working
+#: machine tool comes near it, and numbers like 1e20 break the linear algebra (docs/campaign-format.md)
+PRIOR_LIMIT = {"arcsec": (3600.0, "1°"), "um": (10_000.0, "10 mm")}
+#: narrowest prior sd (or uniform width), in its unit: below it the parameter is fixed beneath the models'
+#: floating-point resolution (an sd of 1e-300 gives NaN)
+PRIOR_RESOLUTION = 1e-3
 
 
 # --------------------------------------------------------------------------- loading
@@ -70,7 +77,7 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     """Parse and validate campaign TOML ``text``; ``source`` names it in error messages."""
     r = TomlReader(source)
     doc = parse_toml(text, source, f"a campaign TOML with format = \"{FORMAT}\"")
-    r.check_keys(doc, {"format", "machine", "ballbar", "probe", "reported", "priors", "truth"}, "")
+    r.check_keys(doc, {"format", "machine", "ballbar", "probe", "reported", "priors", "truth", "tolerances"}, "")
     fmt = r.string(doc, "format", "", required=True)
     if fmt != FORMAT:
         r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
@@ -83,7 +90,8 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     priors = _priors(r, r.table(doc, "priors", "", required=False) or {})
     truth_t = r.table(doc, "truth", "", required=False)
     truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe) if truth_t is not None else None
-    return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir)
+    tolerances = parse_tolerances(r, r.table(doc, "tolerances", "", required=False) or {})
+    return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances)
 
 
 def _machine(r: TomlReader, t: dict) -> Machine:
@@ -123,6 +131,7 @@ def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
         r.fail(f"{P}.runs", "expected one or more [[ballbar.runs]] tables")
     runs = [_run(r, x, f"{P}.runs[{i}]", setups=setups, mounts=mounts, base_dir=base_dir, L_B=length,
                  cr_geometry=cr_geometry) for i, x in enumerate(raw_runs)]
+    _distinct_runs(r, runs, P)
     return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry)
 
 
@@ -136,6 +145,21 @@ def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]])
             if zt_a == zt_b:
                 r.fail(f"{pb}.Z_T_mm", f"equal to {pa}.Z_T_mm ({zt_a:g} mm) although R_B differs: "
                        "Z_T + R_B must stay constant between tool lengths")
+
+
+def _distinct_runs(r: TomlReader, runs: list[Run], path: str) -> None:
+    """Two runs of one pattern, setup and mount are refused (``docs/campaign-format.md``, "Duplicate runs"):
+    merged they would pass two sessions, perhaps a re-clamped ball, for repeats of one measurement, whose
+    repeat sd the likelihood takes as the run's repeatability."""
+    first: dict[tuple[str, str, str], int] = {}
+    for i, run in enumerate(runs):
+        j = first.setdefault((run.pattern, run.setup, run.mount), i)
+        if j != i:
+            arrays = ('trace_csv = ["a.csv", "b.csv"]' if run.trace_csv or runs[j].trace_csv
+                      else f"{COMPONENTS[run.pattern][0]}_um = [..., ...]")
+            r.fail(f"{path}.runs[{i}]", f"repeats {path}.runs[{j}] (pattern {run.pattern}, setup {run.setup!r}, "
+                   f"mount {run.mount!r}): put all repeats of one measurement in one run's arrays ({arrays}); "
+                   f"if the ball was re-clamped, give it its own [{path}.mounts.<id>]")
 
 
 def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: float, cr_geometry: str) -> Run:
@@ -303,6 +327,18 @@ def _reported(r: TomlReader, t: dict, text: str) -> dict[str, dict[str, Reported
     return out
 
 
+def _prior_bounds(r: TomlReader, v: float, key: str, *, unit: str, sd: bool) -> None:
+    """A number of a prior (″ or µm) within ±PRIOR_LIMIT; an sd also at least PRIOR_RESOLUTION."""
+    sym = ("" if unit == "arcsec" else " ") + units.SYMBOL[unit]
+    limit, shown = PRIOR_LIMIT[unit]
+    if abs(v) > limit:
+        r.fail(key, f"{v:g}{sym} is beyond ±{limit:g}{sym} ({shown}): no geometric deviation, offset or model "
+               "discrepancy of a machine tool is that large")
+    if sd and v < PRIOR_RESOLUTION:
+        r.fail(key, f"{v:g}{sym} is below {PRIOR_RESOLUTION:g}{sym}: a prior that narrow fixes the parameter "
+               "below the models' floating-point resolution")
+
+
 def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
     known = {**{k: q.unit for k, q in DEVIATIONS.items()},
              **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE, **PROBE_NUISANCE}.items()},
@@ -325,9 +361,13 @@ def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
         for p in params:
             v = r.number(spec, f"{p}_{unit}", path, required=(p != "mean"), positive=(p == "sd"),
                          default=0.0)
+            _prior_bounds(r, v, f"{path}.{p}_{unit}", unit=unit, sd=(p == "sd"))
             parsed[p] = units.to_internal(v, unit)
         if dist == "uniform" and parsed["high"] <= parsed["low"]:
             r.fail(f"{path}.high_{unit}", "must be greater than low")
+        if dist == "uniform" and spec[f"high_{unit}"] - spec[f"low_{unit}"] < PRIOR_RESOLUTION:
+            r.fail(f"{path}.high_{unit}", f"must exceed low by at least {PRIOR_RESOLUTION:g} "
+                   f"{units.SYMBOL[unit]}: a narrower prior fixes the parameter below the models' resolution")
         if name == "sigma_model":  # a standard deviation: the sampler only visits sigma_model > 0
             for p in ("low", "mean"):
                 if parsed.get(p, 0.0) < 0:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from .. import units
 from ..campaign import Campaign, Probe, Truth
-from ..parameters import DEVIATIONS
+from ..parameters import DEVIATIONS, QUANTITIES
 from .campaign_reader import FORMAT
 from .textfiles import write_text_atomic
 from .tomlio import Fixed, dumps
@@ -54,6 +54,13 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
             unit = DEVIATIONS[name].unit if name in DEVIATIONS else "um"  # nuisance terms are lengths
             doc["priors"][name] = {"dist": spec["dist"], **{f"{k}_{unit}": units.from_internal(v, unit)
                                                             for k, v in spec.items() if k != "dist"}}
+    if c.tolerances:
+        doc["tolerances"] = {}
+        for name, t in c.tolerances.items():
+            unit = QUANTITIES[name].unit
+            ends = {k: units.from_internal(v, unit) for k, v in (("low", t.low), ("high", t.high)) if v is not None}
+            symmetric = t.low is not None and t.high is not None and t.low == -t.high
+            doc["tolerances"][f"{name}_{unit}"] = ends["high"] if symmetric else ends
     if c.truth is not None:
         doc["truth"] = truth_to_dict(c.truth)
     return doc

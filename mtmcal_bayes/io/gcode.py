@@ -15,6 +15,22 @@ after them).  What compensation cannot interpret is an error naming the line:
 twice in a block, a word other than ``G N X Y Z B C F M S T H D`` in a motion
 block (an ``A``/``U``/``V``/``W`` axis, ``O`` typed for a zero), and any text
 that is not an address word or a comment (decimal commas, macros).
+
+Axis words without a decimal point (``X100``, ``B90``) mean different things on
+different controls: with decimal-point programming (Fanuc and alike) ``X100`` is
+100 least-input increments, 0.100 mm at 1 µm, and ``B90`` 0.090° at 0.001°; on
+others (calculator-type input) 100 mm and 90°.  The rule is the control's, so
+it applies to every X, Y, Z, B, C word whose value compensation uses as a
+position (those of G00/G01 blocks): with ``integer_unit=None`` such a word is an
+error naming the line; ``"um"`` reads it in increments of 1/1000 of the unit
+(1 µm, 0.001°), ``"mm"`` in whole units (mm, °).  B and C are included because a
+misread B angle moves the tool as much as a misread X.  A zero (``X0``, ``C0``)
+is accepted whatever ``integer_unit`` is: it is zero under either reading, and
+refusing it would refuse common programs for a word that cannot be misread.
+Words that are not positions are never affected: G, M, N, F, S, T, H, D, the X
+of a ``G04`` dwell or ``G10.9``, the axes of ``G28``/``G30``/``G53`` (passed
+through).  A word read with ``integer_unit`` and unchanged by compensation keeps
+its text; a changed one is written in mm (degrees) with a decimal point.
 """
 
 from __future__ import annotations
@@ -25,7 +41,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError
+from .. import units
+from ..errors import InputError, ParameterError
 from ..units import fixed
 from .textfiles import read_user_text
 
@@ -40,6 +57,12 @@ MOTION_WORDS = frozenset("GNXYZBCFMSTHD")  # the words a G00/G01 block may carry
 _PASS_G = (4.0, 10.9)  # dwell, radius/diameter switch: their X is not a position; the block passes through
 _MACHINE_G = (28.0, 30.0, 53.0)  # reference point / machine coordinates: passed through, those axes' positions unknown after
 _FRAME_G = (10.0, 52.0, 92.0)  # set offsets or shift the coordinate system: later positions cannot be interpreted
+#: counts per mm (linear) or degree (rotary) of an axis word without a decimal point, by ``integer_unit``:
+#: "um" least input increments of 1/1000 of the unit (1 µm, 0.001°), "mm" whole units (mm, °).  A division by
+#: 1000.0 gives the double nearest the decimal, as ``X0.123`` does (a product with 0.001 misses it by an ulp)
+INTEGER_UNITS = {"um": units.from_internal(1.0, "um"), "mm": 1.0}
+#: decimals a word read with ``integer_unit`` carries (the increment's): a changed one is written with them, at least
+_INTEGER_DECIMALS = {"um": 3, "mm": 0}
 
 
 @dataclass
@@ -130,8 +153,36 @@ def _words(line: str, number: int, source: str) -> list[Word]:
     return out
 
 
-def parse_program(text: str, source: str = "<program>") -> Program:
-    """Parse G-code text; malformed blocks raise :class:`InputError` naming the line."""
+def _integer_words(words: list[Word], line: str, integer_unit: str | None, *, number: int,
+                   source: str) -> list[Word]:
+    """The words of a motion block with each nonzero X Y Z B C written without a decimal point read in
+    ``integer_unit`` (mm, degrees; see the module docstring); without ``integer_unit`` such a word is an error."""
+    out = []
+    for w in words:
+        text = line[w.start:w.end]
+        if w.letter in AXES and "." not in text and w.value != 0:
+            if integer_unit is None:
+                unit, step = (" mm", "1 µm") if w.letter in LINEAR else ("°", "0.001°")
+                small = w.value / INTEGER_UNITS["um"]  # the value at 1/1000 of the unit per count
+                raise InputError(source, f"line {number}", (
+                    f"{w.letter}{text} has no decimal point: many controls read it as {text} least-input "
+                    f"increments ({small:g}{unit} at {step}), not {text}{unit}; write {w.letter}{text}. "
+                    "or give the control's integer unit (um or mm)"))
+            w = Word(w.letter, w.value / INTEGER_UNITS[integer_unit], w.start, w.end,
+                     _INTEGER_DECIMALS[integer_unit])
+        out.append(w)
+    return out
+
+
+def parse_program(text: str, source: str = "<program>", *, integer_unit: str | None = None) -> Program:
+    """Parse G-code text; malformed blocks raise :class:`InputError` naming the line.
+
+    ``integer_unit``: how X Y Z B C words without a decimal point are read — ``"um"`` (counts of 1 µm /
+    0.001°), ``"mm"`` (mm / degrees) or ``None`` (an error; see the module docstring).
+    """
+    if integer_unit is not None and integer_unit not in INTEGER_UNITS:
+        raise ParameterError("integer_unit", f"expected one of {', '.join(map(repr, INTEGER_UNITS))} or None "
+                             f"(refuse axis words without a decimal point), got {integer_unit!r}")
     if not text.strip():
         raise InputError(source, None, "empty file (expected an NC program with G00/G01 X Y Z blocks)")
     newline = "\r\n" if "\r\n" in text else "\r" if "\r" in text and "\n" not in text else "\n"
@@ -178,6 +229,7 @@ def parse_program(text: str, source: str = "<program>") -> Program:
             raise InputError(source, f"line {i}", f"word {other.letter}{line[other.start:other.end]} is not "
                              f"expected in a G00/G01 block ({hint})")
         if modal_motion and has_axis:
+            words = _integer_words(words, line, integer_unit, number=i, source=source)
             for w in words:
                 if w.letter in AXES:
                     state[w.letter] = w.value
@@ -194,8 +246,9 @@ def parse_program(text: str, source: str = "<program>") -> Program:
     return Program(blocks, source, newline)
 
 
-def read_program(path) -> Program:
-    return parse_program(read_user_text(path, "NC program"), str(path))
+def read_program(path, *, integer_unit: str | None = None) -> Program:
+    """The NC program at ``path`` (see :func:`parse_program` for ``integer_unit``)."""
+    return parse_program(read_user_text(path, "NC program"), str(path), integer_unit=integer_unit)
 
 
 def rewrite(program: Program, xyz: np.ndarray, default_decimals: int = 4) -> str:
@@ -239,8 +292,10 @@ def rewrite(program: Program, xyz: np.ndarray, default_decimals: int = 4) -> str
 
 def block_line(position, *, feed=None, decimals: int = 4, motion: str = "G01") -> str:
     """One motion block to ``position`` = (X, Y, Z, B, C), mm and degrees,
-    e.g. ``G01 X-390.0000 Y0.0000 Z-112.2605 B0.0000 C0.0000 F2000``."""
-    words = [motion] + [f"{a}{fixed(v, decimals)}" for a, v in zip(AXES, position)]
+    e.g. ``G01 X-390.0000 Y0.0000 Z-112.2605 B0.0000 C0.0000 F2000``; with ``decimals=0`` the numbers keep
+    their decimal point (``X-390.``): without it many controls read least-input increments."""
+    point = "." if decimals == 0 else ""
+    words = [motion] + [f"{a}{fixed(v, decimals)}{point}" for a, v in zip(AXES, position)]
     if feed is not None:
         words.append(f"F{feed:g}")
     return " ".join(words)

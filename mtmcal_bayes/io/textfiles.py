@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import codecs
 import contextlib
 import os
 import shutil
@@ -14,7 +15,8 @@ from ..errors import InputError, MtmcalError
 def read_user_text(path: str | os.PathLike, kind: str) -> str:
     """Text of the file at ``path``; a missing, unreadable or binary file is an :class:`InputError`.
 
-    ``kind`` names what the file should be (``"campaign file"``, ``"DPRNT file"``).
+    ``kind`` names what the file should be (``"campaign file"``, ``"DPRNT file"``).  A leading UTF-8
+    byte-order mark (Windows editors write one) is dropped: every text input is read through here.
     """
     p = Path(path)
     if not p.exists():
@@ -25,6 +27,8 @@ def read_user_text(path: str | os.PathLike, kind: str) -> str:
         raw = p.read_bytes()
     except OSError as exc:
         raise InputError(str(p), None, f"cannot read as a {kind}: {exc.strerror or exc}") from None
+    if raw.startswith(codecs.BOM_UTF8):  # stripped here, not by "utf-8-sig": exc.start below indexes raw
+        raw = raw[len(codecs.BOM_UTF8):]
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:  # name the line of the first bad byte: binary, or saved as Latin-1/UTF-16

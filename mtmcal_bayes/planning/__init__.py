@@ -2,6 +2,6 @@
 
 from .candidates import Candidate, catalogue, feasibility, read_candidates
 from .design import Planner
-from .plan import PlanResult, plan
+from .plan import PlanResult, best_measurement, plan
 
-__all__ = ["Candidate", "catalogue", "feasibility", "read_candidates", "Planner", "PlanResult", "plan"]
+__all__ = ["Candidate", "catalogue", "feasibility", "read_candidates", "Planner", "PlanResult", "best_measurement", "plan"]

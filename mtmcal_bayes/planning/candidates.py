@@ -28,6 +28,12 @@ OTHER_L_B_MM = (50.0, 100.0, 150.0)
 #: patterns measured at additional tool lengths
 TOOL_LENGTH_PATTERNS = ("CR", "CA", "BX", "BY")
 DEFAULT_REPEATS = 3
+#: most repeats of a user candidate: beyond a few hundred, s²/n is far below u_inst² + sigma_model², which do not
+#: average out, so more repeats add nothing; 1e20 would overflow the planner's arrays (docs/planning.md)
+MAX_REPEATS = 10_000
+#: largest |length| of a user candidate, mm (lever arms, mount, bar length): 10 m is beyond the travels of any
+#: turn-mill machine; larger numbers are unit slips and make the design matrix singular (docs/planning.md)
+MAX_LENGTH_MM = 10_000.0
 
 
 @dataclass(frozen=True)
@@ -130,14 +136,26 @@ _USER_KEYS = {"name", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm",
               "repeats"}
 
 
-def _existing(r: TomlReader, t: dict, key: str, *, path: str, known: dict):
-    """The campaign's setup/mount named by ``key``, None when the candidate gives a new one."""
+def _existing(r: TomlReader, t: dict, key: str, *, path: str, known: dict, geometry: tuple[str, ...]):
+    """The campaign's setup/mount named by ``key``, None when the candidate gives a new one by its ``geometry``
+    keys (both is an error: which one counts would be a guess)."""
     if key not in t:
         return None
+    if given := [g for g in geometry if g in t]:
+        r.fail(f"{path}.{given[0]}", f"give either {key} = \"<id>\" or {', '.join(geometry)} of a new {key}, not both")
     oid = r.string(t, key, path)
     if oid not in known:
         r.fail(f"{path}.{key}", f"no {key} {oid!r} in the campaign (have {', '.join(known)})")
     return known[oid]
+
+
+def _length(r: TomlReader, t: dict, key: str, path: str, **checks) -> float:
+    """Length ``key`` of a candidate, mm: finite, within ±MAX_LENGTH_MM (``checks`` as ``TomlReader.number``)."""
+    v = r.number(t, key, path, **checks)
+    if abs(v) > MAX_LENGTH_MM:
+        r.fail(f"{path}.{key}", f"{v:g} mm is beyond ±{MAX_LENGTH_MM:g} mm, more than any machine tool's travel "
+               "(µm written for mm?)")
+    return v
 
 
 def read_candidates(path, campaign: Campaign) -> list[Candidate]:
@@ -165,17 +183,22 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
         pattern = r.string(t, "pattern", path_i, required=True)
         if pattern not in PATTERNS:
             r.fail(f"{path_i}.pattern", f"unknown pattern {pattern!r} (expected one of {' '.join(PATTERNS)})")
-        setup = _existing(r, t, "setup", path=path_i, known=bb.setups) or Setup(
-            f"user{i}", r.number(t, "R_B_mm", path_i, positive=True), r.number(t, "Z_T_mm", path_i),
-            r.number(t, "X_T_mm", path_i))
-        mount = _existing(r, t, "mount", path=path_i, known=bb.mounts) or Mount(
-            f"user{i}", r.number(t, "Z_C_mm", path_i), r.number(t, "R_C_mm", path_i, nonnegative=True))
+        setup = _existing(r, t, "setup", path=path_i, known=bb.setups,
+                          geometry=("R_B_mm", "Z_T_mm", "X_T_mm")) or Setup(
+            f"user{i}", _length(r, t, "R_B_mm", path_i, positive=True), _length(r, t, "Z_T_mm", path_i),
+            _length(r, t, "X_T_mm", path_i))
+        mount = _existing(r, t, "mount", path=path_i, known=bb.mounts, geometry=("Z_C_mm", "R_C_mm")) or Mount(
+            f"user{i}", _length(r, t, "Z_C_mm", path_i, nonnegative=True),
+            _length(r, t, "R_C_mm", path_i, nonnegative=True))
         if conflict := mount_conflict(pattern, t.get("mount"), mount.R_C):
             r.fail(f"{path_i}.mount" if "mount" in t else f"{path_i}.R_C_mm", conflict)
-        length = r.number(t, "length_mm", path_i, required=False, positive=True, default=bb.length)
+        length = _length(r, t, "length_mm", path_i, required=False, positive=True, default=bb.length)
         repeats = r.number(t, "repeats", path_i, required=False, positive=True, default=DEFAULT_REPEATS)
         if repeats != int(repeats):
             r.fail(f"{path_i}.repeats", f"must be a whole number, got {repeats:g}")
+        if repeats > MAX_REPEATS:
+            r.fail(f"{path_i}.repeats", f"{repeats:g} is more than {MAX_REPEATS}: beyond a few hundred repeats the "
+                   "instrument accuracy and the model discrepancy, which do not average out, set the uncertainty")
         name = r.string(t, "name", path_i, default=f"{pattern} @ {setup.id}/{mount.id} (user)")
         out.append(Candidate(name, "user", pattern, setup, mount, length, int(repeats),
                              extension=setup.R_B - campaign.primary_setup().R_B))

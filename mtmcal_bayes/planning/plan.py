@@ -147,6 +147,22 @@ def monte_carlo_check(planner: Planner, table: pd.DataFrame, *, n: int = N_CHECK
     return pd.DataFrame(rows)
 
 
+def best_measurement(campaign, target: str, *, sigma_model_um: float | None = None,
+                     model: str = "linear") -> dict | None:
+    """The catalogue measurement that would make ``target`` most certain (closed form): ``name``,
+    ``sd_before``, ``sd_after`` (display units) and ``unit``; None when no feasible candidate helps."""
+    candidates = catalogue(campaign)
+    sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
+    planner = Planner(campaign, candidates, [target], sigma_model=sigma, model=model)
+    table = _table(planner, candidates, campaign)
+    useful = table[table["feasible"] & table["informative"]]
+    if useful.empty:
+        return None
+    best = useful.loc[useful[f"{target} sd_after"].idxmin()]
+    return {"name": str(best["name"]), "sd_before": float(best[f"{target} sd_before"]),
+            "sd_after": float(best[f"{target} sd_after"]), "unit": planner.target_units[0]}
+
+
 def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_model_um: float | None = None,
          sweep_pattern: str | None = None, model: str = "linear") -> PlanResult:
     """Rank the catalogue (plus ``extra`` user candidates) for ``targets``; sweep; check three by Monte Carlo."""

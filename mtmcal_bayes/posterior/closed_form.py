@@ -16,6 +16,7 @@ from .. import units
 from ..errors import ParameterError
 from ..inference.analytic import gaussian_posterior
 from ..inference.log_posterior import LogPosterior
+from ..iso import iso_symbol
 from ..parameters import IDENTIFIABLE, QUANTITIES, weights
 
 #: probability of the reported interval
@@ -32,13 +33,14 @@ class ClosedFormResult:
 
     def to_json(self) -> dict:
         return {"model": "linear", "closed_form": True, "sigma_model_um": self.sigma_model_um,
-                "summary": {n: {c: (r[c] if c == "unit" else float(r[c])) for c in self.summary.columns}
+                "summary": {n: {c: (r[c] if c == "unit" else (r[c] if isinstance(r[c], str) else None) if c == "iso"
+                                    else float(r[c])) for c in self.summary.columns}
                             for n, r in self.summary.iterrows()}}
 
     def to_text(self) -> str:
         lines = [f"Closed-form Gaussian posterior, linear model, sigma_model fixed at {self.sigma_model_um:g} µm"]
         for n, r in self.summary.iterrows():
-            lines.append(f"  {n:18s} {r['mean']:9.2f} ± {r['sd']:6.2f} {units.SYMBOL[r['unit']]}   "
+            lines.append(f"  {n:18s} {r['iso'] if isinstance(r['iso'], str) else '—':10s} {r['mean']:9.2f} ± {r['sd']:6.2f} {units.SYMBOL[r['unit']]}   "
                          f"95 %: [{r['hdi_low']:.2f}, {r['hdi_high']:.2f}]")
         return "\n".join(lines)
 
@@ -57,5 +59,6 @@ def closed_form(campaign, *, sigma_model_um: float = 0.0, fix_dx_BT: bool = Fals
         m, sd = g.linear_combination(weights(name, g.names))
         unit = QUANTITIES[name].unit
         m, sd = units.from_internal(m, unit), units.from_internal(sd, unit)
-        rows[name] = {"mean": m, "sd": sd, "hdi_low": m - z * sd, "hdi_high": m + z * sd, "unit": unit}
+        rows[name] = {"iso": iso_symbol(name), "mean": m, "sd": sd, "hdi_low": m - z * sd, "hdi_high": m + z * sd,
+                      "unit": unit}
     return ClosedFormResult(pd.DataFrame.from_dict(rows, orient="index"), sigma_model_um, fix_dx_BT)

@@ -11,14 +11,49 @@ from .checks import thesis_assumption_effect
 JSON_COLUMNS = ["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit"]
 
 
+def _num(v):
+    """A JSON number, or None for None/NaN."""
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return None
+    return v if isinstance(v, (bool, str)) else float(v)
+
+
+def quantity_json(name: str, row, conformity=None) -> dict:
+    """One quantity's entry of the JSON summary: the SPEC §10 columns, its ISO 230-7 symbol, the GUM statement
+    (``u``, both 95 % coverage intervals, ``U`` and ``k`` or null with ``U_note`` saying why), its
+    identifiability and, with a tolerance, the conformity decision (docs/metrology.md)."""
+    out = {c: (row[c] if c == "unit" else float(row[c])) for c in JSON_COLUMNS}
+    through = row.get("identified_through")
+    out.update({
+        "iso": row.get("iso") if isinstance(row.get("iso"), str) else None,
+        "u": _num(row["u"]),
+        "ci95_shortest": [_num(row["ci95_shortest_low"]), _num(row["ci95_shortest_high"])],
+        "ci95_symmetric": [_num(row["ci95_symmetric_low"]), _num(row["ci95_symmetric_high"])],
+        "coverage_probability": _num(row["coverage_probability"]), "U": _num(row["U"]), "k": _num(row["k"]),
+        "U_note": row["U_note"] or None, "n_draws": int(row["n_draws"]),
+        "endpoint_tolerance": _num(row["endpoint_tolerance"]), "significant_digits": int(row["significant_digits"]),
+        "identified": row["identified"] if isinstance(row["identified"], bool) else None,
+        "identified_through": through.split(", ") if isinstance(through, str) and through else [],
+        "prior_growth": _num(row["prior_growth"]), "nuisance_growth": _num(row["nuisance_growth"]),
+    })
+    if conformity is not None and name in conformity.index:
+        c = conformity.loc[name]
+        out.update({"tolerance": {"low": _num(c["tolerance_low"]), "high": _num(c["tolerance_high"])},
+                    "p_nonconformance": _num(c["p_nonconformance"]), "conformity": c["conformity"],
+                    "acceptance_zone": [_num(c["acceptance_low"]), _num(c["acceptance_high"])]})
+        if c.get("next_measurement") is not None and isinstance(c.get("next_measurement"), str):
+            out["next_measurement"] = {"name": c["next_measurement"], "sd_after": _num(c["sd_after"]),
+                                       "sd_to_decide": _num(c["sd_to_decide"]), "would_decide": c["would_decide"]}
+    return out
+
+
 def posterior_json(result) -> dict:
     """JSON of a :class:`~mtmcal_bayes.posterior.PosteriorResult`: summary and comparison per quantity,
     diagnostics."""
     post = result.log_posterior
     return {
         "model": post.model_name, "data": post.data, "campaign": post.campaign.source, "fix_dx_BT": post.fix_dx_BT,
-        "summary": {n: {c: (row[c] if c == "unit" else float(row[c])) for c in JSON_COLUMNS}
-                    for n, row in result.summary.iterrows()},
+        "summary": {n: quantity_json(n, row, result.conformity) for n, row in result.summary.iterrows()},
         "comparison": {n: {k: (None if v is None or (isinstance(v, float) and math.isnan(v)) else v)
                            for k, v in row.items()} for n, row in result.comparison.iterrows()},
         "diagnostics": result.diagnostics.to_json(),
@@ -32,11 +67,13 @@ def format_posterior(result) -> str:
     data = {"ballbar": "", "probe": ", touch-probe data", "both": ", ball-bar and touch-probe data"}[result.data]
     lines = [f"Posterior, model {result.model}{data} ({r.chains.shape[0]} ensembles × {r.chains.shape[2]} walkers, "
              f"{r.n_steps} steps, {r.wall_time:.0f} s); 95 % HDI"]
-    hdr = f"{'quantity':18s} {'unit':>4s} {'mean':>9s} {'sd':>7s} {'95 % HDI':>20s} {'R-hat':>6s} {'ESS':>7s}  ball bar  probe(thesis)"
+    hdr = (f"{'quantity':18s} {'ISO 230-7':10s} {'unit':>4s} {'mean':>9s} {'sd':>7s} {'95 % HDI':>20s} {'R-hat':>6s} "
+           f"{'ESS':>7s}  ball bar  probe(thesis)")
     lines.append(hdr)
     c = result.comparison
     for name, row in s.iterrows():
-        line = (f"{name:18s} {units.SYMBOL[row['unit']]:>4s} {row['mean']:9.2f} {row['sd']:7.2f} "
+        iso = row["iso"] if isinstance(row["iso"], str) else "—"
+        line = (f"{name:18s} {iso:10s} {units.SYMBOL[row['unit']]:>4s} {row['mean']:9.2f} {row['sd']:7.2f} "
                 f"[{row['hdi_low']:8.2f}, {row['hdi_high']:8.2f}] {row['r_hat']:6.3f} {row['ess_bulk']:7.0f}")
         if name in c.index:
             ref = c.loc[name]
@@ -46,8 +83,11 @@ def format_posterior(result) -> str:
             line += f"  {pr:8.2f}{'' if ref['probe_reported_in_hdi'] else '*'}" if pr is not None and pr == pr else "        —"
         lines.append(line)
     lines.append("* = outside the 95 % HDI")
+    lines += ["", gum_block(s)]
+    if result.conformity is not None and not result.conformity.empty:
+        lines += ["", conformity_block(result.conformity, s)]
     if result.not_identified:
-        lines += ["", "Not identified by the data:"] + [f"  - {m}" for m in result.not_identified]
+        lines += ["", "Identifiability (closed-form prior-sensitivity check):"] + [f"  - {m}" for m in result.not_identified]
     d = result.diagnostics
     lines += ["", f"Diagnostics: converged {d.converged}, τ_max {d.tau_max_steps:.1f} steps, burn-in "
               f"{d.burn_in}, min bulk / tail ESS {d.min_ess_bulk:.0f} / {d.min_ess_tail:.0f} (target "
@@ -56,6 +96,44 @@ def format_posterior(result) -> str:
                  if d.independence_acceptance == d.independence_acceptance else "")]
     if result.reference is not None:
         lines.append(f"Accuracy {result.reference.sentence()}")
+    return "\n".join(lines)
+
+
+def gum_block(s) -> str:
+    """The GUM statement of every quantity as a console table (docs/metrology.md)."""
+    n = int(s["n_draws"].iloc[0])
+    lines = [f"Uncertainty statement (GUM-S1, {n:,} posterior draws; coverage probability 95 %; U = k·u only where "
+             "the posterior is close to Gaussian)",
+             f"{'quantity':18s} {'unit':>4s} {'estimate':>9s} {'u':>7s} {'shortest 95 %':>20s} {'symmetric 95 %':>20s} "
+             f"{'U (k)':>13s} {'endpoints ±':>11s}"]
+    for name, r in s.iterrows():
+        U = f"{r['U']:.2f} ({r['k']:.2f})" if isinstance(r["U"], float) and r["U"] == r["U"] else "not stated"
+        lines.append(f"{name:18s} {units.SYMBOL[r['unit']]:>4s} {r['mean']:9.2f} {r['u']:7.2f} "
+                     f"[{r['ci95_shortest_low']:8.2f}, {r['ci95_shortest_high']:8.2f}] "
+                     f"[{r['ci95_symmetric_low']:8.2f}, {r['ci95_symmetric_high']:8.2f}] {U:>13s} "
+                     f"{r['endpoint_tolerance']:11.2g}")
+    lines.append("U not stated: y ± 1.96u differs from the symmetric interval by more than the numerical tolerance "
+                 "(JSON: U_note); endpoints ± = 2 Monte-Carlo standard errors")
+    return "\n".join(lines)
+
+
+def conformity_block(conf, s) -> str:
+    """Tolerances, probabilities of nonconformance, ISO 14253-1 verdicts and the way to decide the undecided."""
+    from .conformity import tolerance_text
+
+    lines = ["Conformity (ISO 14253-1, guard bands = the 95 % coverage interval)",
+             f"{'quantity':18s} {'ISO 230-7':10s} {'tolerance':>16s} {'P(nonconf.)':>11s}  verdict"]
+    for name, r in conf.iterrows():
+        row = s.loc[name]
+        iso = row["iso"] if isinstance(row["iso"], str) else "—"
+        lines.append(f"{name:18s} {iso:10s} {tolerance_text(r, row['unit']):>16s} {r['p_nonconformance']:11.3f}  "
+                     f"{r['conformity']}")
+        if isinstance(r.get("next_measurement"), str):
+            sym = units.SYMBOL[row["unit"]]
+            verdict = "it would decide" if r["would_decide"] else "not enough on its own"
+            lines.append(f"{'':30s}next measurement: {r['next_measurement']} would bring its sd from {row['sd']:.2g} "
+                         f"to {r['sd_after']:.2g} {sym}; deciding needs < {r['sd_to_decide']:.2g} {sym} if the "
+                         f"estimate stays: {verdict} (mtmcal-bayes plan --target {name})")
     return "\n".join(lines)
 
 

@@ -26,6 +26,7 @@ from .checks import (
     reference_warnings,
 )
 from .comparison import comparison
+from .conformity import conformity_table
 
 
 @dataclass(frozen=True)
@@ -80,6 +81,9 @@ class PosteriorResult:
     sampling : SamplingResult
         the chains of every ensemble in internal units, and the sampler's own facts.
     warnings, not_identified : sentences to heed.
+    conformity : pandas.DataFrame or None
+        with tolerances: per toleranced quantity its limits, probability of nonconformance and verdict
+        (:func:`~mtmcal_bayes.posterior.conformity.conformity_table`).
     """
 
     idata: object
@@ -90,6 +94,7 @@ class PosteriorResult:
     not_identified: list[str] = field(default_factory=list)
     reference: ReferenceCheck | None = None
     output: str | None = None  # where :meth:`save` wrote the NetCDF
+    conformity: pd.DataFrame | None = None  # one row per toleranced quantity (posterior.conformity)
 
     @property
     def log_posterior(self) -> LogPosterior:
@@ -141,9 +146,11 @@ class PosteriorResult:
 
 def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False,
                      settings: SamplerSettings | None = None, checkpoint=None,
-                     progress: Progress | None = None, data: str = "ballbar") -> PosteriorResult:
+                     progress: Progress | None = None, data: str = "ballbar",
+                     tolerances: dict | None = None) -> PosteriorResult:
     """Sample the posterior of ``campaign`` given its ``data`` (``"ballbar"``, ``"probe"`` or ``"both"``) and
-    summarise it against the deterministic results."""
+    summarise it against the deterministic results; decide conformity with ``tolerances`` (``{name:
+    Tolerance}``; default the campaign's own)."""
     post = LogPosterior(campaign, model, fix_dx_BT=fix_dx_BT, data=data)
     result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress)
     seed = settings.seed if settings else None
@@ -152,4 +159,6 @@ def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False
     comp = comparison(summary, identify(campaign))
     ref = reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary) + reference_warnings(ref, summary)
-    return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref)
+    tol = campaign.tolerances if tolerances is None else tolerances
+    conf = conformity_table(idata, summary, tol) if tol else None
+    return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf)

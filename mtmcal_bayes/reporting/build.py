@@ -15,9 +15,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from .. import units
 from ..errors import MtmcalError
 from ..identification import IdentificationResult, identify
 from ..identification.output import identification_table
+from ..inference.gum import GUM_COLUMNS, certificate_sentence
 from ..inference.sampling import SamplerSettings
 from ..io.netcdf import write_netcdf_atomic
 from ..io.textfiles import atomic_directory
@@ -26,6 +28,7 @@ from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.checks import thesis_assumption_effect
+from ..posterior.conformity import CONFORMITY_COLUMNS, conformity_table, tolerance_text
 from ..posterior.consistency import (
     DATA_LABELS,
     InstrumentComparison,
@@ -36,12 +39,14 @@ from ..posterior.sample import PosteriorResult, sample_posterior
 from ..progress import Progress, ProgressEvent, emit
 from ..version import __version__
 from . import compare, corner_plot, forest, mcmc_plots, polar, ppc, widths
+from .decisions import SUGGESTION_COLUMNS, add_suggestions, suggestion_text
 from .drawing import draw_figures
 from .html import Page
 from .missing import missing_data
 
-SUMMARY_COLUMNS = ["unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
-                   "prior_sd", "sd_ratio", "identified"]
+SUMMARY_COLUMNS = ["iso", "unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
+                   "prior_sd", "sd_ratio", "identified", "identified_through", "prior_growth", "nuisance_growth",
+                   *GUM_COLUMNS]
 REFERENCE_COLUMNS = ["ballbar", "ballbar_in_hdi", "ballbar_z", "probe_reported", "probe_reported_in_hdi",
                      "probe_reported_z", "probe_recomputed", "probe_recomputed_in_hdi", "probe_recomputed_z"]
 
@@ -95,6 +100,10 @@ def summary_table(rep: PosteriorResult) -> pd.DataFrame:
     c = rep.comparison.reindex(s.index)
     for col in REFERENCE_COLUMNS:
         s[col] = c[col] if col in c else None
+    if rep.conformity is not None:
+        conf = rep.conformity.reindex(s.index)
+        for col in CONFORMITY_COLUMNS + SUGGESTION_COLUMNS:
+            s[col] = conf[col] if col in conf else None
     s.index.name = "quantity"
     return s
 
@@ -113,7 +122,8 @@ def _check_output_dir(out_dir: Path) -> None:
 
 def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerSettings | None = None,
                  fix_dx_BT: bool = False, compare_models: bool = False, posterior: PosteriorResult | None = None,
-                 progress: Progress | None = None, command: str = "", data: str = "ballbar") -> Report:
+                 progress: Progress | None = None, command: str = "", data: str = "ballbar",
+                 tolerances: dict | None = None) -> Report:
     """Sample, draw, tabulate and write the report of ``campaign`` into ``out_dir``.
 
     ``posterior``: a posterior of this campaign already sampled (its model and
@@ -121,6 +131,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     ``progress`` receives the sampler's events and one ``"report"`` event per stage.  ``data``: the
     measurements of the main posterior (``"ballbar"``, ``"probe"``, ``"both"``); a campaign with
     touch-probe readings also gets the three posteriors side by side and the instruments' consistency.
+    ``tolerances`` (``{name: Tolerance}``, default the campaign's own) adds the conformity decisions.
     """
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
@@ -137,6 +148,11 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
         say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
         rep = sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
                                data=data)
+    tol = campaign.tolerances if tolerances is None else tolerances
+    if tol:
+        rep.conformity = conformity_table(rep.idata, rep.summary, tol)
+        say("asking the planner how to decide the undecided tolerances")
+        add_suggestions(rep, campaign)
     instruments = None
     if campaign.has_probe_readings():
         def other(d):
@@ -246,7 +262,7 @@ def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
     s = summary.loc[[n for n in IDENTIFIABLE if n in summary.index] +
                     [n for n in summary.index if n not in IDENTIFIABLE]]
     unit = s["unit"].map({"arcsec": "″", "um": "µm"})
-    out = pd.DataFrame({"unit": unit, "mean": s["mean"], "sd": s["sd"], "HDI 2.5 %": s["hdi_low"],
+    out = pd.DataFrame({"ISO 230-7": s["iso"].fillna("—"), "unit": unit, "mean": s["mean"], "sd": s["sd"], "HDI 2.5 %": s["hdi_low"],
                         "HDI 97.5 %": s["hdi_high"], "ball bar": s["ballbar"], "in HDI": s["ballbar_in_hdi"],
                         "probe (thesis)": s["probe_reported"], "in HDI ": s["probe_reported_in_hdi"],
                         "probe (recomputed)": s["probe_recomputed"], "in HDI  ": s["probe_recomputed_in_hdi"],
@@ -299,6 +315,41 @@ def _instruments_section(page: Page, ins: InstrumentComparison, tmp: Path) -> No
     page.table(sd.rename(columns=lambda c: f"sd, {c}"), digits=2)
 
 
+def _statement_section(page: Page, rep: PosteriorResult) -> None:
+    """The GUM statement of each quantity as a calibration certificate gives it, and the tolerance decisions."""
+    s = rep.summary
+    page.section("statement", "Uncertainty statement")
+    page.paragraph(
+        "In the form of a calibration certificate (GUM, JCGM 100; GUM Supplement 1, JCGM 101: the posterior draws "
+        "are the Monte-Carlo sample). The expanded uncertainty U = k·u is stated only where the posterior is close "
+        "to Gaussian (y ± U within the numerical tolerance of the probabilistically symmetric interval, GUM-S1 §8); "
+        "elsewhere the coverage intervals are the statement. ISO 230-7 symbols as in docs/metrology.md.")
+    page.box("statement", "Results", [certificate_sentence(n, r, r["iso"] if isinstance(r["iso"], str) else None)
+                                      for n, r in s.iterrows() if n != "sigma_model"])
+    gum = s.rename_axis("quantity")[["iso", "mean", "u", "ci95_shortest_low", "ci95_shortest_high", "ci95_symmetric_low", "ci95_symmetric_high",
+             "U", "k", "endpoint_tolerance", "significant_digits"]]
+    page.table(gum.rename(columns={"iso": "ISO 230-7", "mean": "estimate", "ci95_shortest_low": "shortest low",
+                                   "ci95_shortest_high": "shortest high", "ci95_symmetric_low": "symmetric low",
+                                   "ci95_symmetric_high": "symmetric high", "endpoint_tolerance": "endpoints ±",
+                                   "significant_digits": "digits"}), digits=3)
+    if rep.conformity is None or rep.conformity.empty:
+        return
+    page.section("conformity", "Conformity with the tolerances")
+    page.paragraph(
+        "ISO 14253-1 decision rule with guard bands equal to the uncertainty: conforms when the shortest 95 % "
+        "coverage interval lies inside the tolerance, does not conform when it lies wholly outside, undecided when "
+        "it straddles a limit. P(nonconformance) is the posterior probability of lying outside the tolerance. For "
+        "an undecided quantity the planner names the next measurement that would make it most certain.")
+    rows = []
+    for n, r in rep.conformity.iterrows():
+        unit = s.loc[n, "unit"]
+        nxt = r.get("next_measurement")
+        rows.append({"quantity": n, "ISO 230-7": s.loc[n, "iso"] or "—", "tolerance": tolerance_text(r, unit),
+                     "P(nonconformance)": r["p_nonconformance"], "verdict": r["conformity"],
+                     "next measurement": suggestion_text(n, r, units.SYMBOL[unit]) if isinstance(nxt, str) else ""})
+    page.table(pd.DataFrame(rows), digits={"P(nonconformance)": 3}, index=False)
+
+
 def _planning(campaign, rep):
     """The plan for the quantities the data do not identify, else for all eight."""
     targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
@@ -320,6 +371,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         "the touch-probe values (as printed in Table 5.3 and as recomputed from Table 5.2). 'in HDI' says whether "
         "that value lies inside the 95 % HDI. Angles in arc seconds, lengths in micrometres. Full table: summary.csv.")
     page.table(_results_table(summary), digits={"R-hat": 3})
+    _statement_section(page, rep)
 
     page.section("corner", "Joint posterior")
     page.figure(tmp / "corner.png", corner_plot.CAPTION + (" Off scale, not drawn: " + "; ".join(c.off_scale) + "."

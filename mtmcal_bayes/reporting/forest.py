@@ -11,6 +11,7 @@ from ..figure_style import (
     DATA_COLOURS,
     MODEL_COLOURS,
     REFERENCE_LABELS,
+    iso_mathtext,
     new_figure,
     symbol,
     unit_symbol,
@@ -80,7 +81,9 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
         ax.set_xlim(xlim)
         ax.set_ylim(-0.6, ys[0] + 0.6)
         ax.set_yticks([])
-        ax.set_ylabel(f"{symbol(n)}\n[{unit_symbol(n)}]", rotation=0, ha="right", va="center", fontsize=12)
+        iso = iso_mathtext(n)
+        ax.set_ylabel(f"{symbol(n)}\n{iso + chr(10) if iso else ''}[{unit_symbol(n)}]", rotation=0, ha="right",
+                      va="center", fontsize=12)
         if xlim[0] < 0 < xlim[1]:
             ax.axvline(0, color="0.6", lw=0.8, zorder=0)
         ax.grid(axis="x", alpha=0.3)

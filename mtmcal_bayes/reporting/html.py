@@ -19,6 +19,7 @@ figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
 figcaption{font-size:.9em;color:#444;margin-top:.4em}
 .warn{background:#fff4e5;border-left:5px solid #e69f00;padding:.6em 1em;margin:1em 0}
 .missing{background:#eef4fb;border-left:5px solid #0072b2;padding:.6em 1em;margin:1em 0}
+.statement{background:#f1f8f4;border-left:5px solid #009e73;padding:.6em 1em;margin:1em 0}
 .meta{color:#555;font-size:.9em}code{background:#f6f6f6;padding:0 3px}
 nav a{margin-right:1em}
 """
@@ -43,7 +44,7 @@ class Page:
         self.parts.append(fragment)
 
     def box(self, kind: str, title: str, items: list[str]) -> None:
-        """A highlighted list (``kind`` ``"warn"`` or ``"missing"``)."""
+        """A highlighted list (``kind`` ``"warn"``, ``"missing"`` or ``"statement"``)."""
         if items:
             lis = "".join(f"<li>{html.escape(i)}</li>" for i in items)
             self.parts.append(f'<div class="{kind}"><strong>{html.escape(title)}</strong><ul>{lis}</ul></div>')

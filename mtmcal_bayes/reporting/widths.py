@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.lines import Line2D
 
-from ..figure_style import COLOURS, new_figure, symbol, unit_symbol
+from ..figure_style import COLOURS, label, new_figure
 from ..inference.analytic import NOT_IDENTIFIED_GROWTH, WIDEN
 from ..parameters import IDENTIFIABLE
 
@@ -15,7 +15,9 @@ CAPTION = (
     "posterior/prior written beside it: a ratio near 1 means the data taught nothing about that quantity. "
     f"Red labels mark quantities that are not identified by the data: their posterior sd grows more than "
     f"{NOT_IDENTIFIED_GROWTH:g}× when the deviation priors are widened {WIDEN:g}× (closed-form check), "
-    "so their width reflects the prior, not the measurement."
+    "so their width reflects the prior, not the measurement. 'Only through the prior on …' marks quantities whose "
+    f"sd grows more than {NOT_IDENTIFIED_GROWTH:g}× when the nuisance priors (T-ball centring, tool length, W-ball "
+    "clamping) are widened instead: the data identify them only with that set-up knowledge (docs/metrology.md)."
 )
 
 
@@ -31,9 +33,12 @@ def widths_figure(summary: pd.DataFrame, names=IDENTIFIABLE):
     lo, hi = float(min(s["sd"].min(), s["prior_sd"].min())), float(max(s["sd"].max(), s["prior_sd"].max()))
     ax.set_xlim(lo / 3, hi * 6)
     for yi, (n, r) in zip(y, s.iterrows()):
-        ax.text(max(r["prior_sd"], r["sd"]) * 1.25, yi, f"× {r['sd_ratio']:.3g}" + ("" if r["identified"] else
-                "  not identified"), va="center", fontsize=9, color="black" if r["identified"] else "#C00000")
-    ax.set_yticks(y, [f"{symbol(n)} [{unit_symbol(n)}]" for n in names], fontsize=11)
+        through = r.get("identified_through")
+        note = ("" if r["identified"] else "  not identified") + (f"  only through the prior on {through}"
+                                                                  if isinstance(through, str) and through else "")
+        ax.text(max(r["prior_sd"], r["sd"]) * 1.25, yi, f"× {r['sd_ratio']:.3g}" + note, va="center", fontsize=9,
+                color="black" if r["identified"] else "#C00000")
+    ax.set_yticks(y, [label(n) for n in names], fontsize=11)
     for tick, n in zip(ax.get_yticklabels(), names):
         if not s.loc[n, "identified"]:
             tick.set_color("#C00000")
