@@ -53,6 +53,20 @@ def tolerances_of(tolerances) -> dict | None:
     return load_tolerances(tolerances)
 
 
+def sigma_model_of(sigma_model_um: float | None) -> float | None:
+    """sigma_model in mm from µm (None: sampled); a negative or non-finite value is a ``ParameterError``."""
+    import math
+
+    from .errors import ParameterError
+    from .units import to_internal
+
+    if sigma_model_um is None:
+        return None
+    if not (isinstance(sigma_model_um, (int, float)) and math.isfinite(sigma_model_um) and 0 <= sigma_model_um <= 1000):
+        raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a sigma_model in µm (0 to 1000)")
+    return to_internal(float(sigma_model_um), "um")
+
+
 def _writable(path, what: str) -> None:
     if path is not None:
         check_writable(path, what)
@@ -104,7 +118,8 @@ def sensitivity(campaign: CampaignLike = None, *, model: str = "htm-thesis") -> 
 
 def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | None = None, fix_dx_BT: bool = False,
            target_ess: float = TARGET_ESS, sampler: str = "emcee", max_steps: int = MAX_STEPS, checkpoint=None,
-           output=None, progress: Progress | None = None, data: str = "ballbar", tolerances=None) -> PosteriorResult:
+           output=None, progress: Progress | None = None, data: str = "ballbar", tolerances=None,
+           sigma_model_um: float | None = None) -> PosteriorResult:
     """The posterior of the deviations and nuisance offsets, summarised beside the ball-bar and touch-probe values.
 
     emcee ensembles run until the bulk and tail ESS of the eight quantities reach ``target_ess`` and R-hat
@@ -114,7 +129,8 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     ``"ballbar"`` (default), ``"probe"`` (touch-probe readings) or ``"both"`` (fused).  ``tolerances``: a
     TOML file with ``[tolerances]`` or ``{name: Tolerance}`` (default the campaign's own ``[tolerances]``):
     each toleranced quantity gets its probability of nonconformance, a verdict and, when undecided, the
-    planner's next measurement for it.
+    planner's next measurement for it.  ``sigma_model_um`` fixes the model-discrepancy scale (µm) instead of
+    sampling it.
     """
     from .inference.sampling import SamplerSettings
     from .models import check_data, check_model
@@ -129,7 +145,7 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     tol = tolerances_of(tolerances)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     result = sample_posterior(c, model=model, fix_dx_BT=fix_dx_BT, settings=settings, checkpoint=checkpoint,
-                              progress=progress, data=data, tolerances=tol)
+                              progress=progress, data=data, tolerances=tol, sigma_model=sigma_model_of(sigma_model_um))
     add_suggestions(result, c)
     if output is not None:
         result.save(output)
@@ -147,13 +163,15 @@ def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, f
 def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,
            fix_dx_BT: bool = False, compare_models: bool = False, target_ess: float = TARGET_ESS,
            sampler: str = "emcee", max_steps: int = MAX_STEPS, posterior: PosteriorResult | None = None,
-           progress: Progress | None = None, command: str = "", data: str = "ballbar", tolerances=None) -> Report:
+           progress: Progress | None = None, command: str = "", data: str = "ballbar", tolerances=None,
+           sigma_model_um: float | None = None) -> Report:
     """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
 
     ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
     ``compare_models`` adds the same campaign under all three forward models.  ``data`` as for
     :func:`sample`; a campaign with touch-probe readings also gets its ball-bar-only, probe-only and
-    fused posteriors side by side and the instruments' consistency check.  ``tolerances`` as for :func:`sample`.
+    fused posteriors side by side and the instruments' consistency check.  ``tolerances`` and
+    ``sigma_model_um`` as for :func:`sample`.
     """
     from .inference.sampling import SamplerSettings
     from .models import check_data, check_model
@@ -165,7 +183,7 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     return build_report(c, output, model=model, settings=settings, fix_dx_BT=fix_dx_BT, compare_models=compare_models,
                         posterior=posterior, progress=progress, command=command, data=data,
-                        tolerances=tolerances_of(tolerances))
+                        tolerances=tolerances_of(tolerances), sigma_model=sigma_model_of(sigma_model_um))
 
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,

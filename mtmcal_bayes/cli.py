@@ -63,12 +63,12 @@ def cmd_sensitivity(args) -> int:
 
 def cmd_sample(args) -> int:
     if args.closed_form:
-        return _show(api.closed_form(args.campaign, sigma_model_um=args.sigma_model_um, fix_dx_BT=args.fix_dx_BT,
+        return _show(api.closed_form(args.campaign, sigma_model_um=args.sigma_model_um or 0.0, fix_dx_BT=args.fix_dx_BT,
                                      model=args.model), args)
     result = api.sample(args.campaign, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                         target_ess=args.target_ess, sampler=args.sampler, max_steps=args.max_steps,
                         checkpoint=args.checkpoint, output=args.output, progress=None if args.quiet else StderrProgress(), data=args.data,
-                        tolerances=args.tolerances)
+                        tolerances=args.tolerances, sigma_model_um=args.sigma_model_um)
     _warn(result.warnings)
     return _show(result, args)
 
@@ -78,7 +78,7 @@ def cmd_report(args) -> int:
     rep = api.report(args.campaign, output=args.output, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                      compare_models=args.compare_models, target_ess=args.target_ess, sampler=args.sampler,
                      max_steps=args.max_steps, progress=None if args.quiet else StderrProgress(), command=command, data=args.data,
-                     tolerances=args.tolerances)
+                     tolerances=args.tolerances, sigma_model_um=args.sigma_model_um)
     _warn(rep.posterior.warnings)
     return _show(rep, args)
 
@@ -145,6 +145,8 @@ def _sampler_options(s) -> None:
     s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")
     s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances] to decide conformity against "
                    "(default: the campaign's own section, if any)")
+    s.add_argument("--sigma-model-um", type=float, default=None, help="fix sigma_model at this value, µm "
+                   "(default: sampled from its prior; 0 with --closed-form)")
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
 
@@ -182,9 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", metavar="posterior.nc", help="write the ArviZ InferenceData (NetCDF)")
     s.add_argument("--checkpoint", metavar="FILE", help="HDF5 checkpoint: written as it goes, resumed if it exists")
     _sampler_options(s)
-    s.add_argument("--closed-form", action="store_true",
-                   help="instant closed-form Gaussian posterior (linear model, fixed sigma_model)")
-    s.add_argument("--sigma-model-um", type=float, default=0.0, help="sigma_model for --closed-form (default 0)")
+    s.add_argument("--closed-form", action="store_true", help="instant closed-form Gaussian posterior (linear model)")
 
     s = _command(sub, "report", cmd_report, "sample the posterior and write an HTML report with figures, tables and NetCDF",
                  json_help="print the summary, diagnostics and written files as JSON")

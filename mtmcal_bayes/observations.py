@@ -74,6 +74,13 @@ class Observations:
         repeated = self.n > 1
         return np.where(repeated, self.sd, self.pooled_sd()) ** 2 / self.n + accuracy**2
 
+    def noise_components(self, accuracy: float) -> dict[str, np.ndarray]:
+        """:meth:`noise_variance` by source, each ``(m,)`` mm²: ``"repeatability"`` (s²/n) and
+        ``"instrument"`` (accuracy²); they sum to it."""
+        total = self.noise_variance(accuracy)
+        instrument = np.full(len(total), accuracy**2)
+        return {"repeatability": total - instrument, "instrument": instrument}
+
     def pooled_sd(self) -> float:
         """Pooled repeat sd of the repeated components, mm; 0.25 µm when none was repeated."""
         repeated = self.n > 1
@@ -154,6 +161,10 @@ class ProbeObservations:
         """Noise variance of each reading without sigma_model ``(m,)``, mm² (the probe's own)."""
         return self.base_var
 
+    def noise_components(self, accuracy: float | None = None) -> dict[str, np.ndarray]:
+        """:meth:`noise_variance` by source: all of it ``"probe readings"`` (repeat scatter or sphere fit)."""
+        return {"probe readings": self.base_var}
+
 
 @dataclass(frozen=True)
 class JointObservations:
@@ -178,6 +189,12 @@ class JointObservations:
 
     def noise_variance(self, accuracy: float) -> np.ndarray:
         return np.concatenate([p.noise_variance(accuracy) for p in self.parts])
+
+    def noise_components(self, accuracy: float) -> dict[str, np.ndarray]:
+        """The parts' noise sources over the joint vector (zero where a part lacks a source)."""
+        parts = [p.noise_components(accuracy) for p in self.parts]
+        names = list(dict.fromkeys(k for c in parts for k in c))
+        return {k: np.concatenate([c.get(k, np.zeros(len(p))) for c, p in zip(parts, self.parts)]) for k in names}
 
     def slices(self) -> list[tuple[object, slice]]:
         """Each part with its slice of the joint vector."""

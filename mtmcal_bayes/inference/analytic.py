@@ -44,6 +44,17 @@ class GaussianPosterior:
         return rng.multivariate_normal(self.mean, self.cov, size=n, method="cholesky")
 
 
+def linearisation(post: LogPosterior, theta0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``A`` (m, p) and ``c`` (m,) with ``f(θ) ≈ c + A θ``: the design of the ``linear`` model (exact), else the
+    Jacobian of the forward model at ``theta0`` (default zero), internal units."""
+    model = post.forward
+    if hasattr(model, "design"):
+        return model.design, np.zeros(model.design.shape[0])
+    theta0 = np.zeros(post.p) if theta0 is None else np.asarray(theta0, float)
+    A = jacobian(model, theta0)
+    return A, model.predict(theta0) - A @ theta0
+
+
 def gaussian_posterior(post: LogPosterior, sigma_model: float = 0.0, *, theta0: np.ndarray | None = None,
                        allow_non_normal: bool = False, prior_scale: np.ndarray | None = None) -> GaussianPosterior:
     """Gaussian posterior of ``post``'s forward parameters at fixed ``sigma_model`` (mm).
@@ -63,13 +74,7 @@ def gaussian_posterior(post: LogPosterior, sigma_model: float = 0.0, *, theta0: 
                               "has another prior in [priors]")
     mu0 = np.array([q.centre for q in priors])
     var0 = (np.array([q.sd for q in priors]) * (1.0 if prior_scale is None else prior_scale)) ** 2
-    model = post.forward
-    if hasattr(model, "design"):
-        A, c = model.design, np.zeros(model.design.shape[0])
-    else:
-        theta0 = np.zeros(p) if theta0 is None else np.asarray(theta0, float)
-        A = jacobian(model, theta0)
-        c = model.predict(theta0) - A @ theta0
+    A, c = linearisation(post, theta0)
     V = post.likelihood.base_var + sigma_model**2
     prec = np.diag(1.0 / var0) + A.T @ (A / V[:, None])
     cov = np.linalg.inv(prec)

@@ -35,6 +35,7 @@ class GaussianMeanLikelihood:
         self.observations = observations
         self.y = observations.mean  # (m,) mm
         self.base_var = observations.noise_variance(accuracy)  # (m,) mm²
+        self.noise = observations.noise_components(accuracy)  # {source: (m,) mm²}, summing to base_var
 
     def with_means(self, y: np.ndarray) -> GaussianMeanLikelihood:
         """The same likelihood (same repeat sds, counts and accuracy) for other means ``y`` (m,), mm."""

@@ -16,6 +16,7 @@ from ..iso import iso_symbol
 from ..observations import JointObservations, ProbeObservations
 from ..parameters import DERIVED, NUISANCE_MEANING, combine, quantity_unit, weights
 from .analytic import NOT_IDENTIFIED_GROWTH, REPORTED, WIDEN, prior_sensitivity
+from .budget import linearisation_point, variance_budget
 from .gum import gum_table
 
 HDI_PROB = 0.95
@@ -68,11 +69,19 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
     sub = flat[:, idx, :].reshape(-1, q)
     pred = post.forward.predict(sub[:, : post.p])
     rep = units.from_internal(post.likelihood.replicate(pred, post.sigma(sub), rng).reshape(K, len(idx), -1), "um")
-    observed, predictive, coords, dims = {}, {}, {}, {}
+    # pointwise log-likelihood of every kept draw (PSIS-LOO, posterior.loo): Normal density of the observed
+    # mean in µm, variance base_var + sigma_model² of that draw — one forward-model call on all draws
+    every = flat.reshape(-1, q)
+    mu = units.from_internal(post.forward.predict(every[:, : post.p]), "um")
+    sd = units.from_internal(np.sqrt(post.likelihood.variance(post.sigma(every))), "um")
+    z = (units.from_internal(post.likelihood.y, "um") - mu) / sd
+    loglik = (-0.5 * (z * z + np.log(2 * np.pi)) - np.log(sd)).reshape(K, W * S, -1)
+    observed, predictive, log_likelihood, coords, dims = {}, {}, {}, {}, {}
     for var, obs, sl in observation_parts(post.forward.observations):
         coords[f"{var}_observation"] = obs.labels
         dims[var] = [f"{var}_observation"]
         predictive[var] = rep[..., sl]
+        log_likelihood[var] = loglik[..., sl]
         observed[var] = units.from_internal(obs.mean, "um")
     if "eccentricity" in dims:  # the ball bar's keep their historical name
         coords["observation"] = coords.pop("eccentricity_observation")
@@ -81,6 +90,7 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
         posterior=posterior,
         prior=prior,
         posterior_predictive=predictive,
+        log_likelihood=log_likelihood,
         observed_data=observed,
         sample_stats={"lp": lp},
         coords=coords,
@@ -97,6 +107,7 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
         "units": "arc seconds for angles, micrometres for lengths",
     })
     idata.observed_data.attrs["unit"] = "um (mean of the repeats; probe readings minus their nominal)"
+    idata.log_likelihood.attrs["unit"] = "log density of the observed mean in um (Normal, variance base + sigma_model²)"
     return idata
 
 
@@ -141,7 +152,16 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     s = s[["iso", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
            "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identified_through",
            "mcse_mean", "mcse_sd"]]
-    return pd.concat([s, gum_table(idata, s)], axis=1)
+    return pd.concat([s, gum_table(idata, s), budget_columns(idata, post).reindex(s.index)], axis=1)
+
+
+def budget_columns(idata, post) -> pd.DataFrame:
+    """``budget:<source>`` columns: each reported quantity's share of posterior variance by source
+    (:func:`~mtmcal_bayes.inference.budget.variance_budget`), averaged over the posterior draws of sigma_model;
+    kinematic models linearised at the posterior mean."""
+    sigma = (units.to_internal(np.asarray(idata.posterior["sigma_model"], float).ravel(), "um")
+             if post.fixed_sigma is None and "sigma_model" in idata.posterior else None)
+    return variance_budget(post, sigma, theta0=linearisation_point(idata, post)).add_prefix("budget:")
 
 
 def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:

@@ -14,6 +14,21 @@ at the thesis deviations, bench/nonlinearity.py).
 More repeats of an existing run do not add rows: they shrink ``s²/n`` in the
 variance ``s²/n + u_inst² + sigma_model²`` of that run's means, and only
 that term (the instrument error and the model discrepancy do not average out).
+
+What the data teach about ``sigma_model`` itself (:meth:`Planner.sigma_information`):
+the means are marginally ``N(A μ0, C(σ))`` with ``C = A Σ0 Aᵀ + N(σ)``, ``N`` the
+noise covariance (diagonal ``base_var + σ²``), so the Fisher information about σ is
+``I(σ) = ½ tr(C⁻¹ ∂C C⁻¹ ∂C) = 2σ² tr(C⁻²)`` (``∂C/∂σ = 2σ·1``).  Directions of
+the data that the parameters can follow (the column space of ``A`` under weak
+priors) carry almost none of it: only means beyond what the parameters absorb
+(redundant runs) do.  The posterior variance of σ is taken as
+``1/(1/var_prior + I(σ0))`` (Laplace approximation), its contraction
+``1 − var_post/var_prior = var_prior·I/(1 + var_prior·I)``: 0.5 once ``I``
+equals the prior precision.  A candidate run ``k`` times means ``k`` runs of it
+at its setup, the second and later ones each on its own W-ball placement (own
+mount offsets, as the campaign format requires of a second run of one pattern,
+setup and mount); more repeats of an existing run add no mean, so no degree of
+freedom about σ.
 """
 
 from __future__ import annotations
@@ -38,6 +53,10 @@ from .candidates import Candidate
 
 #: a candidate that changes no target's sd by this fraction identifies nothing new
 MIN_GAIN = 0.01
+#: the posterior of sigma_model "differs from its prior" once its variance is below (1 − this) of the prior's
+SIGMA_CONTRACTION = 0.5
+#: most runs of one candidate counted towards :data:`SIGMA_CONTRACTION`
+MAX_RUNS = 50
 
 
 def check_targets(targets) -> list[str]:
@@ -75,6 +94,50 @@ class Evaluation:
     def informative(self) -> np.ndarray:
         """(K,) whether some target's sd falls by at least :data:`MIN_GAIN`."""
         return np.any(self.sd_after < (1.0 - MIN_GAIN) * self.sd_before, axis=1)
+
+
+def sigma_contraction(fisher, prior_var: float):
+    """``1 − var_post/var_prior`` of sigma_model with ``var_post = 1/(1/var_prior + fisher)`` (Laplace)."""
+    x = prior_var * np.asarray(fisher, dtype=float)
+    return x / (1.0 + x)
+
+
+def trace_inv_sq(M1: np.ndarray, M2: np.ndarray, M3: np.ndarray, t) -> np.ndarray:
+    """``tr(C⁻²)`` of ``C = X Xᵀ + N`` (batched over leading axes) from ``Mj = Xᵀ N⁻ʲ X`` and ``t = tr(N⁻²)``.
+
+    ``X`` is the design in prior-sd units (the prior of its parameters standard normal).  Woodbury:
+    ``C⁻¹ = N⁻¹ − N⁻¹ X S Xᵀ N⁻¹`` with ``S = (1 + M1)⁻¹``, so
+    ``tr(C⁻²) = t − 2 tr(S M3) + tr(S M2 S M2)``: matrices of the parameters' size, whatever the number of means.
+    """
+    S = np.linalg.inv(np.eye(M1.shape[-1]) + M1)
+    G = S @ M2
+    out = t - 2.0 * np.einsum("...ij,...ji->...", S, M3) + np.einsum("...ij,...ji->...", G, G)
+    return np.maximum(out, 0.0)
+
+
+def _moments(X: np.ndarray, N_inv: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``(Xᵀ N⁻¹ X, Xᵀ N⁻² X, Xᵀ N⁻³ X, tr N⁻²)`` for one block of means with inverse noise covariance ``N_inv``."""
+    N2 = N_inv @ N_inv
+    return X.T @ N_inv @ X, X.T @ N2 @ X, X.T @ (N2 @ N_inv) @ X, float(np.trace(N2))
+
+
+@dataclass
+class SigmaInformation:
+    """What the data would teach about sigma_model (Laplace approximation, see the module docstring).
+
+    ``sigma`` the value it is evaluated at and ``prior_var`` the variance of its prior (mm, mm²);
+    ``fisher_now`` (1/mm²) and ``contraction_now`` of the campaign as it is; ``fisher`` (K, R) after
+    1..R runs of each candidate; ``contraction`` (K,) after one run; ``runs_needed`` (K,) the fewest runs
+    whose contraction reaches :data:`SIGMA_CONTRACTION`, 0 where R runs do not.
+    """
+
+    sigma: float
+    prior_var: float
+    fisher_now: float
+    contraction_now: float
+    fisher: np.ndarray
+    contraction: np.ndarray
+    runs_needed: np.ndarray
 
 
 class Planner:
@@ -182,10 +245,11 @@ class Planner:
         cov = np.linalg.inv(precisions)
         return self.T @ cov @ self.T.T
 
-    def evaluate(self, candidates: list[Candidate] | None = None) -> Evaluation:
-        """Expected target sds, information gain and identifiability after each candidate."""
+    def evaluate(self, candidates: list[Candidate] | None = None, *, rows=None) -> Evaluation:
+        """Expected target sds, information gain and identifiability after each candidate (``rows``: their
+        :meth:`candidate_rows`, if already made)."""
         candidates = self.candidates if candidates is None else candidates
-        rows = self.candidate_rows(candidates)
+        rows = self.candidate_rows(candidates) if rows is None else rows
         added = np.stack([A.T @ (A * w[:, None]) for A, w in rows]) if rows else np.zeros((0,) + (len(self.space),) * 2)
         to_display = np.array([units.from_internal(1.0, u) for u in self.target_units])
         out = {}
@@ -203,3 +267,69 @@ class Planner:
         return Evaluation(self.targets, self.target_units, sd_b * to_display, sd_a * to_display,
                           0.5 * (logdet_b - logdet_a) / np.log(2.0), growth_b <= NOT_IDENTIFIED_GROWTH,
                           growth_a <= NOT_IDENTIFIED_GROWTH)
+
+    # ------------------------------------------------------------------ sigma_model
+    def sigma_prior(self):
+        """The campaign's prior of sigma_model (frozen scipy distribution, mm)."""
+        return make_prior("sigma_model", "sigma_model", "length", self.campaign.priors).frozen()
+
+    def sigma_information(self, candidates: list[Candidate] | None = None, *, rows=None,
+                          max_runs: int = MAX_RUNS) -> SigmaInformation:
+        """Fisher information about sigma_model at :attr:`sigma_model` and the contraction of its posterior,
+        today and after 1..``max_runs`` runs of each candidate (``rows``: their :meth:`candidate_rows`).
+
+        Computed in the parameters' coordinates (prior-sd units), restricted to the parameters the data
+        touch: one small batched inverse per candidate for all run counts.
+        """
+        if max_runs < 1:
+            raise ValueError(f"max_runs must be at least 1, got {max_runs}")
+        candidates = self.candidates if candidates is None else candidates
+        rows = self.candidate_rows(candidates) if rows is None else rows
+        prior_var = float(self.sigma_prior().var())
+        scale = np.sqrt(self.prior_var)
+        X0 = self.A * scale
+        used = np.any(X0 != 0.0, axis=0)
+        now = 2.0 * self.sigma_model**2 * float(trace_inv_sq(*_moments(X0[:, used], np.diag(1.0 / self.V))))
+        runs = np.arange(1, max_runs + 1)
+        fisher = np.zeros((len(candidates), max_runs))
+        for k, (c, (B, w)) in enumerate(zip(candidates, rows)):
+            if c.repeat_of is None:
+                tr = self._trace_new_runs(c, X0, B * scale, noise=1.0 / w, runs=runs)
+            else:
+                tr = self._trace_more_repeats(c, X0[:, used], runs)
+            fisher[k] = 2.0 * self.sigma_model**2 * tr
+        contraction = sigma_contraction(fisher, prior_var)
+        reached = contraction >= SIGMA_CONTRACTION
+        needed = np.where(reached.any(axis=1), np.argmax(reached, axis=1) + 1, 0)
+        return SigmaInformation(self.sigma_model, prior_var, now, float(sigma_contraction(now, prior_var)), fisher,
+                                contraction[:, 0], needed)
+
+    def _trace_new_runs(self, c: Candidate, X0: np.ndarray, Xc: np.ndarray, *, noise: np.ndarray,
+                        runs: np.ndarray) -> np.ndarray:
+        """``tr(C⁻²)`` (R,) of the campaign plus ``runs`` runs of a new-run candidate (rows ``Xc``, prior-sd units):
+        the first as the candidate is, each further one with its own W-ball offsets, integrated out (they add
+        ``X_W X_Wᵀ`` to that run's noise covariance)."""
+        cols = np.flatnonzero(np.any(X0 != 0.0, axis=0) | np.any(Xc != 0.0, axis=0))
+        X0, Xc = X0[:, cols], Xc[:, cols]
+        own = np.array([p.group == "mount" and p.owner == c.mount.id for p in
+                        (self.space.parameters[j] for j in cols)], dtype=bool)
+        Xw = Xc[:, own]
+        again = np.where(own[None, :], 0.0, Xc)
+        base = _moments(X0, np.diag(1.0 / self.V))
+        first = _moments(Xc, np.diag(1.0 / noise))
+        more = _moments(again, np.linalg.inv(np.diag(noise) + Xw @ Xw.T))
+        n = (runs - 1)[:, None, None]
+        M = [b + f + n * m for b, f, m in zip(base[:3], first[:3], more[:3])]
+        return trace_inv_sq(*M, base[3] + first[3] + (runs - 1) * more[3])
+
+    def _trace_more_repeats(self, c: Candidate, X0: np.ndarray, runs: np.ndarray) -> np.ndarray:
+        """``tr(C⁻²)`` (R,) after ``runs`` times ``c.repeats`` more repeats of run ``c.repeat_of``: no new mean, the
+        run's means only lose part of their ``s²/n``."""
+        keys = [j for j, k in enumerate(self.observations.keys) if k.run == c.repeat_of]
+        n = self.observations.n[keys]
+        s2 = np.where(n > 1, np.nan_to_num(self.observations.sd[keys]) ** 2, self.pooled_sd**2)
+        V = np.broadcast_to(self.V, (len(runs), len(self.V))).copy()
+        V[:, keys] += s2 / (n + runs[:, None] * c.repeats) - s2 / n
+        W = 1.0 / V
+        M = [np.einsum("mp,rm,mq->rpq", X0, W**j, X0) for j in (1, 2, 3)]
+        return trace_inv_sq(*M, np.sum(W**2, axis=1))

@@ -5,12 +5,16 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pandas as pd
+
 from .. import units
 from ..figure_style import save_png
 from ..io.textfiles import atomic_directory
 from .figures import ranking_figure, sweep_figure
 
 SHOWN = 15
+#: patterns shown in "What would teach sigma_model" (the best candidate of each)
+SIGMA_SHOWN = 6
 
 
 def format_plan(result) -> str:
@@ -34,6 +38,7 @@ def format_plan(result) -> str:
     bad = t[~t["feasible"]]
     for _, r in bad.iterrows():
         lines.append(f"  rejected: {r['name']}: {r['verdict']}")
+    lines += sigma_lines(result)
     s = result.sweep
     lines += ["", f"Sweep: {result.sweep_pattern} at the primary tool length plus Δ"]
     for tg, s_ in zip(result.targets, sym):
@@ -55,6 +60,40 @@ def format_plan(result) -> str:
                          f"  Monte Carlo {r['sd_after_monte_carlo']:8.3g}  ({100 * r['relative_difference']:+.1f} %)")
     lines += ["", "Notes:"] + [f"  - {n}" for n in result.notes]
     return "\n".join(lines)
+
+
+def _runs(value, max_runs: int) -> str:
+    return f"not within {max_runs}" if pd.isna(value) else str(int(value))
+
+
+def sigma_lines(result) -> list[str]:
+    """The "What would teach sigma_model" section: today's contraction, the best candidate of each pattern."""
+    info, t = result.sigma_model, result.table
+    if not info or "sigma_model_contraction" not in t:
+        return []
+    cap, target = info["max_runs"], info["target_contraction"]
+    if info["evaluated_at_um"] == 0:
+        return ["", "What would teach sigma_model: not computed at sigma_model = 0 (see the notes)"]
+    ok = t[t["feasible"]].sort_values("sigma_model_rank")
+    lines = ["", f"What would teach sigma_model (prior {info['prior']}; closed form at {info['evaluated_at_um']:.2f} µm; "
+             "contraction = 1 − posterior/prior variance, Laplace approximation):",
+             f"  today: {info['contraction_now']:.3f} from {info['means']} means"
+             + (" — its posterior is almost its prior: the parameters absorb the residuals" if
+                info["contraction_now"] < 0.1 else ""),
+             f"  {'#':>3s}  {'candidate (best of its pattern)':34s} {'contraction':>11s}  runs to reach {target:g}"]
+    for _, r in ok.drop_duplicates("pattern").head(SIGMA_SHOWN).iterrows():
+        lines.append(f"  {int(r['sigma_model_rank']):3d}  {r['name'][:34]:34s} {r['sigma_model_contraction']:11.3f}  "
+                     f"{_runs(r['sigma_model_runs_needed'], cap)}")
+    if len(ok):
+        best = ok.sort_values("rank").iloc[0]
+        lines.append(f"  best for the targets, {best['name']}: {best['sigma_model_contraction']:.3f}, runs to reach "
+                     f"{target:g}: {_runs(best['sigma_model_runs_needed'], cap)}")
+    never = ok[ok["sigma_model_runs_needed"].isna()]
+    if len(never):
+        names = ", ".join(never["name"].head(4)) + (f" and {len(never) - 4} more" if len(never) > 4 else "")
+        lines.append(f"  never within {cap} runs ({len(never)}): {names} — more repeats add no mean, and the means "
+                     "of a run on a new W-ball placement go mostly into that placement's own offsets")
+    return lines
 
 
 def write_plan(result, out_dir) -> list[str]:

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
+from ..inference.priors import make_prior
 from .candidates import (
     Candidate,
     candidate_mount,
@@ -15,7 +16,7 @@ from .candidates import (
     extended_setup,
     feasibility,
 )
-from .design import Planner
+from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import realised_sd
 
 #: tool-length differences of the sweep, mm
@@ -39,6 +40,9 @@ class PlanResult:
     campaign: str = ""
     output: str | None = None  # directory written by :meth:`write`
     files: list[str] = field(default_factory=list)
+    #: what the campaign and the candidates teach about sigma_model (:func:`sigma_summary`); the per-candidate
+    #: values are the table's sigma_model_* columns
+    sigma_model: dict = field(default_factory=dict)
 
     def write(self, out_dir) -> list[str]:
         """Write plan.csv, plan_sweep.csv, plan_check.csv, plan.json and the figures into ``out_dir``."""
@@ -74,8 +78,14 @@ class PlanResult:
                             for t, u in zip(self.targets, self.target_units)},
                 "newly_identified": [t for t in r["newly_identified"].split(", ") if t],
                 "eig_bits": r["eig_bits"],
+                "sigma_model_contraction": r["sigma_model_contraction"], "sigma_model_rank": int(r["sigma_model_rank"]),
+                "sigma_model_runs_needed": None if pd.isna(r["sigma_model_runs_needed"])
+                else int(r["sigma_model_runs_needed"]),
             })
+        ranked = self.table.sort_values("sigma_model_rank")
+        sigma = {**self.sigma_model, "ranking": [str(n) for n in ranked.loc[ranked["feasible"], "name"]]}
         return {"model": self.model, "targets": self.targets, "sigma_model_um": self.sigma_model_um, "candidates": cands,
+                "sigma_model_information": sigma,
                 "sweep": {"pattern": self.sweep_pattern, "rows": self.sweep.to_dict(orient="records")},
                 "monte_carlo_check": self.check.to_dict(orient="records"), "notes": self.notes}
 
@@ -87,7 +97,14 @@ def _verdict(feasible: bool, why: str, informative: bool) -> str:
 
 
 def _table(planner: Planner, candidates: list[Candidate], campaign) -> pd.DataFrame:
-    ev = planner.evaluate(candidates)
+    return _tables(planner, candidates, campaign)[0]
+
+
+def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd.DataFrame, SigmaInformation]:
+    """The ranked table and what the candidates would teach about sigma_model (one set of candidate rows)."""
+    made = planner.candidate_rows(candidates)
+    ev = planner.evaluate(candidates, rows=made)
+    si = planner.sigma_information(candidates, rows=made)
     rows = []
     for k, c in enumerate(candidates):
         ok, why = feasibility(c, campaign)
@@ -96,7 +113,9 @@ def _table(planner: Planner, candidates: list[Candidate], campaign) -> pd.DataFr
                "Z_T_mm": c.setup.Z_T, "mount": c.mount.id, "R_C_mm": c.mount.R_C, "L_B_mm": c.length,
                "repeats": c.repeats, "extension_mm": c.extension, "feasible": ok, "feasibility": why,
                "eig_bits": float(ev.eig_bits[k]), "informative": bool(ev.informative[k]),
-               "newly_identified": ", ".join(newly), "verdict": _verdict(ok, why, bool(ev.informative[k]))}
+               "newly_identified": ", ".join(newly), "verdict": _verdict(ok, why, bool(ev.informative[k])),
+               "sigma_model_contraction": float(si.contraction[k]),
+               "sigma_model_runs_needed": int(si.runs_needed[k]) or None}
         for i, t in enumerate(ev.targets):
             row[f"{t} sd_before"] = float(ev.sd_before[i])
             row[f"{t} sd_after"] = float(ev.sd_after[k, i])
@@ -106,7 +125,14 @@ def _table(planner: Planner, candidates: list[Candidate], campaign) -> pd.DataFr
     order = np.lexsort((-df["eig_bits"].to_numpy(), tier))
     df = df.iloc[order].reset_index(drop=True)
     df.insert(0, "rank", np.arange(1, len(df) + 1))
-    return df
+    df["sigma_model_runs_needed"] = df["sigma_model_runs_needed"].astype("Int64")  # <NA>: not within MAX_RUNS
+    # ranking by what a run teaches about sigma_model: feasible first, then the contraction, then fewer runs
+    runs = df["sigma_model_runs_needed"].fillna(MAX_RUNS + 1).to_numpy(dtype=float)
+    by_sigma = np.lexsort((df["rank"].to_numpy(), runs, -df["sigma_model_contraction"].to_numpy(),
+                           ~df["feasible"].to_numpy(dtype=bool)))
+    df["sigma_model_rank"] = 0
+    df.loc[by_sigma, "sigma_model_rank"] = np.arange(1, len(df) + 1)
+    return df, si
 
 
 def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP_MM) -> pd.DataFrame:
@@ -169,7 +195,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     candidates = catalogue(campaign) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
     planner = Planner(campaign, candidates, targets, sigma_model=sigma, model=model)
-    table = _table(planner, candidates, campaign)
+    table, si = _tables(planner, candidates, campaign)
     if sweep_pattern is None:
         best = table[table["kind"] == "tool length"]
         sweep_pattern = str(best.iloc[0]["pattern"]) if len(best) else "CR"
@@ -185,5 +211,22 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
              "does not give where the C axis sits within the travels)",
              "touch-probe measurements are not candidates: the probe data are compared with, not part of, the "
              "likelihood"]
+    if planner.sigma_model == 0.0:
+        notes.append("at sigma_model = 0 the data carry no Fisher information about sigma_model (its variance "
+                     "enters as sigma_model²): the sigma_model ranking needs a positive sigma_model_um")
     return PlanResult(table, sweep, check, planner.targets, planner.target_units,
-                      units.from_internal(planner.sigma_model, "um"), sweep_pattern, model, notes, campaign.source)
+                      units.from_internal(planner.sigma_model, "um"), sweep_pattern, model, notes, campaign.source,
+                      sigma_model=sigma_summary(planner, si))
+
+
+def sigma_summary(planner: Planner, si: SigmaInformation) -> dict:
+    """The campaign's closed-form sigma_model contraction and how it is computed (JSON-ready)."""
+    prior = make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors)
+    um2 = units.to_internal(1.0, "um") ** 2
+    return {"prior": prior.describe(), "prior_sd_um": units.from_internal(float(np.sqrt(si.prior_var)), "um"),
+            "evaluated_at_um": units.from_internal(si.sigma, "um"), "means": int(len(planner.observations)),
+            "fisher_now_per_um2": si.fisher_now * um2, "contraction_now": si.contraction_now,
+            "target_contraction": SIGMA_CONTRACTION, "max_runs": MAX_RUNS,
+            "method": "Laplace: var_post = 1/(1/var_prior + I), I = 2 sigma^2 tr(C^-2) the Fisher information of "
+                      "the marginal likelihood, C = A Sigma0 A^T + diag(base_var + sigma^2); contraction = "
+                      "1 - var_post/var_prior; a candidate's runs after the first each on its own W-ball placement"}

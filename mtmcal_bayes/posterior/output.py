@@ -36,6 +36,9 @@ def quantity_json(name: str, row, conformity=None) -> dict:
         "identified_through": through.split(", ") if isinstance(through, str) and through else [],
         "prior_growth": _num(row["prior_growth"]), "nuisance_growth": _num(row["nuisance_growth"]),
     })
+    budget = {k.split(":", 1)[1]: float(v) for k, v in row.items() if k.startswith("budget:") and v == v}
+    if budget:
+        out["budget"] = budget
     if conformity is not None and name in conformity.index:
         c = conformity.loc[name]
         out.update({"tolerance": {"low": _num(c["tolerance_low"]), "high": _num(c["tolerance_high"])},
@@ -83,7 +86,7 @@ def format_posterior(result) -> str:
             line += f"  {pr:8.2f}{'' if ref['probe_reported_in_hdi'] else '*'}" if pr is not None and pr == pr else "        —"
         lines.append(line)
     lines.append("* = outside the 95 % HDI")
-    lines += ["", gum_block(s)]
+    lines += ["", gum_block(s), "", budget_block(s, result)]
     if result.conformity is not None and not result.conformity.empty:
         lines += ["", conformity_block(result.conformity, s)]
     if result.not_identified:
@@ -112,8 +115,32 @@ def gum_block(s) -> str:
                      f"[{r['ci95_shortest_low']:8.2f}, {r['ci95_shortest_high']:8.2f}] "
                      f"[{r['ci95_symmetric_low']:8.2f}, {r['ci95_symmetric_high']:8.2f}] {U:>13s} "
                      f"{r['endpoint_tolerance']:11.2g}")
-    lines.append("U not stated: y ± 1.96u differs from the symmetric interval by more than the numerical tolerance "
-                 "(JSON: U_note); endpoints ± = 2 Monte-Carlo standard errors")
+    lines.append(("U not stated: y ± 1.96u differs from the symmetric interval by more than the numerical "
+                  "tolerance (JSON: U_note); " if s["U"].isna().any() else "") + "endpoints ± = 2 Monte-Carlo standard errors")
+    return "\n".join(lines)
+
+
+#: short column heads of the budget table
+BUDGET_HEADS = {"repeatability": "repeat", "instrument": "instr.", "probe readings": "probe", "sigma_model": "σ_model",
+                "sigma_model_uncertainty": "σ unknown", "prior:deviations": "dev.prior", "prior:T-ball centring": "T-ball",
+                "prior:dRB": "dRB", "prior:W-ball clamping": "W-ball", "prior:stylus centring": "stylus",
+                "prior:dRS": "dRS", "prior:rS": "rS", "prior:sphere placement": "sphere", "prior:reading datum": "datum"}
+
+
+def budget_block(s, result) -> str:
+    """The uncertainty budget as a console table: % of each quantity's posterior variance by source."""
+    cols = [c for c in s.columns if c.startswith("budget:") and (s[c].fillna(0) >= 0.005).any()]
+    post = result.log_posterior
+    how = (f"sigma_model fixed at {units.from_internal(post.fixed_sigma, 'um'):g} µm" if post.fixed_sigma is not None
+           else "averaged over the posterior of sigma_model, law of total variance")
+    lin = "" if post.model_name == "linear" else f"; {post.model_name} linearised at the posterior mean"
+    heads = [BUDGET_HEADS.get(c.split(":", 1)[1], c.split(":", 1)[1]) for c in cols]
+    lines = [f"Uncertainty budget: % of each posterior variance by source ({how}{lin})",
+             f"{'quantity':18s} " + " ".join(f"{h:>9s}" for h in heads)]
+    for name, r in s.iterrows():
+        if r[cols].isna().all():
+            continue
+        lines.append(f"{name:18s} " + " ".join(f"{100 * r[c]:9.1f}" for c in cols))
     return "\n".join(lines)
 
 
@@ -142,9 +169,10 @@ def format_sample(result) -> str:
     lines = [format_posterior(result)]
     post = result.log_posterior
     if not post.fix_dx_BT:
-        sigma_um = float(result.summary.loc["sigma_model", "median"])
+        sigma_um = result.sigma_model_um
         lines += ["", f"The thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = {sigma_um:.2f} µm "
-                  "(the posterior median; fix_dx_BT, on the command line --fix-dx-BT, samples it):",
+                  f"({'as fixed' if post.fixed_sigma is not None else 'the posterior median'}; fix_dx_BT, on the command "
+                  "line --fix-dx-BT, samples it):",
                   thesis_assumption_effect(post.campaign, post.model_name, sigma_um, post.data).round(2).to_string()]
     if result.output:
         lines += ["", f"posterior written to {result.output} (ArviZ InferenceData, NetCDF)"]

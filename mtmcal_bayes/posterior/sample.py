@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pandas as pd
 
+from .. import units
 from ..identification import identify
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import (
@@ -105,6 +106,12 @@ class PosteriorResult:
         return self.log_posterior.model_name
 
     @property
+    def sigma_model_um(self) -> float:
+        """sigma_model, µm: its fixed value, or the posterior median where it was sampled."""
+        fixed = self.log_posterior.fixed_sigma
+        return units.from_internal(fixed, "um") if fixed is not None else float(self.summary.loc["sigma_model", "median"])
+
+    @property
     def data(self) -> str:
         """Which measurements the likelihood used: ``"ballbar"``, ``"probe"`` or ``"both"``."""
         return self.log_posterior.data
@@ -147,11 +154,12 @@ class PosteriorResult:
 def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False,
                      settings: SamplerSettings | None = None, checkpoint=None,
                      progress: Progress | None = None, data: str = "ballbar",
-                     tolerances: dict | None = None) -> PosteriorResult:
+                     tolerances: dict | None = None, sigma_model: float | None = None) -> PosteriorResult:
     """Sample the posterior of ``campaign`` given its ``data`` (``"ballbar"``, ``"probe"`` or ``"both"``) and
     summarise it against the deterministic results; decide conformity with ``tolerances`` (``{name:
-    Tolerance}``; default the campaign's own)."""
-    post = LogPosterior(campaign, model, fix_dx_BT=fix_dx_BT, data=data)
+    Tolerance}``; default the campaign's own).  ``sigma_model`` (mm) fixes the model-discrepancy scale instead of
+    sampling it."""
+    post = LogPosterior(campaign, model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model)
     result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress)
     seed = settings.seed if settings else None
     idata = to_inference_data(result, seed=seed)

@@ -34,11 +34,22 @@ from ..posterior.consistency import (
     InstrumentComparison,
     compare_instruments,
 )
+from ..posterior.loo import LooResult, loo_check
 from ..posterior.output import format_posterior, posterior_json
 from ..posterior.sample import PosteriorResult, sample_posterior
 from ..progress import Progress, ProgressEvent, emit
 from ..version import __version__
-from . import compare, corner_plot, forest, mcmc_plots, polar, ppc, widths
+from . import (
+    budget_plot,
+    compare,
+    corner_plot,
+    forest,
+    loo_plot,
+    mcmc_plots,
+    polar,
+    ppc,
+    widths,
+)
 from .decisions import SUGGESTION_COLUMNS, add_suggestions, suggestion_text
 from .drawing import draw_figures
 from .html import Page
@@ -92,6 +103,7 @@ class ReportContent:
     fix_dx_BT: bool
     planned: PlanResult
     instruments: InstrumentComparison | None = None  # ball bar, probe, fused: when the campaign has probe readings
+    loo: LooResult | None = None  # leave-one-out consistency of the main posterior's observations
 
 
 def summary_table(rep: PosteriorResult) -> pd.DataFrame:
@@ -123,7 +135,7 @@ def _check_output_dir(out_dir: Path) -> None:
 def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerSettings | None = None,
                  fix_dx_BT: bool = False, compare_models: bool = False, posterior: PosteriorResult | None = None,
                  progress: Progress | None = None, command: str = "", data: str = "ballbar",
-                 tolerances: dict | None = None) -> Report:
+                 tolerances: dict | None = None, sigma_model: float | None = None) -> Report:
     """Sample, draw, tabulate and write the report of ``campaign`` into ``out_dir``.
 
     ``posterior``: a posterior of this campaign already sampled (its model and
@@ -131,7 +143,8 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     ``progress`` receives the sampler's events and one ``"report"`` event per stage.  ``data``: the
     measurements of the main posterior (``"ballbar"``, ``"probe"``, ``"both"``); a campaign with
     touch-probe readings also gets the three posteriors side by side and the instruments' consistency.
-    ``tolerances`` (``{name: Tolerance}``, default the campaign's own) adds the conformity decisions.
+    ``tolerances`` (``{name: Tolerance}``, default the campaign's own) adds the conformity decisions;
+    ``sigma_model`` (mm) fixes the model-discrepancy scale of every posterior instead of sampling it.
     """
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
@@ -147,7 +160,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     else:
         say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
         rep = sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
-                               data=data)
+                               data=data, sigma_model=sigma_model)
     tol = campaign.tolerances if tolerances is None else tolerances
     if tol:
         rep.conformity = conformity_table(rep.idata, rep.summary, tol)
@@ -158,7 +171,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
         def other(d):
             say(f"sampling the posterior ({model}, {DATA_LABELS[d]}) to compare the instruments")
             return sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
-                                    data=d)
+                                    data=d, sigma_model=sigma_model)
         instruments = compare_instruments(campaign, {data: rep}, other)
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
@@ -167,14 +180,15 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             if other != model:
                 say(f"sampling the posterior ({other}) for the model comparison")
                 reports[other] = sample_posterior(campaign, model=other, fix_dx_BT=fix_dx_BT, settings=settings,
-                                                  progress=progress)
+                                                  progress=progress, sigma_model=sigma_model)
         reports = {m: reports[m] for m in MODELS}
     ident = identify(campaign)
     missing = missing_data(campaign, ident)
     summary = summary_table(rep)
     ppc_df = ppc.ppc_table(bb_rep.idata, campaign)
+    loo = loo_check(rep.idata)
     diag = mcmc_plots.diagnostics_table(rep.summary, rep.sampling)
-    sigma_um = float(rep.summary.loc["sigma_model", "median"])
+    sigma_um = rep.sigma_model_um
 
     effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um, data)
     say("planning the next measurement")
@@ -194,8 +208,11 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     if instruments is not None:
         figures += [("instruments_forest.png", lambda: forest.forest_figure(
             {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison))]
-    figures += [("plan_ranking.png", lambda: plan_figures.ranking_figure(planned)),
+    figures += [("budget.png", lambda: budget_plot.budget_figure(rep.summary)),
+                ("sigma_model.png", lambda: budget_plot.sigma_figure(rep)),
+                ("plan_ranking.png", lambda: plan_figures.ranking_figure(planned)),
                 ("plan_sweep.png", lambda: plan_figures.sweep_figure(planned))]
+    figures.append(("loo.png", lambda: loo_plot.loo_figure(loo)))
 
     files: list[str] = []
     with atomic_directory(out_dir) as tmp:
@@ -208,6 +225,8 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
         files += [name for name, _ in figures[:7]]
         csv("summary.csv", summary)
         csv("ppc.csv", ppc_df)
+        csv("loo.csv", loo.table)
+        files.append("loo.png")
         csv("diagnostics.csv", diag)
         csv("priors.csv", priors_table(rep.log_posterior))
         csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
@@ -224,13 +243,14 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             csv("instruments.csv", instruments.intervals, index=False)
             csv("consistency.csv", instruments.consistency.groups, index=False)
             csv("consistency_readings.csv", instruments.consistency.readings, index=False)
-        files += ["plan_ranking.png", "plan_sweep.png"]
+        files += ["budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png"]
+        csv("budget.csv", budget_table(rep.summary))
         csv("plan.csv", planned.table, index=False)
         say("writing posterior.nc")
         write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
         files.append("posterior.nc")
         content = ReportContent(campaign, model, rep, reports if compare_models else None, ident, missing, summary,
-                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned, instruments)
+                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned, instruments, loo=loo)
         page = _page(content, tmp)
         elapsed = time.perf_counter() - t0
         files.insert(0, "index.html")
@@ -315,6 +335,27 @@ def _instruments_section(page: Page, ins: InstrumentComparison, tmp: Path) -> No
     page.table(sd.rename(columns=lambda c: f"sd, {c}"), digits=2)
 
 
+def budget_table(summary: pd.DataFrame) -> pd.DataFrame:
+    """budget.csv: per quantity the share of its posterior variance from each source (columns), summing to 1."""
+    cols = [c for c in summary.columns if c.startswith("budget:")]
+    out = summary.loc[summary[cols].notna().any(axis=1), cols]
+    return out.rename(columns=lambda c: c.split(":", 1)[1]).rename_axis("quantity")
+
+
+def _budget_section(page: Page, rep: PosteriorResult, tmp: Path) -> None:
+    post = rep.log_posterior
+    page.section("budget", "Uncertainty budget")
+    how = (f"σ_model fixed at {rep.sigma_model_um:g} µm" if post.fixed_sigma is not None else
+           "averaged over σ_model's posterior, with the extra variance of not knowing σ_model (law of total variance)")
+    page.paragraph(f"Where each quantity's posterior variance comes from ({how}"
+                   + ("" if post.model_name == "linear" else f"; the {post.model_name} model linearised at the "
+                      "posterior mean") + "). A share dominated by σ_model or by a prior says the interval is "
+                   "mostly a property of that assumption, not of the machine; docs/metrology.md, budget.csv.")
+    page.figure(tmp / "budget.png", budget_plot.BUDGET_CAPTION, "uncertainty budget")
+    page.table((100 * budget_table(rep.summary)).round(1), digits=1)
+    page.figure(tmp / "sigma_model.png", budget_plot.SIGMA_CAPTION, "posterior sd against sigma_model")
+
+
 def _statement_section(page: Page, rep: PosteriorResult) -> None:
     """The GUM statement of each quantity as a calibration certificate gives it, and the tolerance decisions."""
     s = rep.summary
@@ -360,6 +401,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     campaign, model, rep, reports, ident = c.campaign, c.model, c.posterior, c.compared, c.ident
     summary, ppc_df, diag, effect, planned, sigma_um = c.summary, c.ppc, c.diagnostics, c.thesis_effect, c.planned, c.sigma_um
     page = Page("Bayesian calibration report — B and C axes of a turn-mill machine")
+    page.paragraph("What the intervals rest on (share of each posterior variance by source; section 'Uncertainty "
+                   "budget'): " + budget_plot.dominant_sentence(rep.summary))
     page.box("missing", "Missing from this campaign", c.missing)
     page.box("warn", "Warnings", rep.warnings + rep.not_identified)
 
@@ -372,6 +415,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         "that value lies inside the 95 % HDI. Angles in arc seconds, lengths in micrometres. Full table: summary.csv.")
     page.table(_results_table(summary), digits={"R-hat": 3})
     _statement_section(page, rep)
+
+    _budget_section(page, rep, tmp)
 
     page.section("corner", "Joint posterior")
     page.figure(tmp / "corner.png", corner_plot.CAPTION + (" Off scale, not drawn: " + "; ".join(c.off_scale) + "."
@@ -394,6 +439,14 @@ def _page(c: ReportContent, tmp: Path) -> Page:
                       "residuals." if q >= len(ppc_df) else ""))
     page.table(ppc_df[["observed_mean_um", "repeat_sd_um", "n_repeats", "predictive_mean_um", "predictive_sd_um",
                        "z", "inside_95"]], digits={"z": 2})
+    if c.loo is not None:  # leave-one-out consistency, the second check
+        page.paragraph(f"Leave-one-out consistency of the posterior ({DATA_LABELS[rep.data]}): does each observed "
+                       "mean agree with what all the other measurements predict for it? " + c.loo.power_sentence()
+                       + " Table: loo.csv.")
+        page.box("warn", "Leave-one-out: measurements the others do not predict", c.loo.outlier_sentences())
+        page.figure(tmp / "loo.png", loo_plot.CAPTION, "leave-one-out elpd and Pareto k per observation")
+        page.table(c.loo.table[["variable", "elpd_loo", "elpd_drop", "pareto_k", "note"]],
+                   digits={"elpd_loo": 2, "elpd_drop": 2, "pareto_k": 2})
 
     page.section("polar", "Ball-bar trajectories")
     page.figure(tmp / "polar.png", polar.CAPTION, "polar trajectories")
@@ -412,6 +465,15 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         + (f", which identifies {best['newly_identified']}" if best["newly_identified"] else "")
         + ". Closed form for the linear model; the full ranking is in plan.csv, and mtmcal-bayes plan "
           "ranks for any targets (docs/planning.md).")
+    info = planned.document()["sigma_model_information"]
+    t = planned.table.sort_values("sigma_model_rank").iloc[0]
+    page.paragraph(
+        f"What would teach σ_model: today's design narrows its {info['prior']} prior by a contraction of "
+        f"{info['contraction_now']:.3f} (closed form at {info['evaluated_at_um']:g} µm; the sampler's posterior: "
+        f"{budget_plot.sigma_contraction(rep):.2f}), i.e. hardly at all: the parameters absorb the residuals of "
+        f"{info['means']} means. Redundant runs teach it: {t['name']} alone would bring the contraction to "
+        f"{t['sigma_model_contraction']:.2f}; plan.csv lists each candidate's contraction and how many runs reach "
+        f"{info['target_contraction']:g} (docs/planning.md).")
     page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
     shown = planned.table.head(10)
     cols = ["name", "eig_bits", "verdict", "newly_identified"] + [f"{t} sd_after" for t in planned.targets[:4]]

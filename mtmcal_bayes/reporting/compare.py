@@ -40,7 +40,7 @@ def model_fit_table(reports: dict, campaign) -> pd.DataFrame:
         t = ppc_table(rep.idata, campaign)
         rows.append({"model": model, "rms_z": float((t["z"] ** 2).mean() ** 0.5), "max_abs_z": float(t["z"].abs().max()),
                      "outside_95": int((~t["inside_95"]).sum()), "n_observations": len(t),
-                     "sigma_model_median_um": float(rep.summary.loc["sigma_model", "median"])})
+                     "sigma_model_median_um": rep.sigma_model_um})
     return pd.DataFrame(rows).set_index("model")
 
 

@@ -26,7 +26,7 @@ def add_suggestions(result, campaign) -> None:
         return
     for c in SUGGESTION_COLUMNS:
         table[c] = None
-    sigma_um = float(result.summary.loc["sigma_model", "median"]) if "sigma_model" in result.summary.index else None
+    sigma_um = result.sigma_model_um
     for name, row in table.iterrows():
         if row["conformity"] != UNDECIDED:
             continue

@@ -1,0 +1,128 @@
+"""Uncertainty budget: what share of each quantity's posterior variance comes from which source (GUM budget).
+
+For the linear-Gaussian posterior at a fixed sigma_model the decomposition is exact.  With prior
+precision ``P = Σ_g P_g`` (one block per prior group g), noise ``V = Σ_k R_k`` (repeatability,
+instrument accuracy, sigma_model², probe readings), posterior covariance ``Σ = (P + AᵀV⁻¹A)⁻¹`` and gain
+``K = Σ AᵀV⁻¹``,
+
+    Σ = Σ P Σ + K V Kᵀ = Σ_g Σ P_g Σ + Σ_k K R_k Kᵀ,
+
+so a quantity ``aᵀθ`` has variance ``Σ_g aᵀΣP_gΣa + Σ_k aᵀK R_k Kᵀa``: each term is that source's
+contribution, and they add up to the posterior variance.
+
+For a sampled sigma_model the law of total variance splits the posterior variance into the average of
+these budgets over sigma_model's posterior and the variance of the conditional mean,
+``Var(aᵀθ) = E_σ[Var(aᵀθ | σ)] + Var_σ(E[aᵀθ | σ])``: the last term is ``sigma_model_uncertainty``, what
+not knowing sigma_model adds.  The average runs over :data:`N_SIGMA` quantiles of the posterior draws of
+sigma_model.  The kinematic models are linearised at the posterior mean (the budget is then first order).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .. import units
+from ..parameters import quantity_unit, weights
+from .analytic import REPORTED, linearisation
+from .log_posterior import LogPosterior
+
+#: quantiles of sigma_model's posterior the budget is averaged over
+N_SIGMA = 64
+#: the noise sources, in display order (the probe's only with probe data)
+NOISE_SOURCES = ("repeatability", "instrument", "probe readings", "sigma_model")
+#: prior groups of the nuisance parameters, by base name (``prior:<group>`` in the budget)
+PRIOR_GROUP = {"xT": "T-ball centring", "yT": "T-ball centring", "zT": "T-ball centring", "dRB": "dRB",
+               "xW": "W-ball clamping", "yW": "W-ball clamping", "zW": "W-ball clamping",
+               "xS": "stylus centring", "yS": "stylus centring", "dRS": "dRS", "rS": "rS",
+               "xP": "sphere placement", "yP": "sphere placement",
+               "xD": "reading datum", "yD": "reading datum", "zD": "reading datum"}
+#: what each source is, for sentences ("87 % of the variance comes from …")
+MEANING = {"repeatability": "the repeatability of the measurements (scatter of the repeats)",
+           "instrument": "the ball bar's accuracy", "probe readings": "the touch-probe readings' own noise",
+           "sigma_model": "the assumed model-discrepancy scale σ_model",
+           "sigma_model_uncertainty": "not knowing σ_model (its prior, which the data barely narrow)",
+           "prior:deviations": "the priors of the deviations themselves",
+           "prior:T-ball centring": "the T-ball centring prior (±1 µm centring check)",
+           "prior:dRB": "the tool-length prior dRB (dial gauge, 10 µm)",
+           "prior:W-ball clamping": "the W-ball clamping prior", "prior:stylus centring": "the stylus centring prior",
+           "prior:dRS": "the stylus-length prior", "prior:rS": "the stylus-radius (pre-travel) prior",
+           "prior:sphere placement": "the sphere-placement prior", "prior:reading datum": "the reading-datum prior"}
+
+
+def source_of(parameter) -> str:
+    """Budget source of a parameter's prior: ``prior:deviations`` or ``prior:<nuisance group>``."""
+    return "prior:deviations" if parameter.group == "deviation" else f"prior:{PRIOR_GROUP[parameter.base]}"
+
+
+def conditional_budget(post: LogPosterior, sigma_model: float, names, *,
+                       theta0: np.ndarray | None = None) -> tuple[pd.DataFrame, pd.Series]:
+    """Variance contributions at fixed ``sigma_model`` (mm): a DataFrame (quantity × source, internal units²)
+    whose rows sum to the posterior variance, and the posterior mean of each quantity (internal units).
+
+    Exact for the ``linear`` model; other models linearised at ``theta0``.  Every prior is taken as a normal
+    of its mean and sd (the half-normal/uniform overrides as in the sampler's start)."""
+    p = post.p
+    priors = post.priors.priors[:p]
+    var0 = np.array([q.sd for q in priors]) ** 2
+    mu0 = np.array([q.centre for q in priors])
+    A, c = linearisation(post, theta0)
+    noise = dict(post.likelihood.noise)
+    noise["sigma_model"] = np.full(A.shape[0], sigma_model**2)
+    V = sum(noise.values())
+    cov = np.linalg.inv(np.diag(1.0 / var0) + A.T @ (A / V[:, None]))
+    cov = 0.5 * (cov + cov.T)
+    mean = cov @ (mu0 / var0 + A.T @ ((post.likelihood.y - c) / V))
+    space_names = list(post.space.names)
+    W = np.array([[weights(n, space_names).get(k, 0.0) for k in space_names] for n in names])  # (q, p)
+    H = W @ cov  # (q, p): aᵀΣ
+    G = (H @ A.T) / V  # (q, m): aᵀK
+    out = {k: (G**2) @ r for k, r in noise.items()}
+    for j, param in enumerate(post.space.parameters):
+        key = source_of(param)
+        out[key] = out.get(key, 0.0) + H[:, j] ** 2 / var0[j]
+    return pd.DataFrame(out, index=list(names)), pd.Series(W @ mean, index=list(names))
+
+
+def variance_budget(post: LogPosterior, sigma_draws: np.ndarray | None, names=None, *,
+                    theta0: np.ndarray | None = None) -> pd.DataFrame:
+    """Shares of the posterior variance by source (rows: quantities, columns: sources; rows sum to 1).
+
+    ``sigma_draws`` (mm): posterior draws of sigma_model, averaged over by the law of total variance (adds the
+    ``sigma_model_uncertainty`` column); None when sigma_model is fixed (``post.fixed_sigma``).
+    """
+    names = [n for n in (names or REPORTED) if weights(n, post.space.names)]
+    if sigma_draws is None:
+        var, _ = conditional_budget(post, float(post.fixed_sigma or 0.0), names, theta0=theta0)
+        var["sigma_model_uncertainty"] = 0.0
+    else:
+        grid = np.quantile(np.asarray(sigma_draws, float), (np.arange(N_SIGMA) + 0.5) / N_SIGMA)
+        parts = [conditional_budget(post, float(s), names, theta0=theta0) for s in grid]
+        var = sum(v for v, _ in parts) / len(parts)
+        var["sigma_model_uncertainty"] = np.var(np.stack([m.to_numpy() for _, m in parts]), axis=0)
+    return var.div(var.sum(axis=1), axis=0)
+
+
+def dominant(shares: pd.Series) -> tuple[str, float]:
+    """The source with the largest share, and the share."""
+    return str(shares.idxmax()), float(shares.max())
+
+
+def linearisation_point(idata, post: LogPosterior) -> np.ndarray | None:
+    """Where a kinematic model is linearised for the budget: the posterior mean of its parameters (internal
+    units, from ``idata``'s display-unit draws); None for the ``linear`` model, which is linear."""
+    if post.model_name == "linear":
+        return None
+    return np.array([units.to_internal(float(idata.posterior[n].mean()), quantity_unit(n)) for n in post.space.names])
+
+
+def sd_against_sigma(post: LogPosterior, sigma_grid: np.ndarray, names, *,
+                     theta0: np.ndarray | None = None) -> pd.DataFrame:
+    """Posterior sd of each quantity (display units) at each fixed sigma_model of ``sigma_grid`` (mm): rows the
+    grid, columns ``names``; closed form (kinematic models linearised at ``theta0``)."""
+    names = [n for n in names if weights(n, post.space.names)]
+    rows = []
+    for s in np.asarray(sigma_grid, float):
+        var, _ = conditional_budget(post, float(s), names, theta0=theta0)
+        rows.append({n: units.from_internal(float(np.sqrt(v)), quantity_unit(n)) for n, v in var.sum(axis=1).items()})
+    return pd.DataFrame(rows, index=units.from_internal(np.asarray(sigma_grid, float), "um"))

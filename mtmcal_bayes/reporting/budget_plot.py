@@ -1,0 +1,128 @@
+"""What every interval rests on: the uncertainty budget as stacked bars, and the posterior sds against sigma_model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+
+from .. import units
+from ..figure_style import COLOURS, label, new_figure, symbol
+from ..inference.budget import MEANING, linearisation_point, sd_against_sigma
+from ..parameters import IDENTIFIABLE
+
+#: colour of each budget source (Okabe–Ito and greys; priors in warm colours, noise in cool ones)
+SOURCE_COLOURS = {"repeatability": "#56B4E9", "instrument": "#0072B2", "probe readings": "#009E73",
+                  "sigma_model": "#E69F00", "sigma_model_uncertainty": "#F0E442",
+                  "prior:deviations": "#999999", "prior:T-ball centring": "#D55E00", "prior:dRB": "#CC79A7",
+                  "prior:W-ball clamping": "#882255", "prior:stylus centring": "#117733", "prior:dRS": "#44AA99",
+                  "prior:rS": "#AA4499", "prior:sphere placement": "#332288", "prior:reading datum": "#DDDDDD"}
+
+BUDGET_CAPTION = (
+    "Uncertainty budget: the share of each quantity's posterior variance that comes from each source — the "
+    "repeatability and accuracy of the measurements, the model-discrepancy scale σ_model, not knowing σ_model "
+    "(law of total variance), and the priors (of the deviations, the T-ball centring, the tool length dRB, the "
+    "W-ball clamping). Exact for the linear model at each σ_model (Σ = Σ_g ΣP_gΣ + Σ_k K R_k Kᵀ), averaged over "
+    "σ_model's posterior; kinematic models linearised at the posterior mean. Table: summary.csv, budget:* columns."
+)
+SIGMA_CAPTION = (
+    "Posterior sd of each of the eight quantities if σ_model were known, from 0 to 4 µm (closed form), and "
+    "beneath, σ_model's prior (line) and posterior (histogram). Where the posterior is the prior, the data do "
+    "not choose σ_model: the intervals then rest on the assumed prior, and this figure shows how much. The "
+    "dashed line is σ_model's posterior median (or its fixed value)."
+)
+
+
+def budget_figure(summary: pd.DataFrame):
+    """One horizontal stacked bar per quantity (the reported ones), segments by source, in % of the variance."""
+    cols = [c for c in summary.columns if c.startswith("budget:")]
+    s = summary.loc[summary[cols].notna().any(axis=1), cols].fillna(0.0)
+    cols = [c for c in cols if (s[c] >= 0.005).any()]
+    names = list(s.index)
+    fig, ax = new_figure(figsize=(10, 0.42 * len(names) + 2.2))
+    y = np.arange(len(names))[::-1]
+    left = np.zeros(len(names))
+    for c in cols:
+        src = c.split(":", 1)[1]
+        width = 100.0 * s[c].to_numpy()
+        ax.barh(y, width, left=left, color=SOURCE_COLOURS.get(src, "#BBBBBB"), edgecolor="white", linewidth=0.5)
+        for yi, l0, w in zip(y, left, width):
+            if w >= 8:
+                ax.text(l0 + w / 2, yi, f"{w:.0f}", ha="center", va="center", fontsize=8)
+        left += width
+    ax.set_yticks(y, [label(n) for n in names], fontsize=10)
+    ax.set_xlim(0, 100)
+    ax.set_xlabel("share of the posterior variance (%)")
+    handles = [Patch(color=SOURCE_COLOURS.get(c.split(":", 1)[1], "#BBBBBB"), label=c.split(":", 1)[1]) for c in cols]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.08 - 0.3 / max(len(names), 1)),
+              ncol=4, fontsize=9, frameon=False)
+    fig.tight_layout()
+    return fig
+
+
+def sigma_contraction(rep) -> float:
+    """How much the data narrowed sigma_model: 1 − posterior/prior variance, from the draws (nan when fixed)."""
+    post = rep.log_posterior
+    if post.fixed_sigma is not None:
+        return float("nan")
+    draws = units.to_internal(np.asarray(rep.idata.posterior["sigma_model"], float).ravel(), "um")
+    return float(1.0 - np.var(draws) / post.priors.priors[-1].frozen().var())
+
+
+def sigma_figure(rep, names=IDENTIFIABLE):
+    """Posterior sd against a fixed sigma_model (0–4 µm) for each of ``names``, σ_model's prior and posterior beneath."""
+    post = rep.log_posterior
+    grid = units.to_internal(np.linspace(0.0, 4.0, 33), "um")
+    curves = sd_against_sigma(post, grid, names, theta0=linearisation_point(rep.idata, post))
+    names = list(curves.columns)
+    fig = Figure(figsize=(12, 7.6))
+    gs = fig.add_gridspec(3, 4, height_ratios=[1, 1, 0.8])
+    here = rep.sigma_model_um
+    for i, n in enumerate(names):
+        ax = fig.add_subplot(gs[i // 4, i % 4])
+        ax.plot(curves.index, curves[n], color=COLOURS["posterior"], lw=2)
+        ax.axvline(here, color="0.3", ls="--", lw=1)
+        ax.set_title(symbol(n), fontsize=11)
+        ax.set_ylim(0, None)
+        ax.set_ylabel(f"posterior sd [{units.SYMBOL[rep.summary.loc[n, 'unit']]}]", fontsize=8)
+        ax.tick_params(labelsize=8)
+        ax.grid(alpha=0.25)
+        if i // 4 == 1:
+            ax.set_xlabel("σ_model fixed at [µm]", fontsize=8)
+    ax = fig.add_subplot(gs[2, :])
+    xs = np.linspace(0.0, 4.0, 200)
+    if post.fixed_sigma is None:
+        prior = post.priors.priors[-1]
+        pdf = prior.frozen().pdf(units.to_internal(xs, "um")) * units.to_internal(1.0, "um")
+        ax.plot(xs, pdf, color=COLOURS["prior"], lw=2, label=f"prior ({prior.describe()})")
+        draws = np.asarray(rep.idata.posterior["sigma_model"]).ravel()
+        ax.hist(draws, bins=np.linspace(0, max(4.0, float(np.quantile(draws, 0.995))), 50), density=True,
+                color=COLOURS["posterior"], alpha=0.45, label="posterior")
+        ax.text(0.99, 0.9, f"contraction 1 − var_post/var_prior = {sigma_contraction(rep):.2f}", transform=ax.transAxes,
+                ha="right", fontsize=9)
+    else:
+        ax.text(0.5, 0.5, f"σ_model fixed at {here:g} µm (--sigma-model-um)", transform=ax.transAxes, ha="center")
+    ax.axvline(here, color="0.3", ls="--", lw=1)
+    ax.set_xlim(0, 4.0)
+    ax.set_xlabel("σ_model [µm]")
+    ax.set_ylabel("density [1/µm]", fontsize=9)
+    ax.legend(fontsize=9, loc="upper center")
+    fig.tight_layout()
+    return fig
+
+
+def dominant_sentence(summary: pd.DataFrame, names=IDENTIFIABLE) -> str:
+    """For each quantity of ``names``, the source that dominates its variance, grouped by source: "σ_model …
+    dominates the variance of alpha_CZ (89 %), …"."""
+    by_source: dict[str, list[str]] = {}
+    for n in names:
+        if n not in summary.index:
+            continue
+        row = summary.loc[n, [c for c in summary.columns if c.startswith("budget:")]].dropna()
+        if not row.empty:
+            src = str(row.idxmax()).split(":", 1)[1]
+            by_source.setdefault(src, []).append(f"{n} ({100 * row.max():.0f} %)")
+    parts = [f"{MEANING.get(src, src)} dominates the variance of {', '.join(qs)}" for src, qs in by_source.items()]
+    text = "; ".join(parts) + "."
+    return text[0].upper() + text[1:]
