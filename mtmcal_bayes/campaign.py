@@ -8,6 +8,7 @@ Python is used the same way.
 
 from __future__ import annotations
 
+import datetime
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,6 +22,7 @@ class Machine:
     name: str = ""
     configuration: str = ""
     travel: dict[str, float] = field(default_factory=dict)  # axis letter -> travel, mm
+    serial: str = ""  # the machine's identifier: campaigns with one serial form its history
 
 
 @dataclass
@@ -210,6 +212,8 @@ class Campaign:
     source: str = "<campaign>"
     base_dir: Path | None = None
     tolerances: dict[str, Tolerance] = field(default_factory=dict)  # by thesis name
+    date: datetime.datetime | None = None  # when the campaign was measured (a TOML date is taken at 00:00)
+    temperature_C: float | None = None  # workshop temperature during the campaign, °C
 
     def has_probe_readings(self) -> bool:
         """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""

@@ -8,27 +8,15 @@ status 2, never a traceback; an API parameter named in an error is shown as the 
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
 import time
 
-from . import api
+from . import api, cli_options
+from .cli_options import PROG, flag_of
 from .errors import MtmcalError, ParameterError
 from .io.json_text import json_text
-from .models import DATA, MODELS
 from .progress import StderrProgress
-from .version import __version__
-
-PROG = "mtmcal-bayes"
-#: API parameters set by something other than the flag of the same name
-FLAG_OF = {"start": "--x0/--y0/--z0"}
-DATA_OPTION = dict(choices=DATA, default="ballbar", help="measurements in the likelihood: ball bar (default), probe, or both")
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # one line, exit 2
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
 def _show(result, args) -> int:
@@ -118,156 +106,12 @@ def cmd_validate_sbc(args) -> int:
     return 0
 
 
-# --------------------------------------------------------------------------- parser
-def _command(sub, name: str, func, help: str, *, campaign: str | None = "campaign TOML (default: the built-in "
-             "thesis campaign)", json_help: str | None = "print JSON"):
-    s = sub.add_parser(name, help=help)
-    if campaign:
-        s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help=campaign)
-    if json_help:
-        s.add_argument("--json", action="store_true", help=json_help)
-    s.set_defaults(func=func, parser=s)
-    return s
-
-
-def _model(s, default: str, choices=MODELS, help: str | None = None) -> None:
-    s.add_argument("--model", choices=choices, default=default, help=help or f"forward model (default {default})")
-
-
-def _sampler_options(s) -> None:
-    """Options of the commands that run the sampler (sample, report)."""
-    s.add_argument("--data", **DATA_OPTION)
-    s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
-    s.add_argument("--target-ess", type=float, default=api.TARGET_ESS, help="stop when the bulk and tail ESS of "
-                   f"each of the eight quantities reach this (default {api.TARGET_ESS:g}) and R-hat ≤ 1.01")
-    s.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
-                   help="emcee ensembles (default) or independent draws of the exact posterior (linear model)")
-    s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")
-    s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances] to decide conformity against "
-                   "(default: the campaign's own section, if any)")
-    s.add_argument("--sigma-model-um", type=float, default=None, help="fix sigma_model at this value, µm "
-                   "(default: sampled from its prior; 0 with --closed-form)")
-    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
-    p.add_argument("--version", action="version", version=f"{PROG} {__version__}")
-    sub = p.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser, required=True)
-
-    _command(sub, "identify", cmd_identify, "deterministic ball-bar and touch-probe identification (thesis Eqs 4.10–4.18, 5.1–5.19)")
-
-    s = _command(sub, "probe-fit", cmd_probe_fit, "least-squares sphere fit of DPRNT probe output", campaign=None)
-    s.add_argument("file", metavar="FILE", help="DPRNT output file (e.g. thesis Fig 5.13)")
-    s.add_argument("--stylus-radius-mm", type=float, metavar="R", default=None,
-                   help="stylus-ball radius, subtracted from the fitted radius (centre unchanged)")
-
-    s = _command(sub, "simulate", cmd_simulate, "predicted eccentricities for a known truth, or a synthetic campaign",
-                 json_help="print the noise-free eccentricities as JSON")
-    s.add_argument("--truth", required=True, metavar="TRUTH.toml",
-                   help="[deviations] <name>_arcsec/_um, [setups.<id>] xT_um.., [mounts.<id>] xW_um..; missing = 0")
-    _model(s, "htm-thesis")
-    s.add_argument("-o", "--output", metavar="FILE", help="write a synthetic campaign TOML with the truth recorded")
-    s.add_argument("--noise", action="store_true", help="with -o: scatter like a real measurement (repeats, instrument accuracy)")
-    s.add_argument("--seed", type=int, default=None, help="random seed for --noise")
-
-    s = _command(sub, "sensitivity", cmd_sensitivity, "eccentricity of every pattern per unit deviation and mounting offset",
-                 campaign="campaign whose geometry to use (default: thesis)", json_help=None)
-    _model(s, "htm-thesis")
-    g = s.add_mutually_exclusive_group()
-    g.add_argument("--json", action="store_true", help="print JSON")
-    g.add_argument("--markdown", action="store_true", help="print a Markdown table")
-
-    s = _command(sub, "sample", cmd_sample, "posterior of the deviations by MCMC (emcee ensembles), with diagnostics")
-    _model(s, "linear")
-    s.add_argument("--seed", type=int, default=None, help="random seed: the same seed gives the same draws")
-    s.add_argument("-o", "--output", metavar="posterior.nc", help="write the ArviZ InferenceData (NetCDF)")
-    s.add_argument("--checkpoint", metavar="FILE", help="HDF5 checkpoint: written as it goes, resumed if it exists")
-    _sampler_options(s)
-    s.add_argument("--closed-form", action="store_true", help="instant closed-form Gaussian posterior (linear model)")
-
-    s = _command(sub, "report", cmd_report, "sample the posterior and write an HTML report with figures, tables and NetCDF",
-                 json_help="print the summary, diagnostics and written files as JSON")
-    s.add_argument("-o", "--output", metavar="DIR", default="report", help="report directory, created if needed (default ./report)")
-    _model(s, "linear")
-    s.add_argument("--compare-models", action="store_true",
-                   help="also sample under the other two models and compare (takes several minutes)")
-    s.add_argument("--seed", type=int, default=1, help="random seed (default 1: the same report every time)")
-    _sampler_options(s)
-
-    s = _command(sub, "plan", cmd_plan, "rank candidate extra measurements by how much they reduce uncertainty",
-                 json_help="print JSON, best candidate first")
-    s.add_argument("--target", dest="targets", action="append", metavar="NAME",
-                   help="quantity to make more certain (repeatable; default the eight identified quantities)")
-    _model(s, "linear", help="forward model (default linear; htm models are linearised at zero)")
-    s.add_argument("--candidates", metavar="FILE.toml", help="extra candidates of your own ([[candidate]] tables)")
-    s.add_argument("--sigma-model-um", type=float, default=None,
-                   help="fixed model-discrepancy sd of the closed form (default: rms of its prior, 2 µm)")
-    s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
-                   help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
-    s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")
-
-    s = _command(sub, "ncgen", cmd_ncgen, "measuring NC program of a ball-bar pattern (e.g. thesis Fig 4.30(a))",
-                 campaign=None, json_help=None)
-    s.add_argument("pattern", metavar="PATTERN", help="one of BR BT BA BX BY BZ CR CT CA CX CY CZ")
-    s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign whose setup geometry to use (default: thesis)")
-    s.add_argument("--R-B-mm", dest="R_B_mm", type=float, default=None, help="tool length R_B, mm (default: the setup's)")
-    s.add_argument("--x0", type=float, default=None, help="NC X of the first block, mm (with --z0)")
-    s.add_argument("--y0", type=float, default=0.0, help="NC Y of the first block, mm (default 0)")
-    s.add_argument("--z0", type=float, default=None, help="NC Z of the first block, mm (with --x0)")
-    s.add_argument("--step-deg", type=float, default=2.5, help="B or C step, degrees (default 2.5)")
-    s.add_argument("--feed", type=float, default=None, help="feed word F (default none)")
-    s.add_argument("-n", type=int, default=None, help="number of blocks (default: 0–90° for B, one turn for C)")
-    s.add_argument("--setup", default=None, help="campaign setup for R_B and the NC origin (default: that of BX)")
-    s.add_argument("--mount", default=None, help="campaign mount for Z_C, R_C")
-    s.add_argument("-o", "--output", metavar="FILE.nc", help="write the program to FILE (default: print)")
-
-    s = _command(sub, "compensate", cmd_compensate, "rewrite X/Y/Z of an NC program for the identified deviations, "
-                 "with uncertainty", json_help="print JSON: corrections, residuals, what is not compensable")
-    s.add_argument("program", metavar="PROGRAM.nc", help="NC program (G00/G01 blocks, absolute)")
-    s.add_argument("-o", "--output", required=True, metavar="OUT.nc", help="compensated program")
-    s.add_argument("--method", choices=("exact", "thesis"), default="exact",
-                   help="exact inversion (default) or thesis Eqs 3.4–3.13 as printed (double correction)")
-    _model(s, "htm-thesis", help="kinematic model (default htm-thesis; linear cannot compensate)")
-    s.add_argument("--values", choices=("posterior", "ballbar"), default="posterior",
-                   help="compensate with the posterior mean (default) or the deterministic ball-bar values")
-    s.add_argument("--posterior", metavar="post.nc", help="posterior draws (from sample -o); default: closed form")
-    s.add_argument("--point", choices=("tcp", "nose"), default="tcp",
-                   help="compensate the tool centre point (default) or the spindle nose as the thesis does")
-    s.add_argument("--setup", default=None, help="campaign setup of the tool (R_B, NC origin; default: that of BX)")
-    s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
-    s.add_argument("--integer-unit", choices=("um", "mm"), default=None, help="how to read X/Y/Z/B/C words "
-                   "without a decimal point (X100): increments of 1 µm / 0.001°, or mm / ° (default: refuse them)")
-
-    vsub = sub.add_parser("validate", help="check the inference itself: simulation-based calibration").add_subparsers(
-        dest="check", metavar="CHECK", parser_class=_Parser, required=True)
-    v = _command(vsub, "sbc", cmd_validate_sbc, "simulation-based calibration (Talts et al. 2018): rank histograms, "
-                 "coverage", campaign="campaign whose design (runs, repeats, priors) to simulate (default: thesis)",
-                 json_help="print JSON: p_uniform and coverage_50/90/95 per quantity")
-    v.add_argument("--n", type=int, default=200, help="replicates: truths drawn from the prior (default 200)")
-    _model(v, "linear")
-    v.add_argument("--data", **DATA_OPTION)
-    v.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
-                   help="emcee (default: what sample/report use) or the exact linear posterior (checks SBC itself)")
-    v.add_argument("--draws", dest="n_ranked", type=int, default=99,
-                   help="posterior draws each truth is ranked among (default 99)")
-    v.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"emcee step budget per ensemble (default {api.MAX_STEPS})")
-    v.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                   help=f"parallel processes (default: the CPU count, {os.cpu_count() or 1})")
-    v.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
-    v.add_argument("-o", "--output", metavar="DIR",
-                   help="write sbc.json, sbc_summary.csv, sbc_replicates.csv, sbc_ranks.png, sbc_ecdf.png")
-    v.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    return p
-
-
-def flag_of(parser: argparse.ArgumentParser, parameter: str) -> str:
-    """The flag (or positional metavar) of ``parser`` that sets the API parameter ``parameter``."""
-    for action in parser._actions:
-        if action.dest == parameter:
-            longest = [o for o in action.option_strings if o.startswith("--")] or action.option_strings
-            return longest[0] if longest else (action.metavar or parameter)
-    return FLAG_OF.get(parameter, parameter)
+def build_parser():
+    """The argument parser, each command run by its ``cmd_*`` function (:mod:`mtmcal_bayes.cli_options`)."""
+    return cli_options.build_parser({
+        "identify": cmd_identify, "probe-fit": cmd_probe_fit, "simulate": cmd_simulate, "sensitivity": cmd_sensitivity,
+        "sample": cmd_sample, "report": cmd_report, "plan": cmd_plan, "ncgen": cmd_ncgen, "compensate": cmd_compensate,
+        "sbc": cmd_validate_sbc})
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -28,6 +28,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("posterior", "planning", "compensation", "validation", "simulation"),  # features
     ("reporting",),                                                # the report, built on posterior and planning
     ("api",),                                                      # the Python API: one function per command
+    ("cli_options",),                                              # the command line's flags
     ("cli", "__init__"),                                           # the command line; the package's public face
 )
 LAYER_OF = {unit: i for i, layer in enumerate(LAYERS) for unit in layer}
@@ -162,7 +163,7 @@ def test_cli_is_thin():
 def test_cli_calls_the_api_only():
     """The CLI reaches the library through ``api`` (and the errors, the model names, progress and JSON printing)."""
     allowed = {"mtmcal_bayes.api", "mtmcal_bayes.errors", "mtmcal_bayes.models", "mtmcal_bayes.progress",
-               "mtmcal_bayes.version", "mtmcal_bayes.io.json_text"}
+               "mtmcal_bayes.version", "mtmcal_bayes.io.json_text", "mtmcal_bayes.cli_options"}
     assert GRAPH["mtmcal_bayes.cli"] <= allowed, GRAPH["mtmcal_bayes.cli"] - allowed
 
 

@@ -10,6 +10,7 @@ results, optional priors and, for synthetic campaigns, the truth.
 
 from __future__ import annotations
 
+import datetime
 import os
 from pathlib import Path
 
@@ -77,7 +78,8 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     """Parse and validate campaign TOML ``text``; ``source`` names it in error messages."""
     r = TomlReader(source)
     doc = parse_toml(text, source, f"a campaign TOML with format = \"{FORMAT}\"")
-    r.check_keys(doc, {"format", "machine", "ballbar", "probe", "reported", "priors", "truth", "tolerances"}, "")
+    r.check_keys(doc, {"format", "machine", "ballbar", "probe", "reported", "priors", "truth", "tolerances", "date",
+                       "temperature_C"}, "")
     fmt = r.string(doc, "format", "", required=True)
     if fmt != FORMAT:
         r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
@@ -91,15 +93,32 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     truth_t = r.table(doc, "truth", "", required=False)
     truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe) if truth_t is not None else None
     tolerances = parse_tolerances(r, r.table(doc, "tolerances", "", required=False) or {})
-    return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances)
+    temperature = r.number(doc, "temperature_C", "", required=False)
+    if temperature is not None and not -50.0 <= temperature <= 100.0:
+        r.fail("temperature_C", f"{temperature:g} °C is not a workshop temperature (−50 to 100 °C)")
+    return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances,
+                    _date(r, doc), temperature)
 
 
 def _machine(r: TomlReader, t: dict) -> Machine:
-    allowed = {"name", "configuration"} | {f"travel_{a}_mm" for a in "XYZ"}
+    allowed = {"name", "configuration", "serial"} | {f"travel_{a}_mm" for a in "XYZ"}
     r.check_keys(t, allowed, "machine")
     travel = {a: r.number(t, f"travel_{a}_mm", "machine", positive=True)
               for a in "XYZ" if f"travel_{a}_mm" in t}
-    return Machine(r.string(t, "name", "machine"), r.string(t, "configuration", "machine"), travel)
+    return Machine(r.string(t, "name", "machine"), r.string(t, "configuration", "machine"), travel,
+                   r.string(t, "serial", "machine").strip())
+
+
+def _date(r: TomlReader, doc: dict) -> datetime.datetime | None:
+    """The campaign's ``date``: a TOML date (taken at 00:00) or local date-time; an offset is kept."""
+    if "date" not in doc:
+        return None
+    v = doc["date"]
+    if isinstance(v, datetime.datetime):
+        return v
+    if isinstance(v, datetime.date):
+        return datetime.datetime(v.year, v.month, v.day)
+    r.fail("date", f"expected a TOML date such as 2026-03-15 or a date-time 2026-03-15T08:30:00, got {kind_of(v)}")
 
 
 def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:

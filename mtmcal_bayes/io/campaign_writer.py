@@ -20,7 +20,12 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
     """
     um = lambda v: units.from_internal(v, "um")
     doc: dict = {"format": FORMAT}
+    if c.date is not None:
+        doc["date"] = c.date
+    if c.temperature_C is not None:
+        doc["temperature_C"] = c.temperature_C
     doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
+                      **({"serial": c.machine.serial} if c.machine.serial else {}),
                       **{f"travel_{a}_mm": v for a, v in c.machine.travel.items()}}
     bb = c.ballbar
     b: dict = {}

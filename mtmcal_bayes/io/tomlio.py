@@ -7,6 +7,7 @@ booleans, integers, floats (shortest form, or a fixed number of decimals via
 
 from __future__ import annotations
 
+import datetime
 import math
 import re
 from dataclasses import dataclass
@@ -56,6 +57,11 @@ def _value(v) -> str:
         return _float(v)
     if isinstance(v, str):
         return _string(v)
+    if isinstance(v, datetime.datetime):  # a date-time at midnight without offset is written as a TOML date
+        midnight = v.tzinfo is None and v.time() == datetime.time()
+        return v.date().isoformat() if midnight else v.isoformat()
+    if isinstance(v, datetime.date):
+        return v.isoformat()
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
     if hasattr(v, "tolist"):  # numpy arrays and scalars
