@@ -35,6 +35,8 @@ from . import units
 from .api import (
     closed_form,
     compensate,
+    fleet,
+    history,
     identify,
     ncgen,
     plan,
@@ -44,6 +46,7 @@ from .api import (
     sbc,
     sensitivity,
     simulate,
+    simulate_history,
 )
 from .campaign import Campaign, Truth
 from .errors import InputError, MtmcalError, ParameterError
@@ -58,7 +61,7 @@ from .version import __version__
 
 __all__ = [
     "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan", "ncgen",
-    "compensate", "sbc",
+    "compensate", "sbc", "history", "simulate_history", "fleet",
     "Campaign", "Truth", "load_campaign", "parse_campaign", "save_campaign", "read_dprnt",
     "InputError", "MtmcalError", "ParameterError", "ProgressEvent",
     "identify_ballbar", "identify_probe", "fit_sphere",

@@ -24,6 +24,8 @@ from .progress import Progress
 
 if TYPE_CHECKING:  # the result types, for the signatures only
     from .compensation import CompensationResult
+    from .fleets import FleetResult
+    from .histories import HistoryResult
     from .identification import IdentificationResult, ProbeFit
     from .planning import PlanResult
     from .posterior import ClosedFormResult, PosteriorResult
@@ -260,24 +262,154 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
 
 def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", sampler: str = "emcee",
         n_ranked: int = 99, max_steps: int = MAX_STEPS, workers: int | None = None, seed: int = 1, output=None,
-        progress: Progress | None = None, data: str = "ballbar") -> SBCResult:
+        progress: Progress | None = None, data: str = "ballbar", scheduler: str | None = None) -> SBCResult:
     """Simulation-based calibration (Talts et al. 2018) of the posterior on the design of the campaign:
-    ``n`` truths from the prior, each ranked among ``n_ranked`` posterior draws; ``workers`` processes
-    (default the CPU count); ``output`` receives the JSON, CSV files and figures; ``data`` the measurements
-    simulated and fitted (``"ballbar"``, ``"probe"``, ``"both"``)."""
+    ``n`` truths from the prior, each ranked among ``n_ranked`` posterior draws, the replicates as Dask tasks
+    on a local cluster of ``workers`` processes (default the CPU count) or, with ``scheduler`` (``tcp://host:8786``
+    or a scheduler file), on a running cluster; the same result either way.  ``output`` receives the JSON, CSV
+    files and figures; ``data`` the measurements simulated and fitted (``"ballbar"``, ``"probe"``, ``"both"``).
+    The local workers are forked where the platform forks (Linux, macOS); on Windows, where they are spawned
+    and import the calling script, call it under ``if __name__ == "__main__":``."""
+    from .errors import ParameterError
     from .models import check_data
     from .validation import SBCSettings, run_sbc
 
+    if workers is not None and scheduler is not None:
+        raise ParameterError("workers", "sets the size of a local cluster; a scheduler's cluster has its own workers")
     c = campaign_of(campaign)
     check_data(data, c)
     _writable(output, "SBC")
     settings = SBCSettings(n=n, model=model, sampler=sampler, n_ranked=n_ranked, max_steps=max_steps,
-                           workers=(os.cpu_count() or 1) if workers is None else workers, seed=seed, data=data)
+                           workers=(os.cpu_count() or 1) if workers is None else workers, seed=seed, data=data,
+                           scheduler=scheduler)
     result = run_sbc(c, settings, progress)
     if output is not None:
         result.write(output)
     return result
 
 
+def history_campaigns(paths) -> list[Campaign]:
+    """The campaigns of a history: a directory (its ``*.toml``, sorted) or a list of files (or Campaigns)."""
+    from pathlib import Path
+
+    from .errors import ParameterError
+
+    items = [paths] if isinstance(paths, (str, os.PathLike)) else list(paths)
+    files = []
+    for item in items:
+        if isinstance(item, Campaign):
+            files.append(item)
+        elif Path(item).is_dir():
+            found = sorted(Path(item).glob("*.toml"))
+            if not found:
+                raise ParameterError("campaigns", f"{item}: no campaign files (*.toml) in this directory")
+            files += found
+        else:
+            files.append(item)
+    return [f if isinstance(f, Campaign) else load_campaign(f) for f in files]
+
+
+def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None) -> HistoryResult:
+    """One machine's history: every quantity at every date jointly (deviations as random walks in time), the
+    changes that are real, and the date by which each toleranced quantity should be recalibrated.
+
+    ``campaigns``: a directory of campaign files, a list of files, or Campaigns (each with its ``date``, one
+    ``[machine] serial``); ``tolerances`` as for :func:`sample` (default: the latest campaign's); ``output``
+    receives history.json, CSV files, trend.png and index.html.
+    """
+    from .histories import fit_history
+    from .models import check_model
+
+    check_model(model)
+    _writable(output, "history")
+    result = fit_history(history_campaigns(campaigns), model=model, seed=seed, tolerances=tolerances_of(tolerances))
+    if output is not None:
+        result.write(output)
+    return result
+
+
+def simulate_history(campaign: CampaignLike = None, *, truth, n: int = 5, every_days: float = 91.0, start=None,
+                     steps=(), ramps=(), serial: str = "SIM-001", model: str = "linear", seed: int = 0,
+                     output=None) -> list[Campaign]:
+    """A synthetic history of one machine: ``n`` campaigns ``every_days`` apart from ``start`` (a date, default
+    2026-01-05), each simulated from ``truth`` plus the drifts at its date, with fresh set-up offsets and noise.
+
+    ``steps`` / ``ramps``: ``"NAME=SIZE@K"`` strings (or :class:`~mtmcal_bayes.simulation.history.Drift`):
+    ``beta_CZ=40@4`` adds 40″ from the 4th campaign on; ``alpha_XB=8@1`` adds 8″ per year from the 1st on
+    (display units: ″ or µm).  ``output`` (a directory, created) receives ``<serial>_<date>.toml`` files.
+    """
+    import datetime
+    from pathlib import Path
+
+    from .campaign import Truth
+    from .errors import ParameterError
+    from .io.campaign_reader import load_truth
+    from .io.campaign_writer import save_campaign
+    from .simulation.history import Drift, drift_from_display, synthetic_history
+
+    if not (isinstance(n, int) and 2 <= n <= 200):
+        raise ParameterError("n", f"{n}: a history has 2 to 200 campaigns")
+    if not (isinstance(every_days, (int, float)) and 1 <= every_days <= 3650):
+        raise ParameterError("every_days", f"{every_days}: campaigns 1 to 3650 days apart")
+    t0 = start or datetime.date(2026, 1, 5)
+    t0 = datetime.datetime(t0.year, t0.month, t0.day)
+    dates = [t0 + datetime.timedelta(days=every_days * i) for i in range(n)]
+
+    def drift(spec, kind: str, parameter: str) -> Drift:
+        if isinstance(spec, Drift):
+            return spec
+        try:
+            name, rest = spec.split("=")
+            size, k = rest.split("@")
+            size, k = float(size), int(k)
+        except ValueError:
+            raise ParameterError(parameter, f"{spec!r}: expected NAME=SIZE@K, e.g. beta_CZ=40@4") from None
+        if not 1 <= k <= n:
+            raise ParameterError(parameter, f"{spec!r}: K = {k} is not a campaign number (1 to {n})")
+        return drift_from_display(name.strip(), kind, size, dates[k - 1])
+
+    drifts = [drift(x, "step", "steps") for x in steps] + [drift(x, "ramp", "ramps") for x in ramps]
+    c = campaign_of(campaign)
+    _writable(output, "history")
+    t = truth if isinstance(truth, Truth) else load_truth(truth, c)
+    series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed)
+    if output is not None:
+        out = Path(output)
+        out.mkdir(parents=True, exist_ok=True)
+        for x in series:
+            path = out / f"{serial}_{x.date.date().isoformat()}.toml"
+            save_campaign(x, path, header=f"Synthetic campaign {x.date.date()} of machine {serial}, simulated by "
+                          "mtmcal-bayes (a history with drift).")
+            x.source = str(path)
+    return series
+
+def fleet(directory, *, scheduler: str | None = None, workers: int | None = None, seed: int = 1, model: str = "linear",
+          output=None, cache=None, progress: Progress | None = None, sampler: str = "emcee",
+          target_ess: float = TARGET_ESS, max_steps: int = MAX_STEPS) -> FleetResult:
+    """Every machine's calibrations below ``directory`` (each ``*.toml``, recursively), in parallel on Dask: each
+    campaign's posterior and each machine's history (two or more dated campaigns of one ``[machine] serial``),
+    in one overview of machines × quantities with conformity, drift flags and recalibrate-by dates.
+
+    ``scheduler``: the address (``tcp://host:8786``) or scheduler file of a running Dask cluster; else a local
+    cluster of ``workers`` processes (default one per core).  A campaign that fails is reported in ``errors``
+    and the rest completes (``exit_status`` 3).  Each finished unit is cached (``cache``: a folder; default
+    ``<output>/.cache``, else the user's cache folder; ``False``: none), so a re-run computes only what is
+    missing.  Each campaign is seeded from its content and ``seed``: the results do not depend on the
+    cluster.  ``output`` receives index.html, fleet.json, fleet_summary.csv and a page per machine;
+    ``model``, ``sampler``, ``target_ess``, ``max_steps`` as for :func:`sample`.
+    """
+    from .fleets import FleetSettings, run_fleet
+    from .models import check_model
+
+    check_model(model)
+    _writable(output, "fleet overview")
+    settings = FleetSettings(model=model, seed=seed, sampler=sampler, target_ess=target_ess, max_steps=max_steps)
+    result = run_fleet(directory, settings, scheduler=scheduler, workers=workers, output=output, cache=cache,
+                       progress=progress)
+    if output is not None:
+        result.write(output)
+    return result
+
+
 __all__ = ["campaign_of", "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report",
-           "plan", "ncgen", "compensate", "sbc"]
+           "plan", "ncgen", "compensate", "sbc", "history", "simulate_history", "fleet"]

@@ -39,10 +39,22 @@ def cmd_probe_fit(args) -> int:
 
 
 def cmd_simulate(args) -> int:
+    if args.history:
+        series = api.simulate_history(args.campaign, truth=args.truth, n=args.campaigns, every_days=args.every_days,
+                                      start=args.start, steps=args.step or (), ramps=args.ramp or (), serial=args.serial,
+                                      model=args.model, seed=args.seed or 0, output=args.history)
+        print(f"wrote {len(series)} campaigns of machine {args.serial} to {args.history}/")
+        return 0
     sim = api.simulate(args.campaign, truth=args.truth, model=args.model, noise=args.noise, seed=args.seed,
                        output=args.output)
     _warn(sim.warnings)
     return _show(sim, args)
+
+
+def cmd_history(args) -> int:
+    result = api.history(args.campaigns, model=args.model, seed=args.seed, tolerances=args.tolerances,
+                         output=args.output)
+    return _show(result, args)
 
 
 def cmd_sensitivity(args) -> int:
@@ -100,18 +112,29 @@ def cmd_validate_sbc(args) -> int:
     t0 = time.perf_counter()
     _show(api.sbc(args.campaign, n=args.n, model=args.model, sampler=args.sampler, n_ranked=args.n_ranked, data=args.data,
                   max_steps=args.max_steps, workers=args.workers, seed=args.seed, output=args.output,
-                  progress=None if args.quiet else StderrProgress()), args)
+                  scheduler=args.scheduler, progress=None if args.quiet else StderrProgress()), args)
     if not args.quiet:
         print(f"sbc: done in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
     return 0
+
+
+def cmd_fleet(args) -> int:
+    result = api.fleet(args.directory, scheduler=args.scheduler, workers=args.workers, seed=args.seed,
+                       model=args.model, output=args.output, cache=args.cache, sampler=args.sampler,
+                       target_ess=args.target_ess, max_steps=args.max_steps,
+                       progress=None if args.quiet else StderrProgress())
+    for e in result.errors:
+        print(f"{PROG} fleet: error: {e['message']}", file=sys.stderr)
+    _show(result, args)
+    return result.exit_status
 
 
 def build_parser():
     """The argument parser, each command run by its ``cmd_*`` function (:mod:`mtmcal_bayes.cli_options`)."""
     return cli_options.build_parser({
         "identify": cmd_identify, "probe-fit": cmd_probe_fit, "simulate": cmd_simulate, "sensitivity": cmd_sensitivity,
-        "sample": cmd_sample, "report": cmd_report, "plan": cmd_plan, "ncgen": cmd_ncgen, "compensate": cmd_compensate,
-        "sbc": cmd_validate_sbc})
+        "sample": cmd_sample, "history": cmd_history, "report": cmd_report, "plan": cmd_plan, "ncgen": cmd_ncgen, "compensate": cmd_compensate,
+        "sbc": cmd_validate_sbc, "fleet": cmd_fleet})
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -8,6 +8,7 @@ the flag that sets it.
 from __future__ import annotations
 
 import argparse
+import datetime
 import os
 
 from . import api
@@ -16,7 +17,7 @@ from .version import __version__
 
 PROG = "mtmcal-bayes"
 #: API parameters set by something other than the flag of the same name
-FLAG_OF = {"start": "--x0/--y0/--z0"}
+FLAG_OF = {"start": "--x0/--y0/--z0", "steps": "--step", "ramps": "--ramp", "n": "--campaigns"}
 DATA_OPTION = dict(choices=DATA, default="ballbar", help="measurements in the likelihood: ball bar (default), probe, or both")
 
 
@@ -76,7 +77,24 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     _model(s, "htm-thesis")
     s.add_argument("-o", "--output", metavar="FILE", help="write a synthetic campaign TOML with the truth recorded")
     s.add_argument("--noise", action="store_true", help="with -o: scatter like a real measurement (repeats, instrument accuracy)")
-    s.add_argument("--seed", type=int, default=None, help="random seed for --noise")
+    s.add_argument("--seed", type=int, default=None, help="random seed for --noise (and --history)")
+    h = s.add_argument_group("a history of one machine (docs/history.md)")
+    h.add_argument("--history", metavar="DIR", help="write a series of noisy campaigns of one machine into DIR")
+    h.add_argument("--campaigns", type=int, default=5, help="number of campaigns (default 5)")
+    h.add_argument("--every-days", type=float, default=91.0, help="days between campaigns (default 91)")
+    h.add_argument("--start", type=datetime.date.fromisoformat, default=None, metavar="YYYY-MM-DD",
+                   help="date of the first campaign (default 2026-01-05)")
+    h.add_argument("--step", action="append", metavar="NAME=SIZE@K", help="a step of SIZE (″ or µm) from campaign K on")
+    h.add_argument("--ramp", action="append", metavar="NAME=RATE@K", help="a ramp of RATE per year from campaign K on")
+    h.add_argument("--serial", default="SIM-001", help="the machine's serial (default SIM-001)")
+
+    s = _command(sub, "history", handlers["history"], "one machine's history: every quantity at every date, real "
+                 "changes, when to recalibrate", campaign=None, json_help="print JSON: serial, dates, summary, changes, forecast")
+    s.add_argument("campaigns", nargs="+", metavar="DIR|FILES", help="a directory of campaign files, or the files")
+    _model(s, "linear", choices=("linear",), help="forward model (linear; the history model is linear-Gaussian)")
+    s.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
+    s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances] for the forecast (default: the latest campaign's)")
+    s.add_argument("-o", "--output", metavar="DIR", help="write history.json, CSV files, trend.png and index.html to DIR")
 
     s = _command(sub, "sensitivity", handlers["sensitivity"], "eccentricity of every pattern per unit deviation and mounting offset",
                  campaign="campaign whose geometry to use (default: thesis)", json_help=None)
@@ -146,6 +164,27 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--integer-unit", choices=("um", "mm"), default=None, help="how to read X/Y/Z/B/C words "
                    "without a decimal point (X100): increments of 1 µm / 0.001°, or mm / ° (default: refuse them)")
 
+    s = _command(sub, "fleet", handlers["fleet"], "every machine's campaigns in a folder tree, in parallel on Dask: "
+                 "posteriors, histories, one overview (docs/fleet.md)", campaign=None,
+                 json_help="print JSON: machines (campaigns, changes, forecast), errors, run")
+    s.add_argument("directory", metavar="DIR", help="folder searched recursively for campaign files (*.toml)")
+    s.add_argument("-o", "--output", metavar="OUTDIR", help="write index.html, fleet.json, fleet_summary.csv and "
+                   "machines/<serial>/ to OUTDIR (created if needed)")
+    s.add_argument("--scheduler", metavar="ADDRESS", default=None, help="a running Dask scheduler "
+                   "(tcp://host:8786, or its scheduler file) instead of a local cluster")
+    s.add_argument("--workers", type=int, default=None,
+                   help=f"local worker processes (default: the CPU count, {os.cpu_count() or 1})")
+    s.add_argument("--cache", metavar="CACHEDIR", default=None, help="cache of finished campaigns and histories "
+                   "(default OUTDIR/.cache, else ~/.cache/mtmcal-bayes/fleet)")
+    _model(s, "linear", help="forward model of each campaign's posterior (default linear; histories: linear)")
+    s.add_argument("--seed", type=int, default=1, help="random seed (default 1), combined with each campaign's content")
+    s.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
+                   help="emcee ensembles (default) or independent draws of the exact posterior (linear model)")
+    s.add_argument("--target-ess", type=float, default=api.TARGET_ESS,
+                   help=f"ESS each campaign's sampling aims for (default {api.TARGET_ESS:g})")
+    s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")
+    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
     vsub = sub.add_parser("validate", help="check the inference itself: simulation-based calibration").add_subparsers(
         dest="check", metavar="CHECK", parser_class=_Parser, required=True)
     v = _command(vsub, "sbc", handlers["sbc"], "simulation-based calibration (Talts et al. 2018): rank histograms, "
@@ -159,8 +198,10 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     v.add_argument("--draws", dest="n_ranked", type=int, default=99,
                    help="posterior draws each truth is ranked among (default 99)")
     v.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"emcee step budget per ensemble (default {api.MAX_STEPS})")
-    v.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                   help=f"parallel processes (default: the CPU count, {os.cpu_count() or 1})")
+    v.add_argument("--workers", type=int, default=None,
+                   help=f"processes of the local Dask cluster (default: the CPU count, {os.cpu_count() or 1})")
+    v.add_argument("--scheduler", metavar="ADDRESS", default=None, help="run the replicates on a running Dask "
+                   "scheduler (tcp://host:8786, or its scheduler file) instead of a local cluster; same result")
     v.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
     v.add_argument("-o", "--output", metavar="DIR",
                    help="write sbc.json, sbc_summary.csv, sbc_replicates.csv, sbc_ranks.png, sbc_ecdf.png")

@@ -20,7 +20,7 @@ from mtmcal_bayes.progress import ProgressEvent, StderrProgress
 FIG_4_30A = data_path("fig4_30a_bx_original.nc")
 DPRNT = data_path("fig5_13_dprnt_output.txt")
 COMMAND_FUNCTIONS = ["identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan",
-                     "ncgen", "compensate", "sbc"]
+                     "ncgen", "compensate", "sbc", "history", "simulate_history", "fleet"]
 
 
 @pytest.mark.parametrize("name", COMMAND_FUNCTIONS)

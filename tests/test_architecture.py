@@ -20,13 +20,14 @@ PACKAGE = Path(mtmcal_bayes.__file__).parent
 #: lower layers; units of one layer are siblings and may not import each other
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "units", "progress", "version", "datasets", "arviz_import"),  # foundation: nothing of the package
-    ("parameters", "patterns", "sphere", "iso"),                   # names of quantities (and their ISO symbols), patterns, sphere fit
+    ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
     ("campaign", "observations"),                                  # the data of a calibration
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models
-    ("identification", "inference", "figure_style"),               # thesis method, Bayesian engine, figure look
-    ("posterior", "planning", "compensation", "validation", "simulation"),  # features
+    ("identification", "inference", "figure_style", "html_page"),  # thesis method, Bayesian engine, figure and page look
+    ("posterior", "planning", "compensation", "validation", "simulation", "histories"),  # features
     ("reporting",),                                                # the report, built on posterior and planning
+    ("fleets",),                                                   # many machines on Dask: posteriors, histories, overview
     ("api",),                                                      # the Python API: one function per command
     ("cli_options",),                                              # the command line's flags
     ("cli", "__init__"),                                           # the command line; the package's public face

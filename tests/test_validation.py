@@ -4,13 +4,23 @@ import json
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 import pytest
 
+from mtmcal_bayes.cluster import dask_client
 from mtmcal_bayes.inference import LogPosterior
 from mtmcal_bayes.parameters import IDENTIFIABLE
 from mtmcal_bayes.validation import SBCSettings, run_sbc
 from mtmcal_bayes.validation.samplers import Draws, ExactDraws
 from mtmcal_bayes.validation.sbc import SBC_QUANTITIES, simulate_data
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """One local Dask cluster shared by the tests below (starting one takes seconds; the results do not depend on
+    where the replicates run, tests/test_sbc_dask.py)."""
+    with dask_client(workers=1) as client:
+        yield client.scheduler.address
 
 
 def test_with_means_changes_only_the_data(thesis):
@@ -25,12 +35,12 @@ def test_with_means_changes_only_the_data(thesis):
     assert other(z)[0] != post(z)[0]
 
 
-def test_exact_posterior_is_calibrated(thesis):
+def test_exact_posterior_is_calibrated(thesis, scheduler):
     """The exact linear posterior must pass SBC: the check of the SBC machinery itself (seeded, N = 200).
 
     Tolerance: p > 0.001 per quantity (12 tests) and the 90 % coverage inside its 99.9 % binomial range.
     """
-    r = run_sbc(thesis, SBCSettings(n=200, sampler="exact", workers=1, seed=11))
+    r = run_sbc(thesis, SBCSettings(n=200, sampler="exact", scheduler=scheduler, seed=11))
     s = r.summary()
     assert list(s.index) == list(SBC_QUANTITIES)
     assert (s["p_uniform"] > 0.001).all(), s["p_uniform"]
@@ -56,14 +66,14 @@ class _Distorted(ExactDraws):
 
 @pytest.mark.parametrize("width, shift, what", [(0.6, 0.0, "overconfident"), (1.8, 0.0, "underconfident"),
                                                 (1.0, 0.7, "biased")])
-def test_sbc_detects_a_wrong_posterior(thesis, width, shift, what):
+def test_sbc_detects_a_wrong_posterior(thesis, scheduler, width, shift, what):
     """SBC must reject posteriors 0.6×/1.8× too wide or shifted by 0.7 sd (the passing run's seed; its first 200
     data sets are the passing run's).
 
     N = 400: at N = 200 the 0.6× and 1.8× cases miss the p < 1e-3 criterion for all eight quantities in about
     one seed of four (measured on seeds 11–14: largest p up to 2.7e-3); at N = 400 the largest p is ≤ 2e-10.
     """
-    r = run_sbc(thesis, SBCSettings(n=400, sampler="exact", workers=1, seed=11),
+    r = run_sbc(thesis, SBCSettings(n=400, sampler="exact", scheduler=scheduler, seed=11),
                 sampler=_Distorted(width=width, shift=shift))
     s = r.summary().loc[list(IDENTIFIABLE)]
     assert (s["p_uniform"] < 1e-3).all(), (what, s["p_uniform"])
@@ -73,19 +83,21 @@ def test_sbc_detects_a_wrong_posterior(thesis, width, shift, what):
 
 
 def test_emcee_sbc_is_seeded_and_independent_of_workers(thesis):
-    """Two processes give exactly the ranks of one: every replicate has its own seed (production sampler)."""
+    """Two Dask workers give exactly the ranks and summary of one: every replicate has its own seed and its own
+    place in the result (production sampler; the acceptance test of `validate sbc` on Dask)."""
     st = {"n": 3, "sampler": "emcee", "max_steps": 1000, "seed": 5, "n_ranked": 49}
     one = run_sbc(thesis, SBCSettings(workers=1, **st))
     two = run_sbc(thesis, SBCSettings(workers=2, **st))
     assert np.array_equal(one.ranks, two.ranks)
     assert np.array_equal(one.truth, two.truth)
+    pd.testing.assert_frame_equal(one.summary(), two.summary(), check_exact=True)
     assert one.n_steps.tolist() == two.n_steps.tolist() and one.converged.all()
     assert np.isfinite(one.post_sd).all() and (one.post_sd > 0).all()
 
 
-def test_cli_sbc_json_and_files(run_cli, tmp_path):
+def test_cli_sbc_json_and_files(run_cli, tmp_path, scheduler):
     out = tmp_path / "sbc"
-    code, stdout, err = run_cli("validate", "sbc", "--sampler", "exact", "--n", "60", "--workers", "1",
+    code, stdout, err = run_cli("validate", "sbc", "--sampler", "exact", "--n", "60", "--scheduler", scheduler,
                                 "--json", "-o", out, "--quiet")
     assert code == 0, err
     j = json.loads(stdout)
@@ -99,8 +111,9 @@ def test_cli_sbc_json_and_files(run_cli, tmp_path):
     written = json.loads((out / "sbc.json").read_text())["quantities"]
     assert written["beta_XB"] == pytest.approx(j["quantities"]["beta_XB"], rel=1e-9)
     assert (out / "sbc_ranks.png").stat().st_size > 20_000
-    code, stdout, err = run_cli("validate", "sbc", "--sampler", "exact", "--n", "30", "--workers", "1", "--quiet")
-    assert code == 0 and "p_uniform" in stdout and "Verdict" in stdout
+    code, stdout, err = run_cli("validate", "sbc", "--sampler", "exact", "--n", "30", "--scheduler", scheduler,
+                                "--quiet")
+    assert code == 0 and "p_uniform" in stdout and "Verdict" in stdout and "1 worker(s)" in stdout
 
 
 @pytest.mark.parametrize("argv, fragment", [

@@ -17,6 +17,7 @@ import pandas as pd
 
 from .. import units
 from ..errors import MtmcalError
+from ..html_page import Page
 from ..identification import IdentificationResult, identify
 from ..identification.output import identification_table
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
@@ -52,7 +53,6 @@ from . import (
 )
 from .decisions import SUGGESTION_COLUMNS, add_suggestions, suggestion_text
 from .drawing import draw_figures
-from .html import Page
 from .missing import missing_data
 
 SUMMARY_COLUMNS = ["iso", "unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",

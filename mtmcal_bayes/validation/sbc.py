@@ -10,24 +10,24 @@ quantity.  If the inference is right, each rank is uniform on {0, …, L}
 whatever the prior and the design, and the truth lies inside the posterior's
 x % highest-density interval in x % of the replicates.
 
-The replicates are independent: they run in parallel over processes
-(:class:`concurrent.futures.ProcessPoolExecutor`), each seeded from its own
-child of one :class:`numpy.random.SeedSequence`, so the result does not depend
-on the number of workers.
+The replicates are independent: they run as Dask tasks
+(:func:`~mtmcal_bayes.cluster.dask_client`: a local cluster of ``workers``
+processes, or the cluster of a running scheduler), each seeded from its own
+child of one :class:`numpy.random.SeedSequence` and stored at its own index,
+so the result does not depend on the number of workers or where they run.
 """
 
 from __future__ import annotations
 
-import os
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
 from ..arviz_import import az
+from ..cluster import dask_client, default_workers
 from ..errors import ParameterError
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import display_draws
@@ -44,7 +44,9 @@ class SBCSettings:
     """What to run: ``n`` replicates of ``model`` with ``sampler`` (``"emcee"`` or ``"exact"``).
 
     ``n_ranked`` = L, the posterior draws each truth is ranked among (ranks 0…L);
-    ``max_steps``: the emcee step budget per ensemble; ``workers``: processes.
+    ``max_steps``: the emcee step budget per ensemble; ``workers``: processes of the local Dask cluster;
+    ``scheduler``: the address or scheduler file of a running Dask cluster to use instead (``workers`` is then
+    the number of its worker threads when the run started, for the record).
     """
 
     n: int = 200
@@ -52,9 +54,10 @@ class SBCSettings:
     sampler: str = "emcee"
     n_ranked: int = 99
     max_steps: int = SamplerSettings.max_steps
-    workers: int = field(default_factory=lambda: os.cpu_count() or 1)
+    workers: int = field(default_factory=default_workers)
     seed: int = 1
     data: str = "ballbar"  # the likelihood's measurements: "ballbar", "probe" or "both"
+    scheduler: str | None = None
 
     def check(self) -> None:
         for name, value, low in (("n", self.n, 2), ("workers", self.workers, 1), ("n_ranked", self.n_ranked, 9)):
@@ -156,7 +159,7 @@ class SBCResult:
         return {
             "campaign": self.campaign, "model": self.settings.model, "sampler": self.settings.sampler,
             "n": len(self.ranks), "n_ranked": self.settings.n_ranked, "n_bins": self.n_bins,
-            "seed": self.settings.seed, "workers": self.settings.workers,
+            "seed": self.settings.seed, "workers": self.settings.workers, "scheduler": self.settings.scheduler,
             "max_steps": self.settings.max_steps if self.settings.sampler == "emcee" else None,
             "wall_time_s": self.wall_time, "replicate_seconds_median": float(np.median(self.seconds)),
             "replicates_not_converged": int((~self.converged).sum()),
@@ -207,17 +210,105 @@ def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.Se
             "n_steps": draws.n_steps, "tau_max": draws.tau_max, "seconds": time.perf_counter() - t0}
 
 
-# one posterior and sampler per worker process, built once by the initializer
-_WORKER: dict = {}
+class _Replicates:
+    """What every task needs, sent once to each worker (``Client.scatter``): the recipe of the posterior, the
+    sampler and L.  The posterior is built on first use in each worker process and never sent."""
+
+    def __init__(self, campaign, s: SBCSettings, sampler):
+        self.campaign, self.sampler = campaign, sampler
+        self.model, self.data, self.n_ranked = s.model, s.data, s.n_ranked
+        self._post: LogPosterior | None = None
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_post": None}
+
+    def __call__(self, seeds: list[np.random.SeedSequence]) -> list[dict]:
+        if self._post is None:
+            self._post = LogPosterior(self.campaign, self.model, data=self.data)
+        try:
+            return [one_replicate(self._post, self.sampler, self.n_ranked, seed) for seed in seeds]
+        except ParameterError as exc:  # e.g. too few draws for L: the user's error, back as itself
+            raise _SentParameterError(exc.parameter, exc.message) from None
 
 
-def _init_worker(posterior_args: tuple, sampler, n_ranked: int) -> None:
-    campaign, model, data = posterior_args
-    _WORKER.update(post=LogPosterior(campaign, model, data=data), sampler=sampler, n_ranked=n_ranked)
+class _SentParameterError(ParameterError):
+    """A :class:`ParameterError` on its way back from a worker: pickled as the plain ParameterError it is
+    (pickle cannot rebuild an exception whose constructor takes two arguments; Dask would send a bare
+    ``Exception`` instead)."""
+
+    def __reduce__(self):
+        return ParameterError, (self.parameter, self.message)
 
 
-def _run_one(seed: np.random.SeedSequence) -> dict:
-    return one_replicate(_WORKER["post"], _WORKER["sampler"], _WORKER["n_ranked"], seed)
+def _run_chunk(replicates: _Replicates, seeds: list[np.random.SeedSequence]) -> tuple[list[dict], float]:
+    """One Dask task: consecutive replicates, and the seconds they took."""
+    t0 = time.perf_counter()
+    return replicates(seeds), time.perf_counter() - t0
+
+
+#: how long a Dask task should take, s.  A task costs the scheduler and the worker a few ms: replicates
+#: cheaper than this (the exact sampler's, 10 ms) go in chunks, dearer ones (emcee's, 0.3 s and more) one per task
+TASK_S = 0.25
+#: how long a run waits for the first worker of a scheduler's cluster, s
+WORKER_TIMEOUT_S = 60
+
+
+def _on_dask(campaign, s: SBCSettings, sampler, seeds: list, *, progress: Progress | None,
+             t0: float) -> tuple[list[dict], int]:
+    """Run the replicates of ``seeds`` as Dask tasks; their results in replicate order and the number of workers.
+
+    First one replicate per task, two tasks per worker thread; when the first task returns, its time sizes the
+    chunks of the rest (about :data:`TASK_S` each, at least four tasks per thread), all submitted then (the
+    scheduler gives them to whichever worker is free, those joining later included).  Results go to their
+    replicate's index, so neither the chunks nor the workers change them.  Progress is reported per replicate
+    as tasks finish; an interruption (or an error) cancels what is left before the cluster closes."""
+    from distributed import as_completed
+
+    n, out = len(seeds), [None] * len(seeds)
+    with dask_client(s.scheduler, None if s.scheduler else min(s.workers, n)) as client:
+        workers = _wait_for_workers(client, s.scheduler)
+        shared = client.scatter(_Replicates(campaign, s, sampler), broadcast=True, hash=False)
+        first: dict = {}  # future -> index of its first replicate
+
+        def submit(i: int, size: int):
+            f = client.submit(_run_chunk, shared, seeds[i: i + size], pure=False)
+            first[f] = i
+            return f
+
+        tasks = as_completed([submit(i, 1) for i in range(min(2 * workers, n))])
+        queued = min(2 * workers, n)
+        try:
+            done = 0
+            for f in tasks:
+                results, seconds = f.result()
+                for k, r in enumerate(results, start=first.pop(f)):
+                    out[k], done = r, done + 1
+                    _replicate_done(progress, s, done, time.perf_counter() - t0)
+                if queued < n:  # the first result: the rest, in chunks sized by its time
+                    size = _chunk_size(seconds / len(results), n - queued, workers)
+                    for i in range(queued, n, size):
+                        tasks.add(submit(i, size))
+                    queued = n
+        except BaseException:
+            client.cancel(list(first), force=True)
+            raise
+    return out, workers
+
+
+def _chunk_size(per_replicate: float, left: int, workers: int) -> int:
+    """Replicates per task: about :data:`TASK_S` of work, and at least four tasks per worker thread."""
+    by_time = int(TASK_S // per_replicate) if per_replicate > 0 else left
+    return max(1, min(by_time, left // (4 * workers)))
+
+
+def _wait_for_workers(client, scheduler: str | None) -> int:
+    """The worker threads of the cluster, once there is at least one (a scheduler may have none yet)."""
+    try:
+        client.wait_for_workers(1, timeout=WORKER_TIMEOUT_S)
+    except TimeoutError:
+        raise ParameterError("scheduler", f"no Dask worker joined the scheduler {scheduler!r} within "
+                             f"{WORKER_TIMEOUT_S} s (start some with: dask worker ADDRESS)") from None
+    return sum(client.nthreads().values())
 
 
 def _replicate_done(progress: Progress | None, s: SBCSettings, done: int, elapsed: float) -> None:
@@ -241,20 +332,10 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress: Progress | 
     sampler = sampler or make_sampler(s.sampler, s.max_steps)
     sampler.check(post)
     *seeds, prior_seed = np.random.SeedSequence(s.seed).spawn(s.n + 1)  # one per replicate, one for the prior sd
-    out: list[dict | None] = [None] * s.n
     t0 = time.perf_counter()
-    workers = min(s.workers, s.n)
-    if workers == 1:
-        for i, seed in enumerate(seeds):
-            out[i] = one_replicate(post, sampler, s.n_ranked, seed)
-            _replicate_done(progress, s, i + 1, time.perf_counter() - t0)
-    else:
-        with ProcessPoolExecutor(workers, initializer=_init_worker,
-                                 initargs=((campaign, s.model, s.data), sampler, s.n_ranked)) as pool:
-            futures = {pool.submit(_run_one, seed): i for i, seed in enumerate(seeds)}
-            for done, f in enumerate(as_completed(futures), start=1):
-                out[futures[f]] = f.result()
-                _replicate_done(progress, s, done, time.perf_counter() - t0)
+    out, workers = _on_dask(campaign, s, sampler, seeds, progress=progress, t0=t0)
+    if s.scheduler:
+        s = replace(s, workers=workers)
     stack = lambda key: np.array([r[key] for r in out])
     prior_theta = post.priors.rvs(20_000, np.random.default_rng(prior_seed))
     return SBCResult(

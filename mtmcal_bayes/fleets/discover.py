@@ -1,0 +1,139 @@
+"""Finding a fleet's campaigns: every campaign TOML under a folder, fingerprinted and grouped by machine.
+
+Every ``*.toml`` under the folder (recursively, in sorted order of its path; hidden files and folders, and the
+run's own output and cache folders, skipped) is read with :func:`~mtmcal_bayes.io.load_campaign`.  A file that
+does not load is an error of the fleet (its one-line message), never the end of the run.  Each campaign is
+fingerprinted by its *content*: the bytes of the file and of the files it names (ball-bar traces, DPRNT
+output), not its name or place; the fingerprint seeds its work and names its cache entry.
+
+Campaigns are grouped by ``[machine] serial``.  A campaign without a serial cannot be matched with any other:
+it is a machine of its own, known by its file.  A machine's campaigns are in date order (a missing date
+sorts after every dated campaign, those in file order); only dated campaigns make its history.
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..campaign import Campaign
+from ..errors import InputError, MtmcalError
+from ..io import load_campaign
+
+
+@dataclass
+class CampaignFile:
+    """One campaign of the fleet: where it was found, what it holds, and the fingerprint of its content."""
+
+    file: str  # the path as found (the folder as given joined with the path below it)
+    campaign: Campaign
+    digest: str  # sha256 of the file's bytes and of every file it names
+
+    @property
+    def date_text(self) -> str | None:
+        d = self.campaign.date
+        if d is None:
+            return None
+        return d.date().isoformat() if d.time() == datetime.time(0) and d.tzinfo is None else d.isoformat()
+
+
+@dataclass
+class Machine:
+    """The campaigns of one machine: dated ones by date, then undated ones in file order."""
+
+    serial: str | None
+    id: str  # the serial, or "file:<path below the folder>" for a campaign without one
+    campaigns: list[CampaignFile] = field(default_factory=list)
+
+    @property
+    def dated(self) -> list[CampaignFile]:
+        return [c for c in self.campaigns if c.campaign.date is not None]
+
+
+@dataclass
+class Discovery:
+    """What a folder holds: machines (sorted by id, those without a serial last) and files that did not load."""
+
+    directory: str
+    machines: list[Machine]
+    errors: list[dict]  # {"file", "message"}
+
+    @property
+    def n_campaigns(self) -> int:
+        return sum(len(m.campaigns) for m in self.machines)
+
+
+def _referenced(campaign: Campaign) -> list[Path]:
+    """The files a campaign names (traces, DPRNT output), resolved as the reader resolved them."""
+    names = [n for run in campaign.ballbar.runs for n in (run.trace_csv or [])]
+    p = campaign.probe
+    if p is not None and p.c_axis is not None:
+        names += p.c_axis.dprnt or []
+    if p is not None and p.b_axis is not None:
+        names += [n for s in p.b_axis.styli.values() for n in (s.dprnt or [])]
+    base = campaign.base_dir
+    return [Path(n) if base is None or os.path.isabs(n) else base / n for n in names]
+
+
+def content_digest(path: Path, campaign: Campaign) -> str:
+    """sha256 of the campaign file's bytes and of each file it names (its name as written, then its bytes)."""
+    h = hashlib.sha256(b"mtmcal-campaign\0")
+    h.update(path.read_bytes())
+    for ref in _referenced(campaign):
+        h.update(b"\0" + ref.name.encode("utf-8") + b"\0")
+        h.update(ref.read_bytes() if ref.is_file() else b"<missing>")
+    return h.hexdigest()
+
+
+def _date_key(d: datetime.datetime) -> datetime.datetime:
+    """A sort key for dates with and without a UTC offset (a date without one is taken as UTC)."""
+    return d.replace(tzinfo=None) - (d.utcoffset() or datetime.timedelta(0))
+
+
+def _inside(path: Path, folders: list[Path]) -> bool:
+    return any(f == path or f in path.parents for f in folders)
+
+
+def campaign_paths(directory: str | os.PathLike, skip=()) -> list[Path]:
+    """Every ``*.toml`` below ``directory``, sorted by its path below it; hidden entries and ``skip`` folders left out."""
+    root = Path(directory)
+    if not root.exists():
+        raise InputError(str(root), None, "folder not found")
+    if not root.is_dir():
+        raise InputError(str(root), None, "is a file, not a folder of campaigns")
+    skipped = [Path(s).resolve() for s in skip if s is not None]
+    found = []
+    for p in root.rglob("*.toml"):
+        rel = p.relative_to(root)
+        if any(part.startswith(".") for part in rel.parts) or _inside(p.resolve(), skipped) or not p.is_file():
+            continue
+        found.append(p)
+    return sorted(found, key=lambda p: p.relative_to(root).as_posix())
+
+
+def discover(directory: str | os.PathLike, skip=()) -> Discovery:
+    """Load every campaign below ``directory`` (see the module's description); ``skip``: folders to leave out."""
+    root = Path(directory)
+    loaded: list[CampaignFile] = []
+    errors: list[dict] = []
+    for path in campaign_paths(root, skip):
+        try:
+            c = load_campaign(path)
+            loaded.append(CampaignFile(str(path), c, content_digest(path, c)))
+        except MtmcalError as exc:
+            errors.append({"file": str(path), "message": str(exc)})
+        except (OSError, ValueError) as exc:  # unreadable between listing and reading, or not a campaign at all
+            errors.append({"file": str(path), "message": f"{path}: {type(exc).__name__}: {exc}"})
+    machines: dict[str, Machine] = {}
+    for cf in loaded:
+        serial = cf.campaign.machine.serial or None
+        key = serial if serial is not None else f"file:{Path(cf.file).relative_to(root).as_posix()}"
+        machines.setdefault(key, Machine(serial, key)).campaigns.append(cf)
+    for m in machines.values():
+        m.campaigns = (sorted(m.dated, key=lambda c: (_date_key(c.campaign.date), c.file))
+                       + [c for c in m.campaigns if c.campaign.date is None])
+    order = sorted(machines.values(), key=lambda m: (m.serial is None, m.id))
+    return Discovery(str(root), order, errors)

@@ -1,0 +1,146 @@
+"""The work of a fleet, in units that run anywhere: one campaign's posterior, one machine's history.
+
+A unit is a plain function of picklable arguments (the :class:`~mtmcal_bayes.campaign.Campaign` objects travel
+with it, so a worker on another computer needs no access to the files) returning a JSON-able dict: what is
+cached and what the fleet's JSON shows.  Each unit is seeded from the fingerprints of its campaigns and the
+user's seed, and named by a key over the same and the settings (:func:`unit_key`): the result of a unit never
+depends on which worker ran it, when, or next to what.
+
+A unit never raises: a failure comes back as ``{"error": "<one line>"}``, reported beside the others' results.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from ..errors import MtmcalError, ParameterError
+from ..io.json_text import rounded
+from ..version import __version__
+
+#: the cache entry's format; a change of what a unit returns must change it (or the package version)
+UNIT_FORMAT = "mtmcal-fleet-unit/1"
+#: the forward model of every history: the history model is built on the linear model (mtmcal_bayes.histories)
+HISTORY_MODEL = "linear"
+
+
+@dataclass(frozen=True)
+class FleetSettings:
+    """How every campaign of the fleet is sampled and every history fitted (all enter the cache key)."""
+
+    model: str = "linear"
+    seed: int = 1
+    sampler: str = "emcee"
+    target_ess: float = 1000.0
+    max_steps: int = 20_000
+
+    def __post_init__(self):  # bad settings fail here, before any work, not in every unit
+        from ..inference.sampling import SamplerSettings
+        from ..models import check_model
+
+        check_model(self.model)
+        if not isinstance(self.seed, int) or isinstance(self.seed, bool):
+            raise ParameterError("seed", f"{self.seed!r} is not an integer")
+        SamplerSettings(sampler=self.sampler, target_ess=self.target_ess, max_steps=self.max_steps)
+        if self.sampler == "exact" and self.model != "linear":
+            raise ParameterError("sampler", f"exact: the exact posterior is known for the linear model only, "
+                                 f"not for {self.model} (use the emcee sampler)")
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+
+def unit_key(kind: str, digests: list[str], settings: FleetSettings) -> str:
+    """The name of a unit's work: sha256 over its kind, its campaigns' fingerprints, the settings it depends on
+    (a history: the seed only) and the package version (a new version computes afresh)."""
+    used = settings.to_json() if kind == "campaign" else {"seed": settings.seed, "model": HISTORY_MODEL}
+    text = json.dumps({"format": UNIT_FORMAT, "kind": kind, "digests": digests, "settings": used,
+                       "version": __version__}, sort_keys=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def unit_seed(digests: list[str], seed: int) -> int:
+    """A 32-bit seed from the campaigns' fingerprints and the user's seed: the same content, the same draws."""
+    h = hashlib.sha256(f"{seed}:{':'.join(digests)}".encode())
+    return int.from_bytes(h.digest()[:4], "big")
+
+
+def _plain(obj):
+    """``obj`` as strict JSON data: floats exact (17 digits), NaN as None, numpy and dates as plain values."""
+    return rounded(json.loads(json.dumps(obj, default=_default)), 17)
+
+
+def _default(v):
+    if hasattr(v, "item"):  # numpy scalars
+        return v.item()
+    if hasattr(v, "tolist"):
+        return v.tolist()
+    return str(v)  # dates, paths
+
+
+def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, MtmcalError):
+        return str(exc)
+    return f"internal error: {type(exc).__name__}: {exc}".splitlines()[0]
+
+
+def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
+    """The posterior of one campaign, as ``sample --json`` summarises each quantity (with the conformity
+    verdicts of the campaign's own ``[tolerances]``), with its warnings and the sampler's verdicts."""
+    t0 = time.perf_counter()
+    try:
+        from ..inference.sampling import SamplerSettings
+        from ..posterior import sample_posterior
+        from ..posterior.output import quantity_json
+        from ..reporting.decisions import add_suggestions
+
+        s = SamplerSettings(seed=seed, max_steps=settings.max_steps, target_ess=settings.target_ess,
+                            sampler=settings.sampler)
+        post = sample_posterior(campaign, model=settings.model, settings=s)
+        add_suggestions(post, campaign)
+        d = post.diagnostics
+        out = {"seed": seed,
+               "summary": {n: quantity_json(n, row, post.conformity) for n, row in post.summary.iterrows()},
+               "diagnostics": {"converged": d.converged, "min_ess_bulk": d.min_ess_bulk, "min_ess_tail": d.min_ess_tail,
+                               "max_r_hat": d.max_r_hat, "kept_draws": d.kept_draws, "sampler": d.sampler},
+               "warnings": list(post.warnings)}
+        return {"result": _plain(out), "files": {}, "elapsed_s": time.perf_counter() - t0}
+    except Exception as exc:  # a unit reports, it does not raise (module docstring)
+        return {"error": _one_line(exc), "elapsed_s": time.perf_counter() - t0}
+
+
+#: keys of the history's JSON that are not results of its campaigns' content: where it was read and written
+_HISTORY_PLACES = ("files", "output")
+
+
+def _machine_history(campaigns: list, seed: int):
+    """The history model of one machine (``mtmcal_bayes.histories``), imported when first needed; the
+    tolerances of the forecast are the latest campaign's own."""
+    from ..histories import fit_history
+
+    return fit_history(campaigns, model=HISTORY_MODEL, seed=seed)
+
+
+def history_unit(campaigns: list, seed: int, with_page: bool) -> dict:
+    """The history of one machine from its dated campaigns: the history's JSON (without the places it names)
+    and, ``with_page``, its page's files (``{path: base64}``, written by the history itself into a temporary
+    folder of the worker)."""
+    t0 = time.perf_counter()
+    try:
+        result = _machine_history(campaigns, seed)
+        doc = {k: v for k, v in result.to_json().items() if k not in _HISTORY_PLACES}
+        files = {}
+        if with_page:
+            with tempfile.TemporaryDirectory(prefix="mtmcal-history-") as tmp:
+                result.write(tmp)
+                files = {p.relative_to(tmp).as_posix(): base64.b64encode(p.read_bytes()).decode("ascii")
+                         for p in sorted(Path(tmp).rglob("*")) if p.is_file()}
+        return {"result": _plain({"seed": seed, "model": HISTORY_MODEL, **doc}), "files": files,
+                "elapsed_s": time.perf_counter() - t0}
+    except Exception as exc:  # a unit reports, it does not raise (module docstring)
+        return {"error": _one_line(exc), "elapsed_s": time.perf_counter() - t0}

@@ -1,0 +1,58 @@
+"""A machine's calibration history: the posterior of every quantity at every date jointly, with a drift model
+between dates, the changes that are real, and a forecast of when to recalibrate (docs/history.md).
+
+* :class:`~.model.HistoryModel` — deviations as Gaussian random walks in time, each campaign with its own
+  set-up offsets; exact linear-Gaussian system given the scales.
+* :func:`fit_history` — sample the scales (emcee), condition the states, flag the changes, forecast.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .. import units
+from ..parameters import IDENTIFIABLE, quantity_unit
+from .fit import PRACTICAL_MINIMUM, changes, check_history, fit, recalibrate_by
+from .model import HistoryModel
+from .result import HistoryResult, summary_frame
+
+__all__ = ["HistoryModel", "HistoryResult", "fit_history"]
+
+
+def _tolerance_text(low: float, high: float, unit: str) -> str:
+    sym = units.SYMBOL[unit]
+    if math.isfinite(low) and math.isfinite(high):
+        return f"±{high:g} {sym}" if low == -high else f"[{low:g}, {high:g}] {sym}"
+    return f"≤ {high:g} {sym}" if math.isfinite(high) else f"≥ {low:g} {sym}"
+
+
+def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: dict | None = None,
+                thresholds: dict[str, float] | None = None) -> HistoryResult:
+    """The history of one machine from its campaigns (any order; each dated, one serial).
+
+    ``tolerances``: ``{name: Tolerance}`` (default the latest campaign's ``[tolerances]``); ``thresholds``: the
+    smallest change worth flagging per quantity, display units (default: a quarter of the tolerance's width
+    where there is one, else :data:`~.fit.PRACTICAL_MINIMUM`).
+    """
+    campaigns = sorted(campaigns, key=lambda c: c.date) if all(c.date for c in campaigns) else list(campaigns)
+    check_history(campaigns)
+    hm = HistoryModel(campaigns, model)
+    hf = fit(hm, seed=seed, quantities=IDENTIFIABLE)
+    dates = [c.date for c in campaigns]
+    tol = campaigns[-1].tolerances if tolerances is None else tolerances
+    limits = {}
+    for n, t in tol.items():
+        if n in hf.quantities:
+            unit = quantity_unit(n)
+            limits[n] = (-math.inf if t.low is None else units.from_internal(t.low, unit),
+                         math.inf if t.high is None else units.from_internal(t.high, unit))
+    thr = {}
+    for n in hf.quantities:
+        lo, hi = limits.get(n, (-math.inf, math.inf))
+        width = hi - lo
+        thr[n] = (thresholds or {}).get(n, width / 4 if math.isfinite(width) else PRACTICAL_MINIMUM[quantity_unit(n)])
+    found = changes(hf, dates, thr)
+    forecast = [{"quantity": n, "recalibrate_by": recalibrate_by(hf, hf.quantities.index(n), lo, hi, last=dates[-1]),
+                 "tolerance": _tolerance_text(lo, hi, quantity_unit(n))} for n, (lo, hi) in limits.items()]
+    return HistoryResult(campaigns[-1].machine.serial, dates, [c.source for c in campaigns], summary_frame(hf, dates),
+                         found, forecast, hf, limits)

@@ -1,0 +1,98 @@
+"""Synthetic calibration histories: one machine calibrated again and again while its deviations drift.
+
+A history is a series of campaigns of one machine (one ``[machine] serial``), each a copy of a base
+campaign with its own ``date``, its own data simulated from the truth *at that date*, and fresh set-up
+offsets: the W ball is clamped anew (mount offsets ``xW, yW, zW`` drawn from their priors), the T ball
+re-centred (``xT, yT, zT, dRB`` drawn from theirs).  The truth drifts by :class:`Drift` terms: a step
+(a crash, a repair) or a ramp (wear, settling) in chosen quantities.
+"""
+
+from __future__ import annotations
+
+import copy
+import datetime
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import units
+from ..campaign import Campaign, Truth
+from ..errors import ParameterError
+from ..inference.priors import make_prior
+from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE, quantity_unit
+from .simulate import synthetic_campaign
+
+DRIFT_KINDS = ("step", "ramp")
+DAYS_PER_YEAR = 365.25
+
+
+@dataclass(frozen=True)
+class Drift:
+    """A change of one deviation over time, internal units: ``"step"`` adds ``size`` from ``start`` on;
+    ``"ramp"`` adds ``size`` per year of time after ``start``."""
+
+    quantity: str
+    kind: str
+    size: float
+    start: datetime.datetime
+
+    def __post_init__(self):
+        if self.quantity not in DEVIATIONS:
+            raise ParameterError("drift", f"{self.quantity!r} is not a deviation (one of {', '.join(DEVIATIONS)})")
+        if self.kind not in DRIFT_KINDS:
+            raise ParameterError("drift", f"{self.kind!r} (expected {' or '.join(DRIFT_KINDS)})")
+
+    def offset(self, when: datetime.datetime) -> float:
+        """What the drift adds at ``when``, internal units."""
+        if when < self.start:
+            return 0.0
+        if self.kind == "step":
+            return self.size
+        return self.size * (when - self.start).total_seconds() / (86400.0 * DAYS_PER_YEAR)
+
+
+def drift_from_display(quantity: str, kind: str, size: float, start: datetime.datetime) -> Drift:
+    """A :class:`Drift` with ``size`` in display units (″ or µm; per year for a ramp)."""
+    if quantity not in DEVIATIONS:
+        raise ParameterError("drift", f"{quantity!r} is not a deviation (one of {', '.join(DEVIATIONS)})")
+    return Drift(quantity, kind, units.to_internal(size, quantity_unit(quantity)), start)
+
+
+def truth_at(truth: Truth, drifts, when: datetime.datetime) -> dict[str, float]:
+    """The deviations of ``truth`` at ``when`` with every drift applied, internal units."""
+    dev = dict(truth.deviations)
+    for d in drifts:
+        dev[d.quantity] = dev.get(d.quantity, 0.0) + d.offset(when)
+    return dev
+
+
+def _fresh_offsets(campaign: Campaign, rng: np.random.Generator) -> tuple[dict, dict]:
+    """Set-up offsets of a new campaign drawn from their priors: per tool setup and per W-ball mount."""
+    def draw(base: str, kind_table) -> float:
+        return float(make_prior(base, base, kind_table[base].kind, campaign.priors).frozen().rvs(random_state=rng))
+
+    setups = {s: {b: draw(b, SETUP_NUISANCE) for b in SETUP_NUISANCE} for s in campaign.ballbar.setups}
+    mounts = {m: {b: draw(b, MOUNT_NUISANCE) for b in MOUNT_NUISANCE} for m in campaign.ballbar.mounts}
+    return setups, mounts
+
+
+def synthetic_history(campaign: Campaign, truth: Truth, dates, *, drifts=(), serial: str = "SIM-001",
+                      model: str = "linear", seed: int = 0) -> list[Campaign]:
+    """One campaign per date (datetimes, increasing): data simulated (with noise) from ``truth`` plus ``drifts``
+    at that date, fresh set-up offsets each time, ``[machine] serial`` = ``serial``.  Seeded: the same seed
+    gives the same history."""
+    dates = list(dates)
+    if any(b <= a for a, b in zip(dates, dates[1:])):
+        raise ParameterError("dates", "the campaign dates must increase")
+    rng = np.random.default_rng(seed)
+    out = []
+    for when in dates:
+        setups, mounts = _fresh_offsets(campaign, rng)
+        t = Truth(truth_at(truth, drifts, when), setups, mounts, copy.deepcopy(truth.probe))
+        c = synthetic_campaign(campaign, t, model, noise=True, seed=int(rng.integers(2**31)))
+        c.reported = {}
+        c.date = when
+        c.machine = copy.copy(c.machine)
+        c.machine.serial = serial
+        out.append(c)
+    return out

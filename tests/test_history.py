@@ -1,0 +1,123 @@
+"""Machine histories: a real change is flagged with its date, no change raises no flag (within the promised
+false-alarm rate), the forecast warns before a ramp leaves its tolerance (docs/history.md)."""
+
+import datetime
+import json
+
+import numpy as np
+import pytest
+
+import mtmcal_bayes as mb
+from mtmcal_bayes import units
+from mtmcal_bayes.campaign import Tolerance, Truth
+from mtmcal_bayes.histories import HistoryModel, fit_history
+from mtmcal_bayes.histories.fit import ALPHA
+from mtmcal_bayes.simulation.history import drift_from_display, synthetic_history
+
+DATES = [datetime.datetime(2026, 1, 5) + datetime.timedelta(days=91 * i) for i in range(5)]
+
+
+@pytest.fixture(scope="module")
+def base():
+    return mb.load_campaign()
+
+
+def test_state_posterior_is_the_stacked_gaussian(base):
+    """The joint posterior of the states equals the brute-force Gaussian conditioning of the stacked system
+    (prior Σ_X, observations H X + noise) computed with explicit inverses, on a 3-campaign history."""
+    camps = synthetic_history(base, Truth(), DATES[:3], seed=4)
+    hm = HistoryModel(camps)
+    q2 = np.full((1, hm.d), units.to_internal(3.0, "arcsec") ** 2)
+    s2 = np.array([units.to_internal(0.5, "um") ** 2])
+    mean, cov = hm.state_posterior(q2, s2)
+    S = hm.prior_state_cov(q2)[0]
+    noise = hm.R + s2[0] * np.eye(hm.M)
+    prec = np.linalg.inv(S) + hm.H.T @ np.linalg.inv(noise) @ hm.H
+    cov_bf = np.linalg.inv(prec)
+    y = hm.resid + hm.H @ np.tile(hm.mu0, hm.T)
+    mean_bf = cov_bf @ (np.linalg.inv(S) @ np.tile(hm.mu0, hm.T) + hm.H.T @ np.linalg.inv(noise) @ y)
+    assert np.allclose(mean[0].ravel(), mean_bf, rtol=1e-6, atol=1e-9)
+    assert np.allclose(cov[0], cov_bf, rtol=1e-5, atol=1e-14)
+
+
+def test_step_is_flagged_with_its_date_and_probability(base):
+    """Acceptance: beta_CZ steps by 40″ between the 3rd and the 4th campaign, nothing else changes: that
+    change, and only it, is flagged, dated at the 4th campaign, with its probability."""
+    camps = synthetic_history(base, Truth(), DATES, drifts=[drift_from_display("beta_CZ", "step", 40.0, DATES[3])],
+                              seed=11)
+    r = fit_history(camps, seed=11)
+    flagged = r.flagged
+    assert [(c["quantity"], c["date"]) for c in flagged] == [("beta_CZ", DATES[3])]
+    c = flagged[0]
+    assert c["probability"] > 1 - ALPHA / len(r.changes) and c["delta"] == pytest.approx(40.0, abs=8.0)
+    doc = r.to_json()
+    assert doc["changes"] == [{"quantity": "beta_CZ", "date": "2026-10-05", "probability": c["probability"],
+                               "delta": c["delta"], "threshold": c["threshold"]}]
+    assert set(doc["summary"]["2026-10-05"]["beta_CZ"]) == {"mean", "sd", "hdi_low", "hdi_high"}
+
+
+def test_false_alarm_rate_without_change(base):
+    """Acceptance: 20 seeded histories with no change.  The docs promise that a history with no change raises a
+    flag with probability ≤ 5 % (Bonferroni over the 8 quantities × 4 intervals, on the model's own posterior);
+    20 histories at 5 % give 3 or more flagged ones with probability 7.5 %, so the test allows 2."""
+    flagged = 0
+    for seed in range(20):
+        camps = synthetic_history(base, Truth(), DATES, seed=100 + seed)
+        flagged += bool(fit_history(camps, seed=seed).flagged)
+    assert flagged <= 2
+
+
+def test_forecast_warns_before_a_ramp_leaves_its_tolerance(base):
+    """Acceptance: alpha_XB ramps by 8″ a year from the first campaign; with a ±10″ tolerance it leaves it 1.25
+    years after the first campaign.  The docs promise "recalibrate by" before the true crossing in at least
+    90 % of cases; 10 seeded histories, at least 9."""
+    tol = {"alpha_XB": Tolerance("alpha_XB", units.to_internal(-10, "arcsec"), units.to_internal(10, "arcsec"))}
+    crossing = DATES[0] + datetime.timedelta(days=365.25 * 10 / 8)
+    early = 0
+    for seed in range(10):
+        camps = synthetic_history(base, Truth(), DATES, drifts=[drift_from_display("alpha_XB", "ramp", 8.0, DATES[0])],
+                                  seed=200 + seed)
+        f = fit_history(camps, seed=seed, tolerances=tol).forecast
+        assert [x["quantity"] for x in f] == ["alpha_XB"] and f[0]["tolerance"] == "±10 ″"
+        early += f[0]["recalibrate_by"] is not None and DATES[-1] <= f[0]["recalibrate_by"] < crossing
+    assert early >= 9
+
+
+def test_history_cli_json_and_files(run_cli, tmp_path):
+    hist = tmp_path / "h"
+    truth = tmp_path / "truth.toml"
+    truth.write_text("[deviations]\n")
+    code, out, err = run_cli("simulate", "--truth", str(truth), "--history", str(hist), "--campaigns", "3",
+                             "--step", "beta_CZ=40@3", "--serial", "M-7", "--seed", "5")
+    assert code == 0, err
+    files = sorted(hist.glob("*.toml"))
+    assert len(files) == 3 and mb.load_campaign(files[0]).machine.serial == "M-7"
+    code, out, err = run_cli("history", str(hist), "--json", "-o", str(tmp_path / "out"))
+    assert code == 0, err
+    doc = json.loads(out)
+    assert doc["serial"] == "M-7" and doc["dates"] == ["2026-01-05", "2026-04-06", "2026-07-06"]
+    assert [c["quantity"] for c in doc["changes"]] == ["beta_CZ"] and doc["changes"][0]["date"] == "2026-07-06"
+    for name in ("index.html", "history.json", "history_summary.csv", "changes.csv", "trend.png"):
+        assert (tmp_path / "out" / name).exists(), name
+
+
+def test_history_bad_inputs_are_one_line(run_cli, tmp_path, base):
+    undated = tmp_path / "undated"
+    undated.mkdir()
+    mb.save_campaign(base, undated / "a.toml")
+    mb.save_campaign(base, undated / "b.toml")
+    code, out, err = run_cli("history", str(undated))
+    assert code == 2 and "date: missing" in err and len(err.strip().splitlines()) == 1
+    two = tmp_path / "two"
+    camps = synthetic_history(base, Truth(), DATES[:2], seed=1)
+    camps[1].machine.serial = "OTHER"
+    two.mkdir()
+    for i, c in enumerate(camps):
+        mb.save_campaign(c, two / f"{i}.toml")
+    code, out, err = run_cli("history", str(two))
+    assert code == 2 and "machines" in err and len(err.strip().splitlines()) == 1
+    code, out, err = run_cli("history", str(tmp_path / "missing"))
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    code, out, err = run_cli("simulate", "--truth", str(undated / "a.toml"), "--history", str(tmp_path / "x"),
+                             "--step", "nonsense")
+    assert code == 2 and "--step" in err
