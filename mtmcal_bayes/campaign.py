@@ -9,11 +9,13 @@ Python is used the same way.
 from __future__ import annotations
 
 import datetime
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from . import units
 from .patterns import B_PATTERNS, C_PATTERNS
 
 
@@ -199,6 +201,18 @@ class Tolerance:
     low: float | None
     high: float | None
     key: str = ""
+
+
+def tolerance_text(low, high, unit: str) -> str:
+    """``±30 ″``, ``[-20, 50] µm``, ``≤ 20 ″`` or ``≥ -5 µm`` for limits in display units (an open end is None,
+    NaN or infinite)."""
+    def is_open(v) -> bool:
+        return v is None or not math.isfinite(v)
+
+    sym = units.SYMBOL[unit]
+    if not (is_open(low) or is_open(high)):
+        return f"±{high:g} {sym}" if low == -high else f"[{low:g}, {high:g}] {sym}"
+    return f"≤ {high:g} {sym}" if not is_open(high) else f"≥ {low:g} {sym}"
 
 
 @dataclass

@@ -1,9 +1,16 @@
 """Processes a test starts (a Dask scheduler and its workers): wait for them, stop them with their children."""
 
+import contextlib
+import json
 import os
 import signal
 import subprocess
+import sys
 import time
+from pathlib import Path
+
+#: where the test interpreter's console scripts (``dask``) are
+VENV_BIN = Path(sys.executable).parent
 
 
 def wait_for(predicate, timeout: float, what: str):
@@ -26,3 +33,32 @@ def stop(proc: subprocess.Popen) -> None:
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
+
+
+@contextlib.contextmanager
+def dask_cluster(directory: Path, workers: int = 2, env: dict | None = None):
+    """A Dask cluster started as docs/validation.md says: ``dask scheduler --scheduler-file``, then ``dask worker``
+    (``workers`` processes, one thread each); yields the scheduler file once its address is written, and stops
+    scheduler and workers on exit."""
+    path = directory / "scheduler.json"
+    common = dict(cwd=directory, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    procs = []
+    try:
+        procs.append(subprocess.Popen([str(VENV_BIN / "dask"), "scheduler", "--scheduler-file", str(path),
+                                       "--host", "127.0.0.1", "--port", "0", "--no-dashboard"], **common))
+        wait_for(lambda: scheduler_address(path), 60, "the scheduler file")
+        procs.append(subprocess.Popen([str(VENV_BIN / "dask"), "worker", "--scheduler-file", str(path),
+                                       "--nthreads", "1", "--nworkers", str(workers), "--no-dashboard"],
+                                      env=env, **common))
+        yield path
+    finally:
+        for p in reversed(procs):
+            stop(p)
+
+
+def scheduler_address(path: Path) -> str | None:
+    """The address in a scheduler file, None while it is not (completely) written."""
+    try:
+        return json.loads(path.read_text())["address"]
+    except (OSError, ValueError, KeyError):
+        return None

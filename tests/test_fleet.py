@@ -27,7 +27,7 @@ from mtmcal_bayes.io.json_text import json_text
 from mtmcal_bayes.simulation.history import drift_from_display, synthetic_history
 
 from .conftest import DATA
-from .processes import stop, wait_for
+from .processes import dask_cluster, scheduler_address, stop, wait_for
 
 VENV_BIN = Path(sys.executable).parent
 BROKEN = 'format = "mtmcal-campaign/1"\n[machine]\nserial = "M-2"\n'
@@ -126,28 +126,11 @@ def test_cli_json_interface_and_text(run_cli, tree, reference):
     assert code == 3 and "M-1" in out and "beta_XB" in out and "1 failed (the rest completed)" in out
 
 
-def _scheduler_address(path: Path) -> str | None:
-    try:
-        return json.loads(path.read_text())["address"]
-    except (OSError, ValueError, KeyError):
-        return None
-
-
 def test_a_separately_started_scheduler_gives_identical_results(run_cli, tree, reference, tmp_path):
-    sched_file = tmp_path / "scheduler.json"
-    common = dict(cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    procs = []
-    try:
-        procs.append(subprocess.Popen([str(VENV_BIN / "dask"), "scheduler", "--scheduler-file", str(sched_file),
-                                       "--host", "127.0.0.1", "--port", "0", "--no-dashboard"], **common))
-        address = wait_for(lambda: _scheduler_address(sched_file), 60, "the scheduler file")
-        procs.append(subprocess.Popen([str(VENV_BIN / "dask"), "worker", "--scheduler-file", str(sched_file),
-                                       "--nthreads", "1", "--nworkers", "2", "--no-dashboard"], **common))
+    with dask_cluster(tmp_path) as sched_file:
+        address = scheduler_address(sched_file)
         code, out, err = run_cli("fleet", tree, "--scheduler", address, "--json", "--cache", tmp_path / "cache",
                                  "--quiet")
-    finally:
-        for p in reversed(procs):
-            stop(p)
     assert code == 3, err
     doc = json.loads(out)
     assert doc["run"]["scheduler"] == address and doc["run"]["computed"] == N_UNITS
@@ -227,14 +210,14 @@ def test_a_unit_that_fails_on_its_worker_is_an_error_and_the_rest_is_kept(tree):
 
     found = discover(tree)
     settings = FleetSettings()
-    units_, of_file, of_machine = plan_units(found, settings, histories=True, pages=False)
+    units_, of_file, of_machine = plan_units(found, settings, pages=False)
     summary = {"beta_XB": {"mean": 1.0, "sd": 0.5, "hdi_low": 0.0, "hdi_high": 2.0, "unit": "arcsec"}}
     ok = {"result": {"seed": 1, "summary": summary, "diagnostics": {"converged": True}, "warnings": []}, "files": {}}
     payloads = {u.key: dict(ok) for u in units_}
     failed_file = str(tree / "M-1" / "2025-07-07.toml")
     payloads[of_file[failed_file]] = {"error": f"{failed_file}: sampler: it broke"}
     payloads[of_machine["M-1"]] = {"error": "internal error: ValueError: singular"}
-    run = {"units": len(units_), "cached": 0, "computed": len(units_), "failed": 2, "histories": True,
+    run = {"units": len(units_), "cached": 0, "computed": len(units_), "failed": 2,
            "scheduler": None, "workers": 1, "wall_time_s": 1.0}
     result = FleetResult.assemble(found, settings, payloads=payloads, cached=set(), of_file=of_file,
                                   of_machine=of_machine, run=run)

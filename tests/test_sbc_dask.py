@@ -24,7 +24,7 @@ from mtmcal_bayes.io.json_text import json_text
 from mtmcal_bayes.validation import SBCSettings, run_sbc
 from mtmcal_bayes.validation.samplers import ExactDraws
 
-from .processes import stop, wait_for
+from .processes import dask_cluster, stop, wait_for
 
 VENV_BIN = Path(sys.executable).parent
 ROOT = Path(__file__).resolve().parents[1]
@@ -60,22 +60,11 @@ def scheduler_file(tmp_path_factory):
     """A cluster started as docs/validation.md says: ``dask scheduler``, then ``dask worker`` (two, one thread
     each); its scheduler file.  The workers see this directory, for the test's own sampler classes."""
     tmp = tmp_path_factory.mktemp("dask")
-    path = tmp / "scheduler.json"
-    common = dict(cwd=tmp, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-    procs = []
-    try:
-        procs.append(subprocess.Popen([str(VENV_BIN / "dask"), "scheduler", "--scheduler-file", str(path),
-                                       "--host", "127.0.0.1", "--port", "0", "--no-dashboard"], **common))
-        wait_for(lambda: path.exists() and path.stat().st_size > 0, 60, "the scheduler file")
-        env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-        procs.append(subprocess.Popen([str(VENV_BIN / "dask"), "worker", "--scheduler-file", str(path),
-                                       "--nthreads", "1", "--nworkers", "2", "--no-dashboard"], env=env, **common))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    with dask_cluster(tmp, env=env) as path:
         with Client(scheduler_file=str(path), timeout="10s") as client:
             client.wait_for_workers(2, timeout=60)
         yield str(path)
-    finally:
-        for p in reversed(procs):
-            stop(p)
 
 
 def test_a_separately_started_cluster_gives_identical_results(one_worker, scheduler_file, run_cli, tmp_path):

@@ -94,8 +94,7 @@ class FleetResult:
         cached_files, cached_machines = [], []
         slugs = _unique_slugs([m.id for m in found.machines])
         for m in found.machines:
-            entry, page = cls._machine(m, payloads, of_file=of_file, of_machine=of_machine, errors=errors,
-                                      histories=run.get("histories", True))
+            entry, page = cls._machine(m, payloads, of_file=of_file, of_machine=of_machine, errors=errors)
             entry["page"] = f"machines/{slugs[m.id]}/index.html"
             machines.append(entry)
             if page:
@@ -108,7 +107,7 @@ class FleetResult:
         return cls(found.directory, settings, machines, errors, run, pages)
 
     @staticmethod
-    def _machine(m: Machine, payloads, *, of_file, of_machine, errors: list, histories: bool) -> tuple[dict, dict]:
+    def _machine(m: Machine, payloads, *, of_file, of_machine, errors: list) -> tuple[dict, dict]:
         campaigns, notes = [], []
         for cf in m.campaigns:
             p = payloads[of_file[cf.file]]

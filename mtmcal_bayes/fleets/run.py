@@ -34,8 +34,7 @@ class Unit:
     args: tuple
 
 
-def plan_units(found: Discovery, settings: FleetSettings, *, histories: bool,
-               pages: bool) -> tuple[list[Unit], dict, dict]:
+def plan_units(found: Discovery, settings: FleetSettings, *, pages: bool) -> tuple[list[Unit], dict, dict]:
     """The distinct units of a discovery (``pages``: the histories write their pages too);
     ``{file: campaign key}``, ``{machine id: history key}``."""
     units: dict[str, Unit] = {}
@@ -47,7 +46,7 @@ def plan_units(found: Discovery, settings: FleetSettings, *, histories: bool,
             units.setdefault(key, Unit("campaign", key, cf.file, campaign_unit,
                                        (cf.campaign, settings, unit_seed([cf.digest], settings.seed))))
         dated = m.dated
-        if histories and len(dated) >= 2:
+        if len(dated) >= 2:
             digests = [c.digest for c in dated]
             key = unit_key("history", digests, settings)
             of_machine[m.id] = key
@@ -109,8 +108,7 @@ def run_fleet(directory, settings: FleetSettings, *, scheduler: str | None = Non
     found = discover(directory, skip=[output, folder])
     if not found.machines and not found.errors:
         raise ParameterError("directory", f"{directory}: no campaign files (*.toml) below it")
-    histories = True  # every machine with two or more dated campaigns gets its history
-    units, of_file, of_machine = plan_units(found, settings, histories=histories, pages=output is not None)
+    units, of_file, of_machine = plan_units(found, settings, pages=output is not None)
     payloads, cached = {}, set()
     for u in units:
         hit = store.get(u.kind, u.key) if store is not None else None
@@ -138,7 +136,6 @@ def run_fleet(directory, settings: FleetSettings, *, scheduler: str | None = Non
            "failed": sum("error" in payloads[u.key] for u in units),
            "cache": None if folder is None else str(folder), "scheduler": scheduler, "workers": n_workers,
            "wall_time_s": time.perf_counter() - t0,
-           "compute_time_s": sum(payloads[u.key].get("elapsed_s", 0.0) for u in missing),
-           "histories": histories}
+           "compute_time_s": sum(payloads[u.key].get("elapsed_s", 0.0) for u in missing)}
     return FleetResult.assemble(found, settings, payloads=payloads, cached=cached, of_file=of_file,
                                 of_machine=of_machine, run=run)

@@ -11,19 +11,13 @@ from __future__ import annotations
 import math
 
 from .. import units
+from ..campaign import tolerance_text
 from ..parameters import IDENTIFIABLE, quantity_unit
 from .fit import PRACTICAL_MINIMUM, changes, check_history, fit, recalibrate_by
 from .model import HistoryModel
 from .result import HistoryResult, summary_frame
 
 __all__ = ["HistoryModel", "HistoryResult", "fit_history"]
-
-
-def _tolerance_text(low: float, high: float, unit: str) -> str:
-    sym = units.SYMBOL[unit]
-    if math.isfinite(low) and math.isfinite(high):
-        return f"±{high:g} {sym}" if low == -high else f"[{low:g}, {high:g}] {sym}"
-    return f"≤ {high:g} {sym}" if math.isfinite(high) else f"≥ {low:g} {sym}"
 
 
 def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: dict | None = None,
@@ -53,6 +47,6 @@ def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: 
         thr[n] = (thresholds or {}).get(n, width / 4 if math.isfinite(width) else PRACTICAL_MINIMUM[quantity_unit(n)])
     found = changes(hf, dates, thr)
     forecast = [{"quantity": n, "recalibrate_by": recalibrate_by(hf, hf.quantities.index(n), lo, hi, last=dates[-1]),
-                 "tolerance": _tolerance_text(lo, hi, quantity_unit(n))} for n, (lo, hi) in limits.items()]
+                 "tolerance": tolerance_text(lo, hi, quantity_unit(n))} for n, (lo, hi) in limits.items()]
     return HistoryResult(campaigns[-1].machine.serial, dates, [c.source for c in campaigns], summary_frame(hf, dates),
                          found, forecast, hf, limits)

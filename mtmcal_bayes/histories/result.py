@@ -126,7 +126,8 @@ class HistoryResult:
                        f"{self.changes[0]['level']:.4f} = 1 − {ALPHA:g}/K (Bonferroni over the K = {len(self.changes)} "
                        "pairs): with no change, a flag anywhere in the history has probability ≤ 5 %." if self.changes
                        else "One interval only.")
-        page.table(pd.DataFrame(self.changes).drop(columns=["level"]), digits=4, index=False)
+        table = pd.DataFrame(self.changes).drop(columns=["level"])
+        page.table(table.assign(date=table["date"].map(_iso)) if len(table) else table, digits=4, index=False)
         if self.forecast:
             page.section("forecast", "Forecast")
             page.table(pd.DataFrame(self.forecast), index=False)

@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
+from ..campaign import tolerance_text
 from ..parameters import quantity_unit
 
 CONFORMS, DOES_NOT_CONFORM, UNDECIDED = "conforms", "does not conform", "undecided"
@@ -58,10 +59,6 @@ def conformity_table(idata, summary: pd.DataFrame, tolerances: dict) -> pd.DataF
     return pd.DataFrame.from_dict(rows, orient="index", columns=CONFORMITY_COLUMNS)
 
 
-def tolerance_text(row, unit: str) -> str:
+def row_tolerance_text(row, unit: str) -> str:
     """``±30″``, ``[-20, 50] µm`` or ``≤ 20″`` for a row of :func:`conformity_table`."""
-    sym = units.SYMBOL[unit]
-    low, high = row["tolerance_low"], row["tolerance_high"]
-    if low == low and high == high:
-        return f"±{high:g} {sym}" if low == -high else f"[{low:g}, {high:g}] {sym}"
-    return f"≤ {high:g} {sym}" if high == high else f"≥ {low:g} {sym}"
+    return tolerance_text(row["tolerance_low"], row["tolerance_high"], unit)

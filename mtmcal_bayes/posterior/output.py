@@ -146,14 +146,14 @@ def budget_block(s, result) -> str:
 
 def conformity_block(conf, s) -> str:
     """Tolerances, probabilities of nonconformance, ISO 14253-1 verdicts and the way to decide the undecided."""
-    from .conformity import tolerance_text
+    from .conformity import row_tolerance_text
 
     lines = ["Conformity (ISO 14253-1, guard bands = the 95 % coverage interval)",
              f"{'quantity':18s} {'ISO 230-7':10s} {'tolerance':>16s} {'P(nonconf.)':>11s}  verdict"]
     for name, r in conf.iterrows():
         row = s.loc[name]
         iso = row["iso"] if isinstance(row["iso"], str) else "—"
-        lines.append(f"{name:18s} {iso:10s} {tolerance_text(r, row['unit']):>16s} {r['p_nonconformance']:11.3f}  "
+        lines.append(f"{name:18s} {iso:10s} {row_tolerance_text(r, row['unit']):>16s} {r['p_nonconformance']:11.3f}  "
                      f"{r['conformity']}")
         if isinstance(r.get("next_measurement"), str):
             sym = units.SYMBOL[row["unit"]]

@@ -29,7 +29,11 @@ from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.checks import thesis_assumption_effect
-from ..posterior.conformity import CONFORMITY_COLUMNS, conformity_table, tolerance_text
+from ..posterior.conformity import (
+    CONFORMITY_COLUMNS,
+    conformity_table,
+    row_tolerance_text,
+)
 from ..posterior.consistency import (
     DATA_LABELS,
     InstrumentComparison,
@@ -385,7 +389,7 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
     for n, r in rep.conformity.iterrows():
         unit = s.loc[n, "unit"]
         nxt = r.get("next_measurement")
-        rows.append({"quantity": n, "ISO 230-7": s.loc[n, "iso"] or "—", "tolerance": tolerance_text(r, unit),
+        rows.append({"quantity": n, "ISO 230-7": s.loc[n, "iso"] or "—", "tolerance": row_tolerance_text(r, unit),
                      "P(nonconformance)": r["p_nonconformance"], "verdict": r["conformity"],
                      "next measurement": suggestion_text(n, r, units.SYMBOL[unit]) if isinstance(nxt, str) else ""})
     page.table(pd.DataFrame(rows), digits={"P(nonconformance)": 3}, index=False)
