@@ -29,6 +29,7 @@ if TYPE_CHECKING:  # the result types, for the signatures only
     from .identification import IdentificationResult, ProbeFit
     from .planning import PlanResult
     from .posterior import ClosedFormResult, PosteriorResult
+    from .posterior.instrument_check import InstrumentCheck
     from .reporting import Report
     from .simulation import SensitivityTable, Simulation
     from .validation import SBCResult
@@ -236,9 +237,20 @@ def ncgen(pattern: str, *, campaign: CampaignLike = None, R_B_mm: float | None =
     return text
 
 
+def instruments(campaign: CampaignLike = None, *, explain: bool = True) -> InstrumentCheck:
+    """Do the ball bar and the touch probe of a campaign agree?  The consistency check on the exact linear
+    posteriors, each instrument's discrepancy scale in the fused posterior, the deviations they disagree on
+    (which ``compensate`` refuses), and with ``explain`` the candidate explanations of a conflict weighed by the
+    marginal likelihood (readings of the B patterns, the stylus length, a difference between the sessions)."""
+    from .posterior.instrument_check import check_instruments
+
+    return check_instruments(campaign_of(campaign), explain=explain)
+
+
 def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",
                model: str = "htm-thesis", values: str = "posterior", posterior=None, point: str = "tcp",
-               setup: str | None = None, mount: str | None = None, integer_unit: str | None = None) -> CompensationResult:
+               setup: str | None = None, mount: str | None = None, integer_unit: str | None = None,
+               accept_disagreement: bool = False) -> CompensationResult:
     """Rewrite X/Y/Z of an NC program (a path) so the tool point reaches the programmed points, with the
     residual error from the posterior and the tool tilts X/Y/Z cannot correct; ``output`` receives the program.
 
@@ -246,15 +258,28 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     ``"posterior"`` mean or ``"ballbar"``; ``posterior``: draws, as a NetCDF file, a :func:`sample` result or an InferenceData (default:
     the closed form); ``integer_unit``: how X/Y/Z/B/C words without a decimal point (``X100``) are read, ``"um"``
     (increments of 1 µm / 0.001°) or ``"mm"`` (mm / °); by default they are refused (zeros are accepted).
+
+    A campaign with both instruments is checked first (:func:`instruments`): where they disagree on a deviation the
+    compensation uses, it is refused (a ``ParameterError`` naming ``accept_disagreement``) unless
+    ``accept_disagreement``, which compensates and warns.
     """
     from .compensation import compensate as rewrite_program
+    from .errors import ParameterError
+    from .inference.log_posterior import SAMPLED_DEVIATIONS
     from .io.gcode import read_program
 
     c = campaign_of(campaign)
     parsed = read_program(program, integer_unit=integer_unit)
     _writable(output, "compensated program")
+    refusal = None
+    if c.has_probe_readings() and c.ballbar.runs:
+        refusal = instruments(c, explain=False).refusal(SAMPLED_DEVIATIONS)
+        if refusal and not accept_disagreement:
+            raise ParameterError("accept_disagreement", f"not given, and {refusal}")
     result = rewrite_program(c, parsed, method=method, model=model, values=values, posterior=posterior, point=point,
                              setup=setup, mount=mount)
+    if refusal:
+        result.warnings.append(f"compensated although {refusal} (accepted)")
     if output is not None:
         result.save(output)
     return result
@@ -412,4 +437,4 @@ def fleet(directory, *, scheduler: str | None = None, workers: int | None = None
 
 
 __all__ = ["campaign_of", "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report",
-           "plan", "ncgen", "compensate", "sbc", "history", "simulate_history", "fleet"]
+           "plan", "ncgen", "instruments", "compensate", "sbc", "history", "simulate_history", "fleet"]

@@ -48,14 +48,17 @@ class Mount:
 
 @dataclass
 class Run:
-    """One ball-bar run: pattern, setup, mount and the repeats of each component (mm)."""
+    """One ball-bar run: pattern, setup, mount and the repeats of each component (mm) as its reading convention
+    reports them (:mod:`mtmcal_bayes.conventions`: :func:`~mtmcal_bayes.conventions.machine_repeats` gives them in
+    the machine frame the models predict in)."""
 
     pattern: str
     setup: str
     mount: str
-    repeats: dict[str, np.ndarray] = field(default_factory=dict)  # "ex" -> (r,) mm
+    repeats: dict[str, np.ndarray] = field(default_factory=dict)  # "ex" -> (r,) mm, as reported (its convention)
     trace_csv: list[str] | None = None  # trace files as written in the campaign, one repeat each
     trace_rms: list[dict[str, float]] | None = None  # fit rms per file and direction, mm
+    convention: str | None = None  # how its offsets were read (conventions.py); None: the campaign's
 
     def mean(self, component: str) -> float:
         """Mean of the repeats of ``component``, mm."""
@@ -76,6 +79,7 @@ class Ballbar:
     mounts: dict[str, Mount] = field(default_factory=dict)
     runs: list[Run] = field(default_factory=list)
     cr_geometry: str = "RC-LB"  # T ball of CR at radius R_C − L_B (Table 2.3) or R_C + L_B (Fig 2.6)
+    convention: str = "thesis"  # how the runs' offsets were read (conventions.py), unless a run says otherwise
 
 
 @dataclass

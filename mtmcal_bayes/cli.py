@@ -100,10 +100,15 @@ def cmd_ncgen(args) -> int:
     return 0
 
 
+def cmd_instruments(args) -> int:
+    return _show(api.instruments(args.campaign), args)
+
+
 def cmd_compensate(args) -> int:
     result = api.compensate(args.program, campaign=args.campaign, output=args.output, method=args.method,
                             model=args.model, values=args.values, posterior=args.posterior, point=args.point,
-                            setup=args.setup, mount=args.mount, integer_unit=args.integer_unit)
+                            setup=args.setup, mount=args.mount, integer_unit=args.integer_unit,
+                            accept_disagreement=args.accept_disagreement)
     _warn(result.warnings)
     return _show(result, args)
 
@@ -133,7 +138,7 @@ def build_parser():
     """The argument parser, each command run by its ``cmd_*`` function (:mod:`mtmcal_bayes.cli_options`)."""
     return cli_options.build_parser({
         "identify": cmd_identify, "probe-fit": cmd_probe_fit, "simulate": cmd_simulate, "sensitivity": cmd_sensitivity,
-        "sample": cmd_sample, "history": cmd_history, "report": cmd_report, "plan": cmd_plan, "ncgen": cmd_ncgen, "compensate": cmd_compensate,
+        "sample": cmd_sample, "history": cmd_history, "report": cmd_report, "plan": cmd_plan, "ncgen": cmd_ncgen, "compensate": cmd_compensate, "instruments": cmd_instruments,
         "sbc": cmd_validate_sbc, "fleet": cmd_fleet})
 
 

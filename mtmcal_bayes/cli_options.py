@@ -147,6 +147,10 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--mount", default=None, help="campaign mount for Z_C, R_C")
     s.add_argument("-o", "--output", metavar="FILE.nc", help="write the program to FILE (default: print)")
 
+    _command(sub, "instruments", handlers["instruments"], "do the ball bar and the touch probe agree? consistency, each "
+             "instrument's σ_model, disputed deviations, explanations weighed by the data (docs/probe.md)",
+             json_help="print JSON: agree, scales_um, disputed, consistency, explanations")
+
     s = _command(sub, "compensate", handlers["compensate"], "rewrite X/Y/Z of an NC program for the identified deviations, "
                  "with uncertainty", json_help="print JSON: corrections, residuals, what is not compensable")
     s.add_argument("program", metavar="PROGRAM.nc", help="NC program (G00/G01 blocks, absolute)")
@@ -163,6 +167,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
     s.add_argument("--integer-unit", choices=("um", "mm"), default=None, help="how to read X/Y/Z/B/C words "
                    "without a decimal point (X100): increments of 1 µm / 0.001°, or mm / ° (default: refuse them)")
+    s.add_argument("--accept-disagreement", action="store_true", help="compensate even with deviations the ball "
+                   "bar and the touch probe disagree on (default: refuse them; see mtmcal-bayes instruments)")
 
     s = _command(sub, "fleet", handlers["fleet"], "every machine's campaigns in a folder tree, in parallel on Dask: "
                  "posteriors, histories, one overview (docs/fleet.md)", campaign=None,

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import units
+from .conventions import machine_repeats, reported_values
 
 #: typical repeat scatter of one eccentricity component, µm (thesis Table 4.4: 0.05–0.54 µm, typically 0.25):
 #: the repeat sd assumed where a campaign gives none, and that of simulated repeats
@@ -48,11 +49,15 @@ class Observations:
     sd: np.ndarray
     n: np.ndarray
 
+    #: the instrument these observations come from (its discrepancy scale: ``parameters.DISCREPANCY_SCALES``)
+    instrument = "ballbar"
+
     @classmethod
     def from_campaign(cls, campaign) -> Observations:
+        """One entry per component of every run, in the machine frame (each run read in its convention)."""
         keys, mean, sd, n = [], [], [], []
         for i, run in enumerate(campaign.ballbar.runs):
-            for comp, rep in run.repeats.items():
+            for comp, rep in machine_repeats(run, campaign.ballbar).items():
                 keys.append(ObservationKey(i, run.pattern, run.setup, run.mount, comp))
                 mean.append(float(np.mean(rep)))
                 sd.append(float(np.std(rep, ddof=1)) if len(rep) > 1 else np.nan)
@@ -93,21 +98,32 @@ def with_observations(campaign, values: np.ndarray):
     """A copy of ``campaign`` whose runs carry ``values`` instead of their measured repeats.
 
     ``values``: shape ``(m,)`` (one repeat each) or ``(m, r)`` (r repeats each),
-    mm, in the order of :meth:`Observations.from_campaign`.  Published results
+    mm, machine frame, in the order of :meth:`Observations.from_campaign`; each run
+    stores them as its reading convention reports them.  Published results
     are dropped (they belong to the measured data).
     """
-    import copy
-
-    values = np.asarray(values, dtype=float)
-    if values.ndim == 1:
-        values = values[:, None]
-    out = copy.deepcopy(campaign)
-    out.reported = {}
     keys = Observations.from_campaign(campaign).keys
+    values = [np.asarray(v, dtype=float).reshape(-1) for v in np.asarray(values, dtype=float)]
     if len(keys) != len(values):
         raise ValueError(f"expected {len(keys)} observations, got {len(values)}")
+    return with_run_values(campaign, keys, values)
+
+
+def with_run_values(campaign, keys, values):
+    """A copy of ``campaign`` whose runs carry ``values`` (one ``(r,)`` array of machine-frame repeats, mm, per key
+    of ``keys``) instead of their measured repeats, as each run's convention reports them; traces and published
+    results are dropped."""
+    import copy
+
+    out = copy.deepcopy(campaign)
+    out.reported = {}
+    per_run: dict[int, dict[str, np.ndarray]] = {}
     for key, v in zip(keys, values):
-        out.ballbar.runs[key.run].repeats[key.component] = v.copy()
+        per_run.setdefault(key.run, {})[key.component] = np.asarray(v, dtype=float).copy()
+    for i, machine in per_run.items():
+        run = out.ballbar.runs[i]
+        run.repeats = reported_values(run, out.ballbar, machine)
+        run.trace_csv = None
     return out
 
 
@@ -149,6 +165,8 @@ class ProbeObservations:
     mean: np.ndarray
     base_var: np.ndarray
     n: np.ndarray
+
+    instrument = "probe"
 
     def __len__(self) -> int:
         return len(self.keys)
@@ -196,6 +214,11 @@ class JointObservations:
         names = list(dict.fromkeys(k for c in parts for k in c))
         return {k: np.concatenate([c.get(k, np.zeros(len(p))) for c, p in zip(parts, self.parts)]) for k in names}
 
+    @property
+    def instruments(self) -> list[str]:
+        """The instrument of each observation, in order."""
+        return [p.instrument for p in self.parts for _ in range(len(p))]
+
     def slices(self) -> list[tuple[object, slice]]:
         """Each part with its slice of the joint vector."""
         out, start = [], 0
@@ -203,3 +226,11 @@ class JointObservations:
             out.append((p, slice(start, start + len(p))))
             start += len(p)
         return out
+
+
+def observation_instruments(observations) -> list[str]:
+    """The instrument (``"ballbar"`` or ``"probe"``) of each observation of ``observations`` (any of the three
+    kinds), in order."""
+    if isinstance(observations, JointObservations):
+        return observations.instruments
+    return [observations.instrument] * len(observations)

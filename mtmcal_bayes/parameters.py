@@ -76,8 +76,21 @@ QUANTITIES: dict[str, Quantity] = {
     "dx_CZ_minus_dx_BT": Quantity("dx_CZ_minus_dx_BT", "length", "dx_CZ − dx_BT, the C-axis X offset relative to the spindle"),
 }
 
-#: the model-discrepancy scale of the likelihood (SPEC §5), sampled beside the parameters
-SIGMA_MODEL = Quantity("sigma_model", "length", "sd of what the model leaves out (dynamics, thermal drift, pitch error)")
+#: the model-discrepancy scale of the ball bar's eccentricities (SPEC §5), sampled beside the parameters
+SIGMA_MODEL = Quantity("sigma_model", "length", "sd of what the model leaves out of the ball-bar eccentricities "
+                       "(dynamics, thermal drift, pitch error)")
+#: the touch probe's own discrepancy scale (SPEC §17): a conflict between the instruments widens the one that causes it
+SIGMA_MODEL_PROBE = Quantity("sigma_model_probe", "length", "sd of what the model leaves out of the touch-probe "
+                             "readings (thermal drift between indexed positions, stylus bending, pre-travel lobing)")
+#: the discrepancy scale of each instrument's observations, by instrument
+DISCREPANCY_SCALES: dict[str, Quantity] = {"ballbar": SIGMA_MODEL, "probe": SIGMA_MODEL_PROBE}
+#: what each scale is called in sentences
+SCALE_LABEL = {"sigma_model": "σ_model (ball bar)", "sigma_model_probe": "σ_model (probe)"}
+
+
+def is_scale(name: str) -> bool:
+    """Whether ``name`` is a discrepancy scale (``sigma_model``, ``sigma_model_probe``)."""
+    return name in SCALE_LABEL
 
 
 def weights(name: str, available=None) -> dict[str, float]:
@@ -148,9 +161,10 @@ NUISANCE_MEANING: dict[str, str] = {
 
 def quantity_unit(name: str) -> str:
     """Display unit (``"arcsec"`` or ``"um"``) of a deviation, derived quantity, nuisance parameter
-    (base name ``"xT"`` or full name ``"xT[RB1]"``) or ``sigma_model``."""
+    (base name ``"xT"`` or full name ``"xT[RB1]"``) or a discrepancy scale."""
     base = name.split("[")[0]
-    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, PROBE_NUISANCE, {SIGMA_MODEL.name: SIGMA_MODEL}):
+    scales = {q.name: q for q in DISCREPANCY_SCALES.values()}
+    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, PROBE_NUISANCE, scales):
         if base in table:
             return table[base].unit
     raise KeyError(name)

@@ -21,6 +21,7 @@ PACKAGE = Path(mtmcal_bayes.__file__).parent
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "units", "progress", "version", "datasets", "arviz_import"),  # foundation: nothing of the package
     ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
+    ("conventions",),                                              # what a ball-bar offset means in machine axes
     ("campaign", "observations"),                                  # the data of a calibration
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models

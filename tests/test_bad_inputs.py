@@ -53,6 +53,7 @@ COMMANDS_READING_CAMPAIGNS = (
     ("plan", "{campaign}", "-o", "{out}"),
     ("ncgen", "BX", "{campaign}", "-o", "{out}"),
     ("compensate", "{campaign}", "{program}", "-o", "{out}"),
+    ("instruments", "{campaign}"),
     ("validate", "sbc", "{campaign}", "-o", "{out}", "--quiet"),
 )
 COMMANDS_READING_PROGRAMS = (

@@ -75,7 +75,7 @@ def _expected_loglik(idata, post):
                      axis=-1)
     flat = theta.reshape(-1, theta.shape[-1])
     mu = post.forward.predict(flat[:, : post.p])
-    sd = np.sqrt(post.likelihood.base_var + post.sigma(flat)[:, None] ** 2)
+    sd = np.sqrt(post.likelihood.base_var + post.sigma(flat)[:, post.scale_of] ** 2)  # each mean its instrument's scale
     y = units.from_internal(post.likelihood.y, "um")
     return stats.norm.logpdf(y, units.from_internal(mu, "um"), units.from_internal(sd, "um")).reshape(
         theta.shape[:2] + (-1,))

@@ -142,10 +142,10 @@ def test_thesis_contraction_is_small_and_near_the_sampled_one(planned, thesis):
     theta = rng.normal(size=(n, len(planner.prior_var))) * np.sqrt(planner.prior_var)
     y = theta @ planner.A.T + rng.normal(size=(n, len(base))) * np.sqrt(base + sigma[:, None] ** 2)
     w = exact.weights(y)
-    var_post = (exact.sigma**2) @ w - (exact.sigma @ w) ** 2
+    var_post = (exact.sigma[:, 0] ** 2) @ w - (exact.sigma[:, 0] @ w) ** 2
     assert 1.0 - var_post.mean() / si.prior_var == pytest.approx(si.contraction_now, abs=0.02)
 
-    _, sd = exact.sigma_moments(planner.observations.mean)
+    _, (sd,) = exact.sigma_moments(planner.observations.mean)
     realised_exact = 1.0 - sd**2 / si.prior_var
     draws = np.asarray(mtmcal_bayes.sample(thesis, seed=1).idata.posterior["sigma_model"]).ravel()  # µm
     realised = 1.0 - np.var(draws) / units.from_internal(1.0, "um") ** 2 / si.prior_var
@@ -162,6 +162,7 @@ def _with_runs(planner, k, rows, runs, rng):
     prior = planner.sigma_prior()
     now = MarginalPosterior(planner.A, planner.V - planner.sigma_model**2, planner.prior_var, prior)
     theta, sigma = now.draw(planner.observations.mean, 1, rng)
+    sigma = sigma[:, 0]
     noise = np.sqrt(planner.campaign.ballbar.accuracy**2 + sigma[0] ** 2)
     a = units.from_internal(planner.pooled_sd, "um")  # repeats (m − a, m, m + a): sample sd = the pooled sd
     extra = ""
@@ -191,18 +192,19 @@ def test_redundant_runs_contraction_as_predicted_by_the_sampler_and_the_exact_po
     now = MarginalPosterior(planner.A, planner.V - planner.sigma_model**2, planner.prior_var, prior)
     rng = np.random.default_rng(11)
     theta, sigma = now.draw(planner.observations.mean, 200, rng)
+    sigma = sigma[:, 0]
     theta = np.hstack([theta, rng.normal(size=(200, A.shape[1] - theta.shape[1])) * np.sqrt(prior_var[theta.shape[1]:])])
     y = theta @ A.T + rng.normal(size=(200, len(base))) * np.sqrt(base + sigma[:, None] ** 2)
     y[:, : len(planner.V)] = planner.observations.mean  # the thesis data as measured
     w = exact.weights(y)
-    var_post = (exact.sigma**2) @ w - (exact.sigma @ w) ** 2
+    var_post = (exact.sigma[:, 0] ** 2) @ w - (exact.sigma[:, 0] @ w) ** 2
     assert np.mean(1.0 - var_post / si.prior_var) == pytest.approx(predicted, abs=0.05)
 
     text, _ = _with_runs(planner, k, rows, runs, np.random.default_rng(3))
     aug = parse_campaign(text, "redundant.toml")
     on_aug = Planner(aug, [])
-    _, sd = MarginalPosterior(on_aug.A, on_aug.V - on_aug.sigma_model**2, on_aug.prior_var,
-                              prior).sigma_moments(on_aug.observations.mean)
+    _, (sd,) = MarginalPosterior(on_aug.A, on_aug.V - on_aug.sigma_model**2, on_aug.prior_var,
+                                 prior).sigma_moments(on_aug.observations.mean)
     draws = np.asarray(mtmcal_bayes.sample(aug, seed=1).idata.posterior["sigma_model"]).ravel()  # µm
     realised = 1.0 - np.var(draws) / units.from_internal(1.0, "um") ** 2 / si.prior_var
     assert realised == pytest.approx(1.0 - sd**2 / si.prior_var, abs=0.03)

@@ -24,6 +24,7 @@ from mtmcal_bayes.inference.priors import Prior, PriorSet
 from mtmcal_bayes.io import parse_campaign
 from mtmcal_bayes.models.htm import rotation
 from mtmcal_bayes.models.kinematic import CHUNK, HTMModel
+from mtmcal_bayes.observations import ProbeKey
 from mtmcal_bayes.parameters import weights
 
 from . import variants
@@ -45,11 +46,17 @@ def test_prior_logpdf_is_scipy_stats():
     np.testing.assert_allclose(got[ok], ref[ok], rtol=0, atol=1e-12)
 
 
-def test_likelihood_is_scipy_stats(thesis):
-    post = LogPosterior(thesis, "linear")
+@pytest.mark.parametrize("data", ["ballbar", "both"])
+def test_likelihood_is_scipy_stats(thesis, data):
+    """Each mean Normal with variance base + its own instrument's scale²: the ball bar's means take sigma_model,
+    the probe's readings sigma_model_probe (two different values here, so a swap would show)."""
+    post = LogPosterior(thesis, "linear", data=data)
     theta = post.to_theta(np.random.default_rng(1).normal(size=(20, len(post))))
     pred, sigma = post.forward.predict(theta[:, : post.p]), post.sigma(theta)
-    ref = stats.norm.logpdf(post.likelihood.y, loc=pred, scale=np.sqrt(post.likelihood.variance(sigma))).sum(axis=1)
+    probe = np.array([isinstance(k, ProbeKey) for k in post.forward.observations.keys])
+    assert post.scales == (("sigma_model", "sigma_model_probe") if data == "both" else ("sigma_model",))
+    own = np.where(probe[None], theta[:, -1:], theta[:, post.p: post.p + 1])  # (20, m): each mean's scale
+    ref = stats.norm.logpdf(post.likelihood.y, loc=pred, scale=np.sqrt(post.likelihood.base_var + own**2)).sum(axis=1)
     np.testing.assert_allclose(post.likelihood.loglike(pred, sigma), ref, rtol=1e-12)
 
 
@@ -80,11 +87,11 @@ def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):
     a = PosteriorApproximation(post)
     assert a.exact and a.kind == "exact σ-marginal posterior"
     sigma_prior = post.priors.priors[-1].frozen()
-    assert a.marginal.edges[-1] >= sigma_prior.ppf(0.99999)
+    assert a.marginal.edges[0][-1] >= sigma_prior.ppf(0.99999)
 
     y = post.likelihood.y + np.random.default_rng(8).normal(scale=0.05, size=len(post.likelihood.y))
     far = PosteriorApproximation(post.with_means(y)).marginal
-    mean, sd = far.sigma_moments(y)
+    (mean,), (sd,) = far.sigma_moments(y)
     A, base = post.forward.design, post.likelihood.base_var
     S0 = (A * np.array([q.sd for q in post.priors.priors[: post.p]]) ** 2) @ A.T
 
@@ -100,7 +107,7 @@ def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):
     ref_mean = moment(1) / z
     ref_sd = np.sqrt(moment(2) / z - ref_mean**2)
     assert mean > 1.5 * sigma_prior.ppf(0.99999)  # the data, not the prior, place sigma_model
-    assert far.edges[-1] > mean + 8 * sd
+    assert far.edges[0][-1] > mean + 8 * sd
     assert abs(mean - ref_mean) < 1e-4 * ref_sd and abs(sd / ref_sd - 1) < 1e-4
 
 

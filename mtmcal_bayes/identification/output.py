@@ -8,13 +8,16 @@ from .. import units
 from ..iso import iso_symbol
 
 
-def identification_table(values: dict) -> pd.DataFrame:
+def identification_table(values: dict, *, reread: bool = False) -> pd.DataFrame:
     """One row per quantity of ``{name: Identified}``: recomputed and published value (display units),
-    difference, flag."""
+    difference, flag (``reread``: the data read another way than the thesis', so a difference is what the reading
+    changes, not a failure to reproduce)."""
     rows = []
     for name, ident in values.items():
         if ident.reproduced is None:
             flag = "not computed: " + ident.missing if ident.missing else ("no published value" if ident.reported is None else "")
+        elif reread:
+            flag = "as printed" if ident.reproduced else "changed by the reading"
         else:
             flag = "reproduced" if ident.reproduced else "NOT REPRODUCED"
         rows.append({
@@ -44,6 +47,10 @@ def format_identification(result) -> str:
     out = [f"Campaign: {result.source}", "",
            "Ball bar, thesis Eqs 4.10–4.18 on the means of the repeats, beside [reported.ballbar] (thesis: Table 4.5)"]
     out.append(text_table(identification_table(result.ballbar)))
+    if result.ballbar_in_convention is not None:
+        out += ["", f"Ball bar, the same equations on the offsets read in the campaign's convention ({result.convention}; "
+                "docs/conventions.md), beside [reported.ballbar]"]
+        out.append(text_table(identification_table(result.ballbar_in_convention, reread=True)))
     out += ["", "Touch probe, thesis Eqs 5.1–5.19, beside [reported.probe] (thesis: Table 5.3)"]
     if result.probe:
         out.append(text_table(identification_table(result.probe)))

@@ -73,15 +73,24 @@ class IdentificationResult:
     checks: list[str] = field(default_factory=list)
     assumptions: list[str] = field(default_factory=list)
     source: str = ""
+    #: the same ball-bar equations on the offsets read in the campaign's convention, where that reading differs from
+    #: the thesis' (``None`` otherwise), and the convention in words
+    ballbar_in_convention: dict[str, Identified] | None = None
+    convention: str = "thesis"
 
     def to_json(self) -> dict:
-        return {
+        out = {
             "campaign": self.source,
             "ballbar": {k: {**v.to_json(), "iso": iso_symbol(k)} for k, v in self.ballbar.items()},
             "probe": {k: {**v.to_json(), "iso": iso_symbol(k)} for k, v in self.probe.items()},
             "checks": self.checks,
             "assumptions": self.assumptions,
+            "convention": self.convention,
         }
+        if self.ballbar_in_convention is not None:
+            out["ballbar_in_convention"] = {k: {**v.to_json(), "iso": iso_symbol(k)}
+                                            for k, v in self.ballbar_in_convention.items()}
+        return out
 
     def to_text(self) -> str:
         """What ``mtmcal-bayes identify`` prints."""

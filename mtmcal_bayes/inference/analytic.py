@@ -55,9 +55,10 @@ def linearisation(post: LogPosterior, theta0: np.ndarray | None = None) -> tuple
     return A, model.predict(theta0) - A @ theta0
 
 
-def gaussian_posterior(post: LogPosterior, sigma_model: float = 0.0, *, theta0: np.ndarray | None = None,
+def gaussian_posterior(post: LogPosterior, sigma_model=0.0, *, theta0: np.ndarray | None = None,
                        allow_non_normal: bool = False, prior_scale: np.ndarray | None = None) -> GaussianPosterior:
-    """Gaussian posterior of ``post``'s forward parameters at fixed ``sigma_model`` (mm).
+    """Gaussian posterior of ``post``'s forward parameters at fixed discrepancy scales ``sigma_model`` (mm; one
+    value for every scale, or one per scale of ``post.scales``).
 
     Exact for the ``linear`` model; other models are linearised at ``theta0``
     (default zero).  Non-normal priors (half-normal, uniform overrides) are an
@@ -75,7 +76,7 @@ def gaussian_posterior(post: LogPosterior, sigma_model: float = 0.0, *, theta0: 
     mu0 = np.array([q.centre for q in priors])
     var0 = (np.array([q.sd for q in priors]) * (1.0 if prior_scale is None else prior_scale)) ** 2
     A, c = linearisation(post, theta0)
-    V = post.likelihood.base_var + sigma_model**2
+    V = post.likelihood.variance_at(sigma_model)
     prec = np.diag(1.0 / var0) + A.T @ (A / V[:, None])
     cov = np.linalg.inv(prec)
     cov = 0.5 * (cov + cov.T)
@@ -113,7 +114,7 @@ class PriorSensitivity:
     through: dict[str, tuple[str, ...]]
 
 
-def prior_sensitivity(post: LogPosterior, sigma_model: float = 0.0) -> PriorSensitivity:
+def prior_sensitivity(post: LogPosterior, sigma_model=0.0) -> PriorSensitivity:
     """Widen the deviation priors, then separately the nuisance priors, and see whose sd follows.
 
     A quantity the data determine keeps its width (growth ≈ 1); one whose width is set by the priors grows

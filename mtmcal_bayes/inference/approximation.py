@@ -16,7 +16,7 @@ check — the exact posterior for ``linear``, model-form information (how far th
 kinematic posterior is from its linearisation) for the ``htm-*`` models.
 
 Everything is in the sampler's coordinates ``z`` of :class:`~.log_posterior.LogPosterior`:
-``(θ − centre)/width`` and ``log(σ/scale)``.
+``(θ − centre)/width`` and ``log(σ/scale)`` for each discrepancy scale.
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ from .. import units
 from ..models import jacobian
 from ..parameters import QUANTITIES, quantity_unit, weights
 from .log_posterior import LogPosterior
-from .marginal import GridProposal, MarginalPosterior, sigma_upper
+from .marginal import GridProposal, MarginalPosterior
 
 #: Gauss–Newton linearisations of a kinematic model (the second moves the point by well under the noise)
 LINEARISATIONS = 2
@@ -50,14 +50,13 @@ class PosteriorApproximation:
         mean0 = np.array([q.frozen().mean() for q in priors])
         var0 = np.array([q.sd for q in priors]) ** 2
         normal = all(q.dist == "normal" for q in priors)
-        sigma_prior = post.priors.priors[-1].frozen() if post.fixed_sigma is None else None
+        sigma_prior = [q.frozen() for q in post.priors.priors[post.p:]] if post.fixed_sigma is None else None
         base_var, y = post.likelihood.base_var, post.likelihood.y
 
         def marginal_at(A, c):
-            hi = None if sigma_prior is None else sigma_upper(A, base_var, var0, sigma_prior, y=y, prior_mean=mean0,
-                                                              offset=c)
             return MarginalPosterior(A, base_var, var0, sigma_prior, prior_mean=mean0, offset=c,
-                                     sigma_fixed=post.fixed_sigma, sigma_max=hi)
+                                     sigma_fixed=None if sigma_prior else [post.fixed_sigma] * len(post.scales),
+                                     groups=post.scale_of, y=y)
 
         model = post.forward
         if hasattr(model, "design"):  # linear: the design matrix is the model
@@ -88,10 +87,10 @@ class PosteriorApproximation:
         post = self.post
         theta = post.to_theta(z)
         if post.fixed_sigma is not None:
-            return self.proposal.logpdf(theta, np.zeros(len(theta)))
-        sigma = theta[:, post.p]
+            return self.proposal.logpdf(theta, None)
+        sigma = theta[:, post.p:]
         with np.errstate(divide="ignore"):  # d log σ: density in log σ is σ times that in σ
-            return self.proposal.logpdf(theta[:, : post.p], sigma) + np.log(sigma)
+            return self.proposal.logpdf(theta[:, : post.p], sigma) + np.log(sigma).sum(axis=1)
 
     def independence_move(self) -> IndependenceMove:
         return IndependenceMove(self)
@@ -119,9 +118,11 @@ class PosteriorApproximation:
             for i, name in enumerate(kept):
                 unit = quantity_unit(name)
                 out[name] = (units.from_internal(mean[0, i], unit), units.from_internal(sd[0, i], unit))
-        if "sigma_model" in names and post.fixed_sigma is None:
+        if post.fixed_sigma is None and any(n in names for n in post.scales):
             m, s = self.marginal.sigma_moments(post.likelihood.y)
-            out["sigma_model"] = (units.from_internal(m, "um"), units.from_internal(s, "um"))
+            for k, n in enumerate(post.scales):
+                if n in names:
+                    out[n] = (units.from_internal(m[k], "um"), units.from_internal(s[k], "um"))
         return out
 
 

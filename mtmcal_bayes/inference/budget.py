@@ -10,11 +10,15 @@ instrument accuracy, sigma_model², probe readings), posterior covariance ``Σ =
 so a quantity ``aᵀθ`` has variance ``Σ_g aᵀΣP_gΣa + Σ_k aᵀK R_k Kᵀa``: each term is that source's
 contribution, and they add up to the posterior variance.
 
-For a sampled sigma_model the law of total variance splits the posterior variance into the average of
-these budgets over sigma_model's posterior and the variance of the conditional mean,
+Each instrument has its own discrepancy scale (``sigma_model`` for the ball bar, ``sigma_model_probe`` for
+the touch probe), and each is a source of its own: its ``R_k`` is σ_k² on that instrument's observations.
+
+For sampled scales the law of total variance splits the posterior variance into the average of
+these budgets over the scales' posterior and the variance of the conditional mean,
 ``Var(aᵀθ) = E_σ[Var(aᵀθ | σ)] + Var_σ(E[aᵀθ | σ])``: the last term is ``sigma_model_uncertainty``, what
-not knowing sigma_model adds.  The average runs over :data:`N_SIGMA` quantiles of the posterior draws of
-sigma_model.  The kinematic models are linearised at the posterior mean (the budget is then first order).
+not knowing the scales adds.  The average runs over :data:`N_SIGMA` quantiles of the posterior draws of
+one scale, or :data:`N_SIGMA` posterior draws of several (evenly spaced through the chain).  The kinematic
+models are linearised at the posterior mean (the budget is then first order).
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from .log_posterior import LogPosterior
 #: quantiles of sigma_model's posterior the budget is averaged over
 N_SIGMA = 64
 #: the noise sources, in display order (the probe's only with probe data)
-NOISE_SOURCES = ("repeatability", "instrument", "probe readings", "sigma_model")
+NOISE_SOURCES = ("repeatability", "instrument", "probe readings", "sigma_model", "sigma_model_probe")
 #: prior groups of the nuisance parameters, by base name (``prior:<group>`` in the budget)
 PRIOR_GROUP = {"xT": "T-ball centring", "yT": "T-ball centring", "zT": "T-ball centring", "dRB": "dRB",
                "xW": "W-ball clamping", "yW": "W-ball clamping", "zW": "W-ball clamping",
@@ -40,7 +44,8 @@ PRIOR_GROUP = {"xT": "T-ball centring", "yT": "T-ball centring", "zT": "T-ball c
 #: what each source is, for sentences ("87 % of the variance comes from …")
 MEANING = {"repeatability": "the repeatability of the measurements (scatter of the repeats)",
            "instrument": "the ball bar's accuracy", "probe readings": "the touch-probe readings' own noise",
-           "sigma_model": "the assumed model-discrepancy scale σ_model",
+           "sigma_model": "the assumed model-discrepancy scale σ_model of the ball bar",
+           "sigma_model_probe": "the assumed model-discrepancy scale of the touch probe, σ_model (probe)",
            "sigma_model_uncertainty": "not knowing σ_model (its prior, which the data barely narrow)",
            "prior:deviations": "the priors of the deviations themselves",
            "prior:T-ball centring": "the T-ball centring prior (±1 µm centring check)",
@@ -55,10 +60,11 @@ def source_of(parameter) -> str:
     return "prior:deviations" if parameter.group == "deviation" else f"prior:{PRIOR_GROUP[parameter.base]}"
 
 
-def conditional_budget(post: LogPosterior, sigma_model: float, names, *,
+def conditional_budget(post: LogPosterior, sigma_model, names, *,
                        theta0: np.ndarray | None = None) -> tuple[pd.DataFrame, pd.Series]:
-    """Variance contributions at fixed ``sigma_model`` (mm): a DataFrame (quantity × source, internal units²)
-    whose rows sum to the posterior variance, and the posterior mean of each quantity (internal units).
+    """Variance contributions at fixed discrepancy scales ``sigma_model`` (mm; one value for all, or one per scale of
+    ``post.scales``): a DataFrame (quantity × source, internal units²) whose rows sum to the posterior variance, and
+    the posterior mean of each quantity (internal units).
 
     Exact for the ``linear`` model; other models linearised at ``theta0``.  Every prior is taken as a normal
     of its mean and sd (the half-normal/uniform overrides as in the sampler's start)."""
@@ -68,7 +74,9 @@ def conditional_budget(post: LogPosterior, sigma_model: float, names, *,
     mu0 = np.array([q.centre for q in priors])
     A, c = linearisation(post, theta0)
     noise = dict(post.likelihood.noise)
-    noise["sigma_model"] = np.full(A.shape[0], sigma_model**2)
+    sig = np.broadcast_to(np.asarray(sigma_model, dtype=float), (len(post.scales),))
+    for k, name in enumerate(post.scales):
+        noise[name] = np.where(post.scale_of == k, sig[k] ** 2, 0.0)
     V = sum(noise.values())
     cov = np.linalg.inv(np.diag(1.0 / var0) + A.T @ (A / V[:, None]))
     cov = 0.5 * (cov + cov.T)
@@ -88,16 +96,20 @@ def variance_budget(post: LogPosterior, sigma_draws: np.ndarray | None, names=No
                     theta0: np.ndarray | None = None) -> pd.DataFrame:
     """Shares of the posterior variance by source (rows: quantities, columns: sources; rows sum to 1).
 
-    ``sigma_draws`` (mm): posterior draws of sigma_model, averaged over by the law of total variance (adds the
-    ``sigma_model_uncertainty`` column); None when sigma_model is fixed (``post.fixed_sigma``).
+    ``sigma_draws`` (mm): posterior draws of the scales, ``(n,)`` or ``(n, s)``, averaged over by the law of total
+    variance (adds the ``sigma_model_uncertainty`` column); None when the scales are fixed (``post.fixed_sigma``).
     """
     names = [n for n in (names or REPORTED) if weights(n, post.space.names)]
     if sigma_draws is None:
         var, _ = conditional_budget(post, float(post.fixed_sigma or 0.0), names, theta0=theta0)
         var["sigma_model_uncertainty"] = 0.0
     else:
-        grid = np.quantile(np.asarray(sigma_draws, float), (np.arange(N_SIGMA) + 0.5) / N_SIGMA)
-        parts = [conditional_budget(post, float(s), names, theta0=theta0) for s in grid]
+        draws = np.asarray(sigma_draws, float).reshape(len(sigma_draws), -1)
+        if draws.shape[1] == 1:
+            grid = np.quantile(draws[:, 0], (np.arange(N_SIGMA) + 0.5) / N_SIGMA)[:, None]
+        else:  # several scales: their joint draws, evenly spaced through the chain
+            grid = draws[np.linspace(0, len(draws) - 1, N_SIGMA).astype(int)]
+        parts = [conditional_budget(post, s, names, theta0=theta0) for s in grid]
         var = sum(v for v, _ in parts) / len(parts)
         var["sigma_model_uncertainty"] = np.var(np.stack([m.to_numpy() for _, m in parts]), axis=0)
     return var.div(var.sum(axis=1), axis=0)

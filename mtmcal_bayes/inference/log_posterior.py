@@ -3,12 +3,16 @@
 Sampled parameters (SPEC §5): the deviations alpha_CZ, beta_CZ, alpha_XB,
 beta_XB, gamma_XB, alpha_BT, dy_CZ, dx_CZ and dx_BT (separately; their
 difference is reported), dz_BT; per tool setup xT, yT, zT, dRB; per W-ball
-mount xW, yW, zW; and sigma_model.  The linear-axis squareness deviations are
+mount xW, yW, zW; the touch probe's terms with probe data; and one
+model-discrepancy scale per instrument whose data the likelihood uses:
+``sigma_model`` for the ball bar, ``sigma_model_probe`` for the touch probe
+(SPEC §17: a conflict between the instruments widens the one whose data the
+model cannot fit, not everything).  The linear-axis squareness deviations are
 held at zero (the thesis relations leave them out).  Sampling happens in
 coordinates scaled by the prior widths: ``z = (θ − centre) / width``, except
-sigma_model, sampled as ``log(sigma_model / prior scale)``: the other
-parameters' spread shrinks as sigma_model → 0 (a funnel), and the log
-coordinate lets the sampler reach that end (τ of sigma_model ≈ 3× shorter).
+the scales, sampled as ``log(σ / prior scale)``: the other parameters' spread
+shrinks as σ → 0 (a funnel), and the log coordinate lets the sampler reach
+that end (τ of sigma_model ≈ 3× shorter).
 """
 
 from __future__ import annotations
@@ -18,7 +22,8 @@ import copy
 import numpy as np
 
 from ..models import check_data, make_model
-from ..parameters import ParameterSpace
+from ..observations import observation_instruments
+from ..parameters import DISCREPANCY_SCALES, ParameterSpace
 from .likelihood import GaussianMeanLikelihood
 from .priors import PriorSet, make_prior
 
@@ -35,15 +40,17 @@ class LogPosterior:
     campaign : Campaign
     model : ``"linear"``, ``"htm-literal"`` or ``"htm-thesis"``
     fix_dx_BT : impose the thesis assumption dx_BT = 0 (Eq 4.2)
-    sigma_model : fix the model-discrepancy scale (mm) instead of sampling it
-    data : ``"ballbar"`` (eccentricities), ``"probe"`` (touch-probe readings) or ``"both"``; one
-        sigma_model for all (SPEC §12)
+    sigma_model : fix the model-discrepancy scales (mm; one value for every scale) instead of sampling them
+    data : ``"ballbar"`` (eccentricities), ``"probe"`` (touch-probe readings) or ``"both"``
 
     Attributes
     ----------
-    names : sampled parameter names, length q (forward-model parameters, then ``sigma_model`` if sampled)
+    names : sampled parameter names, length q (forward-model parameters, then the scales if sampled)
     priors : PriorSet over ``names``
     forward : the forward model, over the first ``p`` names
+    scales : names of the discrepancy scales, one per instrument in the data (``sigma_model``,
+        ``sigma_model_probe``), sampled or fixed
+    scale_of : (m,) index into ``scales`` of each observation
     """
 
     def __init__(self, campaign, model: str = "linear", fix_dx_BT: bool = False, sigma_model: float | None = None, *,
@@ -55,15 +62,18 @@ class LogPosterior:
         devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
         self.space = ParameterSpace.for_campaign(campaign, devs, data=data)
         self.forward = make_model(model, campaign, self.space, data)
-        self.likelihood = GaussianMeanLikelihood(self.forward.observations, campaign.ballbar.accuracy)
+        instruments = observation_instruments(self.forward.observations)
+        self.scales = tuple(DISCREPANCY_SCALES[i].name for i in dict.fromkeys(instruments))
+        self.scale_of = np.array([self.scales.index(DISCREPANCY_SCALES[i].name) for i in instruments], dtype=int)
+        self.likelihood = GaussianMeanLikelihood(self.forward.observations, campaign.ballbar.accuracy, self.scale_of)
         priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
         self.fixed_sigma = sigma_model
-        if sigma_model is None:
-            priors.append(make_prior("sigma_model", "sigma_model", "length", campaign.priors))
-        self.priors = PriorSet(priors)
-        self._sigma_scale = priors[-1].scale if sigma_model is None else None
-        self.names = self.priors.names
         self.p = len(self.space)
+        if sigma_model is None:
+            priors += [make_prior(n, n, "length", campaign.priors) for n in self.scales]
+        self.priors = PriorSet(priors)
+        self._sigma_scale = np.array([q.scale for q in priors[self.p:]]) if sigma_model is None else None
+        self.names = self.priors.names
 
     def with_means(self, y: np.ndarray) -> LogPosterior:
         """The posterior of the same campaign structure given other repeat means ``y`` (m,), mm.
@@ -80,26 +90,31 @@ class LogPosterior:
         return len(self.names)
 
     # ------------------------------------------------------------ coordinates
+    @property
+    def sampled_scales(self) -> tuple[str, ...]:
+        """The scales sampled beside the parameters (none when they are fixed)."""
+        return self.scales if self.fixed_sigma is None else ()
+
     def to_theta(self, z: np.ndarray) -> np.ndarray:
         """Sampling coordinates ``(n, q)`` to parameters (internal units)."""
         theta = self.priors.centre + self.priors.width * np.asarray(z, dtype=float)
         if self.fixed_sigma is None:
-            theta[..., self.p] = self._sigma_scale * np.exp(np.asarray(z)[..., self.p])
+            theta[..., self.p:] = self._sigma_scale * np.exp(np.asarray(z)[..., self.p:])
         return theta
 
     def to_z(self, theta: np.ndarray) -> np.ndarray:
         z = (np.asarray(theta, dtype=float) - self.priors.centre) / self.priors.width
         if self.fixed_sigma is None:
             with np.errstate(divide="ignore"):
-                z[..., self.p] = np.log(np.asarray(theta)[..., self.p] / self._sigma_scale)
+                z[..., self.p:] = np.log(np.asarray(theta)[..., self.p:] / self._sigma_scale)
         return z
 
     def sigma(self, theta: np.ndarray) -> np.ndarray:
-        """sigma_model of each row ``(n,)``, mm."""
+        """The discrepancy scales of each row ``(n, s)``, mm (s = ``len(scales)``)."""
         theta = np.atleast_2d(theta)
         if self.fixed_sigma is not None:
-            return np.full(theta.shape[0], self.fixed_sigma)
-        return theta[:, self.p]
+            return np.full((theta.shape[0], len(self.scales)), float(self.fixed_sigma))
+        return theta[:, self.p:]
 
     # ------------------------------------------------------------ densities
     def log_prob_theta(self, theta: np.ndarray) -> np.ndarray:
@@ -116,11 +131,11 @@ class LogPosterior:
     def __call__(self, z: np.ndarray) -> np.ndarray:
         """Log posterior density of sampling coordinates ``(n, q)`` -> ``(n,)``: what emcee calls (vectorize=True).
 
-        Includes the Jacobian of the log coordinate of sigma_model; that of the
+        Includes the Jacobian of the log coordinates of the scales; that of the
         affine scaling is constant and omitted.
         """
         z = np.atleast_2d(z)
         lp = self.log_prob_theta(self.to_theta(z))
         if self.fixed_sigma is None:
-            lp = lp + z[:, self.p]
+            lp = lp + z[:, self.p:].sum(axis=1)
         return lp

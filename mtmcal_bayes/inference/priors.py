@@ -42,6 +42,8 @@ DEFAULTS = {
     "yD": ("normal", 1000.0, "broad: where the sphere sits in the reading frame is not stated"),
     "zD": ("normal", 1000.0, "broad: where the sphere sits in the reading frame is not stated"),
     "sigma_model": ("halfnormal", 2.0, "dynamics, thermal drift and pitch error are not in the model"),
+    "sigma_model_probe": ("halfnormal", 2.0, "thermal drift between indexed positions, stylus bending and pre-travel "
+                          "lobing are not in the probe model"),
 }
 
 

@@ -107,7 +107,8 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
         "units": "arc seconds for angles, micrometres for lengths",
     })
     idata.observed_data.attrs["unit"] = "um (mean of the repeats; probe readings minus their nominal)"
-    idata.log_likelihood.attrs["unit"] = "log density of the observed mean in um (Normal, variance base + sigma_model²)"
+    idata.log_likelihood.attrs["unit"] = ("log density of the observed mean in um (Normal, variance base + the "
+                                          "instrument's discrepancy scale²)")
     return idata
 
 
@@ -130,9 +131,12 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     (:func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`).  A quantity whose ``prior_growth``
     exceeds 2 is not identified by the data (``identified`` False); one whose ``nuisance_growth`` does is
     identified only through the nuisance priors named in ``identified_through`` (comma-separated base names,
-    empty otherwise).  ``identified`` is None where no check applies (sigma_model).
+    empty otherwise).  ``identification`` says which: ``"data"``, ``"nuisance priors"`` or ``"not identified"``
+    (:func:`identification`); ``identified`` is True for ``"data"`` only — a quantity resting on nuisance priors
+    is not identified by the data, and a script reading ``identified`` must not take it for one that is — and
+    None where no check applies (the discrepancy scales).
     """
-    names = list(names or (list(REPORTED) + ["sigma_model"]))
+    names = list(names or (list(REPORTED) + list(post.scales)))
     names = [n for n in names if n in idata.posterior]
     s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none")
     s = s.rename(columns={"hdi_2.5%": "hdi_low", "hdi_97.5%": "hdi_high"})
@@ -142,26 +146,55 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     psd = prior_sd(post, s.index)
     s["prior_sd"] = [psd.get(n, np.nan) for n in s.index]
     s["sd_ratio"] = s["sd"] / s["prior_sd"]
-    sigma0 = (units.to_internal(float(np.median(idata.posterior["sigma_model"])), "um")
-              if "sigma_model" in idata.posterior else 0.0)
-    sens = prior_sensitivity(post, sigma0)
+    sens = prior_sensitivity(post, scale_medians(idata, post))
     s["prior_growth"] = [sens.deviation_growth.get(n, np.nan) for n in s.index]
     s["nuisance_growth"] = [sens.nuisance_growth.get(n, np.nan) for n in s.index]
-    s["identified"] = [None if np.isnan(g) else bool(g <= NOT_IDENTIFIED_GROWTH) for g in s["prior_growth"]]
     s["identified_through"] = [", ".join(sens.through[n]) if n in sens.through else None for n in s.index]
+    s["identification"] = [identification(g, t) for g, t in zip(s["prior_growth"], s["identified_through"])]
+    s["identified"] = [None if i is None else i == IDENTIFIED_BY_DATA for i in s["identification"]]
     s = s[["iso", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
-           "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identified_through",
-           "mcse_mean", "mcse_sd"]]
+           "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identification",
+           "identified_through", "mcse_mean", "mcse_sd"]]
     return pd.concat([s, gum_table(idata, s), budget_columns(idata, post).reindex(s.index)], axis=1)
+
+
+def scale_draws(idata, post) -> np.ndarray | None:
+    """Posterior draws ``(n, s)`` of the discrepancy scales, mm (None when they are fixed)."""
+    if post.fixed_sigma is not None or not all(n in idata.posterior for n in post.scales):
+        return None
+    return np.column_stack([units.to_internal(np.asarray(idata.posterior[n], float).ravel(), "um")
+                            for n in post.scales])
+
+
+def scale_medians(idata, post) -> np.ndarray:
+    """The discrepancy scales ``(s,)`` at which closed-form checks are made, mm: their fixed value, or each
+    scale's posterior median."""
+    draws = scale_draws(idata, post)
+    if draws is None:
+        return np.full(len(post.scales), float(post.fixed_sigma or 0.0))
+    return np.median(draws, axis=0)
+
+
+#: what a quantity's interval rests on (``identification`` column)
+IDENTIFIED_BY_DATA, BY_NUISANCE_PRIORS, NOT_IDENTIFIED = "data", "nuisance priors", "not identified"
+
+
+def identification(prior_growth: float, through: str | None) -> str | None:
+    """``"not identified"`` when widening the deviation priors widens the quantity more than
+    :data:`~.analytic.NOT_IDENTIFIED_GROWTH`, else ``"nuisance priors"`` when it rests on nuisance priors
+    (``through`` names them), else ``"data"``; None where no check applies."""
+    if prior_growth is None or np.isnan(prior_growth):
+        return None
+    if prior_growth > NOT_IDENTIFIED_GROWTH:
+        return NOT_IDENTIFIED
+    return BY_NUISANCE_PRIORS if isinstance(through, str) and through else IDENTIFIED_BY_DATA
 
 
 def budget_columns(idata, post) -> pd.DataFrame:
     """``budget:<source>`` columns: each reported quantity's share of posterior variance by source
-    (:func:`~mtmcal_bayes.inference.budget.variance_budget`), averaged over the posterior draws of sigma_model;
-    kinematic models linearised at the posterior mean."""
-    sigma = (units.to_internal(np.asarray(idata.posterior["sigma_model"], float).ravel(), "um")
-             if post.fixed_sigma is None and "sigma_model" in idata.posterior else None)
-    return variance_budget(post, sigma, theta0=linearisation_point(idata, post)).add_prefix("budget:")
+    (:func:`~mtmcal_bayes.inference.budget.variance_budget`), averaged over the posterior draws of the
+    discrepancy scales; kinematic models linearised at the posterior mean."""
+    return variance_budget(post, scale_draws(idata, post), theta0=linearisation_point(idata, post)).add_prefix("budget:")
 
 
 def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:
@@ -180,7 +213,7 @@ def not_identified(summary: pd.DataFrame) -> list[str]:
     nuisance priors (naming them)."""
     out = []
     for n, r in summary.iterrows():
-        if r["identified"] is False:
+        if r["identification"] == NOT_IDENTIFIED:
             out.append(f"{n}: not identified by the data — its width follows the priors (widening the deviation "
                        f"priors {WIDEN:g}× widens it {r['prior_growth']:.1f}×; posterior sd {r['sd']:.3g} "
                        f"{units.SYMBOL[r['unit']]} = {r['sd_ratio']:.2f} × prior sd)")

@@ -43,7 +43,7 @@ import numpy as np
 
 from ..arviz_import import az
 from ..errors import MtmcalError, ParameterError
-from ..parameters import IDENTIFIABLE
+from ..parameters import IDENTIFIABLE, is_scale
 from ..progress import Progress, ProgressEvent, emit
 from .approximation import PosteriorApproximation
 from .log_posterior import LogPosterior
@@ -154,7 +154,7 @@ class _GrowingBackend(emcee.backends.Backend):
 
 
 def _gating(post: LogPosterior) -> list[str]:
-    return [n for n in IDENTIFIABLE] + (["sigma_model"] if post.fixed_sigma is None else [])
+    return [n for n in IDENTIFIABLE] + list(post.sampled_scales)
 
 
 def _gating_draws(post: LogPosterior, chains_z: np.ndarray) -> dict[str, np.ndarray]:
@@ -183,7 +183,7 @@ def _ess_ratio(draws: dict[str, np.ndarray], s: SamplerSettings) -> float:
     """Smallest bulk or tail ESS over its target, over the gating quantities."""
     worst = math.inf
     for name, x in draws.items():
-        target = s.target_ess_sigma if name == "sigma_model" else s.target_ess
+        target = s.target_ess_sigma if is_scale(name) else s.target_ess
         flat = _walker_major(x)
         ess = min(float(az.ess(flat, method="bulk")), float(az.ess(flat, method="tail")))
         worst = min(worst, ess / target)

@@ -31,6 +31,7 @@ from ..campaign import (
     Stylus,
     Truth,
 )
+from ..conventions import CONVENTIONS, ConventionError, check_convention_name, check_run
 from ..datasets import builtin_campaign_text, data_path
 from ..errors import InputError, MtmcalError
 from ..parameters import (
@@ -123,8 +124,12 @@ def _date(r: TomlReader, doc: dict) -> datetime.datetime | None:
 
 def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
     P = "ballbar"
-    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry",
+    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry", "convention",
                      "setups", "mounts", "runs"}, P)
+    convention = r.string(t, "convention", P, default="thesis")
+    if convention not in CONVENTIONS:
+        r.fail(f"{P}.convention", f"unknown convention {convention!r} (expected one of {', '.join(CONVENTIONS)}; "
+               "a run reads another way with its own convention = \"B0=+X,B90=+Z\", docs/conventions.md)")
     cr_geometry = r.string(t, "cr_geometry", P, default="RC-LB")
     if cr_geometry not in CR_GEOMETRIES:
         r.fail(f"{P}.cr_geometry", f"unknown CR geometry {cr_geometry!r} (expected {' or '.join(CR_GEOMETRIES)})")
@@ -151,7 +156,13 @@ def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
     runs = [_run(r, x, f"{P}.runs[{i}]", setups=setups, mounts=mounts, base_dir=base_dir, L_B=length,
                  cr_geometry=cr_geometry) for i, x in enumerate(raw_runs)]
     _distinct_runs(r, runs, P)
-    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry)
+    bb = Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry, convention)
+    for i, run in enumerate(runs):
+        try:
+            check_run(run, bb)
+        except ConventionError as err:
+            r.fail(f"{P}.runs[{i}].convention" if run.convention else f"{P}.convention", str(err))
+    return bb
 
 
 def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]]) -> None:
@@ -182,7 +193,7 @@ def _distinct_runs(r: TomlReader, runs: list[Run], path: str) -> None:
 
 
 def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: float, cr_geometry: str) -> Run:
-    allowed = {"pattern", "setup", "mount", "trace_csv"} | {f"{c}_um" for c in ("ex", "ey", "ez")}
+    allowed = {"pattern", "setup", "mount", "trace_csv", "convention"} | {f"{c}_um" for c in ("ex", "ey", "ez")}
     r.check_keys(t, allowed, path)
     pattern = r.string(t, "pattern", path, required=True)
     if pattern not in PATTERNS:
@@ -232,7 +243,13 @@ def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: fl
     if not repeats:
         r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])} "
                "or trace_csv")
-    return Run(pattern, setup, mount, repeats, traces, rms)
+    convention = r.string(t, "convention", path, default="") or None
+    if convention is not None:
+        try:
+            check_convention_name(convention)
+        except ConventionError as err:
+            r.fail(f"{path}.convention", str(err))
+    return Run(pattern, setup, mount, repeats, traces, rms, convention)
 
 
 def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:

@@ -38,7 +38,7 @@ def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, see
     A_c, _ = planner.candidate_rows([c])[0]
     base_c = np.full(len(A_c), planner.noise_var(c.repeats) - planner.sigma_model**2)
     theta, sigma = now.draw(y, n_sim, rng)
-    y_c = theta @ A_c.T + rng.normal(size=(n_sim, len(A_c))) * np.sqrt(base_c[None] + sigma[:, None] ** 2)
+    y_c = theta @ A_c.T + rng.normal(size=(n_sim, len(A_c))) * np.sqrt(base_c[None] + sigma ** 2)
     after = MarginalPosterior(np.vstack([planner.A, A_c]), np.concatenate([base_var, base_c]), planner.prior_var,
                               sigma_prior)
     y_all = np.hstack([np.broadcast_to(y, (n_sim, len(y))), y_c])

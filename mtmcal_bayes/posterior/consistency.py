@@ -9,7 +9,8 @@ with ``η`` (stylus, sphere and datum terms for the probe; T-ball and W-ball ter
 unknown to the source posterior and so drawn from its prior.  The model is linear in ``η`` (exactly
 for the probe's datum and placement terms, to first order for the rest), so their part of the
 predictive covariance is ``A_η Σ_η A_ηᵀ`` in closed form; the draws give the rest; the noise is the
-likelihood's at the posterior mean of ``sigma_model²``.  Broad datum terms (prior sd ≥ 1 mm: where
+likelihood's with the target instrument's own discrepancy scale at its prior mean of σ² (the source
+posterior, which has not seen the target's data, knows nothing of it).  Broad datum terms (prior sd ≥ 1 mm: where
 the sphere sits in the reading frame) are profiled out as flat: the residual is the generalised
 least-squares residual orthogonal to their columns, with as many fewer degrees of freedom.
 
@@ -27,6 +28,7 @@ import pandas as pd
 from scipy import stats
 
 from .. import units
+from ..inference.approximation import PosteriorApproximation
 from ..inference.log_posterior import LogPosterior
 from ..models import jacobian
 from ..observations import ProbeKey
@@ -66,18 +68,36 @@ def _group(key) -> str:
     return key.group if isinstance(key, ProbeKey) else f"ball bar {key.pattern}@{key.setup}/{key.mount}"
 
 
+def source_draws(source, n_draws: int = N_DRAWS, seed: int = 0) -> np.ndarray:
+    """``n_draws`` posterior draws ``(n, q)`` (internal units) of ``source``: a :class:`~.sample.PosteriorResult`'s
+    kept chain, or exact draws of a :class:`LogPosterior` of the linear model (its σ-marginal posterior)."""
+    rng = np.random.default_rng(seed)
+    if isinstance(source, LogPosterior):
+        approx = PosteriorApproximation(source)
+        theta, sigma = approx.marginal.draw(source.likelihood.y, n_draws, rng)
+        return np.column_stack([theta, sigma]) if source.fixed_sigma is None else theta
+    flat = source.sampling.chains.reshape(-1, source.sampling.chains.shape[-1])
+    return flat[rng.choice(len(flat), size=min(n_draws, len(flat)), replace=False)]
+
+
+def target_noise(target: LogPosterior) -> np.ndarray:
+    """Noise variance ``(m,)`` of the target's observations, mm²: its base noise plus its own discrepancy scale at
+    the prior mean of σ² (or as fixed)."""
+    if target.fixed_sigma is not None:
+        return target.likelihood.variance_at(target.fixed_sigma)
+    second = np.array([float(q.frozen().var() + q.frozen().mean() ** 2) for q in target.priors.priors[target.p:]])
+    return target.likelihood.base_var + second[target.scale_of]
+
+
 def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed: int = 0):
     """Standardised residuals and group verdicts of ``target``'s observations under ``source``'s posterior.
 
-    ``source`` is a :class:`~.sample.PosteriorResult`; ``target`` the log posterior of the other data.
+    ``source`` is a :class:`~.sample.PosteriorResult`, or the :class:`LogPosterior` of a linear model (its exact
+    posterior is drawn); ``target`` the log posterior of the other data.
     Returns ``(readings DataFrame, groups DataFrame)``.
     """
-    post_s = source.log_posterior
-    chains = source.sampling.chains
-    flat = chains.reshape(-1, chains.shape[-1])
-    rng = np.random.default_rng(seed)
-    draws = flat[rng.choice(len(flat), size=min(n_draws, len(flat)), replace=False)]
-    sigma2 = float(np.mean(post_s.sigma(draws) ** 2))
+    post_s = source if isinstance(source, LogPosterior) else source.log_posterior
+    draws = source_draws(source, n_draws, seed)
     shared = [n for n in target.space.names if n in post_s.space.names]
     own = [i for i, n in enumerate(target.space.names) if n not in post_s.space.names]
     theta = np.zeros((len(draws), target.p))
@@ -90,7 +110,7 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
     broad = [i for i in own if prior_sd[i] >= BROAD]
     narrow = [i for i in own if prior_sd[i] < BROAD]
     S = np.cov(pred, rowvar=False) + (A[:, narrow] * prior_sd[narrow] ** 2) @ A[:, narrow].T
-    S += np.diag(target.likelihood.base_var + sigma2)
+    S += np.diag(target_noise(target))
     r_all = target.likelihood.y - pred.mean(axis=0)
     keys = model.observations.keys
     groups = {}
@@ -132,8 +152,10 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
 
 def instrument_consistency(ballbar, probe, n_draws: int = N_DRAWS, seed: int = 0) -> Consistency:
     """Both directions: probe readings given the ball-bar-only posterior ``ballbar``, ball-bar eccentricities
-    given the probe-only posterior ``probe`` (both :class:`~.sample.PosteriorResult` of one campaign and model)."""
-    post_b, post_p = ballbar.log_posterior, probe.log_posterior
+    given the probe-only posterior ``probe`` (both :class:`~.sample.PosteriorResult` of one campaign and model, or
+    both :class:`LogPosterior` of the linear model, whose exact posteriors are drawn)."""
+    post_b = ballbar if isinstance(ballbar, LogPosterior) else ballbar.log_posterior
+    post_p = probe if isinstance(probe, LogPosterior) else probe.log_posterior
     a = predictive_check(ballbar, post_p, n_draws, seed)
     b = predictive_check(probe, post_b, n_draws, seed)
     return Consistency(pd.concat([a[0], b[0]], ignore_index=True), pd.concat([a[1], b[1]], ignore_index=True))

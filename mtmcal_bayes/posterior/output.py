@@ -33,6 +33,7 @@ def quantity_json(name: str, row, conformity=None) -> dict:
         "U_note": row["U_note"] or None, "n_draws": int(row["n_draws"]),
         "endpoint_tolerance": _num(row["endpoint_tolerance"]), "significant_digits": int(row["significant_digits"]),
         "identified": row["identified"] if isinstance(row["identified"], bool) else None,
+        "identification": row["identification"] if isinstance(row["identification"], str) else None,
         "identified_through": through.split(", ") if isinstance(through, str) and through else [],
         "prior_growth": _num(row["prior_growth"]), "nuisance_growth": _num(row["nuisance_growth"]),
     })

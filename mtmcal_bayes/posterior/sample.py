@@ -107,9 +107,17 @@ class PosteriorResult:
 
     @property
     def sigma_model_um(self) -> float:
-        """sigma_model, µm: its fixed value, or the posterior median where it was sampled."""
-        fixed = self.log_posterior.fixed_sigma
-        return units.from_internal(fixed, "um") if fixed is not None else float(self.summary.loc["sigma_model", "median"])
+        """The first discrepancy scale (the ball bar's ``sigma_model``, else the probe's), µm: its fixed value, or the
+        posterior median where it was sampled."""
+        return self.scales_um[self.log_posterior.scales[0]]
+
+    @property
+    def scales_um(self) -> dict[str, float]:
+        """Each discrepancy scale, µm: its fixed value, or its posterior median where it was sampled."""
+        post = self.log_posterior
+        if post.fixed_sigma is not None:
+            return {n: units.from_internal(post.fixed_sigma, "um") for n in post.scales}
+        return {n: float(self.summary.loc[n, "median"]) for n in post.scales}
 
     @property
     def data(self) -> str:

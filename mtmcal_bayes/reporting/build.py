@@ -60,7 +60,7 @@ from .drawing import draw_figures
 from .missing import missing_data
 
 SUMMARY_COLUMNS = ["iso", "unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
-                   "prior_sd", "sd_ratio", "identified", "identified_through", "prior_growth", "nuisance_growth",
+                   "prior_sd", "sd_ratio", "identified", "identification", "identified_through", "prior_growth", "nuisance_growth",
                    *GUM_COLUMNS]
 REFERENCE_COLUMNS = ["ballbar", "ballbar_in_hdi", "ballbar_z", "probe_reported", "probe_reported_in_hdi",
                      "probe_reported_z", "probe_recomputed", "probe_recomputed_in_hdi", "probe_recomputed_z"]
@@ -291,7 +291,7 @@ def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
                         "probe (thesis)": s["probe_reported"], "in HDI ": s["probe_reported_in_hdi"],
                         "probe (recomputed)": s["probe_recomputed"], "in HDI  ": s["probe_recomputed_in_hdi"],
                         "R-hat": s["r_hat"], "bulk ESS": s["ess_bulk"].round(0).astype(int),
-                        "identified": s["identified"]})
+                        "identified by": s["identification"]})
     return out
 
 
@@ -397,7 +397,8 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
 
 def _planning(campaign, rep):
     """The plan for the quantities the data do not identify, else for all eight."""
-    targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
+    targets = [n for n in IDENTIFIABLE if n in rep.summary.index
+               and rep.summary.loc[n, "identification"] == "not identified"]
     return plan(campaign, targets or None)
 
 

@@ -7,6 +7,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from .. import units
+from ..conventions import machine_repeats
 from ..figure_style import COLOURS
 from ..observations import Observations
 from ..patterns import B_ANGLES_DEG, B_PATTERNS, COMPONENTS, polar_basis
@@ -58,7 +59,8 @@ def polar_figure(result, campaign, seed: int = 0):
         is_b = run.pattern in B_PATTERNS
         deg = B_ANGLES_DEG if is_b else C_GRID_DEG
         psi = np.deg2rad(deg)
-        reps = np.column_stack([units.from_internal(run.repeats[c], "um") for c in names])  # (r, len(comps))
+        machine = machine_repeats(run, campaign.ballbar)
+        reps = np.column_stack([units.from_internal(machine[c], "um") for c in names])  # (r, len(comps))
         measured = _dL(run.pattern, psi, names, reps.mean(axis=0))
         band = np.quantile(_dL(run.pattern, psi, names, pred[:, idx]), [0.025, 0.975], axis=0)
         repeat_lines = _dL(run.pattern, psi, names, reps)

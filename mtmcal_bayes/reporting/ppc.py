@@ -7,6 +7,7 @@ import pandas as pd
 from matplotlib.lines import Line2D
 
 from .. import units
+from ..conventions import machine_repeats
 from ..figure_style import COLOURS, MODEL_COLOURS, new_figure
 from ..observations import Observations
 
@@ -41,7 +42,8 @@ def ppc_table(idata, campaign) -> pd.DataFrame:
 
 
 def _repeats_um(campaign) -> list[np.ndarray]:
-    return [units.from_internal(campaign.ballbar.runs[k.run].repeats[k.component], "um")
+    bb = campaign.ballbar
+    return [units.from_internal(machine_repeats(bb.runs[k.run], bb)[k.component], "um")
             for k in Observations.from_campaign(campaign).keys]
 
 

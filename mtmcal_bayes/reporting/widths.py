@@ -15,10 +15,14 @@ CAPTION = (
     "posterior/prior written beside it: a ratio near 1 means the data taught nothing about that quantity. "
     f"Red labels mark quantities that are not identified by the data: their posterior sd grows more than "
     f"{NOT_IDENTIFIED_GROWTH:g}× when the deviation priors are widened {WIDEN:g}× (closed-form check), "
-    "so their width reflects the prior, not the measurement. 'Only through the prior on …' marks quantities whose "
+    "so their width reflects the prior, not the measurement. 'Only through the prior on …' (orange) marks quantities whose "
     f"sd grows more than {NOT_IDENTIFIED_GROWTH:g}× when the nuisance priors (T-ball centring, tool length, W-ball "
     "clamping) are widened instead: the data identify them only with that set-up knowledge (docs/metrology.md)."
 )
+
+
+#: colour of a quantity's label by what its interval rests on
+IDENTIFICATION_COLOUR = {"data": "black", "nuisance priors": "#B25E00", "not identified": "#C00000", None: "black"}
 
 
 def widths_figure(summary: pd.DataFrame, names=IDENTIFIABLE):
@@ -34,14 +38,13 @@ def widths_figure(summary: pd.DataFrame, names=IDENTIFIABLE):
     ax.set_xlim(lo / 3, hi * 6)
     for yi, (n, r) in zip(y, s.iterrows()):
         through = r.get("identified_through")
-        note = ("" if r["identified"] else "  not identified") + (f"  only through the prior on {through}"
-                                                                  if isinstance(through, str) and through else "")
+        note = ("  not identified" if r["identification"] == "not identified" else "") + (
+            f"  only through the prior on {through}" if isinstance(through, str) and through else "")
         ax.text(max(r["prior_sd"], r["sd"]) * 1.25, yi, f"× {r['sd_ratio']:.3g}" + note, va="center", fontsize=9,
-                color="black" if r["identified"] else "#C00000")
+                color=IDENTIFICATION_COLOUR[r["identification"]])
     ax.set_yticks(y, [label(n) for n in names], fontsize=11)
     for tick, n in zip(ax.get_yticklabels(), names):
-        if not s.loc[n, "identified"]:
-            tick.set_color("#C00000")
+        tick.set_color(IDENTIFICATION_COLOUR[s.loc[n, "identification"]])
     ax.set_xlabel("standard deviation (″ for angles, µm for lengths; log scale)")
     ax.grid(axis="x", which="both", alpha=0.25)
     ax.legend(handles=[Line2D([], [], color=COLOURS["prior"], marker="o", ls="none", label="prior sd"),

@@ -18,7 +18,7 @@ from .. import units
 from ..campaign import Campaign, Truth
 from ..errors import InputError
 from ..models import make_model
-from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_observations
+from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_run_values
 from ..parameters import ParameterSpace, nuisance_name
 
 #: resolution of the ball-bar readings (thesis Table 4.1)
@@ -97,10 +97,7 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
         values = noisy_repeats(pred, n, campaign.ballbar.accuracy, rng)
     else:
         values = [np.array([v]) for v in pred]
-    out = with_observations(campaign, np.zeros(len(obs)))
-    for key, v in zip(obs.keys, values):
-        out.ballbar.runs[key.run].repeats[key.component] = v
-        out.ballbar.runs[key.run].trace_csv = None
+    out = with_run_values(campaign, obs.keys, values)
     out.probe = simulated_probe(campaign, truth, model, noise=noise, rng=rng if noise else None, repeats=repeats)
     out.truth = copy.deepcopy(truth)
     return out

@@ -91,8 +91,9 @@ class ExactDraws:
         if key not in self._cache:
             priors = post.priors.priors[: post.p]
             self._cache[key] = MarginalPosterior(post.forward.design, post.likelihood.base_var,
-                                                 np.array([p.sd for p in priors]) ** 2, post.priors.priors[-1].frozen(),
-                                                 prior_mean=np.array([p.loc for p in priors]))
+                                                 np.array([p.sd for p in priors]) ** 2,
+                                                 [p.frozen() for p in post.priors.priors[post.p:]],
+                                                 prior_mean=np.array([p.loc for p in priors]), groups=post.scale_of)
         return self._cache[key]
 
     def __call__(self, post: LogPosterior, n_ranked: int, rng: np.random.Generator) -> Draws:

@@ -35,7 +35,7 @@ from ..inference.sampling import SamplerSettings
 from ..models import check_data, check_model
 from ..parameters import IDENTIFIABLE
 from ..progress import Progress, ProgressEvent, emit
-from .criteria import INTERVALS, P_MIN, SBC_QUANTITIES
+from .criteria import INTERVALS, P_MIN, SBC_QUANTITIES, sbc_quantities  # noqa: F401  (re-exported)
 from .samplers import make_sampler
 
 
@@ -182,7 +182,7 @@ class SBCResult:
 def quantity_values(post: LogPosterior, theta: np.ndarray) -> np.ndarray:
     """The ranked quantities ``(n, Q)`` (display units) of parameter draws ``(n, q)`` (internal units)."""
     d = display_draws(post.names, theta)
-    return np.column_stack([d[q] for q in SBC_QUANTITIES])
+    return np.column_stack([d[q] for q in sbc_quantities(post)])
 
 
 def simulate_data(post: LogPosterior, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -339,7 +339,7 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress: Progress | 
     stack = lambda key: np.array([r[key] for r in out])
     prior_theta = post.priors.rvs(20_000, np.random.default_rng(prior_seed))
     return SBCResult(
-        settings=s, campaign=campaign.source, quantities=SBC_QUANTITIES, ranks=stack("rank"), truth=stack("truth"),
+        settings=s, campaign=campaign.source, quantities=sbc_quantities(post), ranks=stack("rank"), truth=stack("truth"),
         post_mean=stack("mean"), post_sd=stack("sd"), prior_sd=quantity_values(post, prior_theta).std(axis=0),
         covered=stack("covered"), converged=stack("converged"), n_steps=stack("n_steps"), tau_max=stack("tau_max"),
         seconds=stack("seconds"), wall_time=time.perf_counter() - t0)

@@ -1,0 +1,245 @@
+"""Where a conflict between the instruments comes from: candidate explanations weighed by the data (SPEC §17).
+
+When the ball bar and the touch probe disagree (:mod:`.consistency`), the question is which of the
+plausible causes the data support.  Each candidate is a changed campaign or model; each is weighed by
+
+* the **marginal likelihood** of the fused linear model, ``log p(y | candidate)``: both instruments'
+  data, every parameter and both discrepancy scales integrated out exactly (normal priors, the scales on
+  a grid: :meth:`~mtmcal_bayes.inference.marginal.MarginalPosterior.log_evidence`).  Differences are log
+  Bayes factors: 2.3 is 10 : 1, 4.6 is 100 : 1 (Jeffreys: above 2.3 strong, above 4.6 decisive);
+* the posterior of the two discrepancy scales (a candidate that explains the conflict needs no large σ);
+* the consistency check of each instrument against the other's posterior (:func:`instrument_consistency`).
+
+Candidates:
+
+* **Readings of the B patterns** (:mod:`mtmcal_bayes.conventions`): the eight orientations in which a
+  ball-bar program can draw the B = 0° and B = 90° ends of its arcs (the thesis' reading among them), each
+  with the BY (and BA) bar on either side of the W ball.  The BX bar's side is fixed by the thesis' NC
+  program (Fig 4.30(a): the T ball at X = −390 mm, 100 mm from the C axis in +X).
+* **Stylus length along its axis** known to 0.3 mm instead of 10 µm (the touch probe's programmed length is
+  the tool eye's at B = 0 with the controller's B-pivot length, which the ball bar's dial-gauge R_B does not
+  share; pre-travel and stylus-ball radius act along the same axis).
+* **A difference between the sessions**: the B-axis angles α_XB, β_XB, γ_XB of the probe's session differ from
+  the ball bar's — by a thermal drift (prior sd 5″ each), or by what clamping the B axis at indexed positions
+  (the probe) changes against continuous motion (the ball bar) (prior sd 20″ each).
+
+The analysis is for the ``linear`` model (the kinematic models' first order: their nonlinearity is below
+0.1 µm at thesis magnitudes) with normal priors.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .. import units
+from ..conventions import machine_basis, parse_geometry, run_matrix
+from ..errors import ParameterError
+from ..inference.log_posterior import LogPosterior
+from ..inference.marginal import MarginalPosterior
+from ..parameters import DERIVED, quantity_unit
+from ..patterns import B_PATTERNS
+from .consistency import instrument_consistency
+
+#: grid cells per scale for the evidence (log evidence within 0.01 of a 160-cell grid on the thesis campaign)
+CELLS = 24
+#: the stylus length's prior sd in the "stylus length" candidate, mm
+STYLUS_LENGTH_SD = 0.3
+#: the B-axis angles' difference between the sessions: (label, prior sd in ″, what it supposes)
+SESSIONS = (("session drift 5″", 5.0, "a thermal drift of the B-axis angles α_XB, β_XB, γ_XB between the two sessions "
+             "(sd 5″ each)"),
+            ("sessions differ 20″", 20.0, "the B-axis angles differ between the probe's clamped indexed positions and "
+             "the ball bar's continuous motion (sd 20″ each)"))
+DRIFTING = ("alpha_XB", "beta_XB", "gamma_XB")
+#: the eight orientations of a B-pattern plot: where B = 0° and B = 90° are drawn (first: the thesis' reading)
+ORIENTATIONS = ("B0=+Z,B90=+X", "B0=+Z,B90=-X", "B0=-Z,B90=+X", "B0=-Z,B90=-X",
+                "B0=+X,B90=+Z", "B0=-X,B90=+Z", "B0=+X,B90=-Z", "B0=-X,B90=-Z")
+#: the patterns whose bar runs along Y (their side of the W ball is not fixed by the thesis)
+Y_BARS = ("BY", "BA")
+#: quantities shown for every candidate
+SHOWN = ("alpha_XB", "gamma_XB", "alpha_XB+gamma_XB", "beta_XB", "alpha_BT", "dy_CZ", "dz_BT")
+
+
+def _weights(name: str, names: list[str]) -> np.ndarray:
+    row = np.zeros(len(names))
+    if name == "alpha_XB+gamma_XB":
+        row[names.index("alpha_XB")] = row[names.index("gamma_XB")] = 1.0
+        return row
+    for k, w in DERIVED.get(name, {name: 1.0}).items():
+        if k in names:
+            row[names.index(k)] = w
+    return row
+
+
+def _unit(name: str) -> str:
+    return "arcsec" if name == "alpha_XB+gamma_XB" else quantity_unit(name)
+
+
+@dataclass
+class Candidate:
+    """One explanation: its id, what it supposes, its log evidence, scale means (µm), shown quantities (display
+    units: mean and sd), and where it changes the campaign (``campaign``: a copy to analyse further)."""
+
+    name: str
+    kind: str
+    supposes: str
+    log_evidence: float
+    scales: dict[str, float]
+    quantities: dict[str, tuple[float, float]]
+    campaign: object = field(repr=False, default=None)
+    consistency: pd.DataFrame | None = None
+
+
+def _geometry_string(D: np.ndarray) -> str:
+    """The B-plane geometry string of directions ``D`` (rows: B = 0°, B = 90°; columns X, Z)."""
+    word = lambda v: ("+" if v[np.argmax(np.abs(v))] > 0 else "-") + "XZ"[int(np.argmax(np.abs(v)))]  # noqa: E731
+    return f"B0={word(D[0])},B90={word(D[1])}"
+
+
+def reread(campaign, orientation: str, y_reversed: bool):
+    """A copy of ``campaign`` whose B runs read their offsets with the plot ``orientation`` (instead of the one their
+    convention gives), the BY/BA bar reversed when ``y_reversed``; None when the campaign has no B run."""
+    out = copy.deepcopy(campaign)
+    bb = out.ballbar
+    any_b = False
+    for run in bb.runs:
+        if run.pattern not in B_PATTERNS:
+            continue
+        any_b = True
+        G = np.linalg.solve(machine_basis(run.pattern), parse_geometry(orientation, run.pattern))  # new reading
+        if y_reversed and run.pattern in Y_BARS:
+            G = -G
+        M_old = run_matrix(run, bb)
+        D = machine_basis(run.pattern) @ (G @ M_old)  # the convention that reads the entered offsets so
+        run.convention = _geometry_string(D)
+    return out if any_b else None
+
+
+def _marginal(post: LogPosterior, extra: np.ndarray | None = None, extra_var: np.ndarray | None = None,
+              cells: int = CELLS) -> MarginalPosterior:
+    priors = post.priors.priors[: post.p]
+    bad = [q.name for q in priors if q.dist != "normal"]
+    if bad:
+        raise ParameterError("campaign", f"weighing explanations needs normal priors; {bad[0]} has another in [priors]")
+    A = post.forward.design
+    var0 = np.array([q.sd for q in priors]) ** 2
+    mean0 = np.array([q.loc for q in priors])
+    if extra is not None:
+        A, var0, mean0 = np.hstack([A, extra]), np.concatenate([var0, extra_var]), np.concatenate([mean0, 0 * extra_var])
+    return MarginalPosterior(A, post.likelihood.base_var, var0, [q.frozen() for q in post.priors.priors[post.p:]],
+                             prior_mean=mean0, groups=post.scale_of, y=post.likelihood.y, cells=cells)
+
+
+def _drift_columns(post: LogPosterior, sd_arcsec: float) -> tuple[np.ndarray, np.ndarray]:
+    """Columns of a difference of the B-axis angles in the probe's session: the angles' own columns on the probe's
+    rows, prior sd ``sd_arcsec`` each."""
+    A = post.forward.design
+    probe_rows = np.array([post.scales[k] == "sigma_model_probe" for k in post.scale_of])
+    cols = [post.space.index(n) for n in DRIFTING]
+    extra = np.where(probe_rows[:, None], A[:, cols], 0.0)
+    return extra, np.full(len(cols), units.to_internal(sd_arcsec, "arcsec") ** 2)
+
+
+def weigh(campaign, name: str, kind: str, supposes: str, *, drift_arcsec: float | None = None) -> Candidate:
+    """Evidence, scales and shown quantities of the fused linear posterior of ``campaign`` (a candidate), with the
+    probe's session's B-axis angles differing by a difference of prior sd ``drift_arcsec`` when it is given."""
+    post = LogPosterior(campaign, "linear", data="both")
+    drift = drift_arcsec is not None
+    extra, extra_var = _drift_columns(post, drift_arcsec) if drift else (None, None)
+    mp = _marginal(post, extra, extra_var)
+    y = post.likelihood.y
+    names = list(post.space.names) + ([f"drift {n}" for n in DRIFTING] if drift else [])
+    T = np.array([_weights(q, names) for q in SHOWN])
+    mean, sd = mp.target_moments(y[None], T)
+    sm, _ = mp.sigma_moments(y)
+    quantities = {q: (units.from_internal(mean[0, i], _unit(q)), units.from_internal(sd[0, i], _unit(q)))
+                  for i, q in enumerate(SHOWN)}
+    return Candidate(name, kind, supposes, mp.log_evidence(y),
+                     {n: units.from_internal(sm[k], "um") for k, n in enumerate(post.scales)}, quantities, campaign)
+
+
+@dataclass
+class ConflictAnalysis:
+    """Every candidate explanation, best first (``candidates``); ``given`` is the campaign as it is."""
+
+    given: Candidate
+    candidates: list[Candidate]
+
+    def table(self) -> pd.DataFrame:
+        """One row per candidate: log Bayes factor against the campaign as given, scales, shown quantities."""
+        rows = []
+        for c in [self.given] + [c for c in self.candidates if c is not self.given]:
+            row = {"candidate": c.name, "kind": c.kind, "supposes": c.supposes,
+                   "log_bayes_factor": c.log_evidence - self.given.log_evidence}
+            row.update({f"{n}_um": v for n, v in c.scales.items()})
+            row.update({f"{q}": m for q, (m, _) in c.quantities.items()})
+            rows.append(row)
+        return pd.DataFrame(rows).sort_values("log_bayes_factor", ascending=False, kind="stable").reset_index(drop=True)
+
+    def to_json(self) -> dict:
+        return {"given": self.given.name, "candidates": [
+            {"name": c.name, "kind": c.kind, "supposes": c.supposes,
+             "log_bayes_factor": c.log_evidence - self.given.log_evidence, "scales_um": c.scales,
+             "quantities": {q: {"mean": m, "sd": s, "unit": _unit(q)} for q, (m, s) in c.quantities.items()},
+             "consistency": None if c.consistency is None else c.consistency.to_dict(orient="records")}
+            for c in self.candidates]}
+
+    def to_text(self, top: int = 8) -> str:
+        t = self.table().head(top)
+        lines = ["Where the instruments' conflict could come from (fused linear model; log Bayes factor against the "
+                 "campaign as given; σ posterior means; ″ and µm):"]
+        scale_cols = [c for c in t.columns if c.endswith("_um")]
+        head = (f"  {'candidate':34s} {'log BF':>7s} " + " ".join(f"{c[:-3].replace('sigma_model', 'σ'):>8s}"
+                                                                   for c in scale_cols)
+                + " " + " ".join(f"{q.replace('alpha_XB+gamma_XB', 'α+γ XB'):>9s}" for q in SHOWN))
+        lines.append(head)
+        for _, r in t.iterrows():
+            lines.append(f"  {r['candidate'][:34]:34s} {r['log_bayes_factor']:7.1f} "
+                         + " ".join(f"{r[c]:8.2f}" for c in scale_cols) + " "
+                         + " ".join(f"{r[q]:9.2f}" for q in SHOWN))
+        return "\n".join(lines)
+
+
+def _consistency(c: Candidate) -> pd.DataFrame:
+    cons = instrument_consistency(LogPosterior(c.campaign, "linear", data="ballbar"),
+                                  LogPosterior(c.campaign, "linear", data="probe"))
+    return cons.groups
+
+
+def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
+    """Weigh the candidate explanations of a conflict between the instruments of ``campaign`` (module docstring);
+    the consistency check is run for the campaign as given and the ``consistency_of`` best candidates."""
+    if not campaign.has_probe_readings():
+        raise ParameterError("campaign", f"{campaign.source} has no touch-probe readings: there is no second "
+                             "instrument to weigh")
+    given = weigh(campaign, "as given", "campaign", "the campaign as it is")
+    out = [given]
+    sd_um = units.from_internal(STYLUS_LENGTH_SD, "um")
+    if "dRS" not in campaign.priors or campaign.priors["dRS"].get("sd", 0.0) < STYLUS_LENGTH_SD:
+        stylus = copy.deepcopy(campaign)
+        stylus.priors["dRS"] = {"dist": "normal", "mean": 0.0, "sd": STYLUS_LENGTH_SD}
+        out.append(weigh(stylus, "stylus length ±0.3 mm", "probe",
+                         f"the stylus length along its axis known to {sd_um:g} µm (tool eye + controller pivot)"))
+    best_probe = max(out, key=lambda c: c.log_evidence)
+    base = best_probe.campaign
+    extra = "" if best_probe is given else f"; {best_probe.name}"
+    for label, sd, supposes in SESSIONS:
+        out.append(weigh(base, label + extra, "sessions", supposes + extra, drift_arcsec=sd))
+    for orientation in ORIENTATIONS:
+        for reversed_y in (False, True):
+            if orientation == ORIENTATIONS[0] and not reversed_y:
+                continue  # the base itself
+            moved = reread(base, orientation, reversed_y)
+            if moved is None:
+                break
+            label = orientation + (", BY bar at −Y" if reversed_y else "")
+            out.append(weigh(moved, label + extra, "ball-bar reading",
+                             f"the B arcs drawn {orientation.replace(',', ', ')}"
+                             + (", the BY/BA bar on the −Y side of the W ball" if reversed_y else "") + extra))
+    out.sort(key=lambda c: -c.log_evidence)
+    for c in [given] + [c for c in out if c is not given and c.kind != "sessions"][:consistency_of]:
+        c.consistency = _consistency(c)  # (a session difference changes the model, not a campaign: not checked)
+    return ConflictAnalysis(given, out)

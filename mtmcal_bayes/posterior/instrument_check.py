@@ -1,0 +1,118 @@
+"""Do the instruments agree, on which deviations do they not, and what could explain it: one check, fast.
+
+:func:`check_instruments` runs the consistency check of the ball bar and the touch probe on the exact
+posteriors of the ``linear`` model (the kinematic models' first order; closed form on a grid, no
+sampling: :mod:`.consistency`), the fused posterior's discrepancy scales (one per instrument), the
+deviations each disagreeing reading group depends on (:func:`disputed_deviations`), and — on request —
+the candidate explanations weighed by the marginal likelihood (:mod:`.conflict`).  ``compensate`` refuses
+a disputed deviation (SPEC §17) on this check; ``mtmcal-bayes instruments`` prints it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import units
+from ..errors import ParameterError
+from ..inference.approximation import PosteriorApproximation
+from ..inference.log_posterior import SAMPLED_DEVIATIONS, LogPosterior
+from ..parameters import SCALE_LABEL
+from .conflict import ConflictAnalysis, explain_conflict
+from .consistency import BROAD, Consistency, _group, instrument_consistency
+
+
+def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: LogPosterior) -> dict[str, list[str]]:
+    """``{deviation: [sentence per disagreeing group that depends on it]}``.
+
+    A group depends on a deviation when the deviation moves its readings in a way its broad datum terms (prior sd
+    ≥ 1 mm, profiled out by the check) cannot absorb: the deviation's column of the target's linear design,
+    restricted to the group's readings, has a part outside the span of the datum columns."""
+    out: dict[str, list[str]] = {}
+    for _, g in consistency.groups[consistency.groups["verdict"] == "disagree"].iterrows():
+        target = probe if g["given"] == "ball-bar" else ballbar
+        model = target.forward
+        rows = np.array([i for i, k in enumerate(model.observations.keys) if _group(k) == g["group"]])
+        A = model.design[rows]
+        sd = target.priors.width[: target.p]
+        broad = [i for i, p in enumerate(target.space.parameters) if p.group != "deviation" and sd[i] >= BROAD]
+        B = A[:, broad]
+        B = B[:, np.abs(B).max(axis=0) > 0] if B.size else B
+        sentence = (f"{g['group']} given the {g['given']}-only posterior: χ² = {g['chi2']:.1f} on {g['dof']} dof, "
+                    f"p = {g['p_value']:.2g}")
+        for j, p in enumerate(target.space.parameters):
+            if p.group != "deviation" or p.name not in SAMPLED_DEVIATIONS:
+                continue
+            col = A[:, j] * sd[j]  # the deviation's effect at one prior sd, mm
+            if B.size:
+                col = col - B @ np.linalg.lstsq(B, col, rcond=None)[0]
+            if np.abs(col).max() > units.to_internal(0.01, "um"):
+                out.setdefault(p.name, []).append(sentence)
+    return out
+
+
+@dataclass
+class InstrumentCheck:
+    """The check of :func:`check_instruments`.
+
+    ``consistency``: both directions, per reading group; ``scales``: each discrepancy scale's fused posterior
+    mean and sd, µm; ``disputed``: the deviations the instruments disagree on, with the verdicts behind each;
+    ``conflict``: the candidate explanations (or None)."""
+
+    source: str
+    consistency: Consistency
+    scales: dict[str, tuple[float, float]]
+    disputed: dict[str, list[str]]
+    conflict: ConflictAnalysis | None = None
+
+    @property
+    def agree(self) -> bool:
+        return not self.disputed
+
+    def refusal(self, used) -> str | None:
+        """The sentence refusing to compensate with the disputed deviations among ``used`` (None when none is)."""
+        hit = [d for d in used if d in self.disputed]
+        if not hit:
+            return None
+        why = self.disputed[hit[0]][0]
+        return (f"the ball bar and the touch probe of {self.source} disagree on {', '.join(hit)} ({why}): "
+                "compensating with a deviation the instruments dispute can double the error it should remove; "
+                "find out which is right (mtmcal-bayes instruments, docs/probe.md), or accept the disagreement")
+
+    def to_json(self) -> dict:
+        return {"campaign": self.source, "agree": self.agree,
+                "scales_um": {n: {"mean": m, "sd": s} for n, (m, s) in self.scales.items()},
+                "disputed": self.disputed, "consistency": self.consistency.to_json(),
+                "explanations": None if self.conflict is None else self.conflict.to_json()}
+
+    def to_text(self) -> str:
+        lines = [f"Campaign: {self.source}", "", self.consistency.to_text(), "",
+                 "Fused posterior (linear, exact), each instrument's discrepancy scale: "
+                 + ", ".join(f"{SCALE_LABEL[n]} {m:.2f} ± {s:.2f} µm" for n, (m, s) in self.scales.items())]
+        if self.disputed:
+            lines += ["", "Disputed deviations (compensate refuses them unless the disagreement is accepted):"]
+            lines += [f"  {d}: {v[0]}" for d, v in self.disputed.items()]
+        else:
+            lines += ["", "The instruments agree on every deviation they both measure."]
+        if self.conflict is not None:
+            lines += ["", self.conflict.to_text()]
+        return "\n".join(lines)
+
+
+def check_instruments(campaign, *, explain: bool = True) -> InstrumentCheck:
+    """The consistency of the two instruments of ``campaign`` on the exact linear posteriors, the fused scales,
+    the disputed deviations and (``explain``) the candidate explanations of a conflict."""
+    if not campaign.has_probe_readings() or not campaign.ballbar.runs:
+        raise ParameterError("campaign", f"{campaign.source} needs ball-bar runs and touch-probe readings to compare "
+                             "the instruments")
+    ballbar = LogPosterior(campaign, "linear", data="ballbar")
+    probe = LogPosterior(campaign, "linear", data="probe")
+    cons = instrument_consistency(ballbar, probe)
+    fused = LogPosterior(campaign, "linear", data="both")
+    marginal = PosteriorApproximation(fused).marginal
+    mean, sd = marginal.sigma_moments(fused.likelihood.y)
+    scales = {n: (units.from_internal(mean[k], "um"), units.from_internal(sd[k], "um")) for k, n in
+              enumerate(fused.scales)}
+    conflict = explain_conflict(campaign) if explain and not cons.groups["verdict"].eq("agree").all() else None
+    return InstrumentCheck(campaign.source, cons, scales, disputed_deviations(cons, ballbar, probe), conflict)
