@@ -190,9 +190,11 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
-         sigma_model_um: float | None = None, sweep_pattern: str | None = None, output=None) -> PlanResult:
-    """Rank candidate extra measurements by how much they would reduce the uncertainty of ``targets``
-    (default the eight identified quantities).
+         sigma_model_um: float | None = None, sweep_pattern: str | None = None, output=None,
+         data: str = "ballbar") -> PlanResult:
+    """Rank candidate extra measurements — ball-bar runs and touch-probe runs — by how much they would reduce the
+    uncertainty of ``targets`` (default the eight identified quantities), given the campaign's ``data``
+    (``"ballbar"``, ``"probe"`` or ``"both"``).
 
     ``candidates``: a TOML file of your own ``[[candidate]]`` tables, or a list of
     :class:`~mtmcal_bayes.planning.Candidate`, ranked with the catalogue.
@@ -200,17 +202,19 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     import math
 
     from .errors import ParameterError
-    from .models import check_model
+    from .models import check_data, check_model
     from .planning import plan as rank
     from .planning import read_candidates
 
     c = campaign_of(campaign)
     check_model(model)
+    check_data(data, c)
     _writable(output, "plan")
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
         raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a non-negative number")
     extra = read_candidates(candidates, c) if isinstance(candidates, (str, os.PathLike)) else list(candidates or [])
-    result = rank(c, targets, extra=extra, sigma_model_um=sigma_model_um, sweep_pattern=sweep_pattern, model=model)
+    result = rank(c, targets, extra=extra, sigma_model_um=sigma_model_um, sweep_pattern=sweep_pattern, model=model,
+                  data=data)
     if output is not None:
         result.write(output)
     return result

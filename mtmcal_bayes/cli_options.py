@@ -128,6 +128,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--candidates", metavar="FILE.toml", help="extra candidates of your own ([[candidate]] tables)")
     s.add_argument("--sigma-model-um", type=float, default=None,
                    help="fixed model-discrepancy sd of the closed form (default: rms of its prior, 2 µm)")
+    s.add_argument("--data", choices=DATA, default="ballbar", help="what the current posterior rests on: ball bar "
+                   "(default), probe, or both; probe runs are candidates whenever the campaign has a [probe]")
     s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
                    help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
     s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")

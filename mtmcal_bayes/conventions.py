@@ -168,6 +168,11 @@ def run_matrix(run, ballbar) -> np.ndarray:
     return to_machine_matrix(run_convention(run, ballbar), run.pattern, **run_geometry(run, ballbar))
 
 
+def reads_as_thesis(ballbar) -> bool:
+    """Whether every run of ``ballbar`` is read as the thesis reads it (its convention's matrix is the identity)."""
+    return all(np.allclose(run_matrix(run, ballbar), np.eye(2)) for run in ballbar.runs)
+
+
 def check_run(run, ballbar) -> None:
     """:class:`ConventionError` when a run's convention cannot be applied to it: a malformed one, or one that
     mixes the two components of a run that gives only one of them."""

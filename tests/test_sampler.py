@@ -44,6 +44,9 @@ def test_prior_logpdf_is_scipy_stats():
     assert np.array_equal(np.isneginf(got), np.isneginf(ref))
     ok = np.isfinite(ref)
     np.testing.assert_allclose(got[ok], ref[ok], rtol=0, atol=1e-12)
+    for p in priors + [Prior("e", "halfnormal", 0.2, 0.7, "um", ""), Prior("f", "uniform", 2.0, 0.5, "um", "")]:
+        assert p.mean == pytest.approx(p.frozen().mean(), rel=1e-12, abs=1e-15), p
+        assert p.sd == pytest.approx(p.frozen().std(), rel=1e-12), p
 
 
 @pytest.mark.parametrize("data", ["ballbar", "both"])

@@ -21,3 +21,11 @@ def without_probe() -> str:
     """The thesis campaign without any touch-probe data or published probe results."""
     text = thesis_text()
     return text[: text.index(_PROBE)] + text[text.index(_REPORTED): text.index("[reported.probe]")]
+
+
+def thesis_reading() -> str:
+    """The thesis campaign as the thesis reads it: every run in the thesis' convention, the stylus length known to
+    10 µm (the built-in campaign before the touch probe's evidence changed both, docs/thesis-notes.md)."""
+    lines = [ln for ln in thesis_text().splitlines(keepends=True)
+             if not ln.startswith('convention = "B0=') and not ln.startswith("dRS = {")]
+    return "".join(lines)

@@ -19,7 +19,7 @@ import copy
 import numpy as np
 
 from ..campaign import Campaign
-from ..conventions import machine_repeats, run_convention, run_matrix
+from ..conventions import machine_repeats, reads_as_thesis, run_convention, run_matrix
 from .ballbar import identify_ballbar, thesis_checks
 from .probe import identify_probe
 from .probe_fit import ProbeFit, probe_fit
@@ -30,7 +30,7 @@ def in_machine_frame(campaign: Campaign) -> Campaign | None:
     """A copy of ``campaign`` whose runs carry their offsets in the machine frame (read in the thesis' way), or None
     when every run already is (the campaign's reading convention is the thesis' for all its runs)."""
     bb = campaign.ballbar
-    if all(np.allclose(run_matrix(run, bb), np.eye(2)) for run in bb.runs):
+    if reads_as_thesis(bb):
         return None
     out = copy.deepcopy(campaign)
     for run, new in zip(bb.runs, out.ballbar.runs):

@@ -47,7 +47,7 @@ class PosteriorApproximation:
     def __init__(self, post: LogPosterior):
         self.post = post
         priors = post.priors.priors[: post.p]
-        mean0 = np.array([q.frozen().mean() for q in priors])
+        mean0 = np.array([q.mean for q in priors])
         var0 = np.array([q.sd for q in priors]) ** 2
         normal = all(q.dist == "normal" for q in priors)
         sigma_prior = [q.frozen() for q in post.priors.priors[post.p:]] if post.fixed_sigma is None else None

@@ -123,10 +123,11 @@ class MarginalPosterior:
         S = S[None] + V[:, :, None] * np.eye(m)[None]  # (G, m, m)
         self.S_chol = np.linalg.cholesky(S)
         self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
-        prec = np.diag(1.0 / self.prior_var)[None] + np.einsum("mp,gm,mq->gpq", A, 1.0 / V, A)
+        AtVi = A.T[None] / V[:, None, :]  # (G, P, m): Aᵀ V⁻¹ of every cell (batched matrix products, not einsum)
+        prec = np.diag(1.0 / self.prior_var)[None] + AtVi @ A
         self.cov = np.linalg.inv(prec)  # (G, P, P)
         self.cov = 0.5 * (self.cov + np.swapaxes(self.cov, 1, 2))
-        self.gain = np.einsum("gpq,mq,gm->gpm", self.cov, A, 1.0 / V)  # (G, P, m): mean = μ0 + gain @ residual
+        self.gain = self.cov @ AtVi  # (G, P, m): mean = μ0 + gain @ residual
 
     def _residual(self, y: np.ndarray) -> np.ndarray:
         """Data minus the prediction at the prior mean, ``(N, m)``."""
@@ -176,8 +177,8 @@ class MarginalPosterior:
         return mean, np.sqrt(np.maximum(w @ self.sigma**2 - mean**2, 0.0))
 
     def draw(self, y: np.ndarray, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-        """``n`` draws ``(theta (n, P), sigma (n, s))`` from the posterior given data ``y`` (m,), σ at the cells'
-        midpoints."""
+        """``n`` draws ``(theta (n, P), sigma (n, s))`` from the posterior given data ``y`` (m,): a cell by its weight,
+        σ uniform within it (not its midpoint: a truth is ranked among continuous draws), θ from the cell's Gaussian."""
         w = self.weights(y[None])[:, 0]
         g = rng.choice(len(self.sigma), size=n, p=w)
         means = self.means(y[None])[:, 0]
@@ -185,7 +186,12 @@ class MarginalPosterior:
         for k in np.unique(g):  # one Cholesky per grid point used, not per draw
             idx = np.flatnonzero(g == k)
             theta[idx] = rng.multivariate_normal(means[k], self.cov[k], size=len(idx), method="cholesky")
-        return theta, self.sigma[g]
+        if self.fixed:
+            return theta, self.sigma[g]
+        index = np.unravel_index(g, tuple(len(e) - 1 for e in self.edges))
+        low = np.stack([e[i] for e, i in zip(self.edges, index)], axis=-1)
+        width = np.stack([e[i + 1] - e[i] for e, i in zip(self.edges, index)], axis=-1)
+        return theta, low + width * rng.random(low.shape)
 
 
 def sigma_range(A: np.ndarray, base_var: np.ndarray, prior_var: np.ndarray, sigma_priors, *, y: np.ndarray,

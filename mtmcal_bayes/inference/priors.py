@@ -73,12 +73,24 @@ class Prior:
 
     @functools.cached_property
     def sd(self) -> float:
-        return float(self.frozen().std())
+        """Standard deviation, in closed form (the scipy distribution's ``std()``; tests hold them equal)."""
+        if self.dist == "normal":
+            return float(self.scale)
+        if self.dist == "halfnormal":
+            return float(self.scale * math.sqrt(1.0 - 2.0 / math.pi))
+        return float(self.scale / math.sqrt(12.0))
+
+    @functools.cached_property
+    def mean(self) -> float:
+        """Mean, in closed form (the scipy distribution's ``mean()``)."""
+        if self.dist == "halfnormal":
+            return float(self.loc + self.scale * math.sqrt(2.0 / math.pi))
+        return float(self.loc + (0.5 * self.scale if self.dist == "uniform" else 0.0))
 
     @functools.cached_property
     def centre(self) -> float:
         """Centre of the sampling coordinate (mean, or 0 for half-normal)."""
-        return 0.0 if self.dist == "halfnormal" else float(self.frozen().mean())
+        return {"normal": self.loc, "halfnormal": 0.0}.get(self.dist, self.loc + 0.5 * self.scale)
 
     def describe(self) -> str:
         d = lambda v: f"{units.from_internal(v, self.unit):g}"  # noqa: E731

@@ -45,11 +45,14 @@ from ..inference.analytic import NOT_IDENTIFIED_GROWTH, WIDEN
 from ..inference.likelihood import GaussianMeanLikelihood
 from ..inference.log_posterior import SAMPLED_DEVIATIONS
 from ..inference.priors import make_prior
+from ..models import check_data
 from ..models.linear import LinearModel
+from ..models.probe_model import LinearProbeModel, ProbeModel
 from ..observations import Observations
 from ..parameters import IDENTIFIABLE, QUANTITIES, ParameterSpace, weights
 from ..patterns import COMPONENTS
 from .candidates import Candidate
+from .probe_candidates import ProbeCandidate, probe_rows, probe_terms
 
 #: a candidate that changes no target's sd by this fraction identifies nothing new
 MIN_GAIN = 0.01
@@ -68,10 +71,11 @@ def check_targets(targets) -> list[str]:
     return list(dict.fromkeys(targets))
 
 
-def default_sigma_model(campaign) -> float:
-    """Root mean square of the sigma_model prior, mm: the fixed value the closed form uses."""
-    prior = make_prior("sigma_model", "sigma_model", "length", campaign.priors).frozen()
-    return float(np.sqrt(prior.var() + prior.mean() ** 2))
+def default_sigma_model(campaign, name: str = "sigma_model") -> float:
+    """Root mean square of a discrepancy scale's prior (``sigma_model``, ``sigma_model_probe``), mm: the fixed value
+    the closed form uses."""
+    prior = make_prior(name, name, "length", campaign.priors)
+    return float(np.sqrt(prior.sd**2 + prior.mean**2))
 
 
 @dataclass
@@ -146,26 +150,34 @@ class Planner:
     Parameters
     ----------
     campaign : Campaign
-    candidates : list of Candidate (their new setups/mounts join the parameter space)
+    candidates : list of Candidate or ProbeCandidate (their new setups, mounts and probe terms join the
+        parameter space)
     targets : quantity names (default the eight identifiable ones)
-    sigma_model : fixed model-discrepancy sd, mm (default :func:`default_sigma_model`)
+    sigma_model : fixed model-discrepancy sd of the ball bar, mm (default :func:`default_sigma_model`); the probe's
+        is the rms of the ``sigma_model_probe`` prior
+    data : what the campaign's current posterior rests on: ``"ballbar"`` (default), ``"probe"`` or ``"both"``
     """
 
-    def __init__(self, campaign, candidates: list[Candidate], targets=None, *, sigma_model: float | None = None,
-                 model: str = "linear"):
+    def __init__(self, campaign, candidates: list, targets=None, *, sigma_model: float | None = None,
+                 model: str = "linear", data: str = "ballbar"):
         self.campaign = campaign
         self.model = model
+        self.data = check_data(data, campaign)
         self.candidates = list(candidates)
         self.targets = check_targets(targets)
         self.sigma_model = default_sigma_model(campaign) if sigma_model is None else float(sigma_model)
+        self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe")
         bb = campaign.ballbar
         setups = dict(bb.setups)
         mounts = dict(bb.mounts)
         for c in self.candidates:
-            setups.setdefault(c.setup.id, c.setup)
-            mounts.setdefault(c.mount.id, c.mount)
+            if isinstance(c, Candidate):
+                setups.setdefault(c.setup.id, c.setup)
+                mounts.setdefault(c.mount.id, c.mount)
         self._setups, self._mounts = setups, mounts
-        self.space = ParameterSpace(list(setups), list(mounts), SAMPLED_DEVIATIONS)
+        own_probe = campaign.probe.nuisance_terms() if data != "ballbar" else []
+        cand_probe = [t for c in self.candidates if isinstance(c, ProbeCandidate) for t in probe_terms(c, campaign)]
+        self.space = ParameterSpace(list(setups), list(mounts), SAMPLED_DEVIATIONS, own_probe + cand_probe)
         priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
         self.prior_var = np.array([p.sd for p in priors]) ** 2
         self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
@@ -173,8 +185,16 @@ class Planner:
         lik = GaussianMeanLikelihood(obs, bb.accuracy)
         self.observations = obs
         self.pooled_sd = obs.pooled_sd()
-        self.A = self._design(campaign) if len(obs) else np.zeros((0, len(self.space)))
-        self.V = lik.base_var + self.sigma_model**2
+        A, V = [np.zeros((0, len(self.space)))], [np.zeros(0)]
+        if data != "probe" and len(obs):  # the ball bar's rows first: repeats of its runs index them
+            A.append(self._design(campaign))
+            V.append(lik.base_var + self.sigma_model**2)
+        if data != "ballbar":
+            probe = (LinearProbeModel(campaign, self.space) if model == "linear"
+                     else ProbeModel(campaign, model, self.space))
+            A.append(probe.design if model == "linear" else self._jacobian(probe))
+            V.append(probe.observations.noise_variance() + self.sigma_probe**2)
+        self.A, self.V = np.vstack(A), np.concatenate(V)
         self.T = np.zeros((len(self.targets), len(self.space)))
         for i, t in enumerate(self.targets):
             for name, w in weights(t).items():
@@ -186,9 +206,15 @@ class Planner:
         """Design matrix ``(m, P)`` of ``campaign``'s runs: the linear model, or a kinematic model linearised at zero."""
         if self.model == "linear":
             return LinearModel(campaign, self.space).design
-        from ..models.kinematic import HTMModel, jacobian
+        from ..models.kinematic import HTMModel
 
-        return jacobian(HTMModel(campaign, self.model, self.space))
+        return self._jacobian(HTMModel(campaign, self.model, self.space))
+
+    @staticmethod
+    def _jacobian(model) -> np.ndarray:
+        from ..models.kinematic import jacobian
+
+        return jacobian(model)
 
     def noise_var(self, repeats: int) -> float:
         """Variance of one repeat mean of a new run, mm²."""
@@ -200,7 +226,10 @@ class Planner:
         out: list = [None] * len(candidates)
         by_length: dict[float, list[int]] = {}
         for i, c in enumerate(candidates):
-            if c.repeat_of is None:
+            if isinstance(c, ProbeCandidate):
+                A, base = probe_rows(c, self.campaign, self.space.names, SAMPLED_DEVIATIONS)
+                out[i] = (A, 1.0 / (base + self.sigma_probe**2))
+            elif c.repeat_of is None:
                 by_length.setdefault(c.length, []).append(i)
             else:
                 out[i] = self._repeat_rows(c)
@@ -286,6 +315,10 @@ class Planner:
         candidates = self.candidates if candidates is None else candidates
         rows = self.candidate_rows(candidates) if rows is None else rows
         prior_var = float(self.sigma_prior().var())
+        if self.data != "ballbar":  # the formula below holds for one scale on every row (docs/planning.md)
+            zero = np.zeros((len(candidates), max_runs))
+            return SigmaInformation(self.sigma_model, prior_var, 0.0, 0.0, zero, zero[:, 0], np.zeros(len(candidates),
+                                                                                                     dtype=int))
         scale = np.sqrt(self.prior_var)
         X0 = self.A * scale
         used = np.any(X0 != 0.0, axis=0)
@@ -293,6 +326,9 @@ class Planner:
         runs = np.arange(1, max_runs + 1)
         fisher = np.zeros((len(candidates), max_runs))
         for k, (c, (B, w)) in enumerate(zip(candidates, rows)):
+            if isinstance(c, ProbeCandidate):  # the probe's readings carry its own scale: nothing about sigma_model
+                fisher[k] = now
+                continue
             if c.repeat_of is None:
                 tr = self._trace_new_runs(c, X0, B * scale, noise=1.0 / w, runs=runs)
             else:

@@ -18,6 +18,7 @@ from .candidates import (
 )
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import realised_sd
+from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility
 
 #: tool-length differences of the sweep, mm
 SWEEP_MM = np.arange(0.0, 250.0 + 1e-9, 5.0)
@@ -107,10 +108,14 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
     si = planner.sigma_information(candidates, rows=made)
     rows = []
     for k, c in enumerate(candidates):
-        ok, why = feasibility(c, campaign)
+        probe = isinstance(c, ProbeCandidate)
+        ok, why = probe_feasibility(c, campaign) if probe else feasibility(c, campaign)
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
-        row = {"name": c.name, "kind": c.kind, "pattern": c.pattern, "setup": c.setup.id, "R_B_mm": c.setup.R_B,
-               "Z_T_mm": c.setup.Z_T, "mount": c.mount.id, "R_C_mm": c.mount.R_C, "L_B_mm": c.length,
+        where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
+                  "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else
+                 {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "mount": c.mount.id,
+                  "R_C_mm": c.mount.R_C})
+        row = {"name": c.name, "kind": c.kind, "pattern": c.pattern, **where, "L_B_mm": c.length,
                "repeats": c.repeats, "extension_mm": c.extension, "feasible": ok, "feasibility": why,
                "eig_bits": float(ev.eig_bits[k]), "informative": bool(ev.informative[k]),
                "newly_identified": ", ".join(newly), "verdict": _verdict(ok, why, bool(ev.informative[k])),
@@ -140,7 +145,8 @@ def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP
     base = campaign.primary_setup()
     cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
                        candidate_mount(campaign, pattern), campaign.ballbar.length, extension=float(e)) for e in extensions]
-    sub = Planner(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model)
+    sub = Planner(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
+                  data=planner.data)
     ev = sub.evaluate()
     rows = []
     for k, (c, e) in enumerate(zip(cands, extensions)):
@@ -160,7 +166,9 @@ def monte_carlo_check(planner: Planner, table: pd.DataFrame, *, n: int = N_CHECK
                       seed: int = 0) -> pd.DataFrame:
     """Closed-form expected sd against the Monte-Carlo realised sd for the ``n`` best new runs."""
     index = {c.name: i for i, c in enumerate(planner.candidates)}
-    picked = [r for _, r in table.iterrows() if r["feasible"] and r["kind"] != "repeats"][:n]
+    if planner.data != "ballbar":  # the check's exact posterior has one scale for all rows: the ball bar's alone
+        return pd.DataFrame()
+    picked = [r for _, r in table.iterrows() if r["feasible"] and r["kind"] not in ("repeats", "probe")][:n]
     rows = []
     for r in picked:
         mc = realised_sd(planner, index[r["name"]], n_sim=n_sim, seed=seed)
@@ -190,11 +198,14 @@ def best_measurement(campaign, target: str, *, sigma_model_um: float | None = No
 
 
 def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_model_um: float | None = None,
-         sweep_pattern: str | None = None, model: str = "linear") -> PlanResult:
-    """Rank the catalogue (plus ``extra`` user candidates) for ``targets``; sweep; check three by Monte Carlo."""
-    candidates = catalogue(campaign) + list(extra or [])
+         sweep_pattern: str | None = None, model: str = "linear", data: str = "ballbar") -> PlanResult:
+    """Rank the catalogue — ball-bar runs and, with a ``[probe]``, touch-probe runs — plus ``extra`` user candidates
+    for ``targets``, given the campaign's ``data`` (``"ballbar"``, ``"probe"``, ``"both"``); sweep the tool length;
+    check three by Monte Carlo (ball-bar data)."""
+    ballbar = [c for c in catalogue(campaign) if data != "probe" or c.repeat_of is None]
+    candidates = ballbar + probe_catalogue(campaign) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
-    planner = Planner(campaign, candidates, targets, sigma_model=sigma, model=model)
+    planner = Planner(campaign, candidates, targets, sigma_model=sigma, model=model, data=data)
     table, si = _tables(planner, candidates, campaign)
     if sweep_pattern is None:
         best = table[table["kind"] == "tool length"]
@@ -209,14 +220,22 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
              f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm",
              "feasible = the span of each linear-axis command fits the axis travel of [machine] (the campaign "
              "does not give where the C axis sits within the travels)",
-             "touch-probe measurements are not candidates: the probe data are compared with, not part of, the "
-             "likelihood"]
+             (f"touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its own "
+              f"stylus and datum terms, readings with the probe's repeatability and sigma_model_probe = "
+              f"{units.from_internal(planner.sigma_probe, 'um'):.2f} µm (rms of its prior); a B-axis run at 45° "
+              "separates alpha_XB and gamma_XB, which a B = 90° reading sees only as their sum"
+              if any(isinstance(c, ProbeCandidate) for c in candidates) else
+              "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus")]
+    if data != "ballbar":
+        notes.append(f"the current posterior rests on {'both instruments' if data == 'both' else 'the probe'}: the "
+                     "sigma_model information and the Monte-Carlo check (one scale for all data) are for ball-bar "
+                     "data only and are not given here")
     if planner.sigma_model == 0.0:
         notes.append("at sigma_model = 0 the data carry no Fisher information about sigma_model (its variance "
                      "enters as sigma_model²): the sigma_model ranking needs a positive sigma_model_um")
     return PlanResult(table, sweep, check, planner.targets, planner.target_units,
                       units.from_internal(planner.sigma_model, "um"), sweep_pattern, model, notes, campaign.source,
-                      sigma_model=sigma_summary(planner, si))
+                      sigma_model=sigma_summary(planner, si) if data == "ballbar" else {})
 
 
 def sigma_summary(planner: Planner, si: SigmaInformation) -> dict:

@@ -17,13 +17,16 @@ def comparison(summary: pd.DataFrame, ident) -> pd.DataFrame:
     Rows: the identifiable quantities, then any other deviation of the summary
     with a touch-probe value (dx_CZ, dx_BT, dz_BT).  For every reference value:
     whether it lies in the 95 % HDI, and its distance from the posterior mean in
-    posterior sd.
+    posterior sd.  The ball-bar values are the thesis equations on the offsets read
+    as the campaign reads them (its convention: the data the posterior saw); the
+    thesis' own reading of them is in ``ident.ballbar``.
     """
+    ballbar = ident.ballbar_in_convention if ident.ballbar_in_convention is not None else ident.ballbar
     rows = []
     extra = [n for n in summary.index if n in QUANTITIES and n not in IDENTIFIABLE and n in ident.probe]
     for name in [n for n in IDENTIFIABLE if n in summary.index] + extra:
         r = summary.loc[name]
-        refs = {"ballbar": ident.ballbar.get(name).display if name in ident.ballbar else None}
+        refs = {"ballbar": ballbar.get(name).display if name in ballbar else None}
         probe = ident.probe.get(name)
         refs["probe_reported"] = probe.reported_display if probe is not None and probe.reported else None
         refs["probe_recomputed"] = probe.display if probe is not None else None

@@ -36,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from ..conventions import machine_basis, parse_geometry, run_matrix
+from ..conventions import parse_geometry, run_matrix
 from ..errors import ParameterError
 from ..inference.log_posterior import LogPosterior
 from ..inference.marginal import MarginalPosterior
@@ -100,22 +100,22 @@ def _geometry_string(D: np.ndarray) -> str:
 
 
 def reread(campaign, orientation: str, y_reversed: bool):
-    """A copy of ``campaign`` whose B runs read their offsets with the plot ``orientation`` (instead of the one their
-    convention gives), the BY/BA bar reversed when ``y_reversed``; None when the campaign has no B run."""
+    """A copy of ``campaign`` whose B runs read their offsets with the plot ``orientation`` (a B-plane geometry
+    string), the BY/BA bar reversed when ``y_reversed``; None when the campaign has no B run."""
     out = copy.deepcopy(campaign)
-    bb = out.ballbar
     any_b = False
-    for run in bb.runs:
-        if run.pattern not in B_PATTERNS:
-            continue
-        any_b = True
-        G = np.linalg.solve(machine_basis(run.pattern), parse_geometry(orientation, run.pattern))  # new reading
-        if y_reversed and run.pattern in Y_BARS:
-            G = -G
-        M_old = run_matrix(run, bb)
-        D = machine_basis(run.pattern) @ (G @ M_old)  # the convention that reads the entered offsets so
-        run.convention = _geometry_string(D)
+    for run in out.ballbar.runs:
+        if run.pattern in B_PATTERNS:
+            any_b = True
+            D = parse_geometry(orientation, run.pattern)
+            run.convention = _geometry_string(-D if y_reversed and run.pattern in Y_BARS else D)
     return out if any_b else None
+
+
+def _same_reading(a, b) -> bool:
+    """Whether two campaigns read every run alike."""
+    return all(np.allclose(run_matrix(x, a.ballbar), run_matrix(y, b.ballbar)) for x, y in zip(a.ballbar.runs,
+                                                                                           b.ballbar.runs))
 
 
 def _marginal(post: LogPosterior, extra: np.ndarray | None = None, extra_var: np.ndarray | None = None,
@@ -230,11 +230,9 @@ def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
         out.append(weigh(base, label + extra, "sessions", supposes + extra, drift_arcsec=sd))
     for orientation in ORIENTATIONS:
         for reversed_y in (False, True):
-            if orientation == ORIENTATIONS[0] and not reversed_y:
-                continue  # the base itself
             moved = reread(base, orientation, reversed_y)
-            if moved is None:
-                break
+            if moved is None or _same_reading(moved, base):
+                continue  # no B run, or the campaign's own reading
             label = orientation + (", BY bar at −Y" if reversed_y else "")
             out.append(weigh(moved, label + extra, "ball-bar reading",
                              f"the B arcs drawn {orientation.replace(',', ', ')}"

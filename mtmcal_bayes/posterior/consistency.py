@@ -85,19 +85,21 @@ def target_noise(target: LogPosterior) -> np.ndarray:
     the prior mean of σ² (or as fixed)."""
     if target.fixed_sigma is not None:
         return target.likelihood.variance_at(target.fixed_sigma)
-    second = np.array([float(q.frozen().var() + q.frozen().mean() ** 2) for q in target.priors.priors[target.p:]])
+    second = np.array([q.sd**2 + q.mean**2 for q in target.priors.priors[target.p:]])
     return target.likelihood.base_var + second[target.scale_of]
 
 
-def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed: int = 0):
+def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed: int = 0, *,
+                     draws: np.ndarray | None = None):
     """Standardised residuals and group verdicts of ``target``'s observations under ``source``'s posterior.
 
     ``source`` is a :class:`~.sample.PosteriorResult`, or the :class:`LogPosterior` of a linear model (its exact
-    posterior is drawn); ``target`` the log posterior of the other data.
+    posterior is drawn); ``target`` the log posterior of the other data; ``draws`` (n, q) the source's posterior
+    draws when they are at hand (then ``n_draws`` and ``seed`` are not used).
     Returns ``(readings DataFrame, groups DataFrame)``.
     """
     post_s = source if isinstance(source, LogPosterior) else source.log_posterior
-    draws = source_draws(source, n_draws, seed)
+    draws = source_draws(source, n_draws, seed) if draws is None else draws
     shared = [n for n in target.space.names if n in post_s.space.names]
     own = [i for i, n in enumerate(target.space.names) if n not in post_s.space.names]
     theta = np.zeros((len(draws), target.p))

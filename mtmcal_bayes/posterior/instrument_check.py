@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import units
 from ..errors import ParameterError
+from ..inference.analytic import linearisation
 from ..inference.approximation import PosteriorApproximation
 from ..inference.log_posterior import SAMPLED_DEVIATIONS, LogPosterior
 from ..parameters import SCALE_LABEL
@@ -24,6 +25,7 @@ from .consistency import BROAD, Consistency, _group, instrument_consistency
 
 
 def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: LogPosterior) -> dict[str, list[str]]:
+    # ``ballbar``, ``probe``: the log posteriors of each instrument's data alone (any model)
     """``{deviation: [sentence per disagreeing group that depends on it]}``.
 
     A group depends on a deviation when the deviation moves its readings in a way its broad datum terms (prior sd
@@ -34,7 +36,7 @@ def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: 
         target = probe if g["given"] == "ball-bar" else ballbar
         model = target.forward
         rows = np.array([i for i, k in enumerate(model.observations.keys) if _group(k) == g["group"]])
-        A = model.design[rows]
+        A = linearisation(target)[0][rows]  # the design of the linear model; a kinematic model's first order
         sd = target.priors.width[: target.p]
         broad = [i for i, p in enumerate(target.space.parameters) if p.group != "deviation" and sd[i] >= BROAD]
         B = A[:, broad]
@@ -116,3 +118,28 @@ def check_instruments(campaign, *, explain: bool = True) -> InstrumentCheck:
               enumerate(fused.scales)}
     conflict = explain_conflict(campaign) if explain and not cons.groups["verdict"].eq("agree").all() else None
     return InstrumentCheck(campaign.source, cons, scales, disputed_deviations(cons, ballbar, probe), conflict)
+
+
+def blame(scales: dict[str, tuple[float, float]], priors: dict) -> str:
+    """Which instrument the fused posterior's discrepancy scales blame for a conflict, and why, in words.
+
+    ``scales``: ``{name: (mean, sd)}`` µm of the fused posterior; ``priors``: ``{name: Prior}``.  A scale whose
+    posterior mean is beyond its prior's 95 % quantile is inflated: the model cannot fit that instrument's data
+    together with the other's."""
+    high = {n: units.from_internal(float(priors[n].frozen().ppf(0.95)), "um") for n in scales}
+    inflated = [n for n, (m, _) in scales.items() if m > high[n]]
+    shown = ", ".join(f"{SCALE_LABEL[n]} {m:.2f} ± {s:.2f} µm" for n, (m, s) in scales.items())
+    if not inflated:
+        return (f"Each instrument has its own discrepancy scale ({shown}); neither is beyond its prior's 95 % "
+                "quantile: the fused posterior combines data the model fits together.")
+    if len(inflated) == len(scales):
+        return (f"Each instrument has its own discrepancy scale ({shown}); both are beyond their priors' 95 % "
+                "quantiles: the model fits neither instrument's data well, and no instrument is singled out.")
+    n = inflated[0]
+    other = next(k for k in scales if k != n)
+    return (f"Each instrument has its own discrepancy scale ({shown}). The fused posterior blames the "
+            f"{'ball bar' if n == 'sigma_model' else 'touch probe'}: its {SCALE_LABEL[n]} is beyond the prior's 95 % "
+            f"quantile ({high[n]:.1f} µm), so its data weigh less, while the "
+            f"{'touch probe' if n == 'sigma_model' else 'ball bar'}'s readings fit at {SCALE_LABEL[other]}. That "
+            "singles out the instrument whose conflicting data are fewer, not necessarily the one that is wrong: "
+            "find the cause before trusting the fused intervals (the explanations below, docs/probe.md).")

@@ -16,6 +16,7 @@ from pathlib import Path
 import pandas as pd
 
 from .. import units
+from ..conventions import reads_as_thesis
 from ..errors import MtmcalError
 from ..html_page import Page
 from ..identification import IdentificationResult, identify
@@ -29,6 +30,7 @@ from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.checks import thesis_assumption_effect
+from ..posterior.conflict import SHOWN, ConflictAnalysis, explain_conflict
 from ..posterior.conformity import (
     CONFORMITY_COLUMNS,
     conformity_table,
@@ -39,6 +41,7 @@ from ..posterior.consistency import (
     InstrumentComparison,
     compare_instruments,
 )
+from ..posterior.instrument_check import blame, disputed_deviations
 from ..posterior.loo import LooResult, loo_check
 from ..posterior.output import format_posterior, posterior_json
 from ..posterior.sample import PosteriorResult, sample_posterior
@@ -108,6 +111,8 @@ class ReportContent:
     planned: PlanResult
     instruments: InstrumentComparison | None = None  # ball bar, probe, fused: when the campaign has probe readings
     loo: LooResult | None = None  # leave-one-out consistency of the main posterior's observations
+    disputed: dict | None = None  # deviations the instruments disagree on, with the verdicts behind each
+    conflict: ConflictAnalysis | None = None  # candidate explanations, when they disagree or a run is read otherwise
 
 
 def summary_table(rep: PosteriorResult) -> pd.DataFrame:
@@ -170,13 +175,18 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
         rep.conformity = conformity_table(rep.idata, rep.summary, tol)
         say("asking the planner how to decide the undecided tolerances")
         add_suggestions(rep, campaign)
-    instruments = None
+    instruments = disputed = conflict = None
     if campaign.has_probe_readings():
         def other(d):
             say(f"sampling the posterior ({model}, {DATA_LABELS[d]}) to compare the instruments")
             return sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
                                     data=d, sigma_model=sigma_model)
         instruments = compare_instruments(campaign, {data: rep}, other)
+        disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
+                                       instruments.posteriors["probe"].log_posterior)
+        if campaign.ballbar.runs and (instruments.consistency.disagreeing or not reads_as_thesis(campaign.ballbar)):
+            say("weighing the explanations of the instruments' conflict and the readings of the B runs")
+            conflict = explain_conflict(campaign)
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:
@@ -247,6 +257,8 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             csv("instruments.csv", instruments.intervals, index=False)
             csv("consistency.csv", instruments.consistency.groups, index=False)
             csv("consistency_readings.csv", instruments.consistency.readings, index=False)
+            if conflict is not None:
+                csv("explanations.csv", conflict.table(), index=False)
         files += ["budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png"]
         csv("budget.csv", budget_table(rep.summary))
         csv("plan.csv", planned.table, index=False)
@@ -254,7 +266,8 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
         write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
         files.append("posterior.nc")
         content = ReportContent(campaign, model, rep, reports if compare_models else None, ident, missing, summary,
-                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned, instruments, loo=loo)
+                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned, instruments, loo=loo,
+                                disputed=disputed, conflict=conflict)
         page = _page(content, tmp)
         elapsed = time.perf_counter() - t0
         files.insert(0, "index.html")
@@ -319,7 +332,8 @@ def reference_table(check) -> pd.DataFrame:
                          "mean difference [sd]": check.mean_diff_sd, "sd difference [%]": check.sd_diff_pct})
 
 
-def _instruments_section(page: Page, ins: InstrumentComparison, tmp: Path) -> None:
+def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
+    ins = c.instruments
     page.section("instruments", "Ball bar and touch probe: each alone and fused")
     cons = ins.consistency
     page.paragraph(
@@ -330,13 +344,54 @@ def _instruments_section(page: Page, ins: InstrumentComparison, tmp: Path) -> No
         + " ".join(f"{g['group']} given the {g['given']}-only posterior: {g['verdict']} (χ² = {g['chi2']:.1f} on "
                    f"{g['dof']} dof, p = {g['p_value']:.2g}, largest |z| = {g['max_abs_z']:.1f} at {g['worst']})."
                    for _, g in cons.groups.iterrows()))
+    fused = ins.posteriors["both"]
+    post = fused.log_posterior
+    if post.fixed_sigma is None:
+        scales = {n: (float(fused.summary.loc[n, "mean"]), float(fused.summary.loc[n, "sd"])) for n in post.scales}
+        priors = {p.name: p for p in post.priors.priors[post.p:]}
+        page.paragraph(blame(scales, priors))
     if cons.disagreeing:
         page.paragraph("Where a group disagrees, the fused posterior combines measurements the model cannot "
-                       "reconcile: its σ_model grows to cover the conflict and its intervals are not to be trusted "
-                       "until the cause is found. " + " ".join(ins.disagreements))
+                       "reconcile: its intervals are not to be trusted until the cause is found. "
+                       + " ".join(ins.disagreements))
+    if c.disputed:
+        page.paragraph("The instruments disagree on " + ", ".join(c.disputed) + " (each moves the readings of a "
+                       "disagreeing group beyond what its datum terms absorb); compensate refuses them unless the "
+                       "disagreement is accepted (section 'Compensation').")
     page.figure(tmp / "instruments_forest.png", forest.CAPTION_DATA, "intervals by data")
     sd = ins.intervals.pivot(index="quantity", columns="data", values="sd")[list(DATA_LABELS.values())]
-    page.table(sd.rename(columns=lambda c: f"sd, {c}"), digits=2)
+    page.table(sd.rename(columns=lambda col: f"sd, {col}"), digits=2)
+    if c.conflict is not None:
+        page.paragraph(
+            "Where a conflict could come from, each candidate weighed by the marginal likelihood of the fused linear "
+            "model (both instruments, every parameter and both discrepancy scales integrated out; log Bayes factor "
+            "against the campaign as given: above 2.3 strong, above 4.6 decisive): the readings of the B runs (where "
+            "the samples at B = 0° and 90° were drawn, the BY bar's side; docs/conventions.md), the stylus length "
+            "along its axis, a difference of the B-axis angles between the two sessions. Quantities are the fused "
+            "posterior means under each candidate (″, µm). Full table: explanations.csv; the choice for the built-in "
+            "campaign: docs/thesis-notes.md.")
+        t = c.conflict.table().head(8)
+        show = ["candidate", "log_bayes_factor"] + [col for col in t.columns if col.endswith("_um")] + list(SHOWN)
+        page.table(t[show].rename(columns={"log_bayes_factor": "log BF", "alpha_XB+gamma_XB": "α_XB+γ_XB"}),
+                   digits=2, index=False)
+
+
+def _compensation_section(page: Page, c: ReportContent) -> None:
+    page.section("compensation", "Compensation")
+    base = ("mtmcal-bayes compensate rewrites X/Y/Z of an NC program so the tool point reaches the programmed points "
+            "(exact inversion of the kinematic model with the posterior mean; the residual error per block from the "
+            "posterior; docs/compensation.md). ")
+    if c.disputed:
+        page.paragraph(base + "On this campaign it refuses: the ball bar and the touch probe disagree on "
+                       + ", ".join(c.disputed) + " (section 'Ball bar and touch probe'), and a deviation with the "
+                       "wrong sign doubles the error it was meant to remove. Find the cause, or pass "
+                       "--accept-disagreement to compensate anyway (with a warning).")
+    elif c.instruments is not None:
+        page.paragraph(base + "The two instruments agree on every deviation they both measure, so it compensates "
+                       "without asking; quantities identified only through nuisance priors are named in its "
+                       "warnings.")
+    else:
+        page.paragraph(base + "This campaign has one instrument: nothing checks its deviations against a second one.")
 
 
 def budget_table(summary: pd.DataFrame) -> pd.DataFrame:
@@ -430,7 +485,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     page.figure(tmp / "forest.png", forest.CAPTION, "forest plot")
 
     if c.instruments is not None:
-        _instruments_section(page, c.instruments, tmp)
+        _instruments_section(page, c, tmp)
+    _compensation_section(page, c)
 
     page.section("ppc", "Posterior predictive check")
     page.figure(tmp / "ppc.png", ppc.CAPTION, "posterior predictive check")
