@@ -140,11 +140,16 @@ def thesis_posterior():
 
 
 def test_dz_BT_identified_only_through_nuisance_priors(thesis_posterior):
-    """Acceptance: dz_BT rests on the dRB and zT priors; the eight keep the deviation-prior verdict."""
+    """Acceptance: dz_BT rests on the dRB and zT priors; the eight keep the deviation-prior verdict.  A quantity
+    resting on nuisance priors reads ``identified`` False (SPEC §17: a script must not take it for one the data
+    identify) and ``identification`` "nuisance priors"; the deviation-prior check passes for all eight."""
     s = thesis_posterior.summary
     assert s.loc["dz_BT", "identified_through"] == "dRB, zT"
     assert s.loc["dz_BT", "nuisance_growth"] > 5
-    assert all(s.loc[n, "identified"] is True for n in EIGHT)
+    assert s.loc["dz_BT", "identified"] is False and s.loc["dz_BT", "identification"] == "nuisance priors"
+    assert all(s.loc[n, "identification"] in ("data", "nuisance priors") for n in EIGHT)
+    for n in EIGHT:
+        assert s.loc[n, "identified"] is (s.loc[n, "identification"] == "data"), n
     assert all(isinstance(s.loc[n, "identified"], bool) for n in ("dx_CZ", "dx_BT", "dz_BT"))
     for n in ("alpha_CZ", "beta_CZ", "alpha_XB", "gamma_XB"):  # the data alone
         assert s.loc[n, "identified_through"] == "" and s.loc[n, "nuisance_growth"] < 1.05

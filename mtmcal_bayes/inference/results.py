@@ -150,8 +150,10 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     s["prior_growth"] = [sens.deviation_growth.get(n, np.nan) for n in s.index]
     s["nuisance_growth"] = [sens.nuisance_growth.get(n, np.nan) for n in s.index]
     s["identified_through"] = [", ".join(sens.through[n]) if n in sens.through else None for n in s.index]
-    s["identification"] = [identification(g, t) for g, t in zip(s["prior_growth"], s["identified_through"])]
-    s["identified"] = [None if i is None else i == IDENTIFIED_BY_DATA for i in s["identification"]]
+    ident = [identification(g, t) for g, t in zip(s["prior_growth"], s["identified_through"])]
+    s["identification"] = pd.Series(ident, index=s.index, dtype=object)
+    s["identified"] = pd.Series([None if i is None else i == IDENTIFIED_BY_DATA for i in ident], index=s.index,
+                                dtype=object)
     s = s[["iso", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
            "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identification",
            "identified_through", "mcse_mean", "mcse_sd"]]

@@ -70,10 +70,11 @@ class PlanResult:
         """The plan as JSON (plan.json): ranked candidates, sweep, Monte-Carlo check, notes."""
         cands = []
         for _, r in self.table.iterrows():
+            num = lambda v: None if pd.isna(v) else float(v)  # noqa: E731  (a probe run has no Z_T, no bar)
             cands.append({
                 "rank": int(r["rank"]), "name": r["name"], "kind": r["kind"], "pattern": r["pattern"],
-                "setup": r["setup"], "R_B_mm": r["R_B_mm"], "Z_T_mm": r["Z_T_mm"], "mount": r["mount"],
-                "R_C_mm": r["R_C_mm"], "L_B_mm": r["L_B_mm"], "repeats": int(r["repeats"]),
+                "setup": r["setup"], "R_B_mm": num(r["R_B_mm"]), "Z_T_mm": num(r["Z_T_mm"]), "mount": r["mount"],
+                "R_C_mm": num(r["R_C_mm"]), "L_B_mm": num(r["L_B_mm"]), "repeats": int(r["repeats"]),
                 "feasible": bool(r["feasible"]), "feasibility": r["feasibility"], "verdict": r["verdict"],
                 "targets": {t: {"sd_before": r[f"{t} sd_before"], "sd_after": r[f"{t} sd_after"], "unit": u}
                             for t, u in zip(self.targets, self.target_units)},
