@@ -39,7 +39,7 @@ def main() -> None:
             d0, d90 = (p.split("=")[1] for p in plot.split(","))
             flip = lambda d: ("-" if d[0] == "+" else "+") + d[1]  # noqa: E731
             return {"BX": plot, "BY": f"B0={flip(d0)},B90={flip(d90)}"}
-        return name
+        return {"BX": name, "BY": name}
 
     print("| read as | deviations | flagged | share | 95 % interval | s |\n|---|---|---:|---:|---|---:|")
     for name in READINGS:

@@ -38,6 +38,7 @@ from .api import (
     fleet,
     history,
     identify,
+    instruments,
     ncgen,
     plan,
     probe_fit,
@@ -61,7 +62,7 @@ from .version import __version__
 
 __all__ = [
     "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan", "ncgen",
-    "compensate", "sbc", "history", "simulate_history", "fleet",
+    "instruments", "compensate", "sbc", "history", "simulate_history", "fleet",
     "Campaign", "Truth", "load_campaign", "parse_campaign", "save_campaign", "read_dprnt",
     "InputError", "MtmcalError", "ParameterError", "ProgressEvent",
     "identify_ballbar", "identify_probe", "fit_sphere",

@@ -20,7 +20,7 @@ from mtmcal_bayes.progress import ProgressEvent, StderrProgress
 FIG_4_30A = data_path("fig4_30a_bx_original.nc")
 DPRNT = data_path("fig5_13_dprnt_output.txt")
 COMMAND_FUNCTIONS = ["identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan",
-                     "ncgen", "compensate", "sbc", "history", "simulate_history", "fleet"]
+                     "ncgen", "instruments", "compensate", "sbc", "history", "simulate_history", "fleet"]
 
 
 @pytest.mark.parametrize("name", COMMAND_FUNCTIONS)
@@ -48,6 +48,7 @@ def _api_json(result):
     (("identify",), lambda tmp: mb.identify()),
     (("probe-fit", str(DPRNT)), lambda tmp: mb.probe_fit(DPRNT)),
     (("sensitivity",), lambda tmp: mb.sensitivity()),
+    (("instruments",), lambda tmp: mb.instruments()),
     (("sample", "--closed-form", "--sigma-model-um", "0.4"), lambda tmp: mb.closed_form(sigma_model_um=0.4)),
     (("simulate", "--truth", "{truth}"), lambda tmp: mb.simulate(truth=tmp / "truth.toml")),
     (("compensate", str(FIG_4_30A), "-o", "{out}", "--values", "ballbar"),
