@@ -120,6 +120,15 @@ def parse_geometry(text: str, pattern: str) -> np.ndarray:
     return np.vstack([_unit(d0, pattern), _unit(d90, pattern)])
 
 
+def geometry_string(D: np.ndarray, pattern: str) -> str:
+    """The geometry string of plot directions ``D`` (rows: 0°, 90°; each along one axis of the pattern's plane):
+    the inverse of :func:`parse_geometry`."""
+    axes = plane_axes(pattern)
+    angle = "B" if pattern in B_PATTERNS else "C"
+    word = lambda v: ("+" if v[int(np.argmax(np.abs(v)))] > 0 else "-") + axes[int(np.argmax(np.abs(v)))]  # noqa: E731
+    return f"{angle}0={word(D[0])},{angle}90={word(D[1])}"
+
+
 def directions(convention: str, pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float,
                cr_geometry: str = "RC-LB") -> np.ndarray:
     """``D`` (2, 2) of ``convention`` for one run of ``pattern`` (lever arms in mm)."""

@@ -36,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from ..conventions import parse_geometry, run_matrix
+from ..conventions import geometry_string, parse_geometry, run_matrix
 from ..errors import ParameterError
 from ..inference.log_posterior import LogPosterior
 from ..inference.marginal import MarginalPosterior
@@ -93,12 +93,6 @@ class Candidate:
     consistency: pd.DataFrame | None = None
 
 
-def _geometry_string(D: np.ndarray) -> str:
-    """The B-plane geometry string of directions ``D`` (rows: B = 0°, B = 90°; columns X, Z)."""
-    word = lambda v: ("+" if v[np.argmax(np.abs(v))] > 0 else "-") + "XZ"[int(np.argmax(np.abs(v)))]  # noqa: E731
-    return f"B0={word(D[0])},B90={word(D[1])}"
-
-
 def reread(campaign, orientation: str, y_reversed: bool):
     """A copy of ``campaign`` whose B runs read their offsets with the plot ``orientation`` (a B-plane geometry
     string), the BY/BA bar reversed when ``y_reversed``; None when the campaign has no B run."""
@@ -108,7 +102,7 @@ def reread(campaign, orientation: str, y_reversed: bool):
         if run.pattern in B_PATTERNS:
             any_b = True
             D = parse_geometry(orientation, run.pattern)
-            run.convention = _geometry_string(-D if y_reversed and run.pattern in Y_BARS else D)
+            run.convention = geometry_string(-D if y_reversed and run.pattern in Y_BARS else D, run.pattern)
     return out if any_b else None
 
 

@@ -64,7 +64,8 @@ class Consistency:
         return list(self.groups.loc[self.groups["verdict"] == "disagree", "group"])
 
 
-def _group(key) -> str:
+def reading_group(key) -> str:
+    """The reading group of an observation key: a probe run (of one stylus) or a ball-bar run."""
     return key.group if isinstance(key, ProbeKey) else f"ball bar {key.pattern}@{key.setup}/{key.mount}"
 
 
@@ -117,7 +118,7 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
     keys = model.observations.keys
     groups = {}
     for j, k in enumerate(keys):
-        groups.setdefault(_group(k), []).append(j)
+        groups.setdefault(reading_group(k), []).append(j)
     rows, verdicts = [], []
     given = "ball-bar" if post_s.data == "ballbar" else ("probe" if post_s.data == "probe" else "fused")
     for name, idx in groups.items():

@@ -21,12 +21,12 @@ from ..inference.approximation import PosteriorApproximation
 from ..inference.log_posterior import SAMPLED_DEVIATIONS, LogPosterior
 from ..parameters import SCALE_LABEL
 from .conflict import ConflictAnalysis, explain_conflict
-from .consistency import BROAD, Consistency, _group, instrument_consistency
+from .consistency import BROAD, Consistency, instrument_consistency, reading_group
 
 
 def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: LogPosterior) -> dict[str, list[str]]:
-    # ``ballbar``, ``probe``: the log posteriors of each instrument's data alone (any model)
-    """``{deviation: [sentence per disagreeing group that depends on it]}``.
+    """``{deviation: [sentence per disagreeing group that depends on it]}``; ``ballbar``, ``probe``: the log
+    posteriors of each instrument's data alone (any model: a kinematic one is linearised).
 
     A group depends on a deviation when the deviation moves its readings in a way its broad datum terms (prior sd
     ≥ 1 mm, profiled out by the check) cannot absorb: the deviation's column of the target's linear design,
@@ -35,7 +35,7 @@ def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: 
     for _, g in consistency.groups[consistency.groups["verdict"] == "disagree"].iterrows():
         target = probe if g["given"] == "ball-bar" else ballbar
         model = target.forward
-        rows = np.array([i for i, k in enumerate(model.observations.keys) if _group(k) == g["group"]])
+        rows = np.array([i for i, k in enumerate(model.observations.keys) if reading_group(k) == g["group"]])
         A = linearisation(target)[0][rows]  # the design of the linear model; a kinematic model's first order
         sd = target.priors.width[: target.p]
         broad = [i for i, p in enumerate(target.space.parameters) if p.group != "deviation" and sd[i] >= BROAD]

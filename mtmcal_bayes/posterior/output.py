@@ -123,6 +123,7 @@ def gum_block(s) -> str:
 
 #: short column heads of the budget table
 BUDGET_HEADS = {"repeatability": "repeat", "instrument": "instr.", "probe readings": "probe", "sigma_model": "σ_model",
+                "sigma_model_probe": "σ_probe",
                 "sigma_model_uncertainty": "σ unknown", "prior:deviations": "dev.prior", "prior:T-ball centring": "T-ball",
                 "prior:dRB": "dRB", "prior:W-ball clamping": "W-ball", "prior:stylus centring": "stylus",
                 "prior:dRS": "dRS", "prior:rS": "rS", "prior:sphere placement": "sphere", "prior:reading datum": "datum"}

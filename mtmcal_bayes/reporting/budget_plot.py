@@ -10,19 +10,19 @@ from matplotlib.patches import Patch
 from .. import units
 from ..figure_style import COLOURS, label, new_figure, symbol
 from ..inference.budget import MEANING, linearisation_point, sd_against_sigma
-from ..parameters import IDENTIFIABLE
+from ..parameters import IDENTIFIABLE, SCALE_LABEL
 
 #: colour of each budget source (Okabe–Ito and greys; priors in warm colours, noise in cool ones)
 SOURCE_COLOURS = {"repeatability": "#56B4E9", "instrument": "#0072B2", "probe readings": "#009E73",
-                  "sigma_model": "#E69F00", "sigma_model_uncertainty": "#F0E442",
+                  "sigma_model": "#E69F00", "sigma_model_probe": "#B8860B", "sigma_model_uncertainty": "#F0E442",
                   "prior:deviations": "#999999", "prior:T-ball centring": "#D55E00", "prior:dRB": "#CC79A7",
                   "prior:W-ball clamping": "#882255", "prior:stylus centring": "#117733", "prior:dRS": "#44AA99",
                   "prior:rS": "#AA4499", "prior:sphere placement": "#332288", "prior:reading datum": "#DDDDDD"}
 
 BUDGET_CAPTION = (
     "Uncertainty budget: the share of each quantity's posterior variance that comes from each source — the "
-    "repeatability and accuracy of the measurements, the model-discrepancy scale σ_model, not knowing σ_model "
-    "(law of total variance), and the priors (of the deviations, the T-ball centring, the tool length dRB, the "
+    "repeatability and accuracy of the measurements, the model-discrepancy scale σ_model (with touch-probe data: "
+    "each instrument's own), not knowing σ_model (law of total variance), and the priors (of the deviations, the T-ball centring, the tool length dRB, the "
     "W-ball clamping). Exact for the linear model at each σ_model (Σ = Σ_g ΣP_gΣ + Σ_k K R_k Kᵀ), averaged over "
     "σ_model's posterior; kinematic models linearised at the posterior mean. Table: summary.csv, budget:* columns."
 )
@@ -62,12 +62,13 @@ def budget_figure(summary: pd.DataFrame):
 
 
 def sigma_contraction(rep) -> float:
-    """How much the data narrowed sigma_model: 1 − posterior/prior variance, from the draws (nan when fixed)."""
+    """How much the data narrowed the first discrepancy scale (the ball bar's sigma_model, else the probe's):
+    1 − posterior/prior variance, from the draws (nan when fixed)."""
     post = rep.log_posterior
     if post.fixed_sigma is not None:
         return float("nan")
-    draws = units.to_internal(np.asarray(rep.idata.posterior["sigma_model"], float).ravel(), "um")
-    return float(1.0 - np.var(draws) / post.priors.priors[-1].frozen().var())
+    draws = units.to_internal(np.asarray(rep.idata.posterior[post.scales[0]], float).ravel(), "um")
+    return float(1.0 - np.var(draws) / post.priors.priors[post.p].sd ** 2)
 
 
 def sigma_figure(rep, names=IDENTIFIABLE):
@@ -92,11 +93,12 @@ def sigma_figure(rep, names=IDENTIFIABLE):
             ax.set_xlabel("σ_model fixed at [µm]", fontsize=8)
     ax = fig.add_subplot(gs[2, :])
     xs = np.linspace(0.0, 4.0, 200)
+    scale = post.scales[0]  # with both instruments every scale is fixed at the abscissa; the ball bar's is shown
     if post.fixed_sigma is None:
-        prior = post.priors.priors[-1]
+        prior = post.priors.priors[post.p]
         pdf = prior.frozen().pdf(units.to_internal(xs, "um")) * units.to_internal(1.0, "um")
         ax.plot(xs, pdf, color=COLOURS["prior"], lw=2, label=f"prior ({prior.describe()})")
-        draws = np.asarray(rep.idata.posterior["sigma_model"]).ravel()
+        draws = np.asarray(rep.idata.posterior[scale]).ravel()
         ax.hist(draws, bins=np.linspace(0, max(4.0, float(np.quantile(draws, 0.995))), 50), density=True,
                 color=COLOURS["posterior"], alpha=0.45, label="posterior")
         ax.text(0.99, 0.9, f"contraction 1 − var_post/var_prior = {sigma_contraction(rep):.2f}", transform=ax.transAxes,
@@ -105,7 +107,7 @@ def sigma_figure(rep, names=IDENTIFIABLE):
         ax.text(0.5, 0.5, f"σ_model fixed at {here:g} µm (--sigma-model-um)", transform=ax.transAxes, ha="center")
     ax.axvline(here, color="0.3", ls="--", lw=1)
     ax.set_xlim(0, 4.0)
-    ax.set_xlabel("σ_model [µm]")
+    ax.set_xlabel(f"{SCALE_LABEL[scale]} [µm]")
     ax.set_ylabel("density [1/µm]", fontsize=9)
     ax.legend(fontsize=9, loc="upper center")
     fig.tight_layout()
