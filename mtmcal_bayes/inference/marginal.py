@@ -25,6 +25,7 @@ independence Metropolis–Hastings proposal.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -38,6 +39,8 @@ GRID_2D = 48
 SCAN_FROM, SCAN_TO = 1e-3, 10.0
 #: the grid covers σ where the log posterior is within this many nats of its maximum
 DROP = 30.0
+#: points of each log-spaced scan of :func:`sigma_range` (about 11 per factor of e over its seven decades)
+SCAN_POINTS = 160
 
 
 def _as_list(value, s: int) -> list:
@@ -123,11 +126,26 @@ class MarginalPosterior:
         S = S[None] + V[:, :, None] * np.eye(m)[None]  # (G, m, m)
         self.S_chol = np.linalg.cholesky(S)
         self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
-        AtVi = A.T[None] / V[:, None, :]  # (G, P, m): Aᵀ V⁻¹ of every cell (batched matrix products, not einsum)
-        prec = np.diag(1.0 / self.prior_var)[None] + AtVi @ A
-        self.cov = np.linalg.inv(prec)  # (G, P, P)
-        self.cov = 0.5 * (self.cov + np.swapaxes(self.cov, 1, 2))
-        self.gain = self.cov @ AtVi  # (G, P, m): mean = μ0 + gain @ residual
+
+    @functools.cached_property
+    def _posterior_cells(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's posterior covariance ``(G, P, P)`` and gain ``(G, P, m)`` (mean = μ0 + gain @ residual): made
+        when first needed (draws, means), not for the evidence or the moments of a few targets."""
+        AtVi = self.A.T[None] / self.V[:, None, :]  # (G, P, m): Aᵀ V⁻¹ of every cell (batched products, not einsum)
+        prec = np.diag(1.0 / self.prior_var)[None] + AtVi @ self.A
+        cov = np.linalg.inv(prec)
+        cov = 0.5 * (cov + np.swapaxes(cov, 1, 2))
+        return cov, cov @ AtVi
+
+    @property
+    def cov(self) -> np.ndarray:
+        """Posterior covariance of θ in each cell, ``(G, P, P)``."""
+        return self._posterior_cells[0]
+
+    @property
+    def gain(self) -> np.ndarray:
+        """``(G, P, m)``: the posterior mean of θ in each cell is ``μ0 + gain @ residual``."""
+        return self._posterior_cells[1]
 
     def _residual(self, y: np.ndarray) -> np.ndarray:
         """Data minus the prediction at the prior mean, ``(N, m)``."""
@@ -162,10 +180,17 @@ class MarginalPosterior:
         return self.prior_mean + np.einsum("gpm,nm->gnp", self.gain, self._residual(y))
 
     def target_moments(self, y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Posterior mean and sd of the targets ``T @ θ``, each ``(N, t)``, for data ``(N, m)``."""
+        """Posterior mean and sd of the targets ``T @ θ``, each ``(N, t)``, for data ``(N, m)``.
+
+        In the data's space, which costs the ``t`` targets rather than the ``P`` parameters: with ``K = Σ0 Aᵀ``
+        and ``S`` a cell's prior predictive covariance, ``E[Tθ] = Tμ0 + T K S⁻¹ r`` and
+        ``Var[Tθ] = T Σ0 Tᵀ − T K S⁻¹ Kᵀ Tᵀ`` (the same as from the cell's posterior of θ; a test holds them equal)."""
         w = self.weights(y)  # (G, N)
-        mean_g = np.einsum("tp,gnp->gnt", T, self.means(y))  # (G, N, t)
-        var_g = np.einsum("tp,gpq,tq->gt", T, self.cov, T)  # (G, t)
+        TK = (T * self.prior_var) @ self.A.T  # (t, m)
+        X = np.linalg.solve(self.S_chol, np.broadcast_to(TK.T, (len(self.S_chol),) + TK.T.shape))  # (G, m, t): L⁻¹ KᵀTᵀ
+        Z = np.linalg.solve(self.S_chol, self._residual(y).T[None])  # (G, m, N): L⁻¹ r
+        mean_g = (T @ self.prior_mean)[None, None, :] + np.swapaxes(Z, 1, 2) @ X  # (G, N, t)
+        var_g = np.sum((T * self.prior_var) * T, axis=1)[None] - np.sum(X**2, axis=1)  # (G, t)
         mean = np.einsum("gn,gnt->nt", w, mean_g)
         second = np.einsum("gn,gnt->nt", w, mean_g**2 + var_g[:, None, :])
         return mean, np.sqrt(np.maximum(second - mean**2, 0.0))
@@ -209,7 +234,7 @@ def sigma_range(A: np.ndarray, base_var: np.ndarray, prior_var: np.ndarray, sigm
     S0 = (A * prior_var) @ A.T
     prior_hi = [float(p.ppf(0.99999)) for p in priors]
     spread = float(np.sqrt(np.mean(r**2)))
-    scans = [np.geomspace(hi * SCAN_FROM, max(hi, 10.0 * spread) * SCAN_TO, 400) for hi in prior_hi]
+    scans = [np.geomspace(hi * SCAN_FROM, max(hi, 10.0 * spread) * SCAN_TO, SCAN_POINTS) for hi in prior_hi]
 
     def log_post(sig: np.ndarray) -> np.ndarray:  # (N, s) -> (N,)
         V = base_var[None] + sig[:, groups] ** 2

@@ -205,7 +205,8 @@ def _consistency(c: Candidate) -> pd.DataFrame:
 
 def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
     """Weigh the candidate explanations of a conflict between the instruments of ``campaign`` (module docstring);
-    the consistency check is run for the campaign as given and the ``consistency_of`` best candidates."""
+    the consistency check is run for the campaign as given and the ``consistency_of`` best candidates (none when
+    0)."""
     if not campaign.has_probe_readings():
         raise ParameterError("campaign", f"{campaign.source} has no touch-probe readings: there is no second "
                              "instrument to weigh")
@@ -232,6 +233,7 @@ def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
                              f"the B arcs drawn {orientation.replace(',', ', ')}"
                              + (", the BY/BA bar on the −Y side of the W ball" if reversed_y else "") + extra))
     out.sort(key=lambda c: -c.log_evidence)
-    for c in [given] + [c for c in out if c is not given and c.kind != "sessions"][:consistency_of]:
+    checked = [given] + [c for c in out if c is not given and c.kind != "sessions"][:consistency_of]
+    for c in checked if consistency_of else []:
         c.consistency = _consistency(c)  # (a session difference changes the model, not a campaign: not checked)
     return ConflictAnalysis(given, out)
