@@ -186,12 +186,12 @@ class ConflictAnalysis:
         lines = ["Where the instruments' conflict could come from (fused linear model; log Bayes factor against the "
                  "campaign as given; σ posterior means; ″ and µm):"]
         scale_cols = [c for c in t.columns if c.endswith("_um")]
-        head = (f"  {'candidate':34s} {'log BF':>7s} " + " ".join(f"{c[:-3].replace('sigma_model', 'σ'):>8s}"
+        head = (f"  {'candidate':50s} {'log BF':>7s} " + " ".join(f"{c[:-3].replace('sigma_model', 'σ'):>8s}"
                                                                    for c in scale_cols)
                 + " " + " ".join(f"{q.replace('alpha_XB+gamma_XB', 'α+γ XB'):>9s}" for q in SHOWN))
         lines.append(head)
         for _, r in t.iterrows():
-            lines.append(f"  {r['candidate'][:34]:34s} {r['log_bayes_factor']:7.1f} "
+            lines.append(f"  {r['candidate'][:50]:50s} {r['log_bayes_factor']:7.1f} "
                          + " ".join(f"{r[c]:8.2f}" for c in scale_cols) + " "
                          + " ".join(f"{r[q]:9.2f}" for q in SHOWN))
         return "\n".join(lines)
