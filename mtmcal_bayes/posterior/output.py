@@ -133,8 +133,9 @@ def budget_block(s, result) -> str:
     """The uncertainty budget as a console table: % of each quantity's posterior variance by source."""
     cols = [c for c in s.columns if c.startswith("budget:") and (s[c].fillna(0) >= 0.005).any()]
     post = result.log_posterior
-    how = (f"sigma_model fixed at {units.from_internal(post.fixed_sigma, 'um'):g} µm" if post.fixed_sigma is not None
-           else "averaged over the posterior of sigma_model, law of total variance")
+    scales = " and ".join(post.scales)
+    how = (f"{scales} fixed at {units.from_internal(post.fixed_sigma, 'um'):g} µm" if post.fixed_sigma is not None
+           else f"averaged over the posterior of {scales}, law of total variance")
     lin = "" if post.model_name == "linear" else f"; {post.model_name} linearised at the posterior mean"
     heads = [BUDGET_HEADS.get(c.split(":", 1)[1], c.split(":", 1)[1]) for c in cols]
     lines = [f"Uncertainty budget: % of each posterior variance by source ({how}{lin})",

@@ -67,6 +67,7 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
         lo, hi = min([lo, mean - 4 * sd] + near), max([hi, mean + 4 * sd] + near)
         pad = 0.04 * (hi - lo)
         xlim = (lo - pad, hi + pad)
+        beyond = {True: 0, False: 0}  # off-scale values already drawn on each side: the next one further in
         for key, st in _REF_STYLE.items():
             v = refs[key][i] if refs else None
             if v is None:
@@ -75,11 +76,13 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
                 ax.plot(v, 0.0, color=COLOURS[key], ls="none", **st)
             else:
                 right = v > xlim[1]
-                ax.annotate(f"{v:.0f}", xy=(xlim[1] if right else xlim[0], 0.0), xytext=(-30 if right else 30, 0),
+                row = -0.45 * beyond[right]  # a second one on the same side a row lower
+                beyond[right] += 1
+                ax.annotate(f"{v:.0f}", xy=(xlim[1] if right else xlim[0], row), xytext=(-30 if right else 30, 0),
                             textcoords="offset points", ha="center", va="center", fontsize=8, color=COLOURS[key],
                             arrowprops=dict(arrowstyle="->", color=COLOURS[key]))
         ax.set_xlim(xlim)
-        ax.set_ylim(-0.6, ys[0] + 0.6)
+        ax.set_ylim(-0.6 - 0.45 * max(0, max(beyond.values()) - 1), ys[0] + 0.6)
         ax.set_yticks([])
         iso = iso_mathtext(n)
         ax.set_ylabel(f"{symbol(n)}\n{iso + chr(10) if iso else ''}[{unit_symbol(n)}]", rotation=0, ha="right",
