@@ -4,7 +4,8 @@ The package reads a calibration campaign (ball-bar eccentricities, touch-probe
 centres; :func:`load_campaign`, the thesis campaign built in), reproduces the
 thesis' deterministic identification (:func:`identify`), samples the posterior
 of the deviations and nuisance offsets (:func:`sample`), writes a report
-(:func:`report`), plans the next measurement (:func:`plan`), compensates NC
+(:func:`report`), plans the next measurement (:func:`plan`), designs whole campaigns and
+guides their measuring (:func:`design`, :func:`next_run`), compensates NC
 programs (:func:`compensate`) and checks its own inference (:func:`sbc`).
 Each of these is the function a command of ``mtmcal-bayes`` calls
 (:mod:`mtmcal_bayes.api`); they return objects with ``to_text()`` and
@@ -35,11 +36,13 @@ from . import units
 from .api import (
     closed_form,
     compensate,
+    design,
     fleet,
     history,
     identify,
     instruments,
     ncgen,
+    next_run,
     plan,
     probe_fit,
     report,
@@ -62,7 +65,7 @@ from .version import __version__
 
 __all__ = [
     "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan", "ncgen",
-    "instruments", "compensate", "sbc", "history", "simulate_history", "fleet",
+    "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design", "next_run",
     "Campaign", "Truth", "load_campaign", "parse_campaign", "save_campaign", "read_dprnt",
     "InputError", "MtmcalError", "ParameterError", "ProgressEvent",
     "identify_ballbar", "identify_probe", "fit_sphere",

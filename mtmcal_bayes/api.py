@@ -28,6 +28,7 @@ if TYPE_CHECKING:  # the result types, for the signatures only
     from .histories import HistoryResult
     from .identification import IdentificationResult, ProbeFit
     from .planning import PlanResult
+    from .planning.design_output import DesignResult, NextResult
     from .posterior import ClosedFormResult, PosteriorResult
     from .posterior.instrument_check import InstrumentCheck
     from .reporting import Report
@@ -42,9 +43,15 @@ MAX_STEPS = 20_000
 TARGET_ESS = 1000.0
 
 
-def campaign_of(campaign: CampaignLike) -> Campaign:
-    """A :class:`Campaign` from a campaign, a path to a campaign TOML, or None (the built-in thesis campaign)."""
-    return campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
+def campaign_of(campaign: CampaignLike, *, measured: bool = False) -> Campaign:
+    """A :class:`Campaign` from a campaign, a path to a campaign TOML, or None (the built-in thesis campaign).
+
+    ``measured``: the command needs data, so a campaign without measured ball-bar runs (only planned ones, or
+    none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``."""
+    c = campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
+    if measured:
+        c.require_measured_runs()
+    return c
 
 
 def tolerances_of(tolerances) -> dict | None:
@@ -80,7 +87,7 @@ def identify(campaign: CampaignLike = None) -> IdentificationResult:
     each value beside the published one."""
     from .identification import identify as identify_campaign
 
-    return identify_campaign(campaign_of(campaign))
+    return identify_campaign(campaign_of(campaign, measured=True))
 
 
 def probe_fit(path, *, stylus_radius_mm: float | None = None) -> ProbeFit:
@@ -140,7 +147,7 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     from .posterior import sample_posterior
     from .reporting.decisions import add_suggestions
 
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, measured=True)
     check_model(model)
     check_data(data, c)
     _writable(output, "posterior")
@@ -160,7 +167,8 @@ def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, f
     """The instant Gaussian posterior of the eight quantities: linear model, sigma_model fixed (µm)."""
     from .posterior import closed_form as gaussian
 
-    return gaussian(campaign_of(campaign), sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT, model=model)
+    return gaussian(campaign_of(campaign, measured=True), sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT,
+                    model=model)
 
 
 def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,
@@ -180,7 +188,7 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     from .models import check_data, check_model
     from .reporting import build_report
 
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, measured=True)
     check_model(model)
     check_data(data, c)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
@@ -206,7 +214,7 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     from .planning import plan as rank
     from .planning import read_candidates
 
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, measured=True)
     check_model(model)
     check_data(data, c)
     _writable(output, "plan")
@@ -248,7 +256,7 @@ def instruments(campaign: CampaignLike = None, *, explain: bool = True) -> Instr
     marginal likelihood (readings of the B patterns, the stylus length, a difference between the sessions)."""
     from .posterior.instrument_check import check_instruments
 
-    return check_instruments(campaign_of(campaign), explain=explain)
+    return check_instruments(campaign_of(campaign, measured=True), explain=explain)
 
 
 def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",
@@ -272,7 +280,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     from .inference.log_posterior import SAMPLED_DEVIATIONS
     from .io.gcode import read_program
 
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, measured=True)
     parsed = read_program(program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
@@ -305,7 +313,7 @@ def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", s
 
     if workers is not None and scheduler is not None:
         raise ParameterError("workers", "sets the size of a local cluster; a scheduler's cluster has its own workers")
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, measured=True)
     check_data(data, c)
     _writable(output, "SBC")
     settings = SBCSettings(n=n, model=model, sampler=sampler, n_ranked=n_ranked, max_steps=max_steps,
@@ -335,7 +343,7 @@ def history_campaigns(paths) -> list[Campaign]:
             files += found
         else:
             files.append(item)
-    return [f if isinstance(f, Campaign) else load_campaign(f) for f in files]
+    return [campaign_of(f, measured=True) for f in files]
 
 
 def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None) -> HistoryResult:
@@ -440,5 +448,92 @@ def fleet(directory, *, scheduler: str | None = None, workers: int | None = None
     return result
 
 
+def _time_items(c: Campaign, times) -> dict:
+    """The time model's items: the campaign's ``[design.times]``, then ``times`` (a ``--times`` file, a dict or a
+    TimeModel) over them, each checked."""
+    from dataclasses import asdict
+
+    from .io.times_reader import checked_times, read_times_table
+    from .machine_time import TimeModel
+
+    items = checked_times(dict(c.design.times), c.source, "design.times") if c.design and c.design.times else {}
+    if isinstance(times, TimeModel):
+        return {**items, **{k: v for k, v in asdict(times).items() if v is not None}}
+    if isinstance(times, dict):
+        return {**items, **checked_times(times, "times", "")}
+    if times is not None:
+        return {**items, **read_times_table(times)}
+    return items
+
+
+def _program(pattern: str, campaign, setup: str, mount: str) -> str:
+    from .compensation import measuring_program
+
+    return measuring_program(pattern, campaign, setup=setup, mount=mount, feed=campaign.ballbar.feed_mm_per_min)
+
+
+def _user_candidates(candidates, c: Campaign) -> list:
+    from .planning import read_candidates
+
+    return read_candidates(candidates, c) if isinstance(candidates, (str, os.PathLike)) else list(candidates or [])
+
+
+def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolerances=None,
+           budget_min: float | None = None, contraction: float | None = 0.5, candidates=None, times=None,
+           seed: int = 0, model: str = "linear", output=None) -> DesignResult:
+    """Design the whole campaign: the ball-bar runs, in measuring order, that reach ``targets`` in the fewest
+    machine minutes, or that improve most within ``budget_min`` (docs/design.md).
+
+    The campaign may hold measured runs (the design extends it) or none (a new machine: its set-ups and mounts).
+    ``targets`` {quantity: sd in ″ or µm}; ``tolerances`` a ``[tolerances]`` file or dict (targets at which the
+    ISO 14253-1 decision is expected, where ``targets`` gives none); ``contraction`` σ_model's (None: none);
+    ``candidates`` a TOML file of your own ``[[candidate]]`` tables, added to the catalogue; ``times`` a TOML
+    file (or dict) overriding the machine-time model.  ``output`` receives design.json, campaign.toml (the
+    designed runs as planned runs, ready to fill in), programs/NN_<pattern>.nc and design.html.
+    """
+    from .machine_time import TimeModel
+    from .models import check_model
+    from .planning.design_make import make_design
+    from .planning.design_output import DesignResult, write_design
+    from .planning.next_run import planned_candidates
+
+    c = campaign_of(campaign)
+    check_model(model)
+    _writable(output, "design")
+    items = _time_items(c, times)
+    extra = planned_candidates(c) + _user_candidates(candidates, c)
+    d = make_design(c, targets=targets, tolerances=tolerances_of(tolerances), contraction=contraction,
+                    budget_min=budget_min, candidates=extra, time_model=TimeModel(**items), model=model, seed=seed,
+                    candidates_source=str(candidates) if isinstance(candidates, (str, os.PathLike)) else "candidates")
+    if output is None:
+        return DesignResult(d)
+    files, path = write_design(d, output, program=_program, times=items)
+    return DesignResult(d, str(output), files, path)
+
+
+def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, contraction: float | None = None,
+             budget_min: float | None = None, candidates=None, times=None, seed: int = 0, model: str = "linear",
+             output=None) -> NextResult:
+    """On a partly measured designed campaign: the next run to measure (the rest re-planned from what is measured)
+    or "stop: every target reached" (docs/design.md).  Targets, contraction, budget and times default to the
+    campaign's ``[design]``; ``output`` receives the re-planned campaign and programs."""
+    from .machine_time import TimeModel
+    from .models import check_model
+    from .planning.design_output import NextResult, write_next
+    from .planning.next_run import next_step
+
+    c = campaign_of(campaign)
+    check_model(model)
+    _writable(output, "next")
+    items = _time_items(c, times)
+    step = next_step(c, targets=targets, contraction=contraction, budget_min=budget_min,
+                     time_model=TimeModel(**items), candidates=_user_candidates(candidates, c), model=model, seed=seed)
+    if output is None:
+        return NextResult(step)
+    files, program = write_next(step, output, program=_program, times=items)
+    return NextResult(step, str(output), files, program)
+
+
 __all__ = ["campaign_of", "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report",
-           "plan", "ncgen", "instruments", "compensate", "sbc", "history", "simulate_history", "fleet"]
+           "plan", "ncgen", "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design",
+           "next_run"]

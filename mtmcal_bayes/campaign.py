@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from . import units
+from .errors import InputError
 from .patterns import B_PATTERNS, C_PATTERNS
 
 
@@ -70,6 +71,37 @@ class Run:
 
 
 @dataclass
+class PlannedRun:
+    """A ball-bar run planned but not yet measured (``planned = true`` in the file, docs/campaign-format.md):
+    where and how often to measure, without data.  ``repeats`` is the number of repeats planned; ``minutes``
+    the machine time expected for it, ``why`` the planner's reason, ``order`` its place in the measuring order
+    (as given in the file), ``length`` the bar length, mm, when it differs from the campaign's (else None)."""
+
+    pattern: str
+    setup: str
+    mount: str
+    repeats: int
+    convention: str | None = None  # how its offsets will be read (conventions.py); None: the campaign's
+    minutes: float | None = None
+    why: str = ""
+    order: int | None = None
+    length: float | None = None  # bar length, mm, when not the campaign's [ballbar] length_mm
+
+    @property
+    def label(self) -> str:
+        return f"{self.pattern}@{self.setup}/{self.mount}"
+
+    def describe(self) -> str:
+        """``BX@RB1/B, 3 repeats`` with the bar length, the planned minutes and the reason where given."""
+        text = f"{self.label}, {self.repeats} repeat{'s' if self.repeats != 1 else ''}"
+        if self.length is not None:
+            text += f", bar {self.length:g} mm"
+        if self.minutes is not None:
+            text += f", ~{self.minutes:g} min"
+        return text + (f" ({self.why})" if self.why else "")
+
+
+@dataclass
 class Ballbar:
     length: float  # L_B, mm
     accuracy: float  # instrument accuracy, mm
@@ -80,6 +112,7 @@ class Ballbar:
     runs: list[Run] = field(default_factory=list)
     cr_geometry: str = "RC-LB"  # T ball of CR at radius R_C − L_B (Table 2.3) or R_C + L_B (Fig 2.6)
     convention: str = "thesis"  # how the runs' offsets were read (conventions.py), unless a run says otherwise
+    planned: list[PlannedRun] = field(default_factory=list)  # runs without data yet, in measuring order
 
 
 @dataclass
@@ -220,6 +253,20 @@ def tolerance_text(low, high, unit: str) -> str:
 
 
 @dataclass
+class DesignGoal:
+    """What a campaign is designed for (``[design]``, SPEC §16): ``targets`` the standard uncertainty each quantity
+    should reach, in display units (″ for angles, µm for lengths: ``parameters.QUANTITIES[name].unit``);
+    ``contraction`` the share by which σ_model's uncertainty should shrink (0 < c < 1; None: the planner's
+    default); ``budget_min`` the machine minutes available (None: no limit); ``times`` overrides of the
+    machine-time model, minutes by name (validated by the planner)."""
+
+    targets: dict[str, float] = field(default_factory=dict)
+    contraction: float | None = None
+    budget_min: float | None = None
+    times: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
 class Campaign:
     machine: Machine
     ballbar: Ballbar
@@ -232,6 +279,35 @@ class Campaign:
     tolerances: dict[str, Tolerance] = field(default_factory=dict)  # by thesis name
     date: datetime.datetime | None = None  # when the campaign was measured (a TOML date is taken at 00:00)
     temperature_C: float | None = None  # workshop temperature during the campaign, °C
+    design: DesignGoal | None = None  # what the campaign was designed for ([design]), if it was
+
+    def lacking_data(self) -> list[str]:
+        """One line per planned run, in measuring order: ``"1. BX@RB1/B, 3 repeats (why)"``."""
+        return [f"{k}. {run.describe()}" for k, run in enumerate(self.ballbar.planned, start=1)]
+
+    def lacking_data_note(self) -> str:
+        """One sentence naming the planned runs that still lack data ("" when none is planned)."""
+        planned = self.ballbar.planned
+        if not planned:
+            return ""
+        n = len(planned)
+        return (f"{n} planned run{'s' if n != 1 else ''} still lack{'s' if n == 1 else ''} data and "
+                f"{'are' if n != 1 else 'is'} not used: " + "; ".join(self.lacking_data()))
+
+    def require_measured_runs(self) -> None:
+        """An :class:`~mtmcal_bayes.errors.InputError` (the file, key ``ballbar.runs``) when the campaign has no
+        measured ball-bar run: a campaign designed but not yet measured, or a machine with set-ups only."""
+        if self.ballbar.runs:
+            return
+        n = len(self.ballbar.planned)
+        if n:
+            msg = (f"no measured runs: {n} planned run{'s' if n != 1 else ''} lack{'s' if n == 1 else ''} data "
+                   f"({', '.join(r.label for r in self.ballbar.planned)}); fill them in (give the eccentricities or "
+                   "trace_csv, delete planned and repeats) or run simulate to fill them with synthetic data")
+        else:
+            msg = ("no measured runs: the campaign has set-ups and mounts but no [[ballbar.runs]]; add the measured "
+                   "runs (or plan them with design, then fill them in or run simulate)")
+        raise InputError(self.source, "ballbar.runs", msg)
 
     def has_probe_readings(self) -> bool:
         """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""

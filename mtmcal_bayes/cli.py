@@ -90,6 +90,35 @@ def cmd_plan(args) -> int:
                  args)
 
 
+def _targets(items) -> dict | None:
+    """``--target NAME=SD`` flags as ``{NAME: SD}``."""
+    if not items:
+        return None
+    out = {}
+    for item in items:
+        name, eq, sd = item.partition("=")
+        if not eq or not name.strip():
+            raise ParameterError("targets", f"{item!r}: expected NAME=SD, e.g. alpha_XB=2 (″) or dy_CZ=5 (µm)")
+        try:
+            out[name.strip()] = float(sd)
+        except ValueError:
+            raise ParameterError("targets", f"{item!r}: {sd!r} is not a number") from None
+    return out
+
+
+def cmd_design(args) -> int:
+    return _show(api.design(args.campaign, targets=_targets(args.targets), tolerances=args.tolerances,
+                            budget_min=args.budget_min, contraction=None if args.contraction == 0 else args.contraction,
+                            candidates=args.candidates, times=args.times, seed=args.seed, model=args.model,
+                            output=args.output), args)
+
+
+def cmd_next(args) -> int:
+    return _show(api.next_run(args.campaign, targets=_targets(args.targets), contraction=args.contraction,
+                              budget_min=args.budget_min, candidates=args.candidates, times=args.times, seed=args.seed,
+                              model=args.model, output=args.output), args)
+
+
 def cmd_ncgen(args) -> int:
     if (args.x0 is None) != (args.z0 is None):
         raise MtmcalError("--x0 and --z0 go together (the NC position of the first block)")
@@ -139,7 +168,7 @@ def build_parser():
     """The argument parser, each command run by its ``cmd_*`` function (:mod:`mtmcal_bayes.cli_options`)."""
     return cli_options.build_parser({
         "identify": cmd_identify, "probe-fit": cmd_probe_fit, "simulate": cmd_simulate, "sensitivity": cmd_sensitivity,
-        "sample": cmd_sample, "history": cmd_history, "report": cmd_report, "plan": cmd_plan, "ncgen": cmd_ncgen, "compensate": cmd_compensate, "instruments": cmd_instruments,
+        "sample": cmd_sample, "history": cmd_history, "report": cmd_report, "plan": cmd_plan, "design": cmd_design, "next": cmd_next, "ncgen": cmd_ncgen, "compensate": cmd_compensate, "instruments": cmd_instruments,
         "sbc": cmd_validate_sbc, "fleet": cmd_fleet})
 
 

@@ -57,6 +57,27 @@ def _sampler_options(s) -> None:
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
 
+def _design_goal(s, *, contraction_default) -> None:
+    """Options of design and next: what to reach, the candidates, the time model."""
+    s.add_argument("--target", dest="targets", action="append", metavar="NAME=SD",
+                   help="target standard uncertainty of a quantity, ″ or µm (repeatable), e.g. alpha_XB=2"
+                   + ("" if contraction_default is not None else " (default: the campaign's [design])"))
+    if contraction_default is not None:
+        s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances]: targets at which the ISO 14253-1 "
+                       "decision is expected to be made, for quantities without --target")
+    s.add_argument("--budget-min", type=float, default=None, metavar="MINUTES",
+                   help="machine minutes available (alone: the most improvement within them)")
+    s.add_argument("--contraction", type=float, default=contraction_default, metavar="C",
+                   help="target contraction of σ_model's uncertainty, 0–1 ("
+                   + ("default 0.5: the data, not the prior, set σ_model; 0: none)" if contraction_default is not None
+                      else "default: the campaign's [design], else 0.5)"))
+    s.add_argument("--candidates", metavar="FILE.toml", help="candidate runs of your own ([[candidate]] tables), "
+                   "added to the catalogue")
+    s.add_argument("--times", metavar="FILE.toml", help="override the machine-time model (docs/design.md)")
+    s.add_argument("--seed", type=int, default=0, help="random seed of the search and the check (default 0)")
+    _model(s, "linear", help="forward model (default linear; htm models are linearised at zero)")
+
+
 def build_parser(handlers: dict) -> argparse.ArgumentParser:
     """The argument parser; ``handlers`` maps each command name to the function that runs it."""
     p = _Parser(prog=PROG, description="Bayesian uncertainty analysis of turn-mill (B/C axis) machine-tool calibration.")
@@ -133,6 +154,19 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
                    help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
     s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")
+
+    s = _command(sub, "design", handlers["design"], "design the whole campaign: the runs that reach target "
+                 "uncertainties in the fewest machine minutes, in measuring order, with their NC programs",
+                 json_help="print JSON: runs, total_minutes, expected, sigma_model, campaign")
+    _design_goal(s, contraction_default=0.5)
+    s.add_argument("-o", "--output", metavar="DIR", help="write design.json, campaign.toml, programs/ and "
+                   "design.html to DIR")
+
+    s = _command(sub, "next", handlers["next"], "on a partly measured designed campaign: the next run to measure, "
+                 "or stop: every target reached", json_help="print JSON: status, run, minutes_left, "
+                 "probability_targets_met, expected")
+    _design_goal(s, contraction_default=None)
+    s.add_argument("-o", "--output", metavar="DIR", help="write the re-planned campaign.toml and programs to DIR")
 
     s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern (e.g. thesis Fig 4.30(a))",
                  campaign=None, json_help=None)

@@ -22,7 +22,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "units", "progress", "version", "datasets", "arviz_import"),  # foundation: nothing of the package
     ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
     ("conventions",),                                              # what a ball-bar offset means in machine axes
-    ("campaign", "observations"),                                  # the data of a calibration
+    ("campaign", "observations", "machine_time"),                  # the data of a calibration, its machine time
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models
     ("identification", "inference", "figure_style", "html_page"),  # thesis method, Bayesian engine, figure and page look

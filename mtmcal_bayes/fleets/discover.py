@@ -122,6 +122,7 @@ def discover(directory: str | os.PathLike, skip=()) -> Discovery:
     for path in campaign_paths(root, skip):
         try:
             c = load_campaign(path)
+            c.require_measured_runs()  # a campaign designed but not yet measured has nothing to analyse
             loaded.append(CampaignFile(str(path), c, content_digest(path, c)))
         except MtmcalError as exc:
             errors.append({"file": str(path), "message": str(exc)})

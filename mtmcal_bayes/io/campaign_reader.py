@@ -22,8 +22,10 @@ from ..campaign import (
     BAxisProbe,
     Campaign,
     CAxisProbe,
+    DesignGoal,
     Machine,
     Mount,
+    PlannedRun,
     Probe,
     ReportedValue,
     Run,
@@ -31,7 +33,7 @@ from ..campaign import (
     Stylus,
     Truth,
 )
-from ..conventions import CONVENTIONS, ConventionError, check_convention_name, check_run
+from ..conventions import CONVENTIONS, ConventionError, check_convention_name, check_run, run_matrix
 from ..datasets import builtin_campaign_text, data_path
 from ..errors import InputError, MtmcalError
 from ..parameters import (
@@ -58,6 +60,12 @@ PRIOR_LIMIT = {"arcsec": (3600.0, "1°"), "um": (10_000.0, "10 mm")}
 #: narrowest prior sd (or uniform width), in its unit: below it the parameter is fixed beneath the models'
 #: floating-point resolution (an sd of 1e-300 gives NaN)
 PRIOR_RESOLUTION = 1e-3
+#: most repeats a planned run may ask for
+MAX_PLANNED_REPEATS = 10_000
+#: the keys of a run's data: a planned run has none of them
+DATA_KEYS = ("ex_um", "ey_um", "ez_um", "trace_csv")
+#: the keys only a planned run (``planned = true``) has
+PLANNED_KEYS = ("repeats", "minutes", "why", "order", "length_mm")
 
 
 # --------------------------------------------------------------------------- loading
@@ -80,7 +88,7 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     r = TomlReader(source)
     doc = parse_toml(text, source, f"a campaign TOML with format = \"{FORMAT}\"")
     r.check_keys(doc, {"format", "machine", "ballbar", "probe", "reported", "priors", "truth", "tolerances", "date",
-                       "temperature_C"}, "")
+                       "temperature_C", "design"}, "")
     fmt = r.string(doc, "format", "", required=True)
     if fmt != FORMAT:
         r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
@@ -97,8 +105,10 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     temperature = r.number(doc, "temperature_C", "", required=False)
     if temperature is not None and not -50.0 <= temperature <= 100.0:
         r.fail("temperature_C", f"{temperature:g} °C is not a workshop temperature (−50 to 100 °C)")
+    design_t = r.table(doc, "design", "", required=False)
+    design = _design(r, design_t) if design_t is not None else None
     return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances,
-                    _date(r, doc), temperature)
+                    _date(r, doc), temperature, design)
 
 
 def _machine(r: TomlReader, t: dict) -> Machine:
@@ -148,21 +158,41 @@ def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
         mounts[mid] = Mount(mid, r.number(m, "Z_C_mm", path, nonnegative=True),
                             r.number(m, "R_C_mm", path, nonnegative=True))
 
-    raw_runs = t.get("runs")
-    if raw_runs is None:
-        r.fail(f"{P}.runs", "missing: at least one [[ballbar.runs]] is needed")
-    if not isinstance(raw_runs, list) or not all(isinstance(x, dict) for x in raw_runs) or not raw_runs:
+    raw_runs = t.get("runs", [])  # absent: a machine with set-ups and mounts but nothing measured or planned yet
+    if not isinstance(raw_runs, list) or not all(isinstance(x, dict) for x in raw_runs):
         r.fail(f"{P}.runs", "expected one or more [[ballbar.runs]] tables")
-    runs = [_run(r, x, f"{P}.runs[{i}]", setups=setups, mounts=mounts, base_dir=base_dir, L_B=length,
-                 cr_geometry=cr_geometry) for i, x in enumerate(raw_runs)]
-    _distinct_runs(r, runs, P)
-    bb = Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry, convention)
-    for i, run in enumerate(runs):
+    items = [_run(r, x, f"{P}.runs[{i}]", setups=setups, mounts=mounts, base_dir=base_dir, L_B=length,
+                  cr_geometry=cr_geometry) for i, x in enumerate(raw_runs)]
+    _distinct_runs(r, items, P)
+    runs = [x for x in items if isinstance(x, Run)]
+    planned = _measuring_order(r, [(i, x) for i, x in enumerate(items) if isinstance(x, PlannedRun)], P)
+    bb = Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry, convention,
+                 planned)
+    for i, run in enumerate(items):
         try:
-            check_run(run, bb)
+            check_run(run, bb) if isinstance(run, Run) else run_matrix(run, bb)
         except ConventionError as err:
             r.fail(f"{P}.runs[{i}].convention" if run.convention else f"{P}.convention", str(err))
     return bb
+
+
+def _measuring_order(r: TomlReader, planned: list[tuple[int, PlannedRun]], path: str) -> list[PlannedRun]:
+    """The planned runs in measuring order: as in the file, or sorted by ``order`` when they give one (then all
+    must, each a different number)."""
+    given = [(i, x) for i, x in planned if x.order is not None]
+    if not given:
+        return [x for _, x in planned]
+    if len(given) < len(planned):
+        i = next(i for i, x in planned if x.order is None)
+        r.fail(f"{path}.runs[{i}]", "planned without order while other planned runs give one: give every planned "
+               "run its order, or none (then the file's order is the measuring order)")
+    seen: dict[int, int] = {}
+    for i, x in given:
+        j = seen.setdefault(x.order, i)
+        if j != i:
+            r.fail(f"{path}.runs[{i}].order", f"{x.order} is also the order of {path}.runs[{j}]: each planned run "
+                   "has its own place in the measuring order")
+    return [x for _, x in sorted(given, key=lambda ix: ix[1].order)]
 
 
 def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]]) -> None:
@@ -177,24 +207,39 @@ def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]])
                        "Z_T + R_B must stay constant between tool lengths")
 
 
-def _distinct_runs(r: TomlReader, runs: list[Run], path: str) -> None:
+def _distinct_runs(r: TomlReader, runs: list[Run | PlannedRun], path: str) -> None:
     """Two runs of one pattern, setup and mount are refused (``docs/campaign-format.md``, "Duplicate runs"):
     merged they would pass two sessions, perhaps a re-clamped ball, for repeats of one measurement, whose
-    repeat sd the likelihood takes as the run's repeatability."""
+    repeat sd the likelihood takes as the run's repeatability.  Measured and planned runs alike (the file's
+    order, ``runs`` indexing ``[[ballbar.runs]]``)."""
     first: dict[tuple[str, str, str], int] = {}
     for i, run in enumerate(runs):
         j = first.setdefault((run.pattern, run.setup, run.mount), i)
         if j != i:
-            arrays = ('trace_csv = ["a.csv", "b.csv"]' if run.trace_csv or runs[j].trace_csv
-                      else f"{COMPONENTS[run.pattern][0]}_um = [..., ...]")
+            if isinstance(run, PlannedRun) or isinstance(runs[j], PlannedRun):
+                where = "plan one run with all its repeats (repeats = N)"
+                if isinstance(runs[j], Run):
+                    where = "a run already measured is not planned again on the same placement"
+            else:
+                arrays = ('trace_csv = ["a.csv", "b.csv"]' if run.trace_csv or runs[j].trace_csv
+                          else f"{COMPONENTS[run.pattern][0]}_um = [..., ...]")
+                where = f"put all repeats of one measurement in one run's arrays ({arrays})"
             r.fail(f"{path}.runs[{i}]", f"repeats {path}.runs[{j}] (pattern {run.pattern}, setup {run.setup!r}, "
-                   f"mount {run.mount!r}): put all repeats of one measurement in one run's arrays ({arrays}); "
-                   f"if the ball was re-clamped, give it its own [{path}.mounts.<id>]")
+                   f"mount {run.mount!r}): {where}; if the ball was re-clamped, give it its own [{path}.mounts.<id>]")
 
 
-def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: float, cr_geometry: str) -> Run:
-    allowed = {"pattern", "setup", "mount", "trace_csv", "convention"} | {f"{c}_um" for c in ("ex", "ey", "ez")}
-    r.check_keys(t, allowed, path)
+def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: float,
+         cr_geometry: str) -> Run | PlannedRun:
+    r.check_keys(t, {"pattern", "setup", "mount", "convention", "planned", *DATA_KEYS, *PLANNED_KEYS}, path)
+    planned = t.get("planned", False)
+    if not isinstance(planned, bool):
+        r.fail(f"{path}.planned", "expected true (a run planned but not yet measured) or false, got "
+               f"{kind_of(planned)}")
+    if not planned:
+        for key in PLANNED_KEYS:
+            if key in t:
+                r.fail(f"{path}.{key}", "only a planned run (planned = true) has this key; a measured run gives its "
+                       "repeats as arrays (ex_um = [..., ...]) or trace_csv")
     pattern = r.string(t, "pattern", path, required=True)
     if pattern not in PATTERNS:
         r.fail(f"{path}.pattern", f"unknown pattern {pattern!r} (expected one of {' '.join(PATTERNS)})")
@@ -208,6 +253,8 @@ def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: fl
                f"(have: {', '.join(mounts)})")
     if conflict := mount_conflict(pattern, mount, mounts[mount].R_C):
         r.fail(f"{path}.mount", conflict)
+    if planned:
+        return _planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount, L_B=L_B)
     repeats = {}
     for c in ("ex", "ey", "ez"):
         key = f"{c}_um"
@@ -243,13 +290,51 @@ def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: fl
     if not repeats:
         r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])} "
                "or trace_csv")
+    return Run(pattern, setup, mount, repeats, traces, rms, _convention_of(r, t, path))
+
+
+def _convention_of(r: TomlReader, t: dict, path: str) -> str | None:
     convention = r.string(t, "convention", path, default="") or None
     if convention is not None:
         try:
             check_convention_name(convention)
         except ConventionError as err:
             r.fail(f"{path}.convention", str(err))
-    return Run(pattern, setup, mount, repeats, traces, rms, convention)
+    return convention
+
+
+def _planned_run(r: TomlReader, t: dict, path: str, *, pattern: str, setup: str, mount: str,
+                 L_B: float) -> PlannedRun:
+    """A run with ``planned = true``: how many repeats, and optionally minutes, why, order, length_mm; no data."""
+    data = [k for k in DATA_KEYS if k in t]
+    if data:
+        r.fail(f"{path}.planned", f"planned = true but the run has data ({', '.join(data)}): once it is measured, "
+               "delete planned and repeats")
+    repeats = _whole(r, t, "repeats", path, low=1, high=MAX_PLANNED_REPEATS, required=True,
+                     what="the number of repeats to measure")
+    order = _whole(r, t, "order", path, low=1, high=None, required=False, what="the place in the measuring order")
+    length = r.number(t, "length_mm", path, required=False, positive=True)
+    return PlannedRun(pattern, setup, mount, repeats, convention=_convention_of(r, t, path),
+                      minutes=r.number(t, "minutes", path, required=False, nonnegative=True),
+                      why=r.string(t, "why", path), order=order, length=None if length == L_B else length)
+
+
+def _whole(r: TomlReader, t: dict, key: str, path: str, *, low: int, high: int | None, required: bool,
+           what: str) -> int | None:
+    """A whole number ``low`` ≤ n (≤ ``high``) at ``path.key``."""
+    full = f"{path}.{key}"
+    if key not in t:
+        if required:
+            r.fail(full, f"missing: {what} (a whole number)")
+        return None
+    v = t[key]
+    if isinstance(v, float) and v.is_integer():
+        v = int(v)
+    if isinstance(v, bool) or not isinstance(v, int):
+        r.fail(full, f"expected a whole number ({what}), got {kind_of(v) if not isinstance(v, float) else f'{v:g}'}")
+    if v < low or (high is not None and v > high):
+        r.fail(full, f"{v} is not {what}: expected a whole number from {low}" + (f" to {high}" if high else " up"))
+    return v
 
 
 def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
@@ -411,6 +496,37 @@ def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
                            f"got {units.from_internal(parsed[p], unit):g}")
         out[name] = parsed
     return out
+
+
+def _design(r: TomlReader, t: dict) -> DesignGoal:
+    """``[design]``: ``targets`` (quantity -> standard uncertainty, ″ or µm), ``contraction`` (0 < c < 1),
+    ``budget_min`` (> 0) and ``times`` (machine-time overrides, minutes; their names are the planner's)."""
+    P = "design"
+    r.check_keys(t, {"targets", "contraction", "budget_min", "times"}, P)
+    goal = DesignGoal()
+    for key in r.table(t, "targets", P, required=False) or {}:
+        full = f"{P}.targets.{key}"
+        name, unit = units.split_unit_key(key)
+        q = QUANTITIES.get(name)
+        if q is None or unit not in (None, q.unit):
+            r.fail(full, "unknown quantity: expected a canonical name (" + ", ".join(QUANTITIES) + "), with or "
+                   "without its unit (alpha_BT_arcsec for an angle, dy_CZ_um for a length)")
+        if name in goal.targets:
+            r.fail(full, f"a second target for {name}: give it once")
+        sd = r.number(t["targets"], key, f"{P}.targets", positive=True)
+        limit, shown = PRIOR_LIMIT[q.unit]
+        if sd > limit:
+            r.fail(full, f"{sd:g} {units.SYMBOL[q.unit]} is beyond {limit:g} {units.SYMBOL[q.unit]} ({shown}): not a "
+                   "standard uncertainty a calibration aims for")
+        goal.targets[name] = sd
+    goal.contraction = r.number(t, "contraction", P, required=False)
+    if goal.contraction is not None and not 0.0 < goal.contraction < 1.0:
+        r.fail(f"{P}.contraction", f"{goal.contraction:g} is not a contraction: the share by which σ_model's "
+               "uncertainty shrinks is between 0 and 1 (exclusive), e.g. 0.5")
+    goal.budget_min = r.number(t, "budget_min", P, required=False, positive=True)
+    for key in r.table(t, "times", P, required=False) or {}:
+        goal.times[key] = r.number(t["times"], key, f"{P}.times", nonnegative=True)
+    return goal
 
 
 def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: Probe | None = None) -> Truth:

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 from .. import units
-from ..campaign import Campaign, Probe, Truth
+from ..campaign import Campaign, DesignGoal, PlannedRun, Probe, Truth
 from ..parameters import DEVIATIONS, QUANTITIES
 from .campaign_reader import FORMAT
 from .textfiles import write_text_atomic
@@ -50,6 +50,9 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
         else:
             d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
         b["runs"].append(d)
+    b["runs"] += [planned_run_dict(run) for run in bb.planned]  # after the measured runs, in measuring order
+    if not b["runs"]:
+        del b["runs"]  # a machine with set-ups and mounts only
     doc["ballbar"] = b
     if c.probe is not None:
         doc["probe"] = _probe_dict(c.probe, c, save_dir)
@@ -71,7 +74,40 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
             doc["tolerances"][f"{name}_{unit}"] = ends["high"] if symmetric else ends
     if c.truth is not None:
         doc["truth"] = truth_to_dict(c.truth)
+    if c.design is not None:
+        doc["design"] = design_to_dict(c.design)
     return doc
+
+
+def planned_run_dict(run: PlannedRun) -> dict:
+    """The ``[[ballbar.runs]]`` table of a planned run: ``planned = true``, ``repeats`` and what else is set."""
+    d: dict = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, "planned": True,
+               "repeats": int(run.repeats)}
+    if run.convention:
+        d["convention"] = run.convention
+    if run.length is not None:
+        d["length_mm"] = run.length
+    if run.minutes is not None:
+        d["minutes"] = run.minutes
+    if run.order is not None:
+        d["order"] = int(run.order)
+    if run.why:
+        d["why"] = run.why
+    return d
+
+
+def design_to_dict(g: DesignGoal) -> dict:
+    """The ``[design]`` table: targets with their unit (``alpha_BT_arcsec``), contraction, budget, time overrides."""
+    d: dict = {}
+    if g.contraction is not None:
+        d["contraction"] = g.contraction
+    if g.budget_min is not None:
+        d["budget_min"] = g.budget_min
+    if g.targets:
+        d["targets"] = {f"{n}_{QUANTITIES[n].unit}": float(v) for n, v in g.targets.items()}
+    if g.times:
+        d["times"] = {k: float(v) for k, v in g.times.items()}
+    return d
 
 
 def truth_to_dict(t: Truth) -> dict:

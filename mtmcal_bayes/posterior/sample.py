@@ -175,6 +175,7 @@ def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False
     comp = comparison(summary, identify(campaign))
     ref = reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary) + reference_warnings(ref, summary)
+    warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data
     tol = campaign.tolerances if tolerances is None else tolerances
     conf = conformity_table(idata, summary, tol) if tol else None
     return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf)

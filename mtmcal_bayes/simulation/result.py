@@ -15,6 +15,7 @@ from ..observations import Observations
 from ..parameters import ParameterSpace
 from .simulate import (
     eccentricity_records,
+    planned_as_runs,
     predict_truth,
     synthetic_campaign,
     truth_vector,
@@ -77,7 +78,7 @@ def simulate_truth(campaign: Campaign, truth: Truth, *, model: str = "htm-thesis
     warnings = []
     if model == "linear":  # first order: say so when the truth is too large for it
         space = ParameterSpace.for_campaign(campaign)
-        gap = first_order_gap(campaign, truth_vector(space, truth.ballbar_part(), source), space)
+        gap = first_order_gap(planned_as_runs(campaign), truth_vector(space, truth.ballbar_part(), source), space)
         if gap > campaign.ballbar.accuracy:
             warnings.append(f"the linear model is first order and this truth is too large for it: htm-thesis "
                             f"predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} µm away (instrument "

@@ -15,11 +15,12 @@ import copy
 import numpy as np
 
 from .. import units
-from ..campaign import Campaign, Truth
+from ..campaign import Campaign, Run, Truth
 from ..errors import InputError
 from ..models import make_model
 from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_run_values
 from ..parameters import ParameterSpace, nuisance_name
+from ..patterns import COMPONENTS
 
 #: resolution of the ball-bar readings (thesis Table 4.1)
 RESOLUTION_UM = 0.1
@@ -49,13 +50,42 @@ def truth_from_vector(space: ParameterSpace, theta: np.ndarray) -> Truth:
     return t
 
 
+def planned_as_runs(campaign: Campaign) -> Campaign:
+    """``campaign`` itself when it plans no run, else a copy whose planned runs are runs, appended after the measured
+    ones in measuring order, each with every component of its pattern and ``repeats`` placeholder repeats (zeros,
+    to be replaced by simulated values); the copy plans nothing.
+
+    A planned run with a bar length of its own is an error: the forward models take the campaign's one
+    ``[ballbar] length_mm`` for every run."""
+    bb = campaign.ballbar
+    if not bb.planned:
+        return campaign
+    for k, run in enumerate(bb.planned, start=1):
+        if run.length is not None:
+            raise InputError(campaign.source, "ballbar.runs", f"planned run {k} ({run.label}) asks for a bar of "
+                             f"{run.length:g} mm, and the models simulate every run with the campaign's bar length "
+                             f"L_B = {bb.length:g} mm: simulate it from a campaign whose [ballbar] length_mm is "
+                             f"{run.length:g}")
+    out = copy.deepcopy(campaign)
+    out.ballbar.runs += [Run(p.pattern, p.setup, p.mount, {c: np.zeros(p.repeats) for c in COMPONENTS[p.pattern]},
+                             convention=p.convention) for p in out.ballbar.planned]
+    out.ballbar.planned = []
+    return out
+
+
 def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *,
                   source: str = "<truth>") -> tuple[Observations, np.ndarray]:
-    """Noise-free eccentricities ``(m,)`` (mm) of every observed component under ``model``.
+    """Noise-free eccentricities ``(m,)`` (mm) of every observed component under ``model``; planned runs are
+    predicted too (every component), their observations after the measured runs' (:func:`planned_as_runs`:
+    the observation keys index the runs of that campaign).
 
     A truth so large that an eccentricity is not finite or not below the bar
     length (no ball-bar could measure it) is an error naming ``source``.
     """
+    campaign = planned_as_runs(campaign)
+    if not campaign.ballbar.runs:
+        raise InputError(campaign.source, "ballbar.runs", "nothing to simulate: the campaign has no runs, measured or "
+                         "planned; add [[ballbar.runs]] (planned = true, repeats = N for runs not yet measured)")
     fm = make_model(model, campaign)
     theta = truth_vector(fm.space, truth.ballbar_part(), source)
     with np.errstate(all="ignore"):  # an absurd truth overflows; the check below names it
@@ -86,10 +116,13 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
 
     Noise-free: one repeat per component equal to the prediction.  With
     ``noise``: as many repeats as the original run (or ``repeats``), scattered
-    as described in the module docstring.  Touch-probe readings are simulated too
+    as described in the module docstring.  Planned runs are filled: measured runs after the others, in measuring
+    order, with every component of their pattern and their planned number of repeats (one without ``noise``),
+    so the copy plans nothing.  Touch-probe readings are simulated too
     (:func:`simulated_probe`) when the campaign has them; published results are
     dropped (they belong to the real measurement).
     """
+    campaign = planned_as_runs(campaign)
     obs, pred = predict_truth(campaign, truth, model)
     if noise:
         rng = np.random.default_rng(seed)

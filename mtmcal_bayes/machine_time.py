@@ -1,0 +1,218 @@
+"""Machine minutes of a ball-bar campaign: what a calibration costs in downtime (SPEC §16, docs/design.md).
+
+Items of the time model (minutes; ``--times FILE.toml`` or a campaign's ``[design.times]`` override each):
+
+=====================  =======  ===================================================================
+item                   default  what it covers, where the default comes from
+=====================  =======  ===================================================================
+mount_ballbar_min      15       first set-up of the ball bar on the machine: tool cup in the spindle,
+                                centre cup on the table, centring the cups, setting the bar
+                                (engineering estimate from ballbar practice: a QC20-W type test
+                                is commonly quoted as "set up and measure in 15 minutes")
+tool_change_min        10       change the tool length with an extension bar (thesis Step 5, Table
+                                4.3), measure it, re-centre the T ball on the W ball (estimate)
+reclamp_w_ball_min     10       clamp the W ball at a new placement (radius R_C, height Z_C, or a
+                                fresh placement of the same one) and re-centre (estimate)
+pattern_change_min     3        next pattern at the same set-up and placement: re-seat the bar,
+                                load the program (estimate)
+dwell_min              0.5      per run: approach, run-in/run-out arcs, start and stop of the data
+                                capture (estimate; ISO 230-4 test practice adds arcs of overshoot)
+feed_mm_per_min        —        the ball-bar feed; default the campaign's ``[ballbar]
+                                feed_mm_per_min`` (1000 in the thesis campaign), else 1000
+rotary_deg_per_min     360      the slowest a pattern's rotary axis turns: one C turn a minute
+                                (estimate), which bounds a run whose relative path is short (CR
+                                with R_C = L_B: the T ball on the C axis, the table turning under it)
+directions             2        each run measured clockwise and counter-clockwise (ISO 230-4)
+=====================  =======  ===================================================================
+
+The measuring motion of a run takes ``repeats × directions × max(path / feed, span / rotary)``; ``span``
+is the pattern's rotary range (90° for B, 360° for C patterns); ``path`` is the length of
+the programmed relative motion — the B-axis centre's path in the C-table frame of thesis Tables
+2.2/2.3 (:func:`mtmcal_bayes.patterns.pattern_commands`): an arc of radius R_B over 0–90° for the B
+patterns, a circle of radius R_C (R_C ∓ L_B for CR, ``hypot(R_C, L_B)`` for CT) for the C patterns,
+the path the feed word of the measuring program (thesis Fig 4.30(a)) is programmed along.
+
+A schedule measures the runs in the given order from a start state (ball bar mounted or not, the
+current set-up and placement): a run at another set-up than the previous costs a tool change (the
+first set-up too), at another placement a re-clamp, at the same set-up and placement a pattern
+change; the first run needs the bar mounted.  :func:`canonical_order` groups the runs by set-up,
+then by placement, so that each change happens once.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from .patterns import B_PATTERNS, pattern_commands
+
+#: default ball-bar feed when neither the time model nor the campaign gives one, mm/min
+DEFAULT_FEED = 1000.0
+#: a single step longer than one shift is a unit slip, not a time
+MAX_STEP_MIN = 480.0
+#: feeds beyond this are not ball-bar feeds (mm/min)
+MAX_FEED = 50_000.0
+#: rotary speeds outside these bounds are unit slips (°/min): a turn in 6 h, or 100 rev/min
+MIN_ROTARY, MAX_ROTARY = 1.0, 36_000.0
+#: points of the path-length grid over a pattern's range
+PATH_POINTS = 721
+
+
+@dataclass(frozen=True)
+class TimeModel:
+    """The machine-time model (minutes; see the module docstring for each item and its default)."""
+
+    mount_ballbar_min: float = 15.0
+    tool_change_min: float = 10.0
+    reclamp_w_ball_min: float = 10.0
+    pattern_change_min: float = 3.0
+    dwell_min: float = 0.5
+    feed_mm_per_min: float | None = None
+    rotary_deg_per_min: float = 360.0
+    directions: int = 2
+
+    def __post_init__(self):
+        for key, value, why in self.problems():
+            raise ValueError(f"{key}: {why}")
+
+    def problems(self) -> list[tuple[str, object, str]]:
+        """``(key, value, reason)`` of every value outside its bounds (empty when all are valid)."""
+        out = []
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name == "feed_mm_per_min" and v is None:
+                continue
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                out.append((f.name, v, f"expected a finite number, got {v!r}"))
+            elif f.name == "directions":
+                if v not in (1, 2):
+                    out.append((f.name, v, f"1 or 2 (one direction, or clockwise and counter-clockwise), got {v!r}"))
+            elif f.name == "feed_mm_per_min":
+                if not 0 < v <= MAX_FEED:
+                    out.append((f.name, v, f"a feed above 0 and at most {MAX_FEED:g} mm/min, got {v:g}"))
+            elif f.name == "rotary_deg_per_min":
+                if not MIN_ROTARY <= v <= MAX_ROTARY:
+                    out.append((f.name, v, f"a rotary speed from {MIN_ROTARY:g} to {MAX_ROTARY:g} °/min, got {v:g}"))
+            elif v < 0:
+                out.append((f.name, v, f"a time cannot be negative, got {v:g} min"))
+            elif v > MAX_STEP_MIN:
+                out.append((f.name, v, f"{v:g} min is longer than a shift ({MAX_STEP_MIN:g} min): hours or seconds "
+                            "written for minutes?"))
+        return out
+
+    def feed(self, campaign_feed: float | None) -> float:
+        return self.feed_mm_per_min or campaign_feed or DEFAULT_FEED
+
+
+TIME_KEYS = tuple(f.name for f in fields(TimeModel))
+
+
+@functools.lru_cache(maxsize=4096)
+def path_length(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float, cr_geometry: str = "RC-LB") -> float:
+    """Length of the programmed relative path of one direction of ``pattern``, mm (module docstring)."""
+    span = 90.0 if pattern in B_PATTERNS else 360.0
+    cmd = pattern_commands(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B,
+                           angles_deg=np.linspace(0.0, span, PATH_POINTS), cr_geometry=cr_geometry)
+    xyz = np.c_[cmd.X, cmd.Y, cmd.Z]
+    return float(np.sum(np.linalg.norm(np.diff(xyz, axis=0), axis=1)))
+
+
+@dataclass(frozen=True)
+class Event:
+    """One step of a schedule: ``kind`` ("mount ball bar", "tool change", "re-clamp W ball", "pattern change",
+    "measure"), the run it belongs to (index into the ordered runs), when it starts and how long it takes, min."""
+
+    kind: str
+    run_index: int | None
+    start_min: float
+    minutes: float
+    label: str = ""
+
+
+@dataclass
+class Schedule:
+    events: list[Event] = field(default_factory=list)
+
+    @property
+    def total_min(self) -> float:
+        return float(sum(e.minutes for e in self.events))
+
+    def run_total_min(self, n_runs: int) -> list[float]:
+        """Per run: its measuring plus the set-up changes it causes, min."""
+        out = [0.0] * n_runs
+        for e in self.events:
+            if e.run_index is not None:
+                out[e.run_index] += e.minutes
+        return out
+
+
+class MachineClock:
+    """The time model applied to a campaign's geometry (``setups``/``mounts`` by id, bar length, CR geometry, feed).
+
+    A run is any object with ``pattern``, ``setup`` and ``mount`` ids (or ``Setup``/``Mount`` objects) and
+    ``repeats``.  ``start`` = (ball bar mounted, current setup id, current mount id).
+    """
+
+    def __init__(self, model: TimeModel, *, L_B: float, cr_geometry: str = "RC-LB", feed: float | None = None):
+        self.model, self.L_B, self.cr_geometry = model, L_B, cr_geometry
+        self.feed_mm_per_min = model.feed(feed)
+
+    def measure_minutes(self, pattern: str, setup, mount, repeats: int) -> float:
+        """Dwell plus the measuring motion of one run, min."""
+        path = path_length(pattern, R_B=float(setup.R_B), Z_C=float(mount.Z_C), R_C=float(mount.R_C),
+                           L_B=float(self.L_B), cr_geometry=self.cr_geometry)
+        span = 90.0 if pattern in B_PATTERNS else 360.0
+        one = max(path / self.feed_mm_per_min, span / self.model.rotary_deg_per_min)
+        return self.model.dwell_min + repeats * self.model.directions * one
+
+    def schedule(self, runs, start=(False, None, None)) -> Schedule:
+        """The runs measured in the given order from ``start`` (module docstring)."""
+        mounted, setup, mount = start
+        t, events, m = 0.0, [], self.model
+        for i, r in enumerate(runs):
+            sid, mid = _id(r.setup), _id(r.mount)
+            steps = []
+            if not mounted:
+                steps.append(("mount ball bar", m.mount_ballbar_min))
+            if sid != setup:
+                steps.append(("tool change", m.tool_change_min))
+            if mid != mount:
+                steps.append(("re-clamp W ball", m.reclamp_w_ball_min))
+            if mounted and sid == setup and mid == mount:
+                steps.append(("pattern change", m.pattern_change_min))
+            steps.append(("measure", self.measure_minutes(r.pattern, r.setup, r.mount, r.repeats)))
+            for kind, minutes in steps:
+                events.append(Event(kind, i, t, minutes, f"{r.pattern}@{sid}/{mid}"))
+                t += minutes
+            mounted, setup, mount = True, sid, mid
+        return Schedule(events)
+
+
+def _id(x) -> str:
+    return x if isinstance(x, str) else x.id
+
+
+def canonical_order(runs, start_setup: str | None = None, start_mount: str | None = None) -> list[int]:
+    """Indices of ``runs`` grouped by set-up (the current one first, then in order of first appearance), within a
+    set-up by placement (the current one first), in the given order within a group."""
+    setups = list(dict.fromkeys(_id(r.setup) for r in runs))
+    if start_setup in setups:
+        setups.remove(start_setup)
+        setups.insert(0, start_setup)
+    out = []
+    for s in setups:
+        idx = [i for i, r in enumerate(runs) if _id(r.setup) == s]
+        mounts = list(dict.fromkeys(_id(runs[i].mount) for i in idx))
+        if s == start_setup and start_mount in mounts:
+            mounts.remove(start_mount)
+            mounts.insert(0, start_mount)
+        for mt in mounts:
+            out += [i for i in idx if _id(runs[i].mount) == mt]
+    return out
+
+
+__all__ = ["TimeModel", "TIME_KEYS", "MachineClock", "Schedule", "Event", "canonical_order", "path_length",
+           "DEFAULT_FEED", "MAX_STEP_MIN", "MAX_FEED"]

@@ -1,0 +1,130 @@
+"""The exact preposterior of a whole design: what measuring it delivers, σ_model learnt from the data.
+
+Machines are drawn from what is known now — the parameters and σ_model from the exact σ-marginal
+posterior given the measured runs (:class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`), from
+the priors for a new machine; the new runs' own nuisance offsets from their priors — the design's
+means are simulated with the repeat scatter, the instrument error and σ_model, and the exact
+posterior of each simulated campaign gives the realised posterior sd of every target and the realised
+posterior variance of σ_model.  Reported: their mean and 10–90 % spread, the share of machines whose
+realised sd meets each target, and the expected contraction ``1 − E[var(σ | y)]/var_prior(σ)``.
+
+For a kinematic model the rows are its Jacobian at zero deviations (the model linearised), as in the
+planner.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import units
+from ..inference.log_posterior import SAMPLED_DEVIATIONS
+from ..inference.marginal import MarginalPosterior
+from ..inference.priors import make_prior
+from ..models.linear import LinearModel
+from ..observations import Observations
+from ..parameters import ParameterSpace, weights
+from .design import Planner
+from .design_runs import DesignedRun, with_runs
+
+#: simulated machines of the check
+N_SIM = 400
+
+
+@dataclass
+class Preposterior:
+    """Realised results over ``n_sim`` simulated machines (display units: ″, µm).
+
+    ``sd`` (n_sim, t) realised posterior sds; ``sd_now`` (t,) the exact posterior sd today;
+    ``contraction`` (n_sim,) realised σ_model contraction; ``contraction_now``.
+    """
+
+    targets: list[str]
+    sd: np.ndarray
+    sd_now: np.ndarray
+    contraction: np.ndarray
+    contraction_now: float
+    sigma_mean_um: np.ndarray  # (n_sim,) posterior mean of σ_model per machine
+
+    @property
+    def sd_mean(self) -> np.ndarray:
+        return self.sd.mean(axis=0)
+
+    def sd_quantile(self, q: float) -> np.ndarray:
+        return np.quantile(self.sd, q, axis=0)
+
+    def share_met(self, targets: np.ndarray) -> np.ndarray:
+        """(t,) share of machines whose realised sd meets each target (NaN target: NaN)."""
+        tg = np.asarray(targets, float)
+        out = np.mean(self.sd <= np.where(np.isfinite(tg), tg, np.inf), axis=0)
+        return np.where(np.isfinite(tg), out, np.nan)
+
+    def share_all_met(self, targets: np.ndarray) -> float:
+        """Share of machines whose realised sds meet every target."""
+        tg = np.where(np.isfinite(targets), targets, np.inf)
+        return float(np.mean(np.all(self.sd <= tg, axis=1)))
+
+
+def _rows(planner: Planner, campaign, space: ParameterSpace) -> np.ndarray:
+    if planner.model == "linear":
+        return LinearModel(campaign, space).design
+    from ..models.kinematic import HTMModel, jacobian
+
+    return jacobian(HTMModel(campaign, planner.model, space))
+
+
+def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SIM, seed: int | None = 0) -> Preposterior:
+    """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring)."""
+    rng = np.random.default_rng(seed)
+    campaign = planner.campaign
+    aug = with_runs(campaign, runs)
+    bb = aug.ballbar
+    space = ParameterSpace(list(bb.setups), list(bb.mounts), SAMPLED_DEVIATIONS)
+    priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in space.parameters]
+    prior_var = np.array([p.sd for p in priors]) ** 2
+    prior_mean = np.array([p.mean for p in priors])
+    A = _rows(planner, aug, space)
+    keys = Observations.from_campaign(aug).keys
+    m0 = len(campaign.ballbar.runs)
+    new = np.array([k.run >= m0 for k in keys])
+    sigma0 = planner.sigma_model
+    base_now = planner.V - sigma0**2
+    base_new = np.array([planner.noise_var(runs[k.run - m0].repeats) - sigma0**2 for k in keys if k.run >= m0])
+    T = np.zeros((len(planner.targets), len(space)))
+    for i, t in enumerate(planner.targets):
+        for name, w in weights(t).items():
+            T[i, space.index(name)] = w
+    sigma_prior = planner.sigma_prior()
+    # the grid of the simulated campaigns' posteriors: the prior's range, widened to where the measured data put σ
+    lo, hi = float(sigma_prior.ppf(1e-5)), float(sigma_prior.ppf(0.99999))
+    y_now = planner.observations.mean
+    if (~new).any():
+        now = MarginalPosterior(A[~new], base_now, prior_var, sigma_prior, prior_mean=prior_mean, y=y_now)
+        theta, sigma = now.draw(y_now, n_sim, rng)
+        sigma = sigma[:, 0]
+        _, sd_now = now.target_moments(y_now[None], T)
+        w_now = now.weights(y_now[None])[:, 0]
+        var_now = w_now @ now.sigma[:, 0] ** 2 - (w_now @ now.sigma[:, 0]) ** 2
+        hi = min(max(hi, float(now.edges[0][-1])), float(sigma_prior.support()[1]))
+    else:
+        theta = np.column_stack([p.frozen().rvs(size=n_sim, random_state=rng) for p in priors])
+        sigma = sigma_prior.rvs(size=n_sim, random_state=rng)
+        sd_now = np.sqrt(np.sum(T**2 * prior_var, axis=1))[None]
+        var_now = float(sigma_prior.var())
+    y_new = theta @ A[new].T + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None] + sigma[:, None] ** 2)
+    y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
+    after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, sigma_prior, prior_mean=prior_mean,
+                              sigma_min=lo, sigma_max=hi)
+    _, sd = after.target_moments(y_all, T)
+    w = after.weights(y_all)  # (G, n)
+    s = after.sigma[:, 0]
+    mean_s = s @ w
+    var_s = (s**2) @ w - mean_s**2
+    prior_var_s = float(sigma_prior.var())
+    scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
+    return Preposterior(list(planner.targets), sd * scale, sd_now[0] * scale, 1.0 - var_s / prior_var_s,
+                        float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"))
+
+
+__all__ = ["Preposterior", "preposterior", "N_SIM"]

@@ -1,0 +1,249 @@
+"""What ``design`` and ``next`` print and write: JSON, text, the campaign to fill in, NC programs, design.html."""
+
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import units
+from ..campaign import DesignGoal, PlannedRun
+from .design_make import Design
+from .design_problem import PROMISE
+from .design_runs import geometry_of
+from .next_run import NextStep
+
+
+def _num(v) -> float | None:
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def _mm(v) -> float:
+    """A length to a thousandth of a µm: 12.2877, not 12.287700000000001 (112.2877 − 100)."""
+    return round(float(v), 6)
+
+
+def program_name(order: int, pattern: str) -> str:
+    return f"programs/{order:02d}_{pattern}.nc"
+
+
+def run_records(design: Design, programs: bool = False) -> list[dict]:
+    """The ``runs`` of ``design --json``, in measuring order."""
+    out = []
+    for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1):
+        out.append({"order": i, "pattern": r.pattern, "setup": r.setup.id, "mount": r.mount.id,
+                    "R_B_mm": _mm(r.setup.R_B), "Z_T_mm": _mm(r.setup.Z_T), "X_T_mm": _mm(r.setup.X_T),
+                    "R_C_mm": _mm(r.mount.R_C), "Z_C_mm": _mm(r.mount.Z_C), "length_mm": _mm(r.length), "repeats": r.repeats, "minutes": round(m, 2),
+                    "program": program_name(i, r.pattern) if programs else None, "why": why,
+                    "candidate": r.candidate.name})
+    return out
+
+
+def expected(design: Design) -> dict:
+    """``expected`` of ``design --json``: per quantity the sd today and after the design (mean, 10–90 %)."""
+    chk = design.check
+    p10, p90 = chk.sd_quantile(0.1), chk.sd_quantile(0.9)
+    share = chk.share_met(design.goal.targets)
+    out = {}
+    for i, (t, u) in enumerate(zip(design.targets, design.target_units)):
+        out[t] = {"unit": units.SYMBOL[u], "sd_before": _num(chk.sd_now[i]), "sd_after": _num(chk.sd_mean[i]),
+                  "sd_after_p10": _num(p10[i]), "sd_after_p90": _num(p90[i]),
+                  "target": _num(design.goal.targets[i]), "share_met": _num(share[i]),
+                  "sd_after_closed_form": _num(design.closed_form["sd_promised"][i])}
+    return out
+
+
+def design_document(design: Design, campaign_path: str | None = None, programs: bool = False) -> dict:
+    """``design --json``."""
+    c = design.check.contraction
+    return {"runs": run_records(design, programs), "total_minutes": round(design.total_minutes, 2),
+            "expected": expected(design),
+            "sigma_model": {"contraction_before": design.check.contraction_now,
+                            "contraction_after": float(c.mean()) if c.size else design.check.contraction_now,
+                            "contraction_after_p10": float(np.quantile(c, 0.1)) if c.size else None,
+                            "contraction_after_p90": float(np.quantile(c, 0.9)) if c.size else None,
+                            "target": design.goal.contraction},
+            "budget_min": design.goal.budget, "promise": PROMISE,
+            "probability_targets_met": design.check.share_all_met(design.goal.targets),
+            "schedule": [e.__dict__ | {} for e in design.timing.events(design.runs, design.start)],
+            "model": design.model, "notes": design.notes, "campaign": campaign_path}
+
+
+def design_text(design: Design) -> str:
+    """What ``design`` prints."""
+    lines = [f"designed campaign: {len(design.runs)} run(s), {design.total_minutes:.0f} machine minutes "
+             f"(set-up changes included)", ""]
+    for rec in run_records(design):
+        lines.append(f"{rec['order']:>3}. {rec['pattern']:<3} setup {rec['setup']:<10} mount {rec['mount']:<12} "
+                     f"R_B {rec['R_B_mm']:.1f} mm, R_C {rec['R_C_mm']:.0f} mm, {rec['repeats']}× "
+                     f"{rec['minutes']:6.1f} min  {rec['why']}")
+    lines += ["", f"{'quantity':<18} {'sd now':>9} {'after':>9} {'10–90 %':>17} {'target':>8} {'met in':>7}"]
+    for t, e in expected(design).items():
+        tg = "" if e["target"] is None else f"{e['target']:.3g}"
+        share = "" if e["share_met"] is None else f"{e['share_met']:.0%}"
+        u = f"{e['unit']:<2}"
+        lines.append(f"{t:<18} {e['sd_before']:>7.3g} {u} {e['sd_after']:>6.3g} {u} "
+                     f"{e['sd_after_p10']:>7.3g}–{e['sd_after_p90']:<6.3g} {u} {tg:>6} {share:>7}")
+    c = design.check.contraction
+    ctext = f"{c.mean():.2f}" if c.size else "unchanged"
+    lines += ["", f"σ_model contraction: {design.check.contraction_now:.2f} now → {ctext} after"
+              + (f" (target {design.goal.contraction:g})" if design.goal.contraction is not None else "")]
+    lines += [f"note: {n}" for n in design.notes]
+    return "\n".join(lines)
+
+
+def designed_campaign(design: Design, goal: DesignGoal | None = None):
+    """The starting campaign plus the designed runs as planned runs in measuring order, and the ``[design]`` goal."""
+    base = design.campaign
+    out = copy.copy(base)
+    bb = copy.copy(base.ballbar)
+    bb.setups, bb.mounts = geometry_of(base, design.runs)
+    bb.planned = [PlannedRun(r.pattern, r.setup.id, r.mount.id, r.repeats, minutes=round(m, 1), why=why, order=i)
+                  for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)]
+    out.ballbar = bb
+    targets = {t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)}
+    out.design = goal or DesignGoal(targets, design.goal.contraction, design.goal.budget, {})
+    return out
+
+
+def write_design(design: Design, out_dir, *, program, times: dict | None = None) -> tuple[list[str], str]:
+    """Write design.json, campaign.toml, programs/NN_<pattern>.nc and design.html into ``out_dir``; ``program``
+    (pattern, campaign, setup id, mount id) -> NC text.  Returns the files written (relative) and the campaign's
+    path."""
+    from ..io.campaign_writer import save_campaign
+    from ..io.json_text import json_text
+    from ..io.textfiles import write_text_atomic
+    from .design_figures import write_design_html
+
+    out = Path(out_dir)
+    (out / "programs").mkdir(parents=True, exist_ok=True)
+    goal = DesignGoal({t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)},
+                      design.goal.contraction, design.goal.budget, dict(times or {}))
+    camp = designed_campaign(design, goal)
+    files = []
+    for i, r in enumerate(design.runs, start=1):
+        text = program(r.pattern, camp, r.setup.id, r.mount.id)
+        write_text_atomic(out / program_name(i, r.pattern), text)
+        files.append(program_name(i, r.pattern))
+    path = out / "campaign.toml"
+    save_campaign(camp, path, header="designed by mtmcal-bayes design: fill in each planned run once measured "
+                  "(delete planned and repeats, give ex_um/ey_um/ez_um), then run mtmcal-bayes next")
+    files.insert(0, "campaign.toml")
+    doc = design_document(design, str(path), programs=True)
+    write_text_atomic(out / "design.json", json_text(doc) + "\n")
+    files.insert(0, "design.json")
+    runs = pd.DataFrame(run_records(design, programs=True)).set_index("order")
+    files += write_design_html(design, out, doc=doc, runs=runs, expected=expected_table(design))
+    return files, str(path)
+
+
+def next_document(step: NextStep, program: str | None = None) -> dict:
+    """``next --json``."""
+    exp = {}
+    after = expected(step.design) if step.design is not None else {}
+    for i, (t, u) in enumerate(zip(step.targets, step.target_units)):
+        e = {"unit": units.SYMBOL[u], "sd_now": _num(step.sd_now[i]), "target": _num(step.target_sd[i])}
+        if t in after:
+            e.update({k: after[t][k] for k in ("sd_after", "sd_after_p10", "sd_after_p90")})
+        exp[t] = e
+    run = None
+    if step.design is not None and step.design.runs:
+        run = run_records(step.design)[0]
+        run["program"] = program
+    return {"status": step.status, "run": run, "minutes_left": round(step.minutes_left, 2),
+            "probability_targets_met": step.probability_targets_met, "expected": exp,
+            "sigma_model": {"contraction_now": step.contraction_now, "target": step.contraction_target,
+                            "contraction_after": (float(step.design.check.contraction.mean())
+                                                  if step.design is not None and step.design.runs else None)},
+            "measured_runs": step.measured, "planned_left": step.planned_left, "dropped": step.dropped,
+            "added": step.added}
+
+
+def next_text(step: NextStep) -> str:
+    """What ``next`` prints."""
+    lines = []
+    if step.status == "stop":
+        lines.append(f"stop: every target reached (probability {step.probability_targets_met:.0%} over σ_model's "
+                     f"posterior) after {step.measured} measured run(s)")
+        if step.planned_left:
+            lines.append(f"planned runs not needed: {', '.join(step.planned_left)}")
+    else:
+        r = run_records(step.design)[0]
+        lines.append(f"measure next: {r['pattern']} at setup {r['setup']} (R_B {r['R_B_mm']:.1f} mm), mount "
+                     f"{r['mount']} (R_C {r['R_C_mm']:.0f} mm), {r['repeats']} repeats, ~{r['minutes']:.0f} min — "
+                     f"{r['why']}")
+        lines.append(f"time left: {step.minutes_left:.0f} min for {len(step.design.runs)} run(s); every target met "
+                     f"at the end in {step.probability_targets_met:.0%} of simulated machines")
+        if step.dropped:
+            lines.append(f"dropped from the plan: {', '.join(step.dropped)}")
+        if step.added:
+            lines.append(f"added to the plan: {', '.join(step.added)}")
+    lines.append("")
+    lines.append(f"{'quantity':<18} {'sd now':>10} {'target':>10}")
+    for i, t in enumerate(step.targets):
+        u = units.SYMBOL[step.target_units[i]]
+        tg = "" if not np.isfinite(step.target_sd[i]) else f"{step.target_sd[i]:.3g} {u:<2}"
+        lines.append(f"{t:<18} {step.sd_now[i]:>7.3g} {u:<2} {tg:>10}")
+    lines.append(f"σ_model contraction now {step.contraction_now:.2f}"
+                 + (f" (target {step.contraction_target:g})" if step.contraction_target is not None else ""))
+    return "\n".join(lines)
+
+
+def expected_table(design: Design) -> pd.DataFrame:
+    """The before/after table of design.html."""
+    rows = []
+    for t, e in expected(design).items():
+        rows.append({"quantity": t, "unit": e["unit"], "sd now": e["sd_before"], "sd after (mean)": e["sd_after"],
+                     "10 %": e["sd_after_p10"], "90 %": e["sd_after_p90"], "target": e["target"],
+                     "met in": e["share_met"]})
+    return pd.DataFrame(rows).set_index("quantity")
+
+
+
+class DesignResult:
+    """The result of ``design``: :attr:`design`, and where it was written (``-o``)."""
+
+    def __init__(self, design: Design, output: str | None = None, files=(), campaign: str | None = None):
+        self.design, self.output, self.files, self.campaign = design, output, list(files), campaign
+
+    def to_json(self) -> dict:
+        return {**design_document(self.design, self.campaign, programs=self.output is not None),
+                "output": self.output, "files": self.files}
+
+    def to_text(self) -> str:
+        text = design_text(self.design)
+        if self.output:
+            text += f"\n\ndesign written to {self.output}/: {', '.join(self.files)}"
+        return text
+
+
+class NextResult:
+    """The result of ``next``: :attr:`step`, and the re-planned campaign and program when written (``-o``)."""
+
+    def __init__(self, step: NextStep, output: str | None = None, files=(), program: str | None = None):
+        self.step, self.output, self.files, self.program = step, output, list(files), program
+
+    def to_json(self) -> dict:
+        return {**next_document(self.step, self.program), "output": self.output, "files": self.files}
+
+    def to_text(self) -> str:
+        text = next_text(self.step)
+        if self.output:
+            text += f"\n\nwritten to {self.output}/: {', '.join(self.files)}"
+        return text
+
+
+def write_next(step: NextStep, out_dir, *, program, times: dict | None = None) -> tuple[list[str], str | None]:
+    """The re-planned campaign (measured runs, then the re-planned runs) and the programs in ``out_dir``."""
+    if step.design is None:
+        return [], None
+    files, _ = write_design(step.design, out_dir, program=program, times=times)
+    return files, str(Path(out_dir) / program_name(1, step.design.runs[0].pattern)) if step.design.runs else None
+
+
+__all__ = ["DesignResult", "NextResult", "write_next", "design_document", "design_text", "designed_campaign", "write_design", "next_document", "next_text",
+           "run_records", "expected", "expected_table", "program_name"]

@@ -1,0 +1,257 @@
+"""A whole campaign's expected posterior, fast enough to search over (SPEC §16, docs/design.md).
+
+A design is a count ``n_k`` of runs of each candidate ``k`` (0 … :data:`MAX_INSTANCES`).  The first
+run of a candidate is the candidate as it is (its setup's and mount's nuisance offsets shared with
+every run there); each further run is on a W-ball placement of its own, whose offsets are
+integrated out (they add ``X_W X_Wᵀ`` to that run's noise covariance, as in
+:meth:`Planner._trace_new_runs`).
+
+σ_model is unknown.  The criterion is evaluated at :data:`NODE_LEVELS` quantiles ``σ_s`` of its
+current distribution (its prior for a new machine, else its exact posterior given the measured
+runs, :class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`).  At a fixed σ the linear model's
+posterior is exact and does not depend on the data, so in the parameters' prior-sd coordinates
+(``X = A·diag(prior sd)``) every run adds ``Xᵀ N⁻¹ X`` to the precision ``I + M₁`` and the moments
+``Mⱼ = Xᵀ N⁻ʲ X`` (j = 1, 2, 3) and ``t = tr N⁻²`` from which the Fisher information about σ,
+``I(σ) = 2σ² tr C⁻²``, follows by Woodbury (:func:`.design.trace_inv_sq`).  Per node:
+
+* the target sds ``sd_t(σ_s) = sqrt(T′ (I + M₁)⁻¹ T′ᵀ)``;
+* the σ_model contraction by Laplace, ``1 − 1/(1 + var_prior·I(σ_s))``.
+
+A target is *promised* when ``sd_t`` at the :data:`PROMISE` quantile of σ meets it (``sd_t`` grows
+with σ, so that is the sd met in that share of machines, before the extra spread of σ being learnt
+from the data; :mod:`.design_check` measures the realised share by exact Monte Carlo).  The
+contraction is the average over the nodes.  All candidates are evaluated in one batched inverse.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from .. import units
+from ..inference.marginal import MarginalPosterior
+from ..inference.priors import make_prior
+from .design import Planner, sigma_contraction
+
+#: most runs of one candidate in a design (each further one on its own W-ball placement)
+MAX_INSTANCES = 3
+#: quantiles of σ_model at which the criterion is evaluated
+NODE_LEVELS = (0.1, 0.3, 0.5, 0.7, 0.9)
+#: the share of machines for which a design promises its targets: the sd is taken at this quantile of σ_model
+PROMISE = 0.9
+
+
+@dataclass
+class DesignValue:
+    """The criterion of one or many designs (leading axis ``B``).
+
+    ``sd_nodes`` (B, S, t) target sds at the σ nodes, display units; ``contraction_nodes`` (B, S).
+    """
+
+    sd_nodes: np.ndarray
+    contraction_nodes: np.ndarray
+
+    @property
+    def sd_promised(self) -> np.ndarray:
+        """(B, t) the sd at the :data:`PROMISE` quantile of σ_model."""
+        return self.sd_nodes[:, NODE_LEVELS.index(PROMISE)]
+
+    @property
+    def sd_mean(self) -> np.ndarray:
+        """(B, t) the sd averaged over σ_model."""
+        return self.sd_nodes.mean(axis=1)
+
+    @property
+    def contraction(self) -> np.ndarray:
+        """(B,) the σ_model contraction averaged over σ_model."""
+        return self.contraction_nodes.mean(axis=1)
+
+
+def sigma_nodes(planner: Planner, levels=NODE_LEVELS) -> np.ndarray:
+    """σ_model (mm) at ``levels`` of its current distribution: the prior without measured runs, else the exact
+    σ-marginal posterior of the linear model given the measured means."""
+    prior = planner.sigma_prior()
+    if len(planner.V) == 0:
+        return np.array([float(prior.ppf(q)) for q in levels])
+    now = current_posterior(planner)
+    w = now.weights(planner.observations.mean[None])[:, 0]
+    edges = now.edges[0]
+    cdf = np.concatenate([[0.0], np.cumsum(w)])
+    return np.interp(levels, cdf / cdf[-1], edges)
+
+
+def current_posterior(planner: Planner) -> MarginalPosterior:
+    """The exact σ-marginal posterior of the planner's campaign (ball-bar rows), its data fitted into the grid."""
+    sigma0 = planner.sigma_model
+    return MarginalPosterior(planner.A, planner.V - sigma0**2, planner.prior_var, planner.sigma_prior(),
+                             prior_mean=prior_means(planner), y=planner.observations.mean)
+
+
+def prior_means(planner: Planner) -> np.ndarray:
+    """(P,) prior means of the planner's parameters, internal units."""
+    return np.array([make_prior(p.name, p.base, p.kind, planner.campaign.priors).mean
+                     for p in planner.space.parameters])
+
+
+def _inv_powers(N: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``N⁻¹, N⁻², N⁻³`` of a batch of symmetric positive definite matrices ``(..., r, r)``."""
+    Ni = np.linalg.inv(N)
+    N2 = Ni @ Ni
+    return Ni, N2, N2 @ Ni
+
+
+class DesignProblem:
+    """Candidates, their contributions at the σ nodes, and the criterion of any count vector.
+
+    Parameters
+    ----------
+    planner : :class:`.design.Planner` over the campaign (ball-bar data) and the candidates
+    nodes : σ_model values (S,), mm (default :func:`sigma_nodes`)
+    """
+
+    def __init__(self, planner: Planner, nodes: np.ndarray | None = None):
+        self.planner = planner
+        self.candidates = planner.candidates
+        self.nodes = sigma_nodes(planner) if nodes is None else np.asarray(nodes, float)
+        self.sigma_prior_var = float(planner.sigma_prior().var())
+        scale = np.sqrt(planner.prior_var)
+        rows = planner.candidate_rows()
+        s2 = self.nodes**2  # (S,)
+        X0 = planner.A * scale
+        cols = np.any(X0 != 0.0, axis=0)
+        for A, _ in rows:
+            cols |= np.any(A != 0.0, axis=0)
+        self.cols = np.flatnonzero(cols)
+        X0 = X0[:, self.cols]
+        self.Tp = (planner.T * scale)[:, self.cols]  # (t, P')
+        to_display = np.array([units.from_internal(1.0, u) for u in planner.target_units])
+        self.to_display = to_display
+        P = len(self.cols)
+        base0 = planner.V - planner.sigma_model**2
+        N0 = base0[None, :] + s2[:, None]  # (S, m)
+        self.base = [np.einsum("mp,sm,mq->spq", X0, N0 ** -j, X0) for j in (1, 2, 3)]  # each (S, P, P)
+        self.base_t = np.sum(N0 ** -2.0, axis=1)  # (S,)
+        K, S = len(rows), len(self.nodes)
+        self.first = np.zeros((3, K, S, P, P))
+        self.again = np.zeros((3, K, S, P, P))
+        self.first_t = np.zeros((K, S))
+        self.again_t = np.zeros((K, S))
+        r_max = max((len(A) for A, _ in rows), default=1)
+        # low-rank factors of each run, padded to r_max rows (zero rows, unit noise): rows X (K, r, P) and noise
+        # N, N⁻², N⁻³ (K, S, r, r) of a first run (f) and a further one (a), for :meth:`value_plus_one`
+        self.Xf, self.Xa = np.zeros((K, r_max, P)), np.zeros((K, r_max, P))
+        self.Nf = np.broadcast_to(np.eye(r_max), (K, S, r_max, r_max)).copy()
+        self.Na = self.Nf.copy()
+        self.D2f, self.D3f = np.zeros_like(self.Nf), np.zeros_like(self.Nf)
+        self.D2a, self.D3a = np.zeros_like(self.Nf), np.zeros_like(self.Nf)
+        names = planner.space.parameters
+        for k, ((A, w), c) in enumerate(zip(rows, self.candidates)):
+            Xc = (A * scale)[:, self.cols]
+            base_c = 1.0 / w - planner.sigma_model**2  # (r,)
+            Nc = base_c[None, :] + s2[:, None]  # (S, r)
+            for j in (1, 2, 3):
+                self.first[j - 1, k] = np.einsum("rp,sr,rq->spq", Xc, Nc ** -j, Xc)
+            self.first_t[k] = np.sum(Nc ** -2.0, axis=1)
+            own = np.array([names[i].group == "mount" and names[i].owner == c.mount.id for i in self.cols])
+            Xw = Xc[:, own]
+            Xr = np.where(own[None, :], 0.0, Xc)
+            Nr = np.einsum("sr,rq->srq", Nc, np.eye(len(base_c))) + (Xw @ Xw.T)[None]
+            powers = _inv_powers(Nr)
+            for j, Nj in enumerate(powers):
+                self.again[j, k] = np.einsum("rp,srq,qk->spk", Xr, Nj, Xr)
+            self.again_t[k] = np.trace(powers[1], axis1=1, axis2=2)
+            r = len(base_c)
+            self.Xf[k, :r], self.Xa[k, :r] = Xc, Xr
+            self.Nf[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc, np.eye(r))
+            self.Na[k, :, :r, :r] = Nr
+            self.D2f[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc ** -2.0, np.eye(r))
+            self.D3f[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc ** -3.0, np.eye(r))
+            self.D2a[k, :, :r, :r], self.D3a[k, :, :r, :r] = powers[1], powers[2]
+
+    # ------------------------------------------------------------------ criterion
+    def moments(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(M (3, B, S, P, P), t (B, S))`` of designs ``counts`` (B, K)."""
+        counts = np.atleast_2d(counts)
+        first = (counts >= 1).astype(float)
+        again = np.maximum(counts - 1, 0).astype(float)
+        K = len(self.candidates)
+        flat = lambda a: a.reshape(3, K, -1)  # noqa: E731  (candidates × everything else, for one matmul)
+        shape = (3, len(counts)) + self.first.shape[2:]
+        M = (np.stack(self.base)[:, None] + (first @ flat(self.first)).reshape(shape)
+             + (again @ flat(self.again)).reshape(shape))
+        t = self.base_t[None] + first @ self.first_t + again @ self.again_t
+        return M, t
+
+    def value(self, counts: np.ndarray) -> DesignValue:
+        """The criterion of designs ``counts`` (B, K) or (K,)."""
+        M, t = self.moments(counts)
+        return self._value(M, t)
+
+    def _value(self, M: np.ndarray, t: np.ndarray) -> DesignValue:
+        P = M.shape[-1]
+        Sinv = np.linalg.inv(np.eye(P) + M[0])  # (B, S, P, P): posterior covariance, prior-sd coordinates
+        var = np.sum((Sinv @ self.Tp.T) * self.Tp.T, axis=-2)  # (B, S, t)
+        sd = np.sqrt(np.maximum(var, 0.0)) * self.to_display
+        G = Sinv @ M[1]
+        # traces of products of symmetric matrices as element sums: tr(AB) = Σ A∘B, tr(GG) = Σ G∘Gᵀ
+        tr = t - 2.0 * np.sum(Sinv * M[2], axis=(-2, -1)) + np.sum(G * np.swapaxes(G, -1, -2), axis=(-2, -1))
+        fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
+        return DesignValue(sd, sigma_contraction(fisher, self.sigma_prior_var))
+
+    def value_plus_one(self, counts: np.ndarray) -> tuple[DesignValue, np.ndarray]:
+        """The criterion of ``counts`` plus one more run of each candidate ``k`` (K designs) and which of them are
+        allowed (fewer than :data:`MAX_INSTANCES` runs of ``k``).
+
+        One inverse per σ node for the design as it is; each candidate then by rank-r updates (Woodbury, r ≤ 3
+        rows per run), with ``Σ`` the design's posterior covariance, ``X`` the run's rows and ``N`` their noise
+        covariance: ``Σ′ = Σ − Z``, ``Z = ΣXᵀ W⁻¹ XΣ``, ``W = N + XΣXᵀ``; the target variances fall by
+        ``diag(TZTᵀ)``; with ``Y = Xᵀ N⁻² X`` and ``A = Σ M₂``, ``Σ′(M₂ + Y) = A + ΣXᵀ R`` with
+        ``R = N⁻²X − W⁻¹(XΣM₂) − W⁻¹(XΣXᵀ)N⁻²X``, so ``tr((Σ′M₂′)²) = tr A² + 2 tr(R A ΣXᵀ) + tr((R ΣXᵀ)²)`` and
+        ``tr(Σ′M₃′) = tr(ΣM₃) + tr(N⁻³ H) − tr(W⁻¹(XΣM₃ΣXᵀ + H N⁻³ H))``, ``H = XΣXᵀ``.  Equal to
+        :meth:`value` of each design (``tests/test_design.py``).
+        """
+        counts = np.asarray(counts)
+        M, t = self.moments(counts)
+        P = M.shape[-1]
+        Sig = np.linalg.inv(np.eye(P) + M[0, 0])  # (S, P, P)
+        M2, M3 = M[1, 0], M[2, 0]
+        A = Sig @ M2
+        var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2)  # (S, t)
+        trA2 = np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1))  # (S,)
+        trSM3 = np.sum(Sig * M3, axis=(-2, -1))
+        first = (counts == 0)[:, None, None, None]
+        X = np.where(first[..., 0], self.Xf, self.Xa)  # (K, r, P)
+        N = np.where(first, self.Nf, self.Na)  # (K, S, r, r)
+        D2 = np.where(first, self.D2f, self.D2a)
+        D3 = np.where(first, self.D3f, self.D3a)
+        dt = np.where(counts[:, None] == 0, self.first_t, self.again_t)  # (K, S)
+        XS = np.einsum("krp,spq->ksrq", X, Sig)  # (K, S, r, P): XΣ
+        XSt = np.swapaxes(XS, -1, -2)
+        H = XS @ np.swapaxes(X, -1, -2)[:, None]  # (K, S, r, r): XΣXᵀ
+        Winv = np.linalg.inv(N + H)
+        Q = XS @ self.Tp.T  # (K, S, r, t)
+        var_new = var[None] - np.sum(Q * (Winv @ Q), axis=-2)
+        D2X = D2 @ X[:, None]  # (K, S, r, P)
+        R = D2X - Winv @ (XS @ M2[None]) - Winv @ (H @ D2X)
+        AXSt = A[None] @ XSt  # (K, S, P, r)
+        RX = R @ XSt  # (K, S, r, r)
+        trE2 = trA2[None] + 2.0 * np.einsum("ksrp,kspr->ks", R, AXSt) + np.einsum("ksij,ksji->ks", RX, RX)
+        XSM3XS = XS @ M3[None] @ XSt
+        trSM3_new = (trSM3[None] + np.einsum("ksij,ksji->ks", D3, H)
+                     - np.einsum("ksij,ksji->ks", Winv, XSM3XS + H @ D3 @ H))
+        tr = t[0][None] + dt - 2.0 * trSM3_new + trE2
+        fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
+        sd = np.sqrt(np.maximum(var_new, 0.0)) * self.to_display
+        return DesignValue(sd, sigma_contraction(fisher, self.sigma_prior_var)), counts < MAX_INSTANCES
+
+    def value_now(self) -> DesignValue:
+        """The criterion of the campaign as it is."""
+        return self.value(np.zeros(len(self.candidates), dtype=int))
+
+    def sigma_quantile(self, q: float) -> float:
+        """σ_model at level ``q`` by interpolation of the nodes, mm."""
+        return float(np.interp(q, NODE_LEVELS, self.nodes))
+
+
+__all__ = ["DesignProblem", "DesignValue", "sigma_nodes", "current_posterior", "prior_means", "MAX_INSTANCES",
+           "NODE_LEVELS", "PROMISE"]

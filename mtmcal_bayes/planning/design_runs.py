@@ -1,0 +1,87 @@
+"""The runs of a design as campaign runs: ids, W-ball placements, the campaign they extend.
+
+A design counts runs per candidate; here each becomes one run.  The first run of a candidate is
+at the candidate's mount; each further one is on a W-ball placement of its own (a re-clamped ball:
+own offsets, the campaign format's rule for a second run of one pattern, setup and mount), named
+``<mount>#2``, ``<mount>#3`` at the same geometry.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..campaign import Campaign, Mount, Run, Setup
+from ..patterns import COMPONENTS
+from .candidates import Candidate
+
+
+@dataclass(frozen=True)
+class DesignedRun:
+    """One run of a design: its candidate, which run of that candidate it is (1, 2, …) and its geometry."""
+
+    candidate: Candidate
+    instance: int
+    setup: Setup
+    mount: Mount
+
+    @property
+    def pattern(self) -> str:
+        return self.candidate.pattern
+
+    @property
+    def repeats(self) -> int:
+        return self.candidate.repeats
+
+    @property
+    def length(self) -> float:
+        return self.candidate.length
+
+    @property
+    def label(self) -> str:
+        return f"{self.pattern}@{self.setup.id}/{self.mount.id}"
+
+
+def designed_runs(candidates: list[Candidate], counts: np.ndarray, taken=()) -> list[DesignedRun]:
+    """The runs of ``counts`` (K,) in candidate order (not yet in measuring order); a further run's placement gets
+    the first id ``<mount>#2``, ``<mount>#3``, … not in ``taken`` (the mount ids already in use)."""
+    used = set(taken)
+    out = []
+    for k in np.flatnonzero(counts):
+        c = candidates[k]
+        n = 2
+        for i in range(1, int(counts[k]) + 1):
+            mount = c.mount
+            if i > 1:
+                while f"{c.mount.id}#{n}" in used:
+                    n += 1
+                mount = Mount(f"{c.mount.id}#{n}", c.mount.Z_C, c.mount.R_C)
+                used.add(mount.id)
+            out.append(DesignedRun(c, i, c.setup, mount))
+    return out
+
+
+def geometry_of(campaign: Campaign, runs: list[DesignedRun]) -> tuple[dict[str, Setup], dict[str, Mount]]:
+    """The campaign's setups and mounts plus those the runs bring."""
+    setups, mounts = dict(campaign.ballbar.setups), dict(campaign.ballbar.mounts)
+    for r in runs:
+        setups.setdefault(r.setup.id, r.setup)
+        mounts.setdefault(r.mount.id, r.mount)
+    return setups, mounts
+
+
+def with_runs(campaign: Campaign, runs: list[DesignedRun]) -> Campaign:
+    """A copy of ``campaign`` with ``runs`` appended as runs of zero eccentricities (``repeats`` each): the rows
+    of the forward models for them, after the measured runs' rows."""
+    aug = copy.copy(campaign)
+    bb = copy.copy(campaign.ballbar)
+    bb.setups, bb.mounts = geometry_of(campaign, runs)
+    bb.runs = list(bb.runs) + [Run(r.pattern, r.setup.id, r.mount.id,
+                                   {comp: np.zeros(r.repeats) for comp in COMPONENTS[r.pattern]}) for r in runs]
+    aug.ballbar = bb
+    return aug
+
+
+__all__ = ["DesignedRun", "designed_runs", "geometry_of", "with_runs"]

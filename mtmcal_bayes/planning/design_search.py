@@ -1,0 +1,227 @@
+"""Search for the design: fewest machine minutes that meet the targets, or most improvement within a budget.
+
+Greedy by criterion gained per machine minute added, then an exchange refinement (drop a run, or swap
+one run for another, whenever the targets stay met and the minutes fall; within a budget: whenever the
+improvement grows), repeated from :data:`RESTARTS` randomised greedy starts (each score multiplied by
+a log-normal factor, the randomised-exchange idea of the optimal-design literature) and the best kept.
+Minutes are not additive — set-up changes are shared by the runs at one set-up — so every step asks the
+time model for the whole design's schedule.  ``tests/test_design.py`` compares the result with
+exhaustive search on small candidate sets.
+
+The criterion (:mod:`.design_problem`) is in log units so that sds and the σ_model contraction add up:
+
+* shortfall ``Φ = Σ_t max(0, ln(sd_t / target_t)) + max(0, ln((1 − c)/(1 − C)))``, ``sd_t`` the promised sd,
+  ``c`` the contraction, ``C`` its target: a design meets its targets when ``Φ = 0``;
+* improvement ``J = Σ_t ln(sd_t,now / sd_t) + ln((1 − c_now)/(1 − c))`` (sds averaged over σ_model).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .design_problem import MAX_INSTANCES, DesignProblem, DesignValue
+
+#: randomised greedy starts after the plain greedy one
+RESTARTS = 3
+#: spread of the log-normal factor on the greedy scores of a randomised start
+JITTER = 0.3
+#: most exchange passes of one start
+MAX_PASSES = 30
+MET = 1e-9
+#: designs valued at once by :func:`exhaustive` (memory: 3 × CHUNK × S × P² floats)
+CHUNK = 128
+
+
+@dataclass
+class Goal:
+    """What a design must reach: ``targets`` (t,) sds in display units (NaN: none), ``contraction`` the σ_model
+    contraction (None: none), ``budget`` minutes (None: none)."""
+
+    targets: np.ndarray
+    contraction: float | None = None
+    budget: float | None = None
+
+    @property
+    def has_targets(self) -> bool:
+        return bool(np.any(np.isfinite(self.targets))) or self.contraction is not None
+
+
+def shortfall(v: DesignValue, goal: Goal) -> np.ndarray:
+    """(B,) ``Φ`` of designs valued ``v``."""
+    has = np.isfinite(goal.targets)
+    ratio = np.where(has, v.sd_promised / np.where(has, goal.targets, 1.0), 1.0)
+    phi = np.sum(np.maximum(0.0, np.log(ratio)), axis=1)
+    if goal.contraction is not None:
+        phi = phi + np.maximum(0.0, np.log((1.0 - v.contraction) / (1.0 - goal.contraction)))
+    return phi
+
+
+def improvement(v: DesignValue, now: DesignValue) -> np.ndarray:
+    """(B,) ``J`` of designs valued ``v`` against the campaign ``now``."""
+    sd = np.sum(np.log(now.sd_mean / np.maximum(v.sd_mean, 1e-300)), axis=1)
+    return sd + np.log((1.0 - now.contraction) / np.maximum(1.0 - v.contraction, 1e-300))
+
+
+@dataclass
+class SearchResult:
+    counts: np.ndarray  # (K,)
+    minutes: float
+    value: DesignValue
+    met: bool
+    starts: int
+
+
+class Search:
+    """The search over count vectors of ``problem``'s candidates with the time model ``minutes(counts)``."""
+
+    def __init__(self, problem: DesignProblem, goal: Goal, minutes: Callable[[np.ndarray], float],
+                 allowed: np.ndarray | None = None):
+        self.problem, self.goal, self._minutes = problem, goal, minutes
+        K = len(problem.candidates)
+        self.allowed = np.ones(K, dtype=bool) if allowed is None else np.asarray(allowed, dtype=bool)
+        self.now = problem.value_now()
+        self._cache: dict[bytes, float] = {}
+
+    def minutes(self, counts: np.ndarray) -> float:
+        key = counts.astype(np.int8).tobytes()
+        if key not in self._cache:
+            self._cache[key] = float(self._minutes(counts))
+        return self._cache[key]
+
+    def _score(self, v: DesignValue) -> np.ndarray:
+        """Lower is better: the shortfall with targets, minus the improvement without."""
+        return shortfall(v, self.goal) if self.goal.has_targets else -improvement(v, self.now)
+
+    def _fits(self, m: float) -> bool:
+        return self.goal.budget is None or m <= self.goal.budget + 1e-9
+
+    # ------------------------------------------------------------------ greedy
+    def greedy(self, rng: np.random.Generator | None = None, start: np.ndarray | None = None) -> np.ndarray:
+        K = len(self.problem.candidates)
+        counts = np.zeros(K, dtype=int) if start is None else start.copy()
+        score = float(self._score(self.problem.value(counts))[0])
+        while True:
+            if self.goal.has_targets and score <= MET:
+                return counts
+            vp, ok = self.problem.value_plus_one(counts)
+            ok &= self.allowed
+            scores = self._score(vp)
+            gain = score - scores
+            m0 = self.minutes(counts)
+            best, pick = -np.inf, -1
+            for k in np.flatnonzero(ok & (gain > MET)):
+                trial = counts.copy()
+                trial[k] += 1
+                m = self.minutes(trial)
+                if not self._fits(m):
+                    continue
+                rate = gain[k] / max(m - m0, 1e-6)
+                if rng is not None:
+                    rate *= np.exp(JITTER * rng.standard_normal())
+                if rate > best:
+                    best, pick = rate, k
+            if pick < 0:
+                return counts
+            counts[pick] += 1
+            score = float(scores[pick])
+
+    # ------------------------------------------------------------------ exchange
+    def _better(self, score: float, m: float, score0: float, m0: float) -> bool:
+        if self.goal.has_targets:  # meet the targets, then fewer minutes
+            if score0 > MET:
+                return score < score0 - MET
+            return score <= MET and m < m0 - 1e-9
+        return self._fits(m) and (score < score0 - 1e-9 or (abs(score - score0) <= 1e-9 and m < m0 - 1e-9))
+
+    def exchange(self, counts: np.ndarray) -> np.ndarray:
+        """Drops and swaps that improve the design, best first, until none does."""
+        counts = counts.copy()
+        for _ in range(MAX_PASSES):
+            score0 = float(self._score(self.problem.value(counts))[0])
+            m0 = self.minutes(counts)
+            best = None
+            for k in np.flatnonzero(counts > 0):
+                less = counts.copy()
+                less[k] -= 1
+                s_less = float(self._score(self.problem.value(less))[0])
+                m_less = self.minutes(less)
+                if self._better(s_less, m_less, score0, m0):
+                    best = self._keep(best, (s_less, m_less, less))
+                vp, ok = self.problem.value_plus_one(less)
+                ok &= self.allowed
+                ok[k] = False
+                scores = self._score(vp)
+                for j in np.flatnonzero(ok):
+                    if self.goal.has_targets and scores[j] > MET and score0 <= MET:
+                        continue
+                    trial = less.copy()
+                    trial[j] += 1
+                    m = self.minutes(trial)
+                    if self._better(float(scores[j]), m, score0, m0):
+                        best = self._keep(best, (float(scores[j]), m, trial))
+            if not self.goal.has_targets:  # within a budget, room may be left for one more run
+                vp, ok = self.problem.value_plus_one(counts)
+                scores = self._score(vp)
+                for j in np.flatnonzero(ok & self.allowed & (scores < score0 - 1e-9)):
+                    trial = counts.copy()
+                    trial[j] += 1
+                    m = self.minutes(trial)
+                    if self._fits(m):
+                        best = self._keep(best, (float(scores[j]), m, trial))
+            if best is None:
+                return counts
+            counts = best[2]
+        return counts
+
+    def _keep(self, best, new):
+        if best is None:
+            return new
+        if self.goal.has_targets:
+            return new if (new[0], new[1]) < (best[0], best[1]) else best
+        return new if (new[0], new[1]) < (best[0], best[1]) else best
+
+    # ------------------------------------------------------------------ run
+    def run(self, seed: int | None = 0, restarts: int = RESTARTS) -> SearchResult:
+        rng = np.random.default_rng(seed)
+        best = None
+        for r in range(restarts + 1):
+            counts = self.exchange(self.greedy(rng if r else None))
+            v = self.problem.value(counts)
+            score = float(self._score(v)[0])
+            m = self.minutes(counts)
+            key = (score if self.goal.has_targets and score > MET else 0.0, m) if self.goal.has_targets else (score, m)
+            if best is None or key < best[0]:
+                best = (key, counts, v)
+        counts, v = best[1], best[2]
+        met = bool(shortfall(v, self.goal)[0] <= MET)
+        return SearchResult(counts, self.minutes(counts), v, met, restarts + 1)
+
+
+def exhaustive(problem: DesignProblem, goal: Goal, minutes: Callable[[np.ndarray], float],
+               max_count: int = 1) -> SearchResult:
+    """The best design by enumerating every count vector with counts up to ``max_count`` (small K only)."""
+    K = len(problem.candidates)
+    grids = np.stack(np.meshgrid(*[np.arange(max_count + 1)] * K, indexing="ij"), axis=-1).reshape(-1, K)
+    s = Search(problem, goal, minutes)
+    score = np.concatenate([s._score(problem.value(grids[i:i + CHUNK])) for i in range(0, len(grids), CHUNK)])
+    m = np.array([minutes(c) for c in grids])
+    if goal.has_targets:
+        ok = score <= MET
+        if goal.budget is not None:
+            ok &= m <= goal.budget + 1e-9
+        if not ok.any():
+            i = int(np.argmin(score))
+        else:
+            i = int(np.flatnonzero(ok)[np.argmin(m[ok])])
+    else:
+        ok = m <= goal.budget + 1e-9
+        idx = np.flatnonzero(ok)
+        i = int(idx[np.lexsort((m[idx], score[idx]))[0]])
+    vi = problem.value(grids[i])
+    return SearchResult(grids[i], float(m[i]), vi, bool(shortfall(vi, goal)[0] <= MET), len(grids))
+
+
+__all__ = ["Goal", "Search", "SearchResult", "shortfall", "improvement", "exhaustive", "MAX_INSTANCES"]

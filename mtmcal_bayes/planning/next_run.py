@@ -1,0 +1,138 @@
+"""``next``: on a partly measured designed campaign, the next run to measure or "stop: every target reached".
+
+The posterior so far is the exact σ-marginal posterior of the measured runs (σ_model learnt from what
+is measured).  When every target sd is met by it and σ_model's contraction reached, the answer is
+*stop*, with the probability that the targets are met: the posterior probability of σ_model's values
+at which the σ-conditional sds all meet them (the sds themselves are known, σ_model is not).  Otherwise
+the rest of the campaign is designed again from the machine's current state (the ball bar mounted at
+the last measured run's set-up and placement), the remaining planned runs among the candidates: a
+planned run may be dropped, another added, when the data differ from what the design expected.  The
+first run of that re-plan is the next one; the probability is the share of simulated machines in which
+the re-plan meets every target (:mod:`.design_check`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import units
+from ..errors import ParameterError
+from ..machine_time import TimeModel
+from ..parameters import IDENTIFIABLE
+from .candidates import Candidate
+from .design import Planner
+from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets
+from .design_problem import current_posterior
+
+
+#: re-plans with the targets tightened when the closed form finds nothing left to measure but the exact posterior
+#: has not met them yet
+RETRIES = 4
+
+
+@dataclass
+class NextStep:
+    """The answer of ``next``: ``status`` "measure" or "stop"; the re-plan (``design``) when measuring."""
+
+    status: str
+    targets: list[str]
+    target_units: list[str]
+    target_sd: np.ndarray  # (t,) NaN where none
+    sd_now: np.ndarray  # (t,) exact posterior sd today, display units
+    contraction_now: float
+    contraction_target: float | None
+    probability_targets_met: float
+    design: Design | None = None
+    measured: int = 0
+    planned_left: list[str] = field(default_factory=list)
+    dropped: list[str] = field(default_factory=list)
+    added: list[str] = field(default_factory=list)
+
+    @property
+    def minutes_left(self) -> float:
+        return 0.0 if self.design is None else self.design.total_minutes
+
+
+def planned_candidates(campaign) -> list[Candidate]:
+    """The campaign's planned runs as candidates of the re-plan."""
+    bb = campaign.ballbar
+    out = []
+    for p in bb.planned:
+        s, m = bb.setups[p.setup], bb.mounts[p.mount]
+        out.append(Candidate(f"{p.label} (planned)", "planned", p.pattern, s, m, bb.length, p.repeats,
+                             extension=s.R_B - campaign.primary_setup().R_B))
+    return out
+
+
+def _conditional_met(planner: Planner, targets: np.ndarray, contraction_ok: bool) -> float:
+    """Posterior probability of the σ_model values at which every σ-conditional target sd meets its target."""
+    if not contraction_ok:
+        return 0.0
+    now = current_posterior(planner)
+    w = now.weights(planner.observations.mean[None])[:, 0]
+    var = np.einsum("tp,gpq,tq->gt", planner.T, now.cov, planner.T)
+    scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
+    sd = np.sqrt(np.maximum(var, 0.0)) * scale
+    ok = np.all(sd <= np.where(np.isfinite(targets), targets, np.inf), axis=1)
+    return float(w @ ok)
+
+
+def next_step(campaign, *, targets: dict | None = None, contraction: float | None = None,
+              budget_min: float | None = None, time_model: TimeModel | None = None, candidates=None,
+              model: str = "linear", seed: int | None = 0, n_sim: int | None = None) -> NextStep:
+    """The next run of a designed campaign, or stop (see the module docstring).  Targets, contraction and budget
+    default to the campaign's ``[design]``."""
+    goal = campaign.design
+    want = parse_targets(targets if targets is not None else (goal.targets if goal else {}))
+    if contraction is None:
+        contraction = goal.contraction if goal and goal.contraction is not None else CONTRACTION
+    if budget_min is None and goal is not None:
+        budget_min = goal.budget_min
+    bb = campaign.ballbar
+    cands = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []))
+    names = list(dict.fromkeys(list(want) + list(IDENTIFIABLE)))
+    planner = Planner(campaign, cands, names, model=model)
+    tg = np.array([want.get(t, np.nan) for t in planner.targets])
+    scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
+    if bb.runs:
+        now = current_posterior(planner)
+        _, sd = now.target_moments(planner.observations.mean[None], planner.T)
+        sd_now = sd[0] * scale
+        w = now.weights(planner.observations.mean[None])[:, 0]
+        s = now.sigma[:, 0]
+        prior_var = float(planner.sigma_prior().var())
+        c_now = float(1.0 - (w @ s**2 - (w @ s) ** 2) / prior_var)
+    else:  # nothing measured yet: the priors
+        sd_now = np.sqrt((planner.T**2) @ planner.prior_var) * scale
+        c_now = 0.0
+    met = bool(np.all(sd_now <= np.where(np.isfinite(tg), tg, np.inf))) and c_now >= contraction
+    base = dict(targets=list(planner.targets), target_units=list(planner.target_units), target_sd=tg, sd_now=sd_now,
+                contraction_now=c_now, contraction_target=contraction, measured=len(bb.runs),
+                planned_left=[p.label for p in bb.planned])
+    if met:
+        return NextStep("stop", probability_targets_met=_conditional_met(planner, tg, c_now >= contraction), **base)
+    start = (True, bb.runs[-1].setup, bb.runs[-1].mount) if bb.runs else (False, None, None)
+    goal, contraction_goal = dict(want), contraction
+    for _ in range(RETRIES):
+        design = make_design(campaign, targets=goal, contraction=contraction, budget_min=budget_min,
+                             candidates=[c for c in cands if c.kind in ("planned", "user")],
+                             time_model=time_model, model=model, seed=seed, start=start, n_sim=n_sim)
+        if design.runs:
+            break
+        # the closed form already promises what the exact posterior has not reached: ask it for the ratio more
+        goal = {q: v * min(1.0, v / sd_now[planner.targets.index(q)]) ** 2 for q, v in goal.items()}
+        if c_now < contraction_goal:  # and halve what σ_model's variance may keep of its prior, until a run is due
+            contraction = 1.0 - 0.5 * (1.0 - contraction)
+    if not design.runs:
+        short = [q for q in want if sd_now[planner.targets.index(q)] > want[q]]
+        raise ParameterError("targets", f"{', '.join(short) or 'σ_model contraction'} not reached yet, and no candidate "
+                             "run lowers it further in the closed form: relax the target or add candidates")
+    planned = {p.label for p in bb.planned}
+    chosen = {r.label for r in design.runs}
+    return NextStep("measure", probability_targets_met=design.check.share_all_met(tg), design=design,
+                    dropped=sorted(planned - chosen), added=sorted(chosen - planned), **base)
+
+
+__all__ = ["NextStep", "next_step", "planned_candidates"]

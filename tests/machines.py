@@ -1,0 +1,70 @@
+"""Simulated machines for the design's validation (tests/test_design.py, bench/design.py).
+
+A machine's truth — deviations, every set-up's and placement's nuisance offsets, σ_model — is drawn from the
+campaign's priors, each offset when first needed (a run at a new set-up or placement).  A planned run is
+measured through ``simulate`` (the linear model, the instrument error and the repeat scatter) plus a model
+discrepancy of sd σ_model on each component, shared by its repeats: the data-generating process the
+likelihood assumes.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from mtmcal_bayes.inference.log_posterior import SAMPLED_DEVIATIONS
+from mtmcal_bayes.inference.priors import make_prior
+from mtmcal_bayes.parameters import ParameterSpace
+from mtmcal_bayes.planning.design import Planner
+from mtmcal_bayes.planning.design_problem import current_posterior
+from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
+from mtmcal_bayes import units
+
+
+class SimulatedMachine:
+    def __init__(self, campaign, seed: int):
+        self.rng = np.random.default_rng(seed)
+        self.values: dict[str, float] = {}
+        self.priors = campaign.priors
+        self.sigma = float(make_prior("sigma_model", "sigma_model", "length", campaign.priors).frozen().rvs(
+            random_state=self.rng))
+
+    def truth(self, campaign):
+        bb = campaign.ballbar
+        space = ParameterSpace(list(bb.setups), list(bb.mounts), SAMPLED_DEVIATIONS)
+        for p in space.parameters:
+            if p.name not in self.values:
+                prior = make_prior(p.name, p.base, p.kind, self.priors)
+                self.values[p.name] = float(prior.frozen().rvs(random_state=self.rng))
+        return truth_from_vector(space, np.array([self.values[n] for n in space.names]))
+
+    def measure(self, campaign, index: int = 0):
+        """A copy of ``campaign`` with its planned run ``index`` measured on this machine (appended to its runs)."""
+        bb = campaign.ballbar
+        one = copy.deepcopy(campaign)
+        one.ballbar.planned = [bb.planned[index]]
+        filled = synthetic_campaign(one, self.truth(campaign), model="linear", noise=True,
+                                    seed=int(self.rng.integers(2**31)))
+        run = filled.ballbar.runs[-1]
+        for comp in run.repeats:  # the model discrepancy: one offset per component, shared by its repeats
+            run.repeats[comp] = run.repeats[comp] + self.rng.normal(0.0, self.sigma)
+        out = copy.deepcopy(campaign)
+        out.ballbar.runs = list(out.ballbar.runs) + [run]
+        out.ballbar.planned = [p for i, p in enumerate(bb.planned) if i != index]
+        out.design = campaign.design
+        return out
+
+    def measure_all(self, campaign):
+        out = campaign
+        while out.ballbar.planned:
+            out = self.measure(out, 0)
+        return out
+
+
+def realised_sd(campaign, targets) -> np.ndarray:
+    """The exact posterior sd of ``targets`` given the campaign's measured runs (display units)."""
+    pl = Planner(campaign, [], targets)
+    now = current_posterior(pl)
+    _, sd = now.target_moments(pl.observations.mean[None], pl.T)
+    return sd[0] * np.array([units.from_internal(1.0, u) for u in pl.target_units])
