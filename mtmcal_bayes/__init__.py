@@ -20,7 +20,7 @@ Layers, each importing only those below it (``tests/test_architecture.py``)::
     errors, units, progress, version, datasets,          foundation
     arviz_import
     parameters, patterns                                 names of quantities and patterns
-    campaign, observations                               the data of a calibration
+    campaign, observations, machine_time                 the data of a calibration, its machine minutes
     io                                                   files in and out
     models                                               forward models
     identification, inference, figure_style              thesis method, Bayesian engine, figure look

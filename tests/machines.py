@@ -68,3 +68,27 @@ def realised_sd(campaign, targets) -> np.ndarray:
     now = current_posterior(pl)
     _, sd = now.target_moments(pl.observations.mean[None], pl.T)
     return sd[0] * np.array([units.from_internal(1.0, u) for u in pl.target_units])
+
+
+def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int = 12, n_sim: int = 100):
+    """``next`` after every run on ``machine``: measure the run it names (planning it first when the re-plan added
+    it) until it says stop.  Returns the measured campaign, the minutes used and the last answer."""
+    from mtmcal_bayes.campaign import PlannedRun
+    from mtmcal_bayes.planning.next_run import next_step
+
+    c, minutes = campaign, 0.0
+    for _ in range(max_runs):
+        step = next_step(c, n_sim=n_sim)
+        if step.status == "stop":
+            break
+        run = step.design.runs[0]
+        minutes += step.design.minutes[0]
+        index = next((j for j, p in enumerate(c.ballbar.planned) if p.label == run.label), None)
+        if index is None:  # the re-plan added a run: plan it, then measure it
+            c = copy.deepcopy(c)
+            c.ballbar.setups.setdefault(run.setup.id, run.setup)
+            c.ballbar.mounts.setdefault(run.mount.id, run.mount)
+            c.ballbar.planned.append(PlannedRun(run.pattern, run.setup.id, run.mount.id, run.repeats))
+            index = len(c.ballbar.planned) - 1
+        c = machine.measure(c, index)
+    return c, minutes, step

@@ -232,41 +232,29 @@ def test_promised_share_holds_on_simulated_machines(new_machine):
 
 
 def test_sequential_measuring_stops_no_later_than_the_fixed_design(new_machine):
-    """``next`` after every run on simulated machines: it stops when the data allow, and on average uses no more
-    machine minutes than measuring the whole fixed design (3 machines here; 50 in bench/design.py)."""
+    """``next`` after every run on simulated machines: it stops with every target met, and where the fixed design
+    also meets them (the same machine measuring it) it uses no more machine minutes than the fixed design on
+    average (3 machines here; 50 in bench/design.py, which also reports the machines the fixed design fails on)."""
+    import copy
+
     import mtmcal_bayes as mb
     from mtmcal_bayes.planning.design_output import designed_campaign
-    from mtmcal_bayes.planning.next_run import next_step
-    from tests.machines import SimulatedMachine, realised_sd
+    from tests.machines import SimulatedMachine, measure_sequentially, realised_sd
 
     tg = {"alpha_XB": 1.5, "dy_CZ": 8.0}
+    limit = np.array(list(tg.values()))
     d = mb.design(new_machine, targets=tg).design
     fixed = d.total_minutes
     used = []
     for i in range(3):
         machine = SimulatedMachine(new_machine, 2000 + i)
-        c = designed_campaign(d)
-        minutes = 0.0
-        for _ in range(12):
-            step = next_step(c, n_sim=100)
-            if step.status == "stop":
-                break
-            run = step.design.runs[0]
-            minutes += step.design.minutes[0]
-            index = next((j for j, p in enumerate(c.ballbar.planned) if p.label == run.label), None)
-            if index is None:  # the re-plan added a run: plan it, then measure it
-                from mtmcal_bayes.campaign import PlannedRun
-
-                c.ballbar.setups.setdefault(run.setup.id, run.setup)
-                c.ballbar.mounts.setdefault(run.mount.id, run.mount)
-                c.ballbar.planned = c.ballbar.planned + [PlannedRun(run.pattern, run.setup.id, run.mount.id,
-                                                                    run.repeats)]
-                index = len(c.ballbar.planned) - 1
-            c = machine.measure(c, index)
+        twin = copy.deepcopy(machine)
+        c, minutes, step = measure_sequentially(machine, designed_campaign(d))
         assert step.status == "stop"
-        assert np.all(realised_sd(c, list(tg)) <= np.array(list(tg.values())))
-        used.append(minutes)
-    assert np.mean(used) <= fixed + 1e-9, (used, fixed)
+        assert np.all(realised_sd(c, list(tg)) <= limit)
+        if np.all(realised_sd(twin.measure_all(designed_campaign(d)), list(tg)) <= limit):
+            used.append(minutes)
+    assert used and np.mean(used) <= fixed + 1e-9, (used, fixed)
 
 
 # ---------------------------------------------------------------------------------------------------- command line
