@@ -51,6 +51,8 @@ COMMANDS_READING_CAMPAIGNS = (
     ("sample", "{campaign}", "-o", "{out}", "--checkpoint", "{out}.h5", "--quiet"),
     ("report", "{campaign}", "-o", "{out}", "--quiet"),
     ("plan", "{campaign}", "-o", "{out}"),
+    ("design", "{campaign}", "-o", "{out}"),
+    ("next", "{campaign}", "-o", "{out}"),
     ("ncgen", "BX", "{campaign}", "-o", "{out}"),
     ("compensate", "{campaign}", "{program}", "-o", "{out}"),
     ("instruments", "{campaign}"),
