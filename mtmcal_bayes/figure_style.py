@@ -9,6 +9,8 @@ writes it, and in a notebook it displays as any figure does.
 
 from __future__ import annotations
 
+import io
+
 from matplotlib.figure import Figure
 
 from . import units
@@ -38,6 +40,8 @@ REFERENCE_LABELS = {
 
 _GREEK = {"alpha": r"\alpha", "beta": r"\beta", "gamma": r"\gamma"}
 DPI = 130
+#: colours of a saved figure
+PALETTE = 256
 
 
 def new_figure(nrows: int = 1, ncols: int = 1, **subplots_kw) -> tuple[Figure, object]:
@@ -79,5 +83,13 @@ def label(name: str) -> str:
 
 
 def save_png(fig: Figure, path) -> None:
-    """Write ``fig`` as PNG at the report resolution."""
-    fig.savefig(path, dpi=DPI, bbox_inches="tight")
+    """Write ``fig`` as PNG at the report resolution, in 256 colours (a palette PNG, a quarter of the bytes of the
+    full-colour one: line plots and the corner plot's shades need no more; the report embeds every figure)."""
+    from PIL import Image
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=DPI, bbox_inches="tight")
+    buf.seek(0)
+    with Image.open(buf) as img:
+        img.convert("RGB").quantize(colors=PALETTE, method=Image.Quantize.FASTOCTREE,
+                                    dither=Image.Dither.NONE).save(path, format="png")

@@ -1,3 +1,9 @@
+import os
+
+if os.environ.get("PYTEST_XDIST_WORKER"):  # one process per core already (pytest -n): one BLAS thread each, not two
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+
 import io
 import warnings
 from contextlib import redirect_stderr, redirect_stdout
