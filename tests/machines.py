@@ -92,3 +92,29 @@ def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int =
             index = len(c.ballbar.planned) - 1
         c = machine.measure(c, index)
     return c, minutes, step
+
+
+def small_problem(campaign, rng, k: int = 6):
+    """A random design problem of ``k`` catalogue candidates and targets it can meet, for comparisons with
+    exhaustive search: ``(problem, minutes(counts), targets (t,))``, or None when no target is worth setting.
+    Up to three quantities that all candidates together would narrow to below half; each target between the sd
+    today and the best reachable."""
+    from mtmcal_bayes.machine_time import TimeModel
+    from mtmcal_bayes.planning.design_make import design_candidates
+    from mtmcal_bayes.planning.design_problem import MAX_INSTANCES, DesignProblem
+    from mtmcal_bayes.planning.design_runs import designed_runs
+    from mtmcal_bayes.planning.design_timing import Timing
+
+    allc = design_candidates(campaign)
+    cands = [allc[i] for i in rng.choice(len(allc), k, replace=False)]
+    dp = DesignProblem(Planner(campaign, cands))
+    timing = Timing(campaign, TimeModel())
+    now = dp.value_now().sd_promised[0]
+    most = dp.value(np.full(k, MAX_INSTANCES)).sd_promised[0]
+    useful = np.flatnonzero(most < 0.5 * now)
+    if not len(useful):
+        return None
+    pick = rng.choice(useful, min(3, len(useful)), replace=False)
+    tg = np.full(len(now), np.nan)
+    tg[pick] = np.maximum(np.sqrt(now[pick] * most[pick]) * rng.uniform(0.5, 1.0, len(pick)), 1.05 * most[pick])
+    return dp, (lambda counts: timing.total(designed_runs(cands, counts), (False, None, None))), tg

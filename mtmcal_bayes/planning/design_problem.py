@@ -124,6 +124,8 @@ class DesignProblem:
         self.cols = np.flatnonzero(cols)
         X0 = X0[:, self.cols]
         self.Tp = (planner.T * scale)[:, self.cols]  # (t, P')
+        # the parameters no row touches keep their prior: their share of each target's variance, (t,)
+        self.var_untouched = np.sum(np.delete(planner.T * scale, self.cols, axis=1) ** 2, axis=1)
         to_display = np.array([units.from_internal(1.0, u) for u in planner.target_units])
         self.to_display = to_display
         P = len(self.cols)
@@ -190,7 +192,7 @@ class DesignProblem:
     def _value(self, M: np.ndarray, t: np.ndarray) -> DesignValue:
         P = M.shape[-1]
         Sinv = np.linalg.inv(np.eye(P) + M[0])  # (B, S, P, P): posterior covariance, prior-sd coordinates
-        var = np.sum((Sinv @ self.Tp.T) * self.Tp.T, axis=-2)  # (B, S, t)
+        var = np.sum((Sinv @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched  # (B, S, t)
         sd = np.sqrt(np.maximum(var, 0.0)) * self.to_display
         G = Sinv @ M[1]
         # traces of products of symmetric matrices as element sums: tr(AB) = Σ A∘B, tr(GG) = Σ G∘Gᵀ
@@ -216,7 +218,7 @@ class DesignProblem:
         Sig = np.linalg.inv(np.eye(P) + M[0, 0])  # (S, P, P)
         M2, M3 = M[1, 0], M[2, 0]
         A = Sig @ M2
-        var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2)  # (S, t)
+        var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched  # (S, t)
         trA2 = np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1))  # (S,)
         trSM3 = np.sum(Sig * M3, axis=(-2, -1))
         first = (counts == 0)[:, None, None, None]
