@@ -52,6 +52,7 @@ from .api import (
     simulate,
     simulate_history,
 )
+from .analysis import CampaignAnalysis
 from .campaign import Campaign, Truth
 from .errors import InputError, MtmcalError, ParameterError
 from .identification import identify_ballbar, identify_probe
@@ -66,7 +67,7 @@ from .version import __version__
 __all__ = [
     "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan", "ncgen",
     "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design", "next_run",
-    "Campaign", "Truth", "load_campaign", "parse_campaign", "save_campaign", "read_dprnt",
+    "Campaign", "CampaignAnalysis", "Truth", "load_campaign", "parse_campaign", "save_campaign", "read_dprnt",
     "InputError", "MtmcalError", "ParameterError", "ProgressEvent",
     "identify_ballbar", "identify_probe", "fit_sphere",
     "MODELS", "LinearModel", "HTMModel", "make_model", "Observations",

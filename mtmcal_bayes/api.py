@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 from typing import TYPE_CHECKING
 
+from .analysis import CampaignAnalysis
 from .campaign import Campaign
 from .io.campaign_reader import load_campaign
 from .io.textfiles import check_writable
@@ -35,7 +36,7 @@ if TYPE_CHECKING:  # the result types, for the signatures only
     from .simulation import SensitivityTable, Simulation
     from .validation import SBCResult
 
-CampaignLike = Campaign | str | os.PathLike | None
+CampaignLike = Campaign | CampaignAnalysis | str | os.PathLike | None
 
 #: default step budget of each emcee ensemble
 MAX_STEPS = 20_000
@@ -44,10 +45,13 @@ TARGET_ESS = 1000.0
 
 
 def campaign_of(campaign: CampaignLike, *, measured: bool = False) -> Campaign:
-    """A :class:`Campaign` from a campaign, a path to a campaign TOML, or None (the built-in thesis campaign).
+    """A :class:`Campaign` from a campaign, a :class:`~mtmcal_bayes.analysis.CampaignAnalysis` (its campaign), a path
+    to a campaign TOML, or None (the built-in thesis campaign).
 
     ``measured``: the command needs data, so a campaign without measured ball-bar runs (only planned ones, or
     none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``."""
+    if isinstance(campaign, CampaignAnalysis):
+        campaign = campaign.campaign
     c = campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
     if measured:
         c.require_measured_runs()
@@ -75,6 +79,12 @@ def sigma_model_of(sigma_model_um: float | None) -> float | None:
     if not (isinstance(sigma_model_um, (int, float)) and math.isfinite(sigma_model_um) and 0 <= sigma_model_um <= 1000):
         raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a sigma_model in µm (0 to 1000)")
     return to_internal(float(sigma_model_um), "um")
+
+
+def analysis_or_campaign(given: CampaignLike, campaign: Campaign):
+    """What a feature is handed: the analysis the caller gave (its cache then serves this command too), else the
+    campaign."""
+    return given if isinstance(given, CampaignAnalysis) else campaign
 
 
 def _writable(path, what: str) -> None:
@@ -154,7 +164,8 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     _writable(checkpoint, "checkpoint")
     tol = tolerances_of(tolerances)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
-    result = sample_posterior(c, model=model, fix_dx_BT=fix_dx_BT, settings=settings, checkpoint=checkpoint,
+    result = sample_posterior(analysis_or_campaign(campaign, c), model=model, fix_dx_BT=fix_dx_BT, settings=settings,
+                              checkpoint=checkpoint,
                               progress=progress, data=data, tolerances=tol, sigma_model=sigma_model_of(sigma_model_um))
     add_suggestions(result, c)
     if output is not None:
@@ -192,7 +203,8 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     check_model(model)
     check_data(data, c)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
-    return build_report(c, output, model=model, settings=settings, fix_dx_BT=fix_dx_BT, compare_models=compare_models,
+    return build_report(analysis_or_campaign(campaign, c), output, model=model, settings=settings, fix_dx_BT=fix_dx_BT,
+                        compare_models=compare_models,
                         posterior=posterior, progress=progress, command=command, data=data,
                         tolerances=tolerances_of(tolerances), sigma_model=sigma_model_of(sigma_model_um))
 
@@ -256,7 +268,8 @@ def instruments(campaign: CampaignLike = None, *, explain: bool = True) -> Instr
     marginal likelihood (readings of the B patterns, the stylus length, a difference between the sessions)."""
     from .posterior.instrument_check import check_instruments
 
-    return check_instruments(campaign_of(campaign, measured=True), explain=explain)
+    c = campaign_of(campaign, measured=True)
+    return check_instruments(analysis_or_campaign(campaign, c), explain=explain)
 
 
 def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",

@@ -40,6 +40,9 @@ REFERENCE_LABELS = {
 
 _GREEK = {"alpha": r"\alpha", "beta": r"\beta", "gamma": r"\gamma"}
 DPI = 130
+#: widest a saved figure is drawn, pixels: the report's column (``html_page``: 1180 px) shows it at its own size, so
+#: a wider figure costs drawing time and bytes and shows nothing more
+MAX_WIDTH_PX = 1180
 #: colours of a saved figure
 PALETTE = 256
 
@@ -82,13 +85,29 @@ def label(name: str) -> str:
     return f"{symbol(name)}{f' ({iso})' if iso else ''} [{unit_symbol(name)}]"
 
 
+def png_dpi(fig: Figure) -> float:
+    """The resolution a figure is saved at: :data:`DPI`, lowered so that it is at most :data:`MAX_WIDTH_PX` wide."""
+    return min(DPI, MAX_WIDTH_PX / fig.get_figwidth())
+
+
+def warm_up() -> None:
+    """Load what every figure needs once (fonts, the mathtext parser, the PNG writer) by saving a small figure: a
+    process forked afterwards to draw figures inherits it instead of loading it again."""
+    fig, ax = new_figure(figsize=(2, 1.5))
+    ax.plot([0, 1], [0, 1])
+    ax.set_xlabel(label("alpha_CZ"))
+    ax.set_title("µm ″")
+    save_png(fig, io.BytesIO())
+
+
 def save_png(fig: Figure, path) -> None:
-    """Write ``fig`` as PNG at the report resolution, in 256 colours (a palette PNG, a quarter of the bytes of the
-    full-colour one: line plots and the corner plot's shades need no more; the report embeds every figure)."""
+    """Write ``fig`` as PNG at the report resolution (:func:`png_dpi`), in 256 colours (a palette PNG, a quarter of
+    the bytes of the full-colour one: line plots and the corner plot's shades need no more; the report embeds
+    every figure)."""
     from PIL import Image
 
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=DPI, bbox_inches="tight")
+    buf = io.BytesIO()  # an intermediate PNG, read back at once: compressed least, the fastest to write
+    fig.savefig(buf, format="png", dpi=png_dpi(fig), bbox_inches="tight", pil_kwargs={"compress_level": 1})
     buf.seek(0)
     with Image.open(buf) as img:
         img.convert("RGB").quantize(colors=PALETTE, method=Image.Quantize.FASTOCTREE,

@@ -117,10 +117,10 @@ def test_report_reuses_a_posterior_without_sampling_again(tmp_path, monkeypatch)
     real = build.sample_posterior
     sampled = []
 
-    def only_other_data(*a, **k):
-        assert k.get("data", "ballbar") != "ballbar", "sampled the given posterior again"
-        sampled.append(k["data"])
-        return real(*a, **k)
+    def only_other_data(analysis, **k):  # the report hands each sampling its campaign's analysis, data included
+        assert analysis.data != "ballbar", "sampled the given posterior again"
+        sampled.append(analysis.data)
+        return real(analysis, **k)
 
     monkeypatch.setattr(build, "sample_posterior", only_other_data)
     events = []

@@ -26,6 +26,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models
     ("identification", "inference", "figure_style", "html_page"),  # thesis method, Bayesian engine, figure and page look
+    ("analysis",),                                                 # one campaign's analysis, built once, passed down
     ("posterior", "planning", "compensation", "validation", "simulation", "histories"),  # features
     ("reporting",),                                                # the report, built on posterior and planning
     ("fleets",),                                                   # many machines on Dask: posteriors, histories, overview

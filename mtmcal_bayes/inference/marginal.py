@@ -34,6 +34,9 @@ import numpy as np
 GRID = 128
 #: cells per scale when there are two (the grid is their product)
 GRID_2D = 48
+#: largest draws × parameters² of one gathered product in :meth:`GridProposal.draw` (8 MB of Cholesky factors);
+#: beyond it the draws are made cell by cell
+GATHER_MAX = 1_000_000
 #: the scans of :func:`sigma_range` run from this fraction of the prior's 0.99999 quantile to this multiple of
 #: the largest plausible scale
 SCAN_FROM, SCAN_TO = 1e-3, 10.0
@@ -300,7 +303,15 @@ class GridProposal:
         j = random.choice(self.cell_prob.size, size=n, p=self.cell_prob)
         sigma = (self.low[j] + self.width[j] * random.rand(n, self.low.shape[1]) if not self.fixed
                  else np.repeat(self.sigma, n, axis=0))
-        theta = self.mean[j] + np.einsum("nij,nj->ni", self.chol[j], random.randn(n, self.P))
+        z = random.randn(n, self.P)
+        if n * self.P**2 <= GATHER_MAX:  # a sampler's proposals (walkers × P²): one batched product
+            return self.mean[j] + np.einsum("nij,nj->ni", self.chol[j], z), sigma
+        theta = np.empty((n, self.P))
+        # many draws: one product per grid cell drawn (at most G), not a gathered (n, P, P) stack (20 000 draws of
+        # 40 parameters would gather 250 MB)
+        for cell in np.unique(j):
+            rows = j == cell
+            theta[rows] = self.mean[cell] + z[rows] @ self.chol[cell].T
         return theta, sigma
 
     def logpdf(self, theta: np.ndarray, sigma: np.ndarray | None) -> np.ndarray:

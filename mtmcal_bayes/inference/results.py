@@ -121,7 +121,7 @@ def prior_sd(result_or_post, names) -> dict[str, float]:
     return {n: sd[n] for n in names if n in sd}
 
 
-def summarize(idata, post, names=None) -> pd.DataFrame:
+def summarize(idata, post, names=None, *, statement: bool = True) -> pd.DataFrame:
     """One row per quantity: its ISO 230-7 symbol, mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit,
     prior sd, identifiability, the Monte-Carlo standard errors of mean and sd, and the GUM statement
     (:data:`~mtmcal_bayes.inference.gum.GUM_COLUMNS`).
@@ -135,6 +135,9 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     (:func:`identification`); ``identified`` is True for ``"data"`` only — a quantity resting on nuisance priors
     is not identified by the data, and a script reading ``identified`` must not take it for one that is — and
     None where no check applies (the discrepancy scales).
+
+    ``statement=False`` leaves out the GUM statement and the uncertainty budget (intervals and identifiability
+    only: what a posterior shown beside another needs).
     """
     names = list(names or (list(REPORTED) + list(post.scales)))
     names = [n for n in names if n in idata.posterior]
@@ -157,6 +160,8 @@ def summarize(idata, post, names=None) -> pd.DataFrame:
     s = s[["iso", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
            "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identification",
            "identified_through", "mcse_mean", "mcse_sd"]]
+    if not statement:
+        return s
     return pd.concat([s, gum_table(idata, s), budget_columns(idata, post).reindex(s.index)], axis=1)
 
 

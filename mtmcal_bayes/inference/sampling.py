@@ -254,19 +254,21 @@ def _starts(post: LogPosterior, approx: PosteriorApproximation, n: int, random) 
 
 
 def run_ensembles(post: LogPosterior, settings: SamplerSettings | None = None, checkpoint: str | Path | None = None,
-                  progress: Progress | None = None) -> SamplingResult:
+                  progress: Progress | None = None, *,
+                  approximation: PosteriorApproximation | None = None) -> SamplingResult:
     """Sample ``post`` with independent emcee ensembles until the targets hold (see the module docstring).
 
     ``progress`` receives a :class:`~mtmcal_bayes.progress.ProgressEvent` after every stretch of steps
     (task ``"sampling [<model>]"``, steps done and the budget).
-    ``checkpoint``: HDF5 file; an existing one with the same run is resumed.
+    ``checkpoint``: HDF5 file; an existing one with the same run is resumed.  ``approximation``: the
+    :class:`PosteriorApproximation` of ``post`` when it is at hand (else it is built).
     """
     s = settings or SamplerSettings()
     if s.sampler == "exact":
-        return run_exact(post, s)
+        return run_exact(post, s, approximation=approximation)
     t0 = time.perf_counter()
     q, W = len(post), s.walkers(len(post))
-    approx = PosteriorApproximation(post)
+    approx = approximation or PosteriorApproximation(post)
     ckpt = Path(checkpoint) if checkpoint else None
     seeds = np.random.SeedSequence(s.seed).spawn(s.n_ensembles)
     samplers, starts, moves = [], [], []
@@ -322,11 +324,12 @@ def run_ensembles(post: LogPosterior, settings: SamplerSettings | None = None, c
         checks=checks, messages=messages)
 
 
-def run_exact(post: LogPosterior, settings: SamplerSettings) -> SamplingResult:
+def run_exact(post: LogPosterior, settings: SamplerSettings, *,
+              approximation: PosteriorApproximation | None = None) -> SamplingResult:
     """Independent draws of the exact posterior (linear model, normal priors), shaped like a sampler run:
     ``n_ensembles`` chains of ``min_steps × walkers`` draws each, one walker."""
     t0 = time.perf_counter()
-    approx = PosteriorApproximation(post)
+    approx = approximation or PosteriorApproximation(post)
     if not approx.exact:
         raise ParameterError("sampler", f"exact: the exact posterior is known for the linear model with normal "
                              f"priors only, not for {post.model_name} here (use the emcee sampler)")

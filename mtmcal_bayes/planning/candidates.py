@@ -77,18 +77,25 @@ def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
     bb = campaign.ballbar
     base = campaign.primary_setup()
     L = bb.length
+    mounts: dict[str, Mount] = {}
+
+    def mount(pattern: str) -> Mount:  # the campaign asked once per pattern
+        if pattern not in mounts:
+            mounts[pattern] = candidate_mount(campaign, pattern)
+        return mounts[pattern]
+
     out: list[Candidate] = []
     for pattern in TOOL_LENGTH_PATTERNS:
         for e in extensions:
             s = extended_setup(base, e)
-            out.append(Candidate(f"{pattern} @ R_B+{e:g} mm", "tool length", pattern, s, candidate_mount(campaign, pattern),
+            out.append(Candidate(f"{pattern} @ R_B+{e:g} mm", "tool length", pattern, s, mount(pattern),
                                  L, extension=e))
     measured = {(r.pattern, r.setup) for r in bb.runs}
     for s in bb.setups.values():
         for pattern in TOOL_LENGTH_PATTERNS:
             if (pattern, s.id) not in measured:
                 out.append(Candidate(f"{pattern} @ {s.id} (existing setup)", "existing setup", pattern, s,
-                                     candidate_mount(campaign, pattern), L, extension=s.R_B - base.R_B))
+                                     mount(pattern), L, extension=s.R_B - base.R_B))
     for i, run in enumerate(bb.runs):
         out.append(Candidate(f"repeat {run.pattern} @ {run.setup}/{run.mount} (+{DEFAULT_REPEATS})", "repeats",
                              run.pattern, bb.setups[run.setup], bb.mounts[run.mount], L, repeat_of=i))
@@ -96,7 +103,7 @@ def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
     for pattern in PATTERNS:
         if pattern not in done:
             out.append(Candidate(f"{pattern} @ {base.id}", "other pattern", pattern, base,
-                                 candidate_mount(campaign, pattern), L, extension=0.0))
+                                 mount(pattern), L, extension=0.0))
     c_mount = campaign.mount_for("CR")
     for R_C in OTHER_R_C_MM:
         if R_C != c_mount.R_C:
@@ -108,28 +115,39 @@ def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
         if L_B != L:
             for pattern in TOOL_LENGTH_PATTERNS:
                 out.append(Candidate(f"{pattern} @ {base.id}, L_B {L_B:g} mm", "bar length", pattern, base,
-                                     candidate_mount(campaign, pattern), L_B, extension=0.0))
+                                     mount(pattern), L_B, extension=0.0))
     return out
 
 
-def feasibility(candidate: Candidate, campaign: Campaign) -> tuple[bool, str]:
-    """Whether the pattern's axis motions fit the machine's travels, and why not.
+def feasibility_check(campaign: Campaign):
+    """``check(candidate) -> (feasible, why)``: whether a candidate's axis motions fit the machine's travels.
 
     The campaign gives each axis' travel, not where the C axis sits inside it,
     so a pattern is feasible when the span of each linear-axis command fits the
-    travel (the B-axis centre path of thesis Tables 2.2/2.3).
+    travel (the B-axis centre path of thesis Tables 2.2/2.3).  The campaign is read once, here, for every
+    candidate checked.
     """
-    travel = campaign.machine.travel
-    if not travel:
-        return True, "no axis travels in [machine]: not checked"
-    cmd = pattern_commands(candidate.pattern, R_B=candidate.setup.R_B, Z_C=candidate.mount.Z_C,
-                           R_C=candidate.mount.R_C, L_B=candidate.length, cr_geometry=campaign.ballbar.cr_geometry)
-    over = []
-    for axis, values in (("X", cmd.X), ("Y", cmd.Y), ("Z", cmd.Z)):
-        span = float(np.ptp(values))
-        if axis in travel and span > travel[axis] + 1e-9:
-            over.append(f"{axis} span {span:.0f} mm > travel {travel[axis]:g} mm")
-    return (not over), ("; ".join(over) if over else "within the axis travels")
+    travel = dict(campaign.machine.travel or {})
+    cr_geometry = campaign.ballbar.cr_geometry
+
+    def check(candidate: Candidate) -> tuple[bool, str]:
+        if not travel:
+            return True, "no axis travels in [machine]: not checked"
+        cmd = pattern_commands(candidate.pattern, R_B=candidate.setup.R_B, Z_C=candidate.mount.Z_C,
+                               R_C=candidate.mount.R_C, L_B=candidate.length, cr_geometry=cr_geometry)
+        over = []
+        for axis, values in (("X", cmd.X), ("Y", cmd.Y), ("Z", cmd.Z)):
+            span = float(np.ptp(values))
+            if axis in travel and span > travel[axis] + 1e-9:
+                over.append(f"{axis} span {span:.0f} mm > travel {travel[axis]:g} mm")
+        return (not over), ("; ".join(over) if over else "within the axis travels")
+
+    return check
+
+
+def feasibility(candidate: Candidate, campaign: Campaign) -> tuple[bool, str]:
+    """Whether the pattern's axis motions fit the machine's travels, and why not (:func:`feasibility_check`)."""
+    return feasibility_check(campaign)(candidate)
 
 
 _USER_KEYS = {"name", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm", "Z_C_mm", "R_C_mm", "length_mm",

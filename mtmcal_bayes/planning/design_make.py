@@ -23,7 +23,7 @@ from ..errors import InputError, ParameterError
 from ..iso import thesis_name
 from ..machine_time import TimeModel
 from ..parameters import IDENTIFIABLE
-from .candidates import Candidate, catalogue, feasibility
+from .candidates import Candidate, catalogue, feasibility_check
 from .design import Planner, check_targets
 from .design_check import Preposterior, preposterior
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
@@ -122,8 +122,9 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
     campaign's bar length) and the catalogue's new ball-bar runs within the travels, one candidate per pattern,
     set-up, mount and repeats (the first given)."""
     out = []
+    fits = feasibility_check(campaign)
     for i, c in enumerate(extra or []):
-        ok, why = feasibility(c, campaign)
+        ok, why = fits(c)
         where = f"candidate[{i}]" if c.kind == "user" else f"planned run {c.name}"
         if not ok:
             raise InputError(source, where, f"{c.pattern} outside the machine's travels: {why}")
@@ -132,7 +133,7 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
                              f"({campaign.ballbar.length:g} mm); design another bar length as a campaign of its own")
         out.append(c)
     for c in catalogue(campaign):
-        if c.repeat_of is None and c.kind != "bar length" and feasibility(c, campaign)[0]:
+        if c.repeat_of is None and c.kind != "bar length" and fits(c)[0]:
             out.append(c)
     seen, unique = set(), []
     for c in out:

@@ -14,7 +14,7 @@ from .candidates import (
     candidate_mount,
     catalogue,
     extended_setup,
-    feasibility,
+    feasibility_check,
 )
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import realised_sd
@@ -108,9 +108,10 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
     ev = planner.evaluate(candidates, rows=made)
     si = planner.sigma_information(candidates, rows=made)
     rows = []
+    fits = feasibility_check(campaign)
     for k, c in enumerate(candidates):
         probe = isinstance(c, ProbeCandidate)
-        ok, why = probe_feasibility(c, campaign) if probe else feasibility(c, campaign)
+        ok, why = probe_feasibility(c, campaign) if probe else fits(c)
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
         where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
                   "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else
@@ -143,15 +144,16 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
 
 def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP_MM) -> pd.DataFrame:
     """Expected target sds for ``pattern`` at the primary setup plus each extension (mm)."""
-    base = campaign.primary_setup()
+    base, mount = campaign.primary_setup(), candidate_mount(campaign, pattern)
     cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
-                       candidate_mount(campaign, pattern), campaign.ballbar.length, extension=float(e)) for e in extensions]
+                       mount, campaign.ballbar.length, extension=float(e)) for e in extensions]
     sub = Planner(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
                   data=planner.data)
     ev = sub.evaluate()
     rows = []
+    fits = feasibility_check(campaign)
     for k, (c, e) in enumerate(zip(cands, extensions)):
-        ok, why = feasibility(c, campaign)
+        ok, why = fits(c)
         row = {"extension_mm": float(e), "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "feasible": ok,
                "eig_bits": float(ev.eig_bits[k]),
                "verdict": _verdict(ok, why, bool(ev.informative[k]))}

@@ -9,8 +9,8 @@ from dataclasses import asdict, dataclass
 import pandas as pd
 
 from .. import units
+from ..analysis import CampaignAnalysis, analysis_of
 from ..inference.analytic import gaussian_posterior
-from ..inference.log_posterior import LogPosterior
 from ..inference.sampling import SamplingResult
 from ..models import first_order_gap
 from ..parameters import IDENTIFIABLE, weights
@@ -41,13 +41,17 @@ def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: fl
                              data: str = "ballbar") -> pd.DataFrame:
     """beta_XB and dx_CZ − dx_BT with and without dx_BT = 0, closed form (linearised) at fixed sigma_model.
 
-    Columns: mean and sd of each quantity, by default and with the thesis' Eq 4.2 assumption.
+    Columns: mean and sd of each quantity, by default and with the thesis' Eq 4.2 assumption.  ``campaign`` may
+    be a :class:`~mtmcal_bayes.analysis.CampaignAnalysis` (its model and data are then used).
     """
     sigma = units.to_internal(sigma_model_um, "um")
+    if isinstance(campaign, CampaignAnalysis):
+        model, data = campaign.model, campaign.data
+    analysis = analysis_of(campaign, model=model, data=data, sigma_model=sigma)
     rows = {}
     for label, fix in (("default", False), ("dx_BT = 0", True)):
-        g = gaussian_posterior(LogPosterior(campaign, model, fix_dx_BT=fix, sigma_model=sigma, data=data),
-                               sigma_model=sigma, allow_non_normal=True)
+        g = gaussian_posterior(analysis.variant(fix_dx_BT=fix).log_posterior, sigma_model=sigma,
+                               allow_non_normal=True)
         b_mean, b_sd = g.linear_combination(weights("beta_XB"))
         d_mean, d_sd = g.linear_combination(weights("dx_CZ_minus_dx_BT", g.names))
         rows[label] = {"beta_XB mean ″": units.from_internal(b_mean, "arcsec"),

@@ -38,6 +38,7 @@ import pandas as pd
 from .. import units
 from ..conventions import geometry_string, parse_geometry, run_matrix
 from ..errors import ParameterError
+from ..analysis import CampaignAnalysis
 from ..inference.log_posterior import LogPosterior
 from ..inference.marginal import MarginalPosterior
 from ..parameters import DERIVED, quantity_unit
@@ -137,10 +138,12 @@ def _drift_columns(post: LogPosterior, sd_arcsec: float) -> tuple[np.ndarray, np
     return extra, np.full(len(cols), units.to_internal(sd_arcsec, "arcsec") ** 2)
 
 
-def weigh(campaign, name: str, kind: str, supposes: str, *, drift_arcsec: float | None = None) -> Candidate:
+def weigh(campaign, name: str, kind: str, supposes: str, *, drift_arcsec: float | None = None,
+          post: LogPosterior | None = None) -> Candidate:
     """Evidence, scales and shown quantities of the fused linear posterior of ``campaign`` (a candidate), with the
-    probe's session's B-axis angles differing by a difference of prior sd ``drift_arcsec`` when it is given."""
-    post = LogPosterior(campaign, "linear", data="both")
+    probe's session's B-axis angles differing by a difference of prior sd ``drift_arcsec`` when it is given.
+    ``post``: that fused linear log posterior when it is at hand."""
+    post = post or LogPosterior(campaign, "linear", data="both")
     drift = drift_arcsec is not None
     extra, extra_var = _drift_columns(post, drift_arcsec) if drift else (None, None)
     mp = _marginal(post, extra, extra_var)
@@ -206,23 +209,31 @@ def _consistency(c: Candidate) -> pd.DataFrame:
 def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
     """Weigh the candidate explanations of a conflict between the instruments of ``campaign`` (module docstring);
     the consistency check is run for the campaign as given and the ``consistency_of`` best candidates (none when
-    0)."""
+    0).  ``campaign`` may be a :class:`~mtmcal_bayes.analysis.CampaignAnalysis`, whose fused linear log posterior
+    then serves the campaign as given."""
+    given_post = None
+    if isinstance(campaign, CampaignAnalysis):
+        given_post = campaign.variant(model="linear", data="both", fix_dx_BT=False, sigma_model=None).log_posterior
+        campaign = campaign.campaign
     if not campaign.has_probe_readings():
         raise ParameterError("campaign", f"{campaign.source} has no touch-probe readings: there is no second "
                              "instrument to weigh")
-    given = weigh(campaign, "as given", "campaign", "the campaign as it is")
+    posts = {id(campaign): given_post or LogPosterior(campaign, "linear", data="both")}  # built once per campaign
+    given = weigh(campaign, "as given", "campaign", "the campaign as it is", post=posts[id(campaign)])
     out = [given]
     sd_um = units.from_internal(STYLUS_LENGTH_SD, "um")
     if "dRS" not in campaign.priors or campaign.priors["dRS"].get("sd", 0.0) < STYLUS_LENGTH_SD:
         stylus = copy.deepcopy(campaign)
         stylus.priors["dRS"] = {"dist": "normal", "mean": 0.0, "sd": STYLUS_LENGTH_SD}
+        posts[id(stylus)] = LogPosterior(stylus, "linear", data="both")
         out.append(weigh(stylus, "stylus length ±0.3 mm", "probe",
-                         f"the stylus length along its axis known to {sd_um:g} µm (tool eye + controller pivot)"))
+                         f"the stylus length along its axis known to {sd_um:g} µm (tool eye + controller pivot)",
+                         post=posts[id(stylus)]))
     best_probe = max(out, key=lambda c: c.log_evidence)
     base = best_probe.campaign
     extra = "" if best_probe is given else f"; {best_probe.name}"
     for label, sd, supposes in SESSIONS:
-        out.append(weigh(base, label + extra, "sessions", supposes + extra, drift_arcsec=sd))
+        out.append(weigh(base, label + extra, "sessions", supposes + extra, drift_arcsec=sd, post=posts.get(id(base))))
     for orientation in ORIENTATIONS:
         for reversed_y in (False, True):
             moved = reread(base, orientation, reversed_y)

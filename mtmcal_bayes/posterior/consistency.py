@@ -28,6 +28,7 @@ import pandas as pd
 from scipy import stats
 
 from .. import units
+from ..analysis import CampaignAnalysis
 from ..inference.approximation import PosteriorApproximation
 from ..inference.log_posterior import LogPosterior
 from ..models import jacobian
@@ -69,12 +70,21 @@ def reading_group(key) -> str:
     return key.group if isinstance(key, ProbeKey) else f"ball bar {key.pattern}@{key.setup}/{key.mount}"
 
 
+def _log_posterior(source) -> LogPosterior:
+    """The log posterior behind a :class:`~.sample.PosteriorResult`, a :class:`CampaignAnalysis` or itself."""
+    if isinstance(source, CampaignAnalysis):
+        return source.log_posterior
+    return source if isinstance(source, LogPosterior) else source.log_posterior
+
+
 def source_draws(source, n_draws: int = N_DRAWS, seed: int = 0) -> np.ndarray:
     """``n_draws`` posterior draws ``(n, q)`` (internal units) of ``source``: a :class:`~.sample.PosteriorResult`'s
-    kept chain, or exact draws of a :class:`LogPosterior` of the linear model (its σ-marginal posterior)."""
+    kept chain, or exact draws of a :class:`LogPosterior` of the linear model (its σ-marginal posterior), or of a
+    :class:`CampaignAnalysis` of the linear model (from the exact posterior it has built)."""
     rng = np.random.default_rng(seed)
-    if isinstance(source, LogPosterior):
-        approx = PosteriorApproximation(source)
+    if isinstance(source, (LogPosterior, CampaignAnalysis)):
+        approx = source.approximation if isinstance(source, CampaignAnalysis) else PosteriorApproximation(source)
+        source = _log_posterior(source)
         theta, sigma = approx.marginal.draw(source.likelihood.y, n_draws, rng)
         return np.column_stack([theta, sigma]) if source.fixed_sigma is None else theta
     flat = source.sampling.chains.reshape(-1, source.sampling.chains.shape[-1])
@@ -94,12 +104,12 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
                      draws: np.ndarray | None = None):
     """Standardised residuals and group verdicts of ``target``'s observations under ``source``'s posterior.
 
-    ``source`` is a :class:`~.sample.PosteriorResult`, or the :class:`LogPosterior` of a linear model (its exact
-    posterior is drawn); ``target`` the log posterior of the other data; ``draws`` (n, q) the source's posterior
-    draws when they are at hand (then ``n_draws`` and ``seed`` are not used).
+    ``source`` is a :class:`~.sample.PosteriorResult`, or the :class:`LogPosterior` or :class:`CampaignAnalysis` of a
+    linear model (its exact posterior is drawn); ``target`` the log posterior of the other data; ``draws`` (n, q) the
+    source's posterior draws when they are at hand (then ``n_draws`` and ``seed`` are not used).
     Returns ``(readings DataFrame, groups DataFrame)``.
     """
-    post_s = source if isinstance(source, LogPosterior) else source.log_posterior
+    post_s = _log_posterior(source)
     draws = source_draws(source, n_draws, seed) if draws is None else draws
     shared = [n for n in target.space.names if n in post_s.space.names]
     own = [i for i, n in enumerate(target.space.names) if n not in post_s.space.names]
@@ -156,9 +166,8 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
 def instrument_consistency(ballbar, probe, n_draws: int = N_DRAWS, seed: int = 0) -> Consistency:
     """Both directions: probe readings given the ball-bar-only posterior ``ballbar``, ball-bar eccentricities
     given the probe-only posterior ``probe`` (both :class:`~.sample.PosteriorResult` of one campaign and model, or
-    both :class:`LogPosterior` of the linear model, whose exact posteriors are drawn)."""
-    post_b = ballbar if isinstance(ballbar, LogPosterior) else ballbar.log_posterior
-    post_p = probe if isinstance(probe, LogPosterior) else probe.log_posterior
+    both :class:`LogPosterior` or :class:`CampaignAnalysis` of the linear model, whose exact posteriors are drawn)."""
+    post_b, post_p = _log_posterior(ballbar), _log_posterior(probe)
     a = predictive_check(ballbar, post_p, n_draws, seed)
     b = predictive_check(probe, post_b, n_draws, seed)
     return Consistency(pd.concat([a[0], b[0]], ignore_index=True), pd.concat([a[1], b[1]], ignore_index=True))
@@ -190,7 +199,7 @@ class InstrumentComparison:
                                                                  "HDIs are disjoint."]))
 
 
-def compare_instruments(campaign, posteriors: dict, sample) -> InstrumentComparison:
+def compare_instruments(posteriors: dict, sample) -> InstrumentComparison:
     """The three posteriors (``posteriors`` holds those already sampled, by data; ``sample(data)`` samples
     the others) and the consistency of the two instruments."""
     posteriors = dict(posteriors)

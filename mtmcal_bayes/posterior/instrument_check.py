@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import units
+from ..analysis import CampaignAnalysis, analysis_of
 from ..errors import ParameterError
 from ..inference.analytic import linearisation
-from ..inference.approximation import PosteriorApproximation
 from ..inference.log_posterior import SAMPLED_DEVIATIONS, LogPosterior
 from ..parameters import SCALE_LABEL
 from .conflict import ConflictAnalysis, explain_conflict
@@ -104,19 +104,23 @@ class InstrumentCheck:
 
 def check_instruments(campaign, *, explain: bool = True) -> InstrumentCheck:
     """The consistency of the two instruments of ``campaign`` on the exact linear posteriors, the fused scales,
-    the disputed deviations and (``explain``) the candidate explanations of a conflict."""
+    the disputed deviations and (``explain``) the candidate explanations of a conflict.  ``campaign`` may be a
+    :class:`~mtmcal_bayes.analysis.CampaignAnalysis`, whose cache then serves the linear posteriors."""
+    analysis = campaign
+    campaign = analysis.campaign if isinstance(analysis, CampaignAnalysis) else analysis
     if not campaign.has_probe_readings() or not campaign.ballbar.runs:
         raise ParameterError("campaign", f"{campaign.source} needs ball-bar runs and touch-probe readings to compare "
                              "the instruments")
-    ballbar = LogPosterior(campaign, "linear", data="ballbar")
-    probe = LogPosterior(campaign, "linear", data="probe")
+    linear = analysis_of(analysis, model="linear", data="both")
+    ballbar, probe, fused = (linear.variant(data=d) for d in ("ballbar", "probe", "both"))
     cons = instrument_consistency(ballbar, probe)
-    fused = LogPosterior(campaign, "linear", data="both")
-    marginal = PosteriorApproximation(fused).marginal
+    marginal = fused.marginal
+    fused = fused.log_posterior
+    ballbar, probe = ballbar.log_posterior, probe.log_posterior
     mean, sd = marginal.sigma_moments(fused.likelihood.y)
     scales = {n: (units.from_internal(mean[k], "um"), units.from_internal(sd[k], "um")) for k, n in
               enumerate(fused.scales)}
-    conflict = explain_conflict(campaign) if explain and not cons.groups["verdict"].eq("agree").all() else None
+    conflict = explain_conflict(linear) if explain and not cons.groups["verdict"].eq("agree").all() else None
     return InstrumentCheck(campaign.source, cons, scales, disputed_deviations(cons, ballbar, probe), conflict)
 
 

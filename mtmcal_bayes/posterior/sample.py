@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from ..identification import identify
+from ..analysis import analysis_of
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import (
     diagnostics_warnings,
@@ -159,23 +159,30 @@ class PosteriorResult:
         return format_sample(self)
 
 
-def sample_posterior(campaign, *, model: str = "linear", fix_dx_BT: bool = False,
+def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | None = None,
                      settings: SamplerSettings | None = None, checkpoint=None,
-                     progress: Progress | None = None, data: str = "ballbar",
-                     tolerances: dict | None = None, sigma_model: float | None = None) -> PosteriorResult:
+                     progress: Progress | None = None, data: str | None = None,
+                     tolerances: dict | None = None, sigma_model: float | None | str = "same",
+                     statement: bool = True) -> PosteriorResult:
     """Sample the posterior of ``campaign`` given its ``data`` (``"ballbar"``, ``"probe"`` or ``"both"``) and
     summarise it against the deterministic results; decide conformity with ``tolerances`` (``{name:
     Tolerance}``; default the campaign's own).  ``sigma_model`` (mm) fixes the model-discrepancy scale instead of
-    sampling it."""
-    post = LogPosterior(campaign, model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model)
-    result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress)
+    sampling it (None: sampled).  ``campaign`` may be a :class:`~mtmcal_bayes.analysis.CampaignAnalysis`: what it
+    has built (the log posterior, the linearised posterior, the identification) is used, not built again, and
+    ``model``, ``data``, ``fix_dx_BT`` and ``sigma_model``, where given, change its own choices (else a campaign
+    gets linear, ball bar, dx_BT and σ_model sampled).  ``statement=False``:
+    a summary without the GUM statement and the uncertainty budget (a posterior shown beside another)."""
+    analysis = analysis_of(campaign, model=model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model)
+    campaign, post = analysis.campaign, analysis.log_posterior
+    result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress,
+                           approximation=analysis.approximation)
     seed = settings.seed if settings else None
     idata = to_inference_data(result, seed=seed)
-    summary = summarize(idata, post)
-    comp = comparison(summary, identify(campaign))
+    summary = summarize(idata, post, statement=statement)
+    comp = comparison(summary, analysis.identification)
     ref = reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary) + reference_warnings(ref, summary)
     warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data
     tol = campaign.tolerances if tolerances is None else tolerances
-    conf = conformity_table(idata, summary, tol) if tol else None
+    conf = conformity_table(idata, summary, tol) if tol and statement else None
     return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf)

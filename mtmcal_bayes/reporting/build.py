@@ -8,6 +8,7 @@ nothing half-written.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import time
 from dataclasses import dataclass
@@ -16,10 +17,11 @@ from pathlib import Path
 import pandas as pd
 
 from .. import units
+from ..analysis import analysis_of
 from ..conventions import reads_as_thesis
 from ..errors import MtmcalError
 from ..html_page import Page
-from ..identification import IdentificationResult, identify
+from ..identification import IdentificationResult
 from ..identification.output import identification_table
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
 from ..inference.sampling import SamplerSettings
@@ -59,7 +61,7 @@ from . import (
     widths,
 )
 from .decisions import SUGGESTION_COLUMNS, add_suggestions, suggestion_text
-from .drawing import draw_figures
+from .drawing import Drawing
 from .missing import missing_data
 
 SUMMARY_COLUMNS = ["iso", "unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
@@ -134,6 +136,20 @@ def priors_table(post) -> pd.DataFrame:
                          for p in post.priors.priors]).set_index("parameter")
 
 
+def _side_posterior(analysis, settings: SamplerSettings, say, progress):
+    """How the report gets the posterior of other data than its main one, for the instruments' comparison: for the
+    linear model (normal priors) exact draws of its closed-form σ-marginal posterior, which is what sampling would
+    converge to; for a kinematic model the sampler."""
+    def side(data: str) -> PosteriorResult:
+        other = analysis.variant(data=data)
+        exact = other.model == "linear" and other.approximation.exact
+        how = "exact draws" if exact else "sampling"
+        say(f"{how} of the posterior ({other.model}, {DATA_LABELS[data]}) to compare the instruments")
+        s = dataclasses.replace(settings, sampler="exact") if exact else settings
+        return sample_posterior(other, settings=s, progress=progress, statement=False)  # the report shows intervals
+    return side
+
+
 def _check_output_dir(out_dir: Path) -> None:
     if out_dir.exists() and not out_dir.is_dir():
         raise MtmcalError(f"{out_dir}: cannot write the report: it exists and is not a directory")
@@ -165,116 +181,176 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
 
     if posterior is not None:
         model, fix_dx_BT, data = posterior.model, posterior.log_posterior.fix_dx_BT, posterior.data
+        sigma_model = posterior.log_posterior.fixed_sigma
+    analysis = analysis_of(campaign, model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model)
+    campaign = analysis.campaign
+    if posterior is not None:
         rep = posterior
     else:
         say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
-        rep = sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
-                               data=data, sigma_model=sigma_model)
+        rep = sample_posterior(analysis, settings=settings, progress=progress)
     tol = campaign.tolerances if tolerances is None else tolerances
     if tol:
         rep.conformity = conformity_table(rep.idata, rep.summary, tol)
         say("asking the planner how to decide the undecided tolerances")
         add_suggestions(rep, campaign)
-    instruments = disputed = conflict = None
+    loo = loo_check(rep.idata)
+    with atomic_directory(out_dir) as tmp:
+        drawing = Drawing(tmp)
+        try:
+            # the main posterior's figures and its NetCDF while the instruments are weighed and the plan is made
+            first = _main_figures(rep, model, campaign, loo)
+            first.insert(1, ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc")))
+            ppc_here = data == "ballbar"  # the eccentricity plots show the ball-bar posterior: the main one here
+            if ppc_here:
+                ppc_df = ppc.ppc_table(rep.idata, campaign)
+                first[2:2] = _eccentricity_figures(rep, ppc_df, campaign)
+
+            def draw(jobs):  # a batch of figures, drawn while the report goes on
+                say("drawing " + ", ".join(name for name, _ in jobs))
+                drawing.start(jobs)
+
+            draw(first)
+            content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
+                                      compare_models=compare_models, draw=draw)
+            if not ppc_here:
+                ppc_df = ppc.ppc_table(content.bb_rep.idata, campaign)
+            files = _write_tables(tmp, rep, content, ident=analysis.identification, ppc_df=ppc_df, loo=loo)
+            off_scale = drawing.finish()["corner.png"]
+        finally:
+            drawing.stop()
+        files = [n for n in FIGURE_ORDER if n in drawing.names] + files + ["posterior.nc"]
+        page_content = ReportContent(campaign, model, rep, content.reports if compare_models else None,
+                                     analysis.identification, content.missing, content.summary, ppc_df,
+                                     content.diagnostics, content.effect, off_scale, rep.sigma_model_um,
+                                     analysis.fix_dx_BT, content.planned, content.instruments, loo=loo,
+                                     disputed=content.disputed, conflict=content.conflict)
+        page = _page(page_content, tmp)
+        elapsed = time.perf_counter() - t0
+        files.insert(0, "index.html")
+        seed = rep.sampling.settings.seed
+        page.write(tmp / "index.html", _meta(campaign, model, seed, command=command, elapsed=elapsed))
+    console = _console(rep, content.missing, out_dir=out_dir, files=files, elapsed=elapsed)
+    return Report(out_dir, files, content.summary, console, elapsed, rep, content.missing)
+
+
+#: the figures in the order the report's file list names them
+FIGURE_ORDER = ("corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png", "loo.png",
+                "compare_forest.png", "compare_ppc.png", "instruments_forest.png", "budget.png", "sigma_model.png",
+                "plan_ranking.png", "plan_sweep.png")
+
+
+def _main_figures(rep: PosteriorResult, model: str, campaign, loo: LooResult) -> list:
+    """The figures that show the main posterior alone: drawn as soon as it exists (the longest first, so that the
+    two drawing processes end together)."""
+    return [("corner.png", lambda: corner_plot.corner_figure(rep.idata, rep.comparison)),
+            ("sigma_model.png", lambda: budget_plot.sigma_figure(rep)),
+            ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling)),
+            ("forest.png", lambda: forest.forest_figure({model: rep.summary}, rep.comparison)),
+            ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata)),
+            ("budget.png", lambda: budget_plot.budget_figure(rep.summary)),
+            ("widths.png", lambda: widths.widths_figure(rep.summary)),
+            ("loo.png", lambda: loo_plot.loo_figure(loo))]
+
+
+def _eccentricity_figures(bb_rep: PosteriorResult, ppc_df: pd.DataFrame, campaign) -> list:
+    """The posterior predictive check and the polar trajectories: the ball-bar posterior's."""
+    return [("ppc.png", lambda: ppc.ppc_figure({bb_rep.model: ppc_df}, campaign)),
+            ("polar.png", lambda: polar.polar_figure(bb_rep.sampling, campaign))]
+
+
+@dataclass
+class _Rest:
+    """What the report computes beside the main posterior, and the figures that show it."""
+
+    instruments: InstrumentComparison | None
+    disputed: dict | None
+    conflict: ConflictAnalysis | None
+    bb_rep: PosteriorResult
+    reports: dict
+    missing: list[str]
+    summary: pd.DataFrame
+    diagnostics: pd.DataFrame
+    effect: pd.DataFrame | None
+    planned: PlanResult
+
+
+def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw) -> _Rest:
+    """The instruments' comparison and conflict, the model comparison, the tables, the dx_BT = 0 effect and the
+    plan; their figures are handed to ``draw`` in one batch once the plan exists (each batch forks processes of its
+    own: one more costs more than it gains), before the conflict, which only a table shows, is weighed."""
+    model, data = analysis.model, analysis.data
+    instruments = disputed = None
     if campaign.has_probe_readings():
-        def other(d):
-            say(f"sampling the posterior ({model}, {DATA_LABELS[d]}) to compare the instruments")
-            return sample_posterior(campaign, model=model, fix_dx_BT=fix_dx_BT, settings=settings, progress=progress,
-                                    data=d, sigma_model=sigma_model)
-        instruments = compare_instruments(campaign, {data: rep}, other)
+        instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
         disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                        instruments.posteriors["probe"].log_posterior)
-        if campaign.ballbar.runs and (instruments.consistency.disagreeing or not reads_as_thesis(campaign.ballbar)):
-            say("weighing the explanations of the instruments' conflict and the readings of the B runs")
-            conflict = explain_conflict(campaign, consistency_of=0)  # the report shows its own consistency check
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:
         for other in MODELS:
             if other != model:
                 say(f"sampling the posterior ({other}) for the model comparison")
-                reports[other] = sample_posterior(campaign, model=other, fix_dx_BT=fix_dx_BT, settings=settings,
-                                                  progress=progress, sigma_model=sigma_model)
+                reports[other] = sample_posterior(analysis.variant(model=other, data="ballbar"), settings=settings,
+                                                  progress=progress)
         reports = {m: reports[m] for m in MODELS}
-    ident = identify(campaign)
-    missing = missing_data(campaign, ident)
-    summary = summary_table(rep)
-    ppc_df = ppc.ppc_table(bb_rep.idata, campaign)
-    loo = loo_check(rep.idata)
-    diag = mcmc_plots.diagnostics_table(rep.summary, rep.sampling)
-    sigma_um = rep.sigma_model_um
-
-    effect = None if fix_dx_BT else thesis_assumption_effect(campaign, model, sigma_um, data)
     say("planning the next measurement")
     planned = _planning(campaign, rep)
-    figures = [("corner.png", lambda: corner_plot.corner_figure(rep.idata, rep.comparison)),
-               ("forest.png", lambda: forest.forest_figure({model: rep.summary}, rep.comparison)),
-               ("ppc.png", lambda: ppc.ppc_figure({model: ppc_df}, campaign)),
-               ("polar.png", lambda: polar.polar_figure(bb_rep.sampling, campaign)),
-               ("widths.png", lambda: widths.widths_figure(rep.summary)),
-               ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata)),
-               ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling))]
-    if compare_models:
-        figures += [("compare_forest.png",
-                     lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
-                    ("compare_ppc.png", lambda: ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign)
-                                                                 for m, r in reports.items()}, campaign))]
+    figures = [("plan_sweep.png", lambda: plan_figures.sweep_figure(planned)),
+               ("plan_ranking.png", lambda: plan_figures.ranking_figure(planned))]
     if instruments is not None:
-        figures += [("instruments_forest.png", lambda: forest.forest_figure(
-            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison))]
-    figures += [("budget.png", lambda: budget_plot.budget_figure(rep.summary)),
-                ("sigma_model.png", lambda: budget_plot.sigma_figure(rep)),
-                ("plan_ranking.png", lambda: plan_figures.ranking_figure(planned)),
-                ("plan_sweep.png", lambda: plan_figures.sweep_figure(planned))]
-    figures.append(("loo.png", lambda: loo_plot.loo_figure(loo)))
+        figures.insert(1, ("instruments_forest.png", lambda: forest.forest_figure(
+            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison)))
+    if compare_models:
+        figures[:0] = [("compare_forest.png",
+                        lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
+                       ("compare_ppc.png", lambda: ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign)
+                                                                    for m, r in reports.items()}, campaign))]
+    if data != "ballbar":  # the eccentricity plots show the ball-bar posterior, a side one here
+        figures += _eccentricity_figures(bb_rep, ppc.ppc_table(bb_rep.idata, campaign), campaign)
+    draw(figures)
+    conflict = None
+    if instruments is not None and campaign.ballbar.runs and (instruments.consistency.disagreeing
+                                                               or not reads_as_thesis(campaign.ballbar)):
+        say("weighing the explanations of the instruments' conflict and the readings of the B runs")
+        conflict = explain_conflict(analysis, consistency_of=0)  # the report shows its own consistency check
+    missing = missing_data(campaign, analysis.identification)
+    effect = None if analysis.fix_dx_BT else thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
+    return _Rest(instruments, disputed, conflict, bb_rep, reports, missing, summary_table(rep),
+                 mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned)
 
+
+def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: IdentificationResult, ppc_df: pd.DataFrame,
+                  loo: LooResult) -> list[str]:
+    """Every CSV of the report into ``tmp``; returns their names in order."""
     files: list[str] = []
-    with atomic_directory(out_dir) as tmp:
-        def csv(name, df, index=True):
-            df.to_csv(tmp / name, index=index, float_format="%.6g")
-            files.append(name)
 
-        say("drawing " + ", ".join(name for name, _ in figures))
-        off_scale = draw_figures(figures, tmp)["corner.png"]
-        files += [name for name, _ in figures[:7]]
-        csv("summary.csv", summary)
-        csv("ppc.csv", ppc_df)
-        csv("loo.csv", loo.table)
-        files.append("loo.png")
-        csv("diagnostics.csv", diag)
-        csv("priors.csv", priors_table(rep.log_posterior))
-        csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
-        if ident.probe:
-            csv("identification_probe.csv", identification_table(ident.probe), index=False)
-        if effect is not None:
-            csv("thesis_assumption_dx_BT.csv", effect)
-        if compare_models:
-            files += ["compare_forest.png", "compare_ppc.png"]
-            csv("compare_models.csv", compare.model_comparison_table(reports), index=False)
-            csv("compare_fit.csv", compare.model_fit_table(reports, campaign))
-        if instruments is not None:
-            files.append("instruments_forest.png")
-            csv("instruments.csv", instruments.intervals, index=False)
-            csv("consistency.csv", instruments.consistency.groups, index=False)
-            csv("consistency_readings.csv", instruments.consistency.readings, index=False)
-            if conflict is not None:
-                csv("explanations.csv", conflict.table(), index=False)
-        files += ["budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png"]
-        csv("budget.csv", budget_table(rep.summary))
-        csv("plan.csv", planned.table, index=False)
-        say("writing posterior.nc")
-        write_netcdf_atomic(rep.idata, tmp / "posterior.nc")
-        files.append("posterior.nc")
-        content = ReportContent(campaign, model, rep, reports if compare_models else None, ident, missing, summary,
-                                ppc_df, diag, effect, off_scale, sigma_um, fix_dx_BT, planned, instruments, loo=loo,
-                                disputed=disputed, conflict=conflict)
-        page = _page(content, tmp)
-        elapsed = time.perf_counter() - t0
-        files.insert(0, "index.html")
-        seed = rep.sampling.settings.seed
-        page.write(tmp / "index.html", _meta(campaign, model, seed, command=command, elapsed=elapsed))
-    console = _console(rep, missing, out_dir=out_dir, files=files, elapsed=elapsed)
-    return Report(out_dir, files, summary, console, elapsed, rep, missing)
+    def csv(name, df, index=True):
+        df.to_csv(tmp / name, index=index, float_format="%.6g")
+        files.append(name)
+
+    csv("summary.csv", c.summary)
+    csv("ppc.csv", ppc_df)
+    csv("loo.csv", loo.table)
+    csv("diagnostics.csv", c.diagnostics)
+    csv("priors.csv", priors_table(rep.log_posterior))
+    csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
+    if ident.probe:
+        csv("identification_probe.csv", identification_table(ident.probe), index=False)
+    if c.effect is not None:
+        csv("thesis_assumption_dx_BT.csv", c.effect)
+    if len(c.reports) > 1:
+        csv("compare_models.csv", compare.model_comparison_table(c.reports), index=False)
+        csv("compare_fit.csv", compare.model_fit_table(c.reports, rep.log_posterior.campaign))
+    if c.instruments is not None:
+        csv("instruments.csv", c.instruments.intervals, index=False)
+        csv("consistency.csv", c.instruments.consistency.groups, index=False)
+        csv("consistency_readings.csv", c.instruments.consistency.readings, index=False)
+        if c.conflict is not None:
+            csv("explanations.csv", c.conflict.table(), index=False)
+    csv("budget.csv", budget_table(rep.summary))
+    csv("plan.csv", c.planned.table, index=False)
+    return files
 
 
 def _meta(campaign, model, seed, *, command, elapsed) -> str:

@@ -1,49 +1,139 @@
-"""Drawing a report's figures: in two forked processes where the platform forks, else one after another.
+"""Drawing a report's figures in forked processes while the report goes on computing.
 
-Each figure is independent once the posterior exists, and drawing is most of a
-report's time; two processes halve it on a two-core machine.  The jobs reach the
-workers through the fork (nothing is pickled but an index); each worker writes its
-PNG into the report's temporary directory, so a failure still leaves nothing
-half-written.
+Each figure is independent once what it shows exists, and drawing is most of a report's CPU time.  A
+:class:`Drawing` takes the figures in batches: :meth:`Drawing.start` forks two processes for a batch and
+returns at once, so the figures of the main posterior are drawn while the report weighs the instruments
+and plans the next measurement; :meth:`Drawing.finish` waits for every batch.  The jobs reach the workers
+through the fork (nothing is pickled but each job's small return value); the workers take the jobs of
+their batch in turn from a shared counter and write their files into the report's temporary directory, so
+a failure still leaves nothing half-written.  The processes are forked with :mod:`multiprocessing`'s
+``Process`` and a pipe each — no helper thread runs in the report's process, so a later batch forks a
+process without threads.  Where the platform does not fork, a batch is drawn at once, in order.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import os
+import sys
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from ..figure_style import save_png
+from ..figure_style import save_png, warm_up
 
-#: the jobs of the drawing in progress, inherited by the forked workers
-_JOBS: list[tuple[str, Callable]] = []
+#: processes drawing one batch
+WORKERS = 2
 
 
-def _draw(index: int, directory: Path):
-    """Draw job ``index`` and save it; returns what the job returned beside its figure (or None)."""
-    name, make = _JOBS[index]
+def _run(job: tuple[str, Callable], directory: Path):
+    """Run one job: ``make()`` returns a Figure (saved as PNG under the job's name), ``(Figure, extra)``, or None
+    (the job wrote its own file); returns the extra (or None)."""
+    name, make = job
     made = make()
+    if made is None:
+        return None
     fig, extra = made if isinstance(made, tuple) else (made, None)
     save_png(fig, directory / name)
     return extra
 
 
-def draw_figures(jobs: list[tuple[str, Callable]], directory: Path) -> dict[str, object]:
-    """Draw every ``(file name, make)`` job into ``directory``; ``make()`` returns a Figure or ``(Figure, extra)``.
-
-    Returns each job's extra by file name.
-    """
-    global _JOBS
-    _JOBS = list(jobs)
+def _work(jobs, directory: Path, counter, conn) -> None:
+    """A worker: take the batch's next job from ``counter`` until none is left; send ``{name: extra}`` (or the
+    exception that stopped it) through ``conn``."""
+    out = {}
     try:
-        workers = min(2, os.cpu_count() or 1, len(jobs))
-        if workers > 1 and "fork" in multiprocessing.get_all_start_methods():
-            with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork")) as pool:
-                extras = [f.result() for f in [pool.submit(_draw, i, directory) for i in range(len(jobs))]]
-        else:
-            extras = [_draw(i, directory) for i in range(len(jobs))]
+        while True:
+            with counter.get_lock():
+                i = counter.value
+                counter.value += 1
+            if i >= len(jobs):
+                break
+            out[jobs[i][0]] = _run(jobs[i], directory)
+        conn.send(("ok", out))
+    except BaseException as exc:  # noqa: BLE001 - every failure goes back to the report, which raises it
+        try:
+            conn.send(("error", exc))
+        except Exception:  # noqa: BLE001 - an exception that cannot be pickled: its text
+            conn.send(("error", RuntimeError(f"{type(exc).__name__}: {exc}")))
     finally:
-        _JOBS = []
-    return {name: extra for (name, _), extra in zip(jobs, extras)}
+        conn.close()
+
+
+class Drawing:
+    """The figures of one report, drawn in batches into ``directory`` (module docstring)."""
+
+    def __init__(self, directory: Path, workers: int = WORKERS):
+        self.directory = Path(directory)
+        self.workers = min(workers, os.cpu_count() or 1)
+        self.fork = self.workers > 1 and "fork" in multiprocessing.get_all_start_methods()
+        self.names: list[str] = []
+        self._running: list[tuple[object, object]] = []  # (process, receiving end)
+        self._extras: dict[str, object] = {}
+        self._counters: list = []
+        self._warm = False
+
+    def start(self, jobs: list[tuple[str, Callable]]) -> None:
+        """Begin drawing ``jobs`` (``(file name, make)``) and return; without fork, draw them now."""
+        jobs = list(jobs)
+        self.names += [name for name, _ in jobs]
+        if not jobs:
+            return
+        if not self.fork:
+            self._extras.update({name: _run((name, make), self.directory) for name, make in jobs})
+            return
+        ctx = multiprocessing.get_context("fork")
+        if not self._warm:  # once, here: every process forked from now on inherits it
+            warm_up()
+            self._warm = True
+        for stream in (sys.stdout, sys.stderr):  # what is buffered now would otherwise be written by each child too
+            stream.flush()
+        counter = ctx.Value("i", 0)
+        # kept until the drawing ends: a counter freed while its batch still runs could be handed to the next batch
+        # (the shared memory is reused), and two batches would then take jobs from one counter
+        self._counters.append(counter)
+        for _ in range(min(self.workers, len(jobs))):
+            receive, send = ctx.Pipe(duplex=False)
+            proc = ctx.Process(target=_work, args=(jobs, self.directory, counter, send), daemon=True)
+            proc.start()
+            send.close()
+            self._running.append((proc, receive))
+
+    def finish(self) -> dict[str, object]:
+        """Wait for every batch; returns each job's extra by file name.  A job's exception is raised here."""
+        error = None
+        for proc, receive in self._running:
+            try:
+                status, value = receive.recv()
+            except EOFError:
+                status, value = "error", RuntimeError(f"a drawing process ended without an answer "
+                                                      f"(exit status {proc.exitcode})")
+            proc.join()
+            receive.close()
+            if status == "ok":
+                self._extras.update(value)
+            elif error is None:
+                error = value
+        self._running = []
+        self._counters = []
+        if error is not None:
+            raise error
+        return dict(self._extras)
+
+    def stop(self) -> None:
+        """End the drawing processes still running (the report failed elsewhere)."""
+        for proc, receive in self._running:
+            proc.terminate()
+            proc.join()
+            receive.close()
+        self._running = []
+        self._counters = []
+
+
+def draw_figures(jobs: list[tuple[str, Callable]], directory: Path) -> dict[str, object]:
+    """Draw every ``(file name, make)`` job into ``directory`` and wait; returns each job's extra by file name."""
+    drawing = Drawing(directory)
+    try:
+        drawing.start(jobs)
+        return drawing.finish()
+    finally:
+        drawing.stop()

@@ -12,10 +12,11 @@ from ..inference.results import ESS_MIN, RHAT_MAX, display_draws
 from ..parameters import IDENTIFIABLE
 
 RANK_CAPTION = (
-    "Rank plots (ArviZ): for each quantity the draws of all ensembles are ranked together and the ranks of "
-    "each ensemble histogrammed, one row per ensemble. Independent ensembles that sample the same "
-    "distribution give flat, alike histograms; a slope or a hump means an ensemble is stuck or has not mixed "
-    "(this is what R-hat summarises)."
+    "Rank plots (ArviZ, vertical-line form): for each quantity the draws of all ensembles are ranked together, "
+    "the ranks of each ensemble (one colour each) counted in bins, and each count drawn as a stem from the count "
+    "a uniform histogram would have (the dashed line). Independent ensembles that sample the same distribution "
+    "give short stems scattered on both sides of it everywhere; a run of stems on one side, or a slope across "
+    "the ranks, means an ensemble is stuck or has not mixed (this is what R-hat summarises)."
 )
 TRACE_CAPTION = (
     "Walker traces after burn-in: a few walkers of each independent ensemble (one colour per ensemble), "
@@ -31,11 +32,13 @@ def rank_figure(idata, names=IDENTIFIABLE):
     ncols = 4
     nrows = int(np.ceil(len(names) / ncols))
     fig, axes = new_figure(nrows, ncols, figsize=(14, 3.2 * nrows), squeeze=False)
-    az.plot_rank(idata, var_names=names, ax=axes.ravel()[: len(names)])
+    # stems rather than ArviZ's default bars: the same counts, a third of the drawing time (one line collection
+    # per panel instead of a rectangle per bin and ensemble)
+    az.plot_rank(idata, var_names=names, ax=axes.ravel()[: len(names)], kind="vlines")
     for ax, n in zip(axes.ravel(), names):
         ax.set_title(symbol(n), fontsize=12)
         ax.set_xlabel("rank (all draws)", fontsize=9)
-        ax.set_ylabel("ensemble", fontsize=9)
+        ax.set_ylabel("count − uniform count", fontsize=9)
     for ax in axes.ravel()[len(names):]:
         ax.set_visible(False)
     fig.tight_layout()

@@ -1,0 +1,131 @@
+"""One campaign's analysis, built once and passed down: what every feature derives from a campaign.
+
+A :class:`CampaignAnalysis` holds, for one campaign under one forward model, one choice of data
+(``"ballbar"``, ``"probe"``, ``"both"``), the dx_BT assumption and the discrepancy scales (sampled, or fixed):
+
+* the log posterior (:class:`~.inference.log_posterior.LogPosterior`): the observations, the parameter
+  space, the forward model, the priors and the likelihood;
+* the linearisation and the exact σ-marginal posterior of the linear model
+  (:class:`~.inference.approximation.PosteriorApproximation`);
+* the deterministic identification of the thesis (:func:`~.identification.identify`).
+
+Each is built when first asked for and kept.  The other analyses of the same campaign — another data set, the
+linear model beside a kinematic one, dx_BT = 0, a fixed σ_model — come from :meth:`CampaignAnalysis.variant`
+and share one cache, so the report, which needs the ball-bar-only, probe-only and fused posteriors, their
+linear forms for the instruments' consistency check and the closed form at dx_BT = 0, builds each of them once.
+
+The campaign is not copied: an analysis assumes it is not changed afterwards.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # imported where first used: ``import mtmcal_bayes`` loads no SciPy or ArviZ
+    from .identification import IdentificationResult
+    from .inference.approximation import PosteriorApproximation
+    from .inference.log_posterior import LogPosterior
+
+
+class CampaignAnalysis:
+    """What a campaign becomes for one model, data set and scale assumption (module docstring).
+
+    Parameters
+    ----------
+    campaign : Campaign
+    model : ``"linear"``, ``"htm-literal"`` or ``"htm-thesis"``
+    data : ``"ballbar"``, ``"probe"`` or ``"both"``
+    fix_dx_BT : the thesis assumption dx_BT = 0 (Eq 4.2)
+    sigma_model : the discrepancy scales fixed at this value (mm), or None (sampled)
+    """
+
+    def __init__(self, campaign, *, model: str = "linear", data: str = "ballbar", fix_dx_BT: bool = False,
+                 sigma_model: float | None = None, _family: dict | None = None):
+        self.campaign = campaign
+        self.model = model
+        self.data = data
+        self.fix_dx_BT = fix_dx_BT
+        self.sigma_model = sigma_model
+        self._family = {} if _family is None else _family
+        self._family.setdefault(self.key, self)
+
+    @property
+    def key(self) -> tuple:
+        """``(model, data, fix_dx_BT, sigma_model)``: what tells the analyses of one campaign apart."""
+        return self.model, self.data, self.fix_dx_BT, self.sigma_model
+
+    def variant(self, *, model: str | None = None, data: str | None = None, fix_dx_BT: bool | None = None,
+                sigma_model: float | None | str = "same") -> CampaignAnalysis:
+        """The analysis of the same campaign with the given choices changed (the others kept), from the shared
+        cache: built once however often it is asked for.  ``sigma_model="same"`` keeps this one's; None samples."""
+        key = (self.model if model is None else model, self.data if data is None else data,
+               self.fix_dx_BT if fix_dx_BT is None else fix_dx_BT,
+               self.sigma_model if sigma_model == "same" else sigma_model)
+        if key not in self._family:
+            CampaignAnalysis(self.campaign, model=key[0], data=key[1], fix_dx_BT=key[2], sigma_model=key[3],
+                             _family=self._family)
+        return self._family[key]
+
+    def linear(self) -> CampaignAnalysis:
+        """The linear model's analysis of the same data (exact closed forms; the instruments' consistency)."""
+        return self.variant(model="linear")
+
+    @cached_property
+    def log_posterior(self) -> LogPosterior:
+        """The log posterior: parameter space, forward model, priors, likelihood (built on first use)."""
+        from .inference.log_posterior import LogPosterior
+
+        return LogPosterior(self.campaign, self.model, fix_dx_BT=self.fix_dx_BT, sigma_model=self.sigma_model,
+                            data=self.data)
+
+    @property
+    def observations(self):
+        """The observations of the data in the likelihood (ball-bar means, probe readings or both)."""
+        return self.log_posterior.forward.observations
+
+    @property
+    def space(self):
+        return self.log_posterior.space
+
+    @property
+    def forward(self):
+        return self.log_posterior.forward
+
+    @cached_property
+    def approximation(self) -> PosteriorApproximation:
+        """The σ-marginal posterior of the model linearised at its mode: for ``linear`` with normal priors, the
+        exact posterior."""
+        from .inference.approximation import PosteriorApproximation
+
+        return PosteriorApproximation(self.log_posterior)
+
+    @property
+    def marginal(self):
+        """The exact σ-marginal posterior of the (linearised) model, a :class:`~.inference.marginal.MarginalPosterior`."""
+        return self.approximation.marginal
+
+    @property
+    def identification(self) -> IdentificationResult:
+        """The thesis' deterministic identification of the campaign (shared by every variant)."""
+        if "identification" not in self._family:
+            from .identification import identify
+
+            self._family["identification"] = identify(self.campaign)
+        return self._family["identification"]
+
+    def __repr__(self) -> str:
+        sigma = "sampled" if self.sigma_model is None else f"{self.sigma_model:g} mm"
+        return (f"CampaignAnalysis({self.campaign.source}, model={self.model}, data={self.data}, "
+                f"fix_dx_BT={self.fix_dx_BT}, sigma_model={sigma})")
+
+
+def analysis_of(campaign, *, model: str | None = None, data: str | None = None, fix_dx_BT: bool | None = None,
+                sigma_model: float | None | str = "same") -> CampaignAnalysis:
+    """The analysis of ``campaign`` for these choices: a Campaign's new analysis (a choice not given takes its
+    default: linear, ball bar, dx_BT sampled, σ_model sampled), or, for a :class:`CampaignAnalysis`, its variant
+    with the given choices changed (the others kept; the cache shared)."""
+    if isinstance(campaign, CampaignAnalysis):
+        return campaign.variant(model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model)
+    return CampaignAnalysis(campaign, model=model or "linear", data=data or "ballbar", fix_dx_BT=bool(fix_dx_BT),
+                            sigma_model=None if sigma_model == "same" else sigma_model)

@@ -1,0 +1,107 @@
+"""One analysis built once and passed down (issue 25): the cache of a campaign's analyses, the report building each
+of them once, the figures drawn in batches while the report goes on, the exact draws of the σ-marginal posterior."""
+
+from __future__ import annotations
+
+import time
+from collections import Counter
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+import mtmcal_bayes as mb
+from mtmcal_bayes.analysis import CampaignAnalysis, analysis_of
+from mtmcal_bayes.inference import log_posterior
+from mtmcal_bayes.inference.marginal import GridProposal
+from mtmcal_bayes.reporting import build
+from mtmcal_bayes.reporting.drawing import Drawing
+
+
+def test_variants_share_one_cache(thesis):
+    a = CampaignAnalysis(thesis)
+    probe = a.variant(data="probe")
+    assert probe is a.variant(data="probe") and probe.data == "probe" and probe.model == "linear"
+    assert probe.variant(data="ballbar") is a  # back to the first: the same object, nothing rebuilt
+    assert a.log_posterior is a.log_posterior and a.approximation is a.approximation
+    assert probe.identification is a.identification  # the deterministic identification of the campaign, once
+    htm = analysis_of(a, model="htm-thesis")
+    assert htm.data == "ballbar" and htm.linear() is a
+    assert analysis_of(thesis).key == ("linear", "ballbar", False, None)
+
+
+def test_an_analysis_is_accepted_wherever_a_campaign_is(thesis):
+    a = CampaignAnalysis(thesis)
+    post = mb.sample(a, seed=5, max_steps=500)
+    assert post.sampling.approximation is a.approximation  # what the analysis built is used, not rebuilt
+    assert post.summary.loc["beta_XB", "mean"] == pytest.approx(mb.sample(thesis, seed=5, max_steps=500)
+                                                                .summary.loc["beta_XB", "mean"], abs=1e-12)
+    assert mb.identify(a).ballbar["beta_XB"].display == mb.identify(thesis).ballbar["beta_XB"].display
+
+
+def test_the_report_builds_each_analysis_of_the_campaign_once(thesis, tmp_path, monkeypatch):
+    """Following the built-in campaign down ``build_report``: every log posterior of the campaign (one per model,
+    data set, dx_BT assumption and σ_model) is built once; the conflict's candidates, each a campaign of its own,
+    once each too."""
+    built = Counter()
+    real = log_posterior.LogPosterior.__init__
+
+    def counting(self, campaign, model="linear", fix_dx_BT=False, sigma_model=None, *, data="ballbar"):
+        built[(id(campaign), model, fix_dx_BT, sigma_model, data)] += 1
+        real(self, campaign, model, fix_dx_BT, sigma_model, data=data)
+
+    monkeypatch.setattr(log_posterior.LogPosterior, "__init__", counting)
+    build.build_report(thesis, tmp_path / "r", settings=build.SamplerSettings(seed=1, max_steps=500))
+    assert built and max(built.values()) == 1, [k for k, n in built.items() if n > 1]
+    own = {k[1:] for k in built if k[0] == id(thesis)}
+    assert {("linear", False, None, "ballbar"), ("linear", False, None, "probe"),
+            ("linear", False, None, "both")} <= own
+
+
+def _slow_figure(seconds: float, text: str):
+    def make():
+        time.sleep(seconds)
+        fig = Figure(figsize=(2, 1))
+        fig.text(0.5, 0.5, text)
+        return fig, text
+    return make
+
+
+def test_batches_drawn_while_the_caller_goes_on_all_arrive(tmp_path):
+    """Two batches, the first still drawing when the second starts: every file of both is written, each job's
+    extra comes back, and starting a batch returns at once."""
+    drawing = Drawing(tmp_path)
+    t0 = time.perf_counter()
+    drawing.start([(f"a{i}.png", _slow_figure(0.3, f"a{i}")) for i in range(4)])
+    started = time.perf_counter() - t0
+    drawing.start([(f"b{i}.png", _slow_figure(0.0, f"b{i}")) for i in range(3)]
+                  + [("note.txt", lambda: (tmp_path / "note.txt").write_text("x") and None)])
+    extras = drawing.finish()
+    names = [f"a{i}.png" for i in range(4)] + [f"b{i}.png" for i in range(3)]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names + ["note.txt"])
+    assert {n: extras[n] for n in names} == {n: n[:-4] for n in names} and extras["note.txt"] is None
+    if drawing.fork:
+        assert started < 0.3  # the first batch had not finished when start returned
+
+
+def test_a_failing_job_is_raised_by_finish(tmp_path):
+    def broken():
+        raise RuntimeError("simulated failure while drawing")
+
+    drawing = Drawing(tmp_path)
+    drawing.start([("ok.png", _slow_figure(0.0, "ok")), ("bad.png", broken)])
+    with pytest.raises(RuntimeError, match="simulated failure"):
+        drawing.finish()
+
+
+def test_exact_draws_per_cell_equal_the_gathered_product(thesis):
+    """The proposal's draws, one product per σ cell, equal θ = μ_j + L_j z drawn row by row (to rounding)."""
+    a = CampaignAnalysis(thesis, data="both")
+    prop = GridProposal(a.marginal, a.log_posterior.likelihood.y)
+    theta, sigma = prop.draw(3000, np.random.RandomState(4))
+    r = np.random.RandomState(4)
+    j = r.choice(prop.cell_prob.size, size=3000, p=prop.cell_prob)
+    r.rand(3000, prop.low.shape[1])
+    z = r.randn(3000, prop.P)
+    expected = prop.mean[j] + np.einsum("nij,nj->ni", prop.chol[j], z)
+    assert np.allclose(theta, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
