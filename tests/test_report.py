@@ -21,13 +21,24 @@ QUICK = ("--seed", "2", "--quiet")  # the default run: converged in seconds
 
 
 @pytest.fixture(scope="module")
-def thesis_report(tmp_path_factory, request):
+def thesis_report_run(tmp_path_factory):
+    """One ``report --json`` of the built-in campaign, shared by the tests that read it: (directory, stdout)."""
+    import contextlib
+    import io
+
     from mtmcal_bayes.cli import main
 
     out = tmp_path_factory.mktemp("rep") / "thesis"
-    code = main(["report", "-o", str(out), *QUICK])
+    stdout = io.StringIO()
+    with contextlib.redirect_stdout(stdout):
+        code = main(["report", "-o", str(out), "--json", *QUICK])
     assert code == 0
-    return out
+    return out, stdout.getvalue()
+
+
+@pytest.fixture(scope="module")
+def thesis_report(thesis_report_run):
+    return thesis_report_run[0]
 
 
 def test_report_writes_every_file(thesis_report):
@@ -159,12 +170,10 @@ def test_compare_models(run_cli, tmp_path):
     assert "beta_XB: linear" in html and "htm-literal" in html.split("beta_XB: linear")[1][:80]
 
 
-def test_report_json(run_cli, tmp_path):
+def test_report_json(thesis_report_run):
     import json
 
-    code, out, err = run_cli("report", "-o", tmp_path / "rep", "--json", *QUICK)
-    assert code == 0, err
-    data = json.loads(out)
+    data = json.loads(thesis_report_run[1])
     assert data["files"][0] == "index.html" and "summary.csv" in data["files"]
     assert set(data["summary"]["beta_XB"]) >= {"mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk",
                                                "ess_tail", "unit"}

@@ -206,9 +206,11 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                 ppc_df = ppc.ppc_table(rep.idata, campaign)
                 first[2:2] = _eccentricity_figures(rep, ppc_df, campaign)
 
-            def draw(jobs):  # a batch of figures, drawn while the report goes on
-                say("drawing " + ", ".join(name for name, _ in jobs))
-                drawing.start(jobs)
+            def draw(jobs):  # a batch of figures, drawn while the report goes on; a figure already failed stops it
+                drawing.check()
+                if jobs:
+                    say("drawing " + ", ".join(name for name, _ in jobs))
+                    drawing.start(jobs)
 
             draw(first)
             content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
@@ -294,6 +296,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                 reports[other] = sample_posterior(analysis.variant(model=other, data="ballbar"), settings=settings,
                                                   progress=progress)
         reports = {m: reports[m] for m in MODELS}
+    draw([])  # a figure of the first batch already failed: stop before planning
     say("planning the next measurement")
     planned = _planning(campaign, rep)
     figures = [("plan_sweep.png", lambda: plan_figures.sweep_figure(planned)),

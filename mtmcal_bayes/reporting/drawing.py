@@ -69,6 +69,7 @@ class Drawing:
         self.names: list[str] = []
         self._running: list[tuple[object, object]] = []  # (process, receiving end)
         self._extras: dict[str, object] = {}
+        self._errors: list[BaseException] = []
         self._counters: list = []
         self._warm = False
 
@@ -98,25 +99,38 @@ class Drawing:
             send.close()
             self._running.append((proc, receive))
 
+    def _collect(self, proc, receive, block: bool) -> bool:
+        """Take the answer of one drawing process (waiting for it when ``block``); False when it has none yet."""
+        if not block and not receive.poll():
+            return False
+        try:
+            status, value = receive.recv()
+        except EOFError:
+            status, value = "error", RuntimeError(f"a drawing process ended without an answer "
+                                                  f"(exit status {proc.exitcode})")
+        proc.join()
+        receive.close()
+        if status == "ok":
+            self._extras.update(value)
+        else:
+            self._errors.append(value)
+        return True
+
+    def check(self) -> None:
+        """Raise the exception of a job that has already failed (without waiting for the others): the report
+        stops there instead of computing on for a page it cannot write."""
+        self._running = [(p, r) for p, r in self._running if not self._collect(p, r, block=False)]
+        if self._errors:
+            raise self._errors[0]
+
     def finish(self) -> dict[str, object]:
         """Wait for every batch; returns each job's extra by file name.  A job's exception is raised here."""
-        error = None
         for proc, receive in self._running:
-            try:
-                status, value = receive.recv()
-            except EOFError:
-                status, value = "error", RuntimeError(f"a drawing process ended without an answer "
-                                                      f"(exit status {proc.exitcode})")
-            proc.join()
-            receive.close()
-            if status == "ok":
-                self._extras.update(value)
-            elif error is None:
-                error = value
+            self._collect(proc, receive, block=True)
         self._running = []
         self._counters = []
-        if error is not None:
-            raise error
+        if self._errors:
+            raise self._errors[0]
         return dict(self._extras)
 
     def stop(self) -> None:
