@@ -216,7 +216,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
                                       compare_models=compare_models, draw=draw)
             if not ppc_here:
-                ppc_df = ppc.ppc_table(content.bb_rep.idata, campaign)
+                ppc_df = content.ppc
             files = _write_tables(tmp, rep, content, ident=analysis.identification, ppc_df=ppc_df, loo=loo)
             off_scale = drawing.finish()["corner.png"]
         finally:
@@ -275,6 +275,7 @@ class _Rest:
     diagnostics: pd.DataFrame
     effect: pd.DataFrame | None
     planned: PlanResult
+    ppc: pd.DataFrame | None  # the ball-bar posterior's predictive check, when it is a side posterior
 
 
 def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw) -> _Rest:
@@ -309,8 +310,10 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                         lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
                        ("compare_ppc.png", lambda: ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign)
                                                                     for m, r in reports.items()}, campaign))]
+    ppc_df = None
     if data != "ballbar":  # the eccentricity plots show the ball-bar posterior, a side one here
-        figures += _eccentricity_figures(bb_rep, ppc.ppc_table(bb_rep.idata, campaign), campaign)
+        ppc_df = ppc.ppc_table(bb_rep.idata, campaign)
+        figures += _eccentricity_figures(bb_rep, ppc_df, campaign)
     draw(figures)
     conflict = None
     if instruments is not None and campaign.ballbar.runs and (instruments.consistency.disagreeing
@@ -320,7 +323,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     missing = missing_data(campaign, analysis.identification)
     effect = None if analysis.fix_dx_BT else thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
     return _Rest(instruments, disputed, conflict, bb_rep, reports, missing, summary_table(rep),
-                 mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned)
+                 mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df)
 
 
 def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: IdentificationResult, ppc_df: pd.DataFrame,
