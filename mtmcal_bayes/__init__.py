@@ -32,37 +32,39 @@ Layers, each importing only those below it (``tests/test_architecture.py``)::
 Units: internally mm and rad; files and displays use µm, ″, mm, °.
 """
 
-from . import units
-from .api import (
-    closed_form,
-    compensate,
-    design,
-    fleet,
-    history,
-    identify,
-    instruments,
-    ncgen,
-    next_run,
-    plan,
-    probe_fit,
-    report,
-    sample,
-    sbc,
-    sensitivity,
-    simulate,
-    simulate_history,
-)
-from .analysis import CampaignAnalysis
-from .campaign import Campaign, Truth
-from .errors import InputError, MtmcalError, ParameterError
-from .identification import identify_ballbar, identify_probe
-from .io import load_campaign, parse_campaign, read_dprnt, save_campaign
-from .models import MODELS, HTMModel, LinearModel, make_model
-from .observations import Observations
-from .parameters import DEVIATIONS, IDENTIFIABLE, ParameterSpace
-from .progress import ProgressEvent
-from .sphere import fit_sphere
+import importlib
+
 from .version import __version__
+
+#: each public name and the module it comes from, imported on first use (PEP 562): ``import mtmcal_bayes``
+#: loads no numpy, so the command line can choose the BLAS threads before numpy starts (:mod:`.cli`)
+_HOME = {
+    **dict.fromkeys(("identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan",
+                     "ncgen", "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design",
+                     "next_run"), "api"),
+    "CampaignAnalysis": "analysis", "Campaign": "campaign", "Truth": "campaign",
+    "InputError": "errors", "MtmcalError": "errors", "ParameterError": "errors",
+    "identify_ballbar": "identification", "identify_probe": "identification",
+    "load_campaign": "io", "parse_campaign": "io", "read_dprnt": "io", "save_campaign": "io",
+    "MODELS": "models", "HTMModel": "models", "LinearModel": "models", "make_model": "models",
+    "Observations": "observations", "DEVIATIONS": "parameters", "IDENTIFIABLE": "parameters",
+    "ParameterSpace": "parameters", "ProgressEvent": "progress", "fit_sphere": "sphere",
+}
+
+
+def __getattr__(name: str):
+    if name == "units":
+        return importlib.import_module(".units", __name__)
+    if name not in _HOME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = [
     "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan", "ncgen",

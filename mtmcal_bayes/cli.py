@@ -12,7 +12,13 @@ import os
 import sys
 import time
 
-from . import api, cli_options
+# One BLAS thread (unless the user chose otherwise), set before numpy starts: the matrices here are small (tens of
+# parameters), so a second thread gains nothing, and the report draws its figures in two forked processes on a
+# 2-core machine while this process plans, where OpenBLAS threads spinning against them made the plan 3x slower.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+from . import api, cli_options  # noqa: E402 - after the BLAS threads are chosen
 from .cli_options import PROG, flag_of
 from .errors import MtmcalError, ParameterError
 from .io.json_text import json_text
@@ -172,9 +178,28 @@ def build_parser():
         "sbc": cmd_validate_sbc, "fleet": cmd_fleet})
 
 
+#: the commands that run work on a Dask cluster (``fleet``, ``validate sbc``)
+USES_DASK = frozenset({"fleet", "validate"})
+
+
+def _hide_dask_from_xarray() -> None:
+    """Make ``dask.array`` and ``dask.distributed`` unimportable in this process.
+
+    Whenever Dask is installed (it is, for fleets), xarray imports ``dask.array`` on building the first
+    InferenceData, to recognise Dask arrays, and ``dask.distributed`` on writing NetCDF, to recognise its
+    scheduler: 0.5 s of a 2.5 s ``sample``, for arrays and schedulers no command but ``fleet`` and ``validate``
+    has.  Done only where the process is the command (``main()`` without arguments), never in a caller's
+    process."""
+    for name in ("dask.array", "dask.distributed", "distributed"):
+        if name not in sys.modules:
+            sys.modules[name] = None  # an import of it raises ImportError, which xarray takes as "not installed"
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     args.argv = argv
+    if argv is None and args.command not in USES_DASK:
+        _hide_dask_from_xarray()
     try:
         return args.func(args)
     except ParameterError as exc:
