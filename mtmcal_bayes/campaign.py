@@ -20,6 +20,9 @@ from .errors import InputError
 from .patterns import B_PATTERNS, C_PATTERNS
 
 
+#: the reference temperature of geometric results (ISO 1:2022), °C
+REFERENCE_TEMPERATURE_C = 20.0
+
 @dataclass
 class Machine:
     name: str = ""

@@ -13,7 +13,8 @@ import math
 from .. import units
 from ..campaign import tolerance_text
 from ..parameters import IDENTIFIABLE, quantity_unit
-from .fit import PRACTICAL_MINIMUM, changes, check_history, fit, recalibrate_by
+from .fit import PRACTICAL_MINIMUM, changes, check_history, check_temperatures, fit, recalibrate_by
+from .kinematic import linearised_history
 from .model import HistoryModel
 from .result import HistoryResult, summary_frame
 
@@ -21,17 +22,25 @@ __all__ = ["HistoryModel", "HistoryResult", "fit_history"]
 
 
 def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: dict | None = None,
-                thresholds: dict[str, float] | None = None) -> HistoryResult:
+                thresholds: dict[str, float] | None = None, trend: str = "auto") -> HistoryResult:
     """The history of one machine from its campaigns (any order; each dated, one serial).
 
     ``tolerances``: ``{name: Tolerance}`` (default the latest campaign's ``[tolerances]``); ``thresholds``: the
     smallest change worth flagging per quantity, display units (default: a quarter of the tolerance's width
-    where there is one, else :data:`~.fit.PRACTICAL_MINIMUM`).
+    where there is one, else :data:`~.fit.PRACTICAL_MINIMUM`).  ``trend``: ``"auto"`` (a drift rate per deviation
+    where the data want it) or ``"off"`` (random walks only).  ``model``: ``linear``, or a kinematic model
+    (``htm-thesis``, ``htm-literal``): each campaign is linearised at the history's estimate at its date and the
+    linearisation checked against the nonlinear model (:func:`~.kinematic.linearised_history`).
     """
     campaigns = sorted(campaigns, key=lambda c: c.date) if all(c.date for c in campaigns) else list(campaigns)
     check_history(campaigns)
-    hm = HistoryModel(campaigns, model)
-    hf = fit(hm, seed=seed, quantities=IDENTIFIABLE)
+    check_temperatures(campaigns)
+    if model == "linear":
+        hm, hf, check = HistoryModel(campaigns, model), None, None
+    else:
+        hm, hf, check = linearised_history(campaigns, model, seed=seed, trend=trend)
+    if hf is None:
+        hf = fit(hm, seed=seed, quantities=IDENTIFIABLE, trend=trend)
     dates = [c.date for c in campaigns]
     tol = campaigns[-1].tolerances if tolerances is None else tolerances
     limits = {}
@@ -49,4 +58,6 @@ def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: 
     forecast = [{"quantity": n, "recalibrate_by": recalibrate_by(hf, hf.quantities.index(n), lo, hi, last=dates[-1]),
                  "tolerance": tolerance_text(lo, hi, quantity_unit(n))} for n, (lo, hi) in limits.items()]
     return HistoryResult(campaigns[-1].machine.serial, dates, [c.source for c in campaigns], summary_frame(hf, dates),
-                         found, forecast, hf, limits)
+                         found, forecast, hf, limits, model=model, linearisation=check,
+                         temperatures=[c.temperature_C for c in campaigns] if hm.thermal else None,
+                         summary_20C=summary_frame(hf, dates, at_20C=True) if hm.thermal else None)

@@ -9,9 +9,18 @@ between dates, and the forecast against the tolerances.
 * **Changes.** Between consecutive campaigns, ``P(|Δ| > threshold)`` from the mixture.  A change is flagged
   when that probability exceeds ``1 − α/K`` with K the number of (quantity, interval) pairs examined
   (Bonferroni): under the model the chance that a history with no change raises any flag is at most α.
-* **Forecast.** At a future date the state is the last one plus a random-walk step, ``N(m_T, P_T + q²·Δτ)``;
-  the probability of being out of tolerance is that mixture's mass outside; "recalibrate by" is the first
-  date (daily grid, up to :data:`HORIZON_YEARS`) where it passes :data:`FORECAST_RISK`.
+* **Trend.** Each deviation's drift rate (:mod:`.model`) is kept when the data want it: the Bayes factor of
+  "random walk + trend" against "random walk" for that deviation, ``E[p(y | θ, trend) / p(y | θ)]`` over the
+  random-walk posterior of the scales θ (exact identity, the same scale prior in both), must pass
+  :data:`TREND_BAYES_FACTOR`.  A flat quantity stays flat: the rate's prior (sd :data:`TREND_SCALE` per year)
+  costs an Occam factor the data must pay back.  With trends kept, the scales are sampled again.
+* **Temperature.** With every campaign's ``temperature_C`` the thermal sensitivities (prior sd
+  :data:`THERMAL_SCALE` per °C) are conditioned jointly with the drift; a sensitivity whose posterior sd is not
+  below :data:`IDENTIFIED_SD_RATIO` of its prior sd is reported as prior-only.
+* **Forecast.** At a future date the state (at 20 °C) is the last one plus the rate times the time plus a
+  random-walk step, ``N(m_T + m_r·Δτ, P_T + 2Δτ·P_Tr + Δτ²·P_r + q²·Δτ)``; the probability of being out of
+  tolerance is that mixture's mass outside; "recalibrate by" is the first date (daily grid, up to
+  :data:`HORIZON_YEARS`) where it passes :data:`FORECAST_RISK`.
 """
 
 from __future__ import annotations
@@ -28,7 +37,7 @@ from scipy.stats import norm
 from .. import units
 from ..errors import MtmcalError, ParameterError
 from ..parameters import IDENTIFIABLE, quantity_unit, weights
-from .model import SECONDS_PER_YEAR, HistoryModel
+from .model import SECONDS_PER_YEAR, THERMAL_SCALE, HistoryModel  # noqa: F401 - THERMAL_SCALE re-exported for the docs
 
 #: half-Cauchy scale of each drift rate, display units per √year
 DRIFT_SCALE = {"arcsec": 5.0, "um": 5.0}
@@ -43,19 +52,33 @@ N_STATE = 400
 WALKERS_PER_DIM = 2
 N_STEPS = 1000
 BURN = 300
+#: steps and burn-in of the second run, with the trends kept, started from the first run's walkers
+RESAMPLE_STEPS = 500
+RESAMPLE_BURN = 100
 #: the drift rates sampled span e^±LOG_RANGE around their prior scale (e^-2·LOG_RANGE below)
 LOG_RANGE = 11.5
+#: prior sd of a deviation's drift rate where it has a trend, display units per year
+TREND_SCALE = {"arcsec": 10.0, "um": 10.0}
+#: Bayes factor a trend must reach against the random walk alone to be kept ("positive" evidence, Kass & Raftery)
+TREND_BAYES_FACTOR = 3.0
+#: a thermal sensitivity is learnt when its posterior sd is below this share of its prior sd (else prior-only)
+IDENTIFIED_SD_RATIO = 0.5
+#: scale draws conditioned at once (bounds the (n, K, K) covariances in memory)
+CHUNK = 50
+#: ``trend`` choices of :func:`fit`
+TREND_CHOICES = ("auto", "off")
 
 
 @dataclass(frozen=True)
 class HistoryFit:
-    """Draws of the scales, and per scale draw the mean (n, T, k) and sd (n, T, k) of each quantity."""
+    """Draws of the scales, and per scale draw the mean and sd of each quantity at each date (at 20 °C), as
+    measured (at the campaign's temperature), its drift rate and thermal sensitivity; display units."""
 
     model: HistoryModel
     quantities: list[str]
     q2: np.ndarray  # (n, d) drift rates², internal units per year
     s2: np.ndarray  # (n,) σ_model², mm²
-    mean: np.ndarray  # (n, T, k) display units
+    mean: np.ndarray  # (n, T, k) display units, at 20 °C
     sd: np.ndarray  # (n, T, k)
     last_var: np.ndarray  # (n, k) variance at the last date, display units²
     walk_var: np.ndarray  # (n, k) random-walk variance per year of each quantity, display units²
@@ -63,6 +86,15 @@ class HistoryFit:
     delta_sd: np.ndarray  # (n, T-1, k)
     acceptance: float
     tau_max: float
+    measured_mean: np.ndarray  # (n, T, k) at each campaign's temperature (= mean without temperatures)
+    measured_sd: np.ndarray  # (n, T, k)
+    rate_mean: np.ndarray  # (n, k) drift rate per year (0 where no trend)
+    rate_var: np.ndarray  # (n, k)
+    last_rate_cov: np.ndarray  # (n, k) covariance of the last state and the rate
+    thermal_mean: np.ndarray  # (n, k) per °C
+    thermal_var: np.ndarray  # (n, k)
+    thermal_prior_sd: np.ndarray  # (k,)
+    trend: dict  # {deviation: log10 Bayes factor of trend against random walk}; "trended": the deviations kept
 
 
 def _log_prob_factory(hm: HistoryModel):
@@ -86,45 +118,121 @@ def _log_prob_factory(hm: HistoryModel):
     return log_prob, scale
 
 
-def fit(hm: HistoryModel, *, seed: int = 1, quantities=IDENTIFIABLE) -> HistoryFit:
-    """Sample the scales and condition the states on them (see the module docstring)."""
+def _internal_scale(table: dict, names) -> np.ndarray:
+    return np.array([units.to_internal(table[quantity_unit(n)], quantity_unit(n)) for n in names])
+
+
+def _sample_scales(hm: HistoryModel, rng: np.random.Generator, start: np.ndarray | None = None,
+                   steps: int = N_STEPS, burn: int = BURN) -> tuple[np.ndarray, float, float, np.ndarray]:
+    """N_STATE draws (n, d + 1) of (log q, log σ), the acceptance fraction, the largest autocorrelation time and
+    the walkers' last positions (``start``: where the walkers begin, default spread around the prior scales)."""
     log_prob, scale = _log_prob_factory(hm)
     dim = hm.d + 1
     walkers = WALKERS_PER_DIM * dim + (WALKERS_PER_DIM * dim) % 2
-    rng = np.random.default_rng(seed)
     s0 = hm.sigma_prior.sd
-    start = np.column_stack([np.log(scale * 0.3) + rng.normal(0, 0.5, (walkers, hm.d)),
-                             math.log(s0) + rng.normal(0, 0.3, walkers)])
+    if start is None:
+        start = np.column_stack([np.log(scale * 0.3) + rng.normal(0, 0.5, (walkers, hm.d)),
+                                 math.log(s0) + rng.normal(0, 0.3, walkers)])
     sampler = emcee.EnsembleSampler(walkers, dim, log_prob, vectorize=True,
                                     moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)])
     sampler.random_state = np.random.RandomState(rng.integers(2**32 - 1)).get_state()
-    sampler.run_mcmc(start, N_STEPS, progress=False)
-    chain = sampler.get_chain(discard=BURN, flat=True)
-    if not np.isfinite(sampler.get_log_prob(discard=BURN)).all():
+    sampler.run_mcmc(start, steps, progress=False)
+    chain = sampler.get_chain(discard=burn, flat=True)
+    if not np.isfinite(sampler.get_log_prob(discard=burn)).all():
         raise MtmcalError("the history's scale sampler left the support: the campaigns are inconsistent")
     emcee_log = logging.getLogger("emcee")
     level, emcee_log.level = emcee_log.level, logging.ERROR  # the chain-length advice goes into the diagnostics
     try:
-        tau = float(np.nanmax(sampler.get_autocorr_time(discard=BURN, quiet=True)))
+        tau = float(np.nanmax(sampler.get_autocorr_time(discard=burn, quiet=True)))
     finally:
         emcee_log.setLevel(level)
     pick = chain[np.linspace(0, len(chain) - 1, N_STATE).astype(int)]
+    return pick, float(np.mean(sampler.acceptance_fraction)), tau, sampler.get_chain()[-1]
+
+
+def trend_bayes_factors(hm: HistoryModel, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
+    """log10 Bayes factor (d,) of "random walk + trend" against the model as it is, per deviation, from draws
+    ``q2`` (n, d), ``s2`` (n,) of the scales' posterior under the model as it is (module docstring)."""
+    base = hm.log_marginal(q2, s2)
+    var = _internal_scale(TREND_SCALE, hm.deviations) ** 2
+    out = np.empty(hm.d)
+    for j in range(hm.d):
+        diff = hm.log_marginal_with_trend(q2, s2, j, var[j]) - base
+        out[j] = (np.logaddexp.reduce(diff) - math.log(len(diff))) / math.log(10.0)
+    return out
+
+
+def fit(hm: HistoryModel, *, seed: int = 1, quantities=IDENTIFIABLE, trend: str = "auto") -> HistoryFit:
+    """Sample the scales, choose the trends (``trend="auto"``; ``"off"``: random walks only) and condition the
+    states on the scales (see the module docstring)."""
+    if trend not in TREND_CHOICES:
+        raise ParameterError("trend", f"{trend!r} (expected {' or '.join(TREND_CHOICES)})")
+    rng = np.random.default_rng(seed)
+    pick, acceptance, tau, last = _sample_scales(hm, rng)
+    bf = {}
+    if trend == "auto":
+        log10_bf = trend_bayes_factors(hm, np.exp(2 * pick[:, :-1]), np.exp(2 * pick[:, -1]))
+        bf = dict(zip(hm.deviations, log10_bf.tolist()))
+        keep = log10_bf > math.log10(TREND_BAYES_FACTOR)
+        if keep.any():
+            hm.set_trend(np.where(keep, _internal_scale(TREND_SCALE, hm.deviations) ** 2, 0.0))
+            # the scales move little when a rate is added: the walkers go on from where they are, burn-in shorter
+            pick, acceptance, tau, _ = _sample_scales(hm, rng, start=last, steps=RESAMPLE_STEPS, burn=RESAMPLE_BURN)
     q2, s2 = np.exp(2 * pick[:, :-1]), np.exp(2 * pick[:, -1])
     names = [n for n in quantities if weights(n, hm.deviations)]
     W = np.array([[weights(n, hm.deviations).get(k, 0.0) for k in hm.deviations] for n in names])  # (k, d)
     disp = np.array([units.from_internal(1.0, quantity_unit(n)) for n in names])  # display per internal
-    m, P = hm.state_posterior(q2, s2)  # (n, T, d), (n, Td, Td)
+    parts = [_condition(hm, q2[i:i + CHUNK], s2[i:i + CHUNK], W) for i in range(0, len(q2), CHUNK)]
+    c = {key: np.concatenate([part[key] for part in parts]) for key in parts[0]}
+    d1, d2 = disp, disp**2
+    walk = np.einsum("kd,nd->nk", W**2, q2) * d2
+    prior_k = np.sqrt(np.einsum("kd,d->k", W**2, hm.thermal_var)) * disp
+    trend_info = {**bf, "trended": [n for n, v in zip(hm.deviations, hm.trend_var) if v > 0]}
+    return HistoryFit(hm, names, q2, s2, c["mean"] * d1, np.sqrt(c["var"]) * d1, c["var"][:, -1] * d2, walk,
+                      c["delta_mean"] * d1, np.sqrt(c["delta_var"]) * d1, acceptance, tau,
+                      c["meas_mean"] * d1, np.sqrt(c["meas_var"]) * d1, c["rate_mean"] * d1, c["rate_var"] * d2,
+                      c["last_rate_cov"] * d2, c["kappa_mean"] * d1, c["kappa_var"] * d2, prior_k, trend_info)
+
+
+def _condition(hm: HistoryModel, q2: np.ndarray, s2: np.ndarray, W: np.ndarray) -> dict:
+    """Per scale draw, the moments of the quantities ``W`` (k, d) of the augmented state, internal units."""
+    m, P = hm.augmented_posterior(q2, s2)
     T, d = hm.T, hm.d
-    Pb = P.reshape(len(P), T, d, T, d)
-    mean = np.einsum("ntd,kd->ntk", m, W) * disp
-    var_t = np.einsum("kd,ntde,ke->ntk", W, Pb[:, np.arange(T), :, np.arange(T), :].transpose(1, 0, 2, 3), W)
-    sd = np.sqrt(np.maximum(var_t, 0.0)) * disp
-    cross = np.einsum("kd,ntde,ke->ntk", W, Pb[:, np.arange(T - 1), :, np.arange(1, T), :].transpose(1, 0, 2, 3), W)
-    dvar = var_t[:, 1:] + var_t[:, :-1] - 2 * cross
-    walk = np.einsum("kd,nd->nk", W**2, q2) * disp**2
-    return HistoryFit(hm, names, q2, s2, mean, sd, var_t[:, -1] * disp**2, walk,
-                      mean[:, 1:] - mean[:, :-1], np.sqrt(np.maximum(dvar, 0.0)) * disp,
-                      float(np.mean(sampler.acceptance_fraction)), tau)
+    k = T * d
+    n = len(q2)
+    mx = m[:, :k].reshape(n, T, d)
+    Px = P[:, :k, :k].reshape(n, T, d, T, d)
+    t = np.arange(T)
+    block = Px[:, t, :, t, :].transpose(1, 0, 2, 3)  # (n, T, d, d): Cov(x_t, x_t)
+    var = np.maximum(np.einsum("kd,ntde,ke->ntk", W, block, W), 0.0)
+    cross = np.einsum("kd,ntde,ke->ntk", W, Px[:, t[:-1], :, t[1:], :].transpose(1, 0, 2, 3), W)
+    r, kap = slice(k, k + d), slice(k + d, k + 2 * d)
+    P_r, P_k = P[:, r, r], P[:, kap, kap]
+    P_xk = P[:, :k, kap].reshape(n, T, d, d)  # Cov(x_t, κ)
+    P_xr_last = P[:, (T - 1) * d:k, r]  # Cov(x_T, r)
+    kappa_var = np.maximum(np.einsum("kd,nde,ke->nk", W, P_k, W), 0.0)
+    x_k_cov = np.einsum("kd,ntde,ke->ntk", W, P_xk, W)
+    dT = hm.dT[None, :, None]
+    kappa_mean = np.einsum("nd,kd->nk", m[:, kap], W)
+    mean = np.einsum("ntd,kd->ntk", mx, W)
+    return {"mean": mean, "var": var,
+            "delta_mean": mean[:, 1:] - mean[:, :-1],
+            "delta_var": np.maximum(var[:, 1:] + var[:, :-1] - 2 * cross, 0.0),
+            "meas_mean": mean + dT * kappa_mean[:, None, :],
+            "meas_var": np.maximum(var + dT**2 * kappa_var[:, None, :] + 2 * dT * x_k_cov, 0.0),
+            "rate_mean": np.einsum("nd,kd->nk", m[:, r], W),
+            "rate_var": np.maximum(np.einsum("kd,nde,ke->nk", W, P_r, W), 0.0),
+            "last_rate_cov": np.einsum("kd,nde,ke->nk", W, P_xr_last, W),
+            "kappa_mean": kappa_mean, "kappa_var": kappa_var}
+
+
+def forecast_moments(hf: HistoryFit, k: int, years: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mean and sd (n, len(years)) of quantity ``k`` (at 20 °C) ``years`` after the last campaign, per scale draw."""
+    y = np.asarray(years, float)[None, :]
+    mean = hf.mean[:, -1, k][:, None] + hf.rate_mean[:, k][:, None] * y
+    var = (hf.last_var[:, k][:, None] + 2 * y * hf.last_rate_cov[:, k][:, None] + y**2 * hf.rate_var[:, k][:, None]
+           + hf.walk_var[:, k][:, None] * y)
+    return mean, np.sqrt(np.maximum(var, 0.0))
 
 
 def prob_outside(mean: np.ndarray, sd: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -155,8 +263,7 @@ def recalibrate_by(hf: HistoryFit, k: int, low: float, high: float, *,
     :data:`FORECAST_RISK`; None within :data:`HORIZON_YEARS`."""
     days = np.arange(0, int(HORIZON_YEARS * 365.25) + 1)
     years = days * 86400.0 / SECONDS_PER_YEAR
-    m = hf.mean[:, -1, k][:, None]
-    sd = np.sqrt(hf.last_var[:, k][:, None] + hf.walk_var[:, k][:, None] * years[None, :])
+    m, sd = forecast_moments(hf, k, years)
     p = prob_outside(m, sd, low, high)
     hit = np.nonzero(p > FORECAST_RISK)[0]
     return None if len(hit) == 0 else last + datetime.timedelta(days=int(days[hit[0]]))
@@ -176,3 +283,13 @@ def check_history(campaigns) -> None:
     dates = [c.date for c in campaigns]
     if len(set(dates)) < len(dates):
         raise MtmcalError("two campaigns of the history have the same date")
+
+
+def check_temperatures(campaigns) -> None:
+    """Temperatures are modelled when every campaign has one; a history where only some have is an error naming
+    the first campaign without (a missing reading is not 20 °C)."""
+    have = [c.temperature_C is not None for c in campaigns]
+    if any(have) and not all(have):
+        first = next(c for c, h in zip(campaigns, have) if not h)
+        raise MtmcalError(f"{first.source}: temperature_C: missing, while {sum(have)} of the history's "
+                          f"{len(campaigns)} campaigns have one (give every campaign its temperature, or none)")

@@ -15,6 +15,16 @@ Given the scales (q, σ) the whole history is one linear-Gaussian system.  Stack
 marginal likelihood of the scales and the posterior of every state at every date jointly are exact (the
 same answer a Kalman filter and RTS smoother give, computed in one step since a history has tens of
 campaigns, not thousands).  Only the d + 1 scales are sampled (:mod:`.fit`).
+
+Two static Gaussian terms keep the system linear-Gaussian:
+
+* **Trend.** A deviation j with a trend drifts at a rate ``r_j ~ N(0, vr_j)`` (per year) on top of its random
+  walk: ``x_t = x_0 + r τ_t + w_t``, adding ``vr_j·τ_s·τ_t`` to the states' covariance (``vr_j = 0``: no trend).
+* **Temperature.** The states are the deviations at 20 °C; campaign t, measured at ``temperature_C``, sees
+  ``x_t + κ·(T_t − 20)`` with a thermal sensitivity ``κ_j ~ N(0, vk_j)`` per °C, adding ``vk_j·ΔT_s·ΔT_t``.
+
+The posterior of the augmented state ``Z = (x_1 … x_T, r, κ)`` is exact in the same way
+(:meth:`HistoryModel.augmented_posterior`).
 """
 
 from __future__ import annotations
@@ -23,11 +33,15 @@ import math
 
 import numpy as np
 
-from ..errors import MtmcalError
+from .. import units
+from ..campaign import REFERENCE_TEMPERATURE_C
 from ..inference.analytic import linearisation
 from ..inference.log_posterior import LogPosterior
+from ..parameters import quantity_unit
 
 SECONDS_PER_YEAR = 365.25 * 86400.0
+#: prior sd of a thermal sensitivity, display units per °C
+THERMAL_SCALE = {"arcsec": 2.0, "um": 3.0}
 
 
 class HistoryModel:
@@ -38,11 +52,13 @@ class HistoryModel:
     the covariance without the random-walk and σ terms, ``G`` (d, M, M) with ``C = C0 + Σ_j q_j² G_j + σ² I``.
     """
 
-    def __init__(self, campaigns, model: str = "linear"):
-        if model != "linear":
-            raise MtmcalError(f"the history model is built on the linear model; {model} is not supported yet "
-                              "(its campaigns would have to be linearised at their estimates)")
-        posts = [LogPosterior(c, "linear") for c in campaigns]
+    def __init__(self, campaigns, model: str = "linear", *, thermal: bool = True,
+                 points: list[np.ndarray] | None = None):
+        """``thermal``: model the thermal sensitivities (prior sd :data:`THERMAL_SCALE` per °C) when every campaign
+        has its ``temperature_C``.  ``points``: per campaign the parameter vector (internal units) at which a
+        kinematic ``model`` is linearised (default: zero, the prior centre); the ``linear`` model is linear
+        already."""
+        posts = [LogPosterior(c, model) for c in campaigns]
         first = posts[0]
         dev = [i for i, p in enumerate(first.space.parameters) if p.group == "deviation"]
         self.deviations = [first.space.parameters[i].name for i in dev]
@@ -54,11 +70,12 @@ class HistoryModel:
         self.tau = np.array([(c.date - t0).total_seconds() / SECONDS_PER_YEAR for c in campaigns])
         d, T = len(dev), len(campaigns)
         blocks, ys, Rs = [], [], []
-        for post in posts:
+        self.model = model
+        for t, post in enumerate(posts):
             names = [p.name for p in post.space.parameters]
             cols = [names.index(n) for n in self.deviations]
             nuis = [i for i, p in enumerate(post.space.parameters) if p.group != "deviation"]
-            A, c = linearisation(post)
+            A, c = linearisation(post, None if points is None else points[t])
             prior = post.priors.priors
             vn = np.array([prior[i].sd for i in nuis]) ** 2
             mn = np.array([prior[i].centre for i in nuis])
@@ -84,9 +101,35 @@ class HistoryModel:
         # per deviation j: h_j (M,) its column in every block; prior part v0_j h hᵀ and walk part min(τ)·h hᵀ
         Hj = self.H.reshape(M, T, d).sum(axis=1)  # (M, d): block-diagonal, so the sum picks each row's block
         tm = tmin[self.campaign_of_row][:, self.campaign_of_row]  # (M, M)
-        self.C0 = self.R + (Hj * self.var0) @ Hj.T
-        self.G = np.einsum("aj,bj,ab->jab", Hj, Hj, tm)
+        self.posts = posts
         self.d, self.T, self.M = d, T, M
+        self.G = np.einsum("aj,bj,ab->jab", Hj, Hj, tm)
+        self.G_trend = np.einsum("aj,bj,a,b->jab", Hj, Hj, self.tau[self.campaign_of_row], self.tau[self.campaign_of_row])
+        temps = [c.temperature_C for c in campaigns]
+        self.thermal = thermal and all(x is not None for x in temps)
+        self.dT = np.array([x - REFERENCE_TEMPERATURE_C for x in temps]) if self.thermal else np.zeros(T)
+        self.thermal_var = np.array([units.to_internal(THERMAL_SCALE[quantity_unit(n)], quantity_unit(n)) ** 2
+                                     for n in self.deviations]) if self.thermal else np.zeros(d)
+        dTrow = self.dT[self.campaign_of_row]
+        self.H_thermal = Hj * dTrow[:, None]  # (M, d): campaign t's rows of A_t·ΔT_t
+        self.C_base = self.R + (Hj * self.var0) @ Hj.T + (self.H_thermal * self.thermal_var) @ self.H_thermal.T
+        self.set_trend(np.zeros(d))
+
+    def set_trend(self, trend_var: np.ndarray) -> None:
+        """The prior variance (d,) of each deviation's drift rate (internal units per year, squared; 0: no trend)."""
+        self.trend_var = np.asarray(trend_var, float)
+        self.C0 = self.C_base + np.einsum("j,jab->ab", self.trend_var, self.G_trend)
+
+    def log_marginal_with_trend(self, q2: np.ndarray, s2: np.ndarray, j: int, var: float) -> np.ndarray:
+        """:meth:`log_marginal` (n,) with deviation ``j``'s rate variance set to ``var`` (the others as they are)."""
+        saved = self.trend_var.copy()
+        tv = saved.copy()
+        tv[j] = var
+        try:
+            self.set_trend(tv)
+            return self.log_marginal(q2, s2)
+        finally:
+            self.set_trend(saved)
 
     def covariance(self, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
         """``C`` (n, M, M) of the observations for drift rates² ``q2`` (n, d) and σ² ``s2`` (n,)."""
@@ -117,14 +160,39 @@ class HistoryModel:
 
     def state_posterior(self, q2: np.ndarray, s2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean (n, T, d) and covariance (n, T·d, T·d) of every state at every date, given the scales."""
-        S = self.prior_state_cov(q2)
+        mean, cov = self.augmented_posterior(q2, s2)
+        k = self.T * self.d
+        return mean[:, :k].reshape(-1, self.T, self.d), cov[:, :k, :k]
+
+    def augmented_prior_cov(self, q2: np.ndarray) -> np.ndarray:
+        """Prior covariance (n, K, K) of ``Z = (x_1 … x_T, r, κ)``, K = T·d + 2d (module docstring)."""
+        n, d, T = len(q2), self.d, self.T
+        k = T * d
+        S = np.zeros((n, k + 2 * d, k + 2 * d))
+        Sx = self.prior_state_cov(q2).reshape(n, T, d, T, d)
+        j = np.arange(d)
+        Sx[:, :, j, :, j] += self.trend_var[:, None, None, None] * np.multiply.outer(self.tau, self.tau)
+        S[:, :k, :k] = Sx.reshape(n, k, k)
+        rows = (np.arange(T)[:, None] * d + j).ravel()  # x_{t,j}, t-major
+        S[:, rows, k + np.tile(j, T)] = np.repeat(self.tau, d) * np.tile(self.trend_var, T)
+        S[:, k + np.tile(j, T), rows] = S[:, rows, k + np.tile(j, T)]
+        S[:, k + j, k + j] = self.trend_var
+        S[:, k + d + j, k + d + j] = self.thermal_var
+        return S
+
+    def augmented_posterior(self, q2: np.ndarray, s2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Posterior mean (n, K) and covariance (n, K, K) of ``Z = (x_1 … x_T, r, κ)`` given the scales: the states
+        at 20 °C (t-major), the drift rates (per year), the thermal sensitivities (per °C); internal units."""
+        S = self.augmented_prior_cov(q2)
+        HZ = np.hstack([self.H, np.zeros((self.M, self.d)), self.H_thermal])
         C = self.covariance(q2, s2)
-        SH = S @ self.H.T  # (n, Td, M)
-        K = np.linalg.solve(C, np.transpose(SH, (0, 2, 1)))  # C⁻¹ H S: (n, M, Td)
-        mean = np.tile(self.mu0, self.T) + np.einsum("nmk,m->nk", K, self.resid)
+        SH = S @ HZ.T  # (n, K, M)
+        K = np.linalg.solve(C, np.transpose(SH, (0, 2, 1)))  # C⁻¹ H S: (n, M, K)
+        mu = np.concatenate([np.tile(self.mu0, self.T), np.zeros(2 * self.d)])
+        mean = mu + np.einsum("nmk,m->nk", K, self.resid)
         cov = S - SH @ K
         cov = 0.5 * (cov + np.transpose(cov, (0, 2, 1)))
-        return mean.reshape(-1, self.T, self.d), cov
+        return mean, cov
 
 
 def _is_pd(C: np.ndarray) -> bool:

@@ -16,8 +16,8 @@ from ..html_page import Page
 from ..io.json_text import json_text
 from ..io.textfiles import atomic_directory
 from ..iso import iso_symbol
-from ..parameters import quantity_unit
-from .fit import ALPHA, FORECAST_RISK, HORIZON_YEARS, HistoryFit
+from ..parameters import quantity_unit, weights
+from .fit import ALPHA, FORECAST_RISK, HORIZON_YEARS, IDENTIFIED_SD_RATIO, TREND_BAYES_FACTOR, HistoryFit
 
 
 def _iso(d: datetime.datetime) -> str:
@@ -44,6 +44,43 @@ class HistoryResult:
     tolerances: dict = field(default_factory=dict)  # {name: (low, high)} display units, ±inf when open
     output: str | None = None
     written: list[str] = field(default_factory=list)
+    model: str = "linear"
+    linearisation: dict | None = None  # a kinematic model's check of its expansion (.kinematic)
+    temperatures: list[float] | None = None  # °C per campaign, when the thermal sensitivities were modelled
+    summary_20C: pd.DataFrame | None = None  # as ``summary``, at 20 °C (when the temperatures were modelled)
+
+    @property
+    def summary_at_20C(self) -> pd.DataFrame:
+        """The summary referred to 20 °C (the summary itself when no temperatures were modelled)."""
+        return self.summary if self.summary_20C is None else self.summary_20C
+
+    def trend(self) -> dict:
+        """Per quantity: ``model`` ("trend" where a deviation it is made of has a kept drift rate, else
+        "random-walk"), the rate's posterior mean and sd per year (0 for a random walk) and its unit."""
+        kept = set(self.fit.trend.get("trended", []))
+        out = {}
+        for k, q in enumerate(self.fit.quantities):
+            uses = {n for n, w in weights(q, self.fit.model.deviations).items() if w}
+            m, v = self.fit.rate_mean[:, k], self.fit.rate_var[:, k]
+            out[q] = {"model": "trend" if uses & kept else "random-walk", "rate_mean": float(m.mean()),
+                      "rate_sd": float(np.sqrt(v.mean() + m.var())), "unit": f"{units.SYMBOL[quantity_unit(q)]}/year",
+                      "log10_bayes_factor": max((self.fit.trend[n] for n in uses if n in self.fit.trend), default=None)}
+        return out
+
+    def thermal(self) -> dict:
+        """Per quantity: the thermal sensitivity's posterior mean and sd per °C, its unit, and ``identified``
+        (false where its posterior sd is not below :data:`~.fit.IDENTIFIED_SD_RATIO` of the prior's: the prior sets
+        it); empty without temperatures."""
+        if self.temperatures is None:
+            return {}
+        out = {}
+        for k, q in enumerate(self.fit.quantities):
+            m, v = self.fit.thermal_mean[:, k], self.fit.thermal_var[:, k]
+            sd = float(np.sqrt(v.mean() + m.var()))
+            prior = float(self.fit.thermal_prior_sd[k])
+            out[q] = {"mean": float(m.mean()), "sd": sd, "prior_sd": prior,
+                      "unit": f"{units.SYMBOL[quantity_unit(q)]}/°C", "identified": bool(sd < IDENTIFIED_SD_RATIO * prior)}
+        return out
 
     @property
     def flagged(self) -> list[dict]:
@@ -51,12 +88,20 @@ class HistoryResult:
 
     def to_json(self) -> dict:
         """The interface of ``history --json`` (docs/history.md)."""
-        summary = {}
-        for (when, q), r in self.summary.iterrows():
-            summary.setdefault(when, {})[q] = {c: float(r[c]) for c in ("mean", "sd", "hdi_low", "hdi_high")}
+        def nested(frame):
+            out = {}
+            for (when, q), r in frame.iterrows():
+                out.setdefault(when, {})[q] = {c: float(r[c]) for c in ("mean", "sd", "hdi_low", "hdi_high")}
+            return out
+
+        extra = {}
+        if self.temperatures is not None:
+            extra = {"summary_20C": nested(self.summary_20C),
+                     "temperatures_C": self.temperatures}
         return {
             "serial": self.serial, "dates": [_iso(d) for d in self.dates], "files": self.files,
-            "summary": summary,
+            "summary": nested(self.summary), **extra, "model": self.model,
+            "trend": self.trend(), "thermal": self.thermal(), "linearisation": self.linearisation,
             "changes": [{"quantity": c["quantity"], "date": _iso(c["date"]), "probability": c["probability"],
                          "delta": c["delta"], "threshold": c["threshold"]} for c in self.flagged],
             "forecast": [{"quantity": f["quantity"], "recalibrate_by": f["recalibrate_by"] and _iso(f["recalibrate_by"]),
@@ -67,12 +112,24 @@ class HistoryResult:
         }
 
     def to_text(self) -> str:
+        kept = self.fit.trend.get("trended", [])
+        drift = "random walks" + (f", a drift rate for {', '.join(kept)}" if kept else "")
         lines = [f"History of machine {self.serial or '(no serial)'}: {len(self.dates)} campaigns, "
-                 f"{_iso(self.dates[0])} to {_iso(self.dates[-1])} (random-walk drift model, linear model)"]
+                 f"{_iso(self.dates[0])} to {_iso(self.dates[-1])} ({drift}; {self.model} model"
+                 + (", thermal sensitivities modelled, results at 20 °C" if self.temperatures is not None else "")
+                 + ")"]
+        if self.linearisation is not None:
+            c = self.linearisation
+            lines.append(f"Linearised at the history's estimate; the {c['model']} model differs from its expansion by up "
+                         f"to {c['max_gap_um']:.3f} µm (instrument accuracy {c['accuracy_um']:g} µm)"
+                         + ("" if c["ok"] else ": WARNING, more than the accuracy — the deviations are large for a "
+                            "linearised history"))
         last = self.dates[-1]
-        lines.append(f"{'quantity':18s} {'ISO':10s} {'unit':>4s} {'first':>16s} {'last':>16s}")
+        where = " (at 20 °C)" if self.temperatures is not None else ""
+        lines.append(f"{'quantity':18s} {'ISO':10s} {'unit':>4s} {'first' + where:>16s} {'last' + where:>16s}")
+        table = self.summary_at_20C
         for q in self.fit.quantities:
-            a, b = self.summary.loc[(_iso(self.dates[0]), q)], self.summary.loc[(_iso(last), q)]
+            a, b = table.loc[(_iso(self.dates[0]), q)], table.loc[(_iso(last), q)]
             lines.append(f"{q:18s} {iso_symbol(q) or '—':10s} {units.SYMBOL[quantity_unit(q)]:>4s} "
                          f"{a['mean']:8.2f} ± {a['sd']:5.2f} {b['mean']:8.2f} ± {b['sd']:5.2f}")
         level = self.changes[0]["level"] if self.changes else 1.0
@@ -81,6 +138,16 @@ class HistoryResult:
         lines += [f"  {c['quantity']} before {_iso(c['date'])}: Δ = {c['delta']:+.2f} "
                   f"{units.SYMBOL[quantity_unit(c['quantity'])]}, P(|Δ| > {c['threshold']:g}) = {c['probability']:.4f}"
                   for c in self.flagged] or ["  none"]
+        trend = self.trend()
+        rows = [f"  {q:18s} {t['rate_mean']:+7.2f} ± {t['rate_sd']:5.2f} {t['unit']}" for q, t in trend.items()
+                if t["model"] == "trend"]
+        lines += ["", "Drift rates kept (Bayes factor of a trend against the random walk ≥ "
+                  f"{TREND_BAYES_FACTOR:g}):"] + (rows or ["  none: every quantity drifts as a random walk"])
+        if self.temperatures is not None:
+            lines += ["", "Thermal sensitivities (measured = at 20 °C + sensitivity × (temperature − 20 °C)):"]
+            lines += [f"  {q:18s} {t['mean']:+7.2f} ± {t['sd']:5.2f} {t['unit']}"
+                      + ("" if t["identified"] else f"  prior only (prior sd {t['prior_sd']:g})")
+                      for q, t in self.thermal().items()]
         if self.forecast:
             lines += ["", f"Forecast: the date by which P(out of tolerance) passes {100 * FORECAST_RISK:g} % "
                       f"(horizon {HORIZON_YEARS:g} years):"]
@@ -96,12 +163,17 @@ class HistoryResult:
         from .figures import trend_figure
 
         out_dir = Path(out_dir)
-        files = ["index.html", "history.json", "history_summary.csv", "changes.csv", "forecast.csv", "trend.png"]
+        files = ["index.html", "history.json", "history_summary.csv", "changes.csv", "forecast.csv", "trend.csv",
+                 "trend.png"] + (["history_summary_20C.csv", "thermal.csv"] if self.temperatures is not None else [])
         with atomic_directory(out_dir) as tmp:
             self.output = str(out_dir)
             self.written = files
             (tmp / "history.json").write_text(json_text(self.to_json()) + "\n", encoding="utf-8")
             self.summary.to_csv(tmp / "history_summary.csv", float_format="%.6g")
+            pd.DataFrame(self.trend()).T.rename_axis("quantity").to_csv(tmp / "trend.csv", float_format="%.6g")
+            if self.temperatures is not None:
+                self.summary_20C.to_csv(tmp / "history_summary_20C.csv", float_format="%.6g")
+                pd.DataFrame(self.thermal()).T.rename_axis("quantity").to_csv(tmp / "thermal.csv", float_format="%.6g")
             pd.DataFrame(self.changes).to_csv(tmp / "changes.csv", index=False, float_format="%.6g")
             pd.DataFrame(self.forecast).to_csv(tmp / "forecast.csv", index=False)
             save_png(trend_figure(self), tmp / "trend.png")
@@ -119,8 +191,25 @@ class HistoryResult:
                        "(deviations as Gaussian random walks in time, each campaign with its own set-up offsets; "
                        "docs/history.md). Dashed: the forecast band after the last campaign; red: tolerances.")
         page.figure(tmp / "trend.png", "Trend of each quantity with 95 % bands and the forecast.", "trends")
-        wide = self.summary.reset_index().pivot(index="date", columns="quantity", values="mean")
+        wide = self.summary_at_20C.reset_index().pivot(index="date", columns="quantity", values="mean")
         page.table(wide[[q for q in self.fit.quantities if q in wide.columns]], digits=2)
+        page.section("drift", "Drift: random walk or trend")
+        page.paragraph(f"Each deviation drifts as a random walk; a drift rate is added where the Bayes factor of "
+                       f"\"random walk + trend\" against the random walk alone reaches {TREND_BAYES_FACTOR:g} (the "
+                       "rate's prior costs an Occam factor, so a flat quantity stays flat). The forecast extrapolates "
+                       "a kept rate with its uncertainty. Rates per year:")
+        page.table(pd.DataFrame(self.trend()).T.rename_axis("quantity"), digits=3)
+        if self.temperatures is not None:
+            page.section("thermal", "Temperature")
+            page.paragraph("Each campaign measured at its workshop temperature; the quantities above are referred to "
+                           "20 °C (ISO 1), the values as measured = at 20 °C + sensitivity × (temperature − 20 °C). "
+                           "A sensitivity whose posterior sd is not below half its prior sd is the prior's, not the "
+                           "machine's (identified = false).")
+            page.table(pd.DataFrame(self.thermal()).T.rename_axis("quantity"), digits=3)
+        if self.linearisation is not None:
+            c = self.linearisation
+            page.paragraph(f"Kinematic model {c['model']}: {c['points']}; the model differs from its expansion by up to "
+                           f"{c['max_gap_um']:.3f} µm over the posterior (instrument accuracy {c['accuracy_um']:g} µm).")
         page.section("changes", "Changes between campaigns")
         page.paragraph(f"P(|Δ| > threshold) for each quantity between consecutive campaigns; flagged above "
                        f"{self.changes[0]['level']:.4f} = 1 − {ALPHA:g}/K (Bonferroni over the K = {len(self.changes)} "
@@ -134,14 +223,15 @@ class HistoryResult:
         return page
 
 
-def summary_frame(hf: HistoryFit, dates) -> pd.DataFrame:
+def summary_frame(hf: HistoryFit, dates, *, at_20C: bool = False) -> pd.DataFrame:
     """Rows (date, quantity): mean, sd and the 95 % HDI of the mixture posterior (display units; the HDI from 50
-    draws per scale draw)."""
+    draws per scale draw), as measured (at each campaign's temperature) or ``at_20C``."""
     rng = np.random.default_rng(0)
     rows = {}
+    mean, sd = (hf.mean, hf.sd) if at_20C else (hf.measured_mean, hf.measured_sd)
     for t, when in enumerate(dates):
         for k, q in enumerate(hf.quantities):
-            m, s = hf.mean[:, t, k], hf.sd[:, t, k]
+            m, s = mean[:, t, k], sd[:, t, k]
             draws = (m[:, None] + s[:, None] * rng.standard_normal((len(m), 50))).ravel()
             lo, hi = az.hdi(draws, hdi_prob=0.95)
             rows[(_iso(when), q)] = {"mean": float(m.mean()), "sd": float(np.sqrt(np.mean(s**2) + np.var(m))),

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import units
-from ..campaign import Campaign, Truth
+from ..campaign import REFERENCE_TEMPERATURE_C, Campaign, Truth
 from ..errors import ParameterError
 from ..inference.priors import make_prior
 from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE, quantity_unit
@@ -76,22 +76,41 @@ def _fresh_offsets(campaign: Campaign, rng: np.random.Generator) -> tuple[dict, 
     return setups, mounts
 
 
+def thermal_from_display(quantity: str, per_degree: float) -> tuple[str, float]:
+    """A thermal sensitivity ``(deviation, internal units per °C)`` from display units (″ or µm per °C)."""
+    if quantity not in DEVIATIONS:
+        raise ParameterError("thermal", f"{quantity!r} is not a deviation (one of {', '.join(DEVIATIONS)})")
+    return quantity, units.to_internal(per_degree, quantity_unit(quantity))
+
+
 def synthetic_history(campaign: Campaign, truth: Truth, dates, *, drifts=(), serial: str = "SIM-001",
-                      model: str = "linear", seed: int = 0) -> list[Campaign]:
+                      model: str = "linear", seed: int = 0, temperatures=None, thermal=()) -> list[Campaign]:
     """One campaign per date (datetimes, increasing): data simulated (with noise) from ``truth`` plus ``drifts``
     at that date, fresh set-up offsets each time, ``[machine] serial`` = ``serial``.  Seeded: the same seed
-    gives the same history."""
+    gives the same history.
+
+    ``temperatures``: the workshop temperature of each campaign (°C, recorded as its ``temperature_C``);
+    ``thermal``: ``(deviation, sensitivity)`` pairs (internal units per °C, :func:`thermal_from_display`): the
+    deviation is measured at ``truth + sensitivity·(temperature − 20 °C)``."""
     dates = list(dates)
     if any(b <= a for a, b in zip(dates, dates[1:])):
         raise ParameterError("dates", "the campaign dates must increase")
+    if temperatures is not None and len(temperatures) != len(dates):
+        raise ParameterError("temperatures", f"{len(temperatures)} temperatures for {len(dates)} campaigns")
+    if thermal and temperatures is None:
+        raise ParameterError("thermal", "a thermal sensitivity needs the campaigns' temperatures")
     rng = np.random.default_rng(seed)
     out = []
-    for when in dates:
+    for i, when in enumerate(dates):
         setups, mounts = _fresh_offsets(campaign, rng)
-        t = Truth(truth_at(truth, drifts, when), setups, mounts, copy.deepcopy(truth.probe))
+        dev = truth_at(truth, drifts, when)
+        for name, k in thermal:
+            dev[name] = dev.get(name, 0.0) + k * (temperatures[i] - REFERENCE_TEMPERATURE_C)
+        t = Truth(dev, setups, mounts, copy.deepcopy(truth.probe))
         c = synthetic_campaign(campaign, t, model, noise=True, seed=int(rng.integers(2**31)))
         c.reported = {}
         c.date = when
+        c.temperature_C = None if temperatures is None else float(temperatures[i])
         c.machine = copy.copy(c.machine)
         c.machine.serial = serial
         out.append(c)
