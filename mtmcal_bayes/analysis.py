@@ -1,7 +1,8 @@
 """One campaign's analysis, built once and passed down: what every feature derives from a campaign.
 
 A :class:`CampaignAnalysis` holds, for one campaign under one forward model, one choice of data
-(``"ballbar"``, ``"probe"``, ``"both"``), the dx_BT assumption and the discrepancy scales (sampled, or fixed):
+(``"ballbar"``, ``"probe"``, ``"both"``), the dx_BT assumption and the discrepancy scales (sampled under their
+assumed prior or a prior learnt elsewhere, or fixed):
 
 * the log posterior (:class:`~.inference.log_posterior.LogPosterior`): the observations, the parameter
   space, the forward model, the priors and the likelihood;
@@ -13,6 +14,7 @@ Each is built when first asked for and kept.  The other analyses of the same cam
 linear model beside a kinematic one, dx_BT = 0, a fixed σ_model — come from :meth:`CampaignAnalysis.variant`
 and share one cache, so the report, which needs the ball-bar-only, probe-only and fused posteriors, their
 linear forms for the instruments' consistency check and the closed form at dx_BT = 0, builds each of them once.
+The σ_model prior is part of what tells them apart: two analyses with different priors are never confused.
 
 The campaign is not copied: an analysis assumes it is not changed afterwards.
 """
@@ -26,6 +28,7 @@ if TYPE_CHECKING:  # imported where first used: ``import mtmcal_bayes`` loads no
     from .identification import IdentificationResult
     from .inference.approximation import PosteriorApproximation
     from .inference.log_posterior import LogPosterior
+    from .sigma_prior import SigmaModelPrior
 
 
 class CampaignAnalysis:
@@ -38,33 +41,40 @@ class CampaignAnalysis:
     data : ``"ballbar"``, ``"probe"`` or ``"both"``
     fix_dx_BT : the thesis assumption dx_BT = 0 (Eq 4.2)
     sigma_model : the discrepancy scales fixed at this value (mm), or None (sampled)
+    sigma_prior : the :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` of the sampled scales learnt elsewhere, or
+        None (the assumed default); dropped when the scales are fixed (a fixed scale has no prior)
     """
 
     def __init__(self, campaign, *, model: str = "linear", data: str = "ballbar", fix_dx_BT: bool = False,
-                 sigma_model: float | None = None, _family: dict | None = None):
+                 sigma_model: float | None = None, sigma_prior: SigmaModelPrior | None = None,
+                 _family: dict | None = None):
         self.campaign = campaign
         self.model = model
         self.data = data
         self.fix_dx_BT = fix_dx_BT
         self.sigma_model = sigma_model
+        self.sigma_prior = None if sigma_model is not None else sigma_prior
         self._family = {} if _family is None else _family
         self._family.setdefault(self.key, self)
 
     @property
     def key(self) -> tuple:
-        """``(model, data, fix_dx_BT, sigma_model)``: what tells the analyses of one campaign apart."""
-        return self.model, self.data, self.fix_dx_BT, self.sigma_model
+        """``(model, data, fix_dx_BT, sigma_model, sigma_prior)``: what tells the analyses of one campaign apart."""
+        return self.model, self.data, self.fix_dx_BT, self.sigma_model, self.sigma_prior
 
     def variant(self, *, model: str | None = None, data: str | None = None, fix_dx_BT: bool | None = None,
-                sigma_model: float | None | str = "same") -> CampaignAnalysis:
+                sigma_model: float | None | str = "same",
+                sigma_prior: SigmaModelPrior | None | str = "same") -> CampaignAnalysis:
         """The analysis of the same campaign with the given choices changed (the others kept), from the shared
-        cache: built once however often it is asked for.  ``sigma_model="same"`` keeps this one's; None samples."""
+        cache: built once however often it is asked for.  ``sigma_model="same"`` keeps this one's; None samples.
+        ``sigma_prior`` not given keeps this one's; None is the assumed default prior."""
+        sigma = self.sigma_model if sigma_model == "same" else sigma_model
+        learnt = self.sigma_prior if sigma_prior == "same" else sigma_prior
         key = (self.model if model is None else model, self.data if data is None else data,
-               self.fix_dx_BT if fix_dx_BT is None else fix_dx_BT,
-               self.sigma_model if sigma_model == "same" else sigma_model)
+               self.fix_dx_BT if fix_dx_BT is None else fix_dx_BT, sigma, None if sigma is not None else learnt)
         if key not in self._family:
             CampaignAnalysis(self.campaign, model=key[0], data=key[1], fix_dx_BT=key[2], sigma_model=key[3],
-                             _family=self._family)
+                             sigma_prior=key[4], _family=self._family)
         return self._family[key]
 
     def linear(self) -> CampaignAnalysis:
@@ -77,7 +87,7 @@ class CampaignAnalysis:
         from .inference.log_posterior import LogPosterior
 
         return LogPosterior(self.campaign, self.model, fix_dx_BT=self.fix_dx_BT, sigma_model=self.sigma_model,
-                            data=self.data)
+                            data=self.data, sigma_prior=self.sigma_prior)
 
     @property
     def observations(self):
@@ -116,16 +126,21 @@ class CampaignAnalysis:
 
     def __repr__(self) -> str:
         sigma = "sampled" if self.sigma_model is None else f"{self.sigma_model:g} mm"
+        learnt = "" if self.sigma_prior is None else f", sigma_prior=learnt ({self.sigma_prior.source})"
         return (f"CampaignAnalysis({self.campaign.source}, model={self.model}, data={self.data}, "
-                f"fix_dx_BT={self.fix_dx_BT}, sigma_model={sigma})")
+                f"fix_dx_BT={self.fix_dx_BT}, sigma_model={sigma}{learnt})")
 
 
 def analysis_of(campaign, *, model: str | None = None, data: str | None = None, fix_dx_BT: bool | None = None,
-                sigma_model: float | None | str = "same") -> CampaignAnalysis:
+                sigma_model: float | None | str = "same",
+                sigma_prior: SigmaModelPrior | None | str = "same") -> CampaignAnalysis:
     """The analysis of ``campaign`` for these choices: a Campaign's new analysis (a choice not given takes its
-    default: linear, ball bar, dx_BT sampled, σ_model sampled), or, for a :class:`CampaignAnalysis`, its variant
-    with the given choices changed (the others kept; the cache shared)."""
+    default: linear, ball bar, dx_BT sampled, σ_model sampled under its assumed prior), or, for a
+    :class:`CampaignAnalysis`, its variant with the given choices changed (the others kept; the cache shared).
+    ``sigma_prior``: a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`, or None for the assumed default."""
     if isinstance(campaign, CampaignAnalysis):
-        return campaign.variant(model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model)
+        return campaign.variant(model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model,
+                                sigma_prior=sigma_prior)
     return CampaignAnalysis(campaign, model=model or "linear", data=data or "ballbar", fix_dx_BT=bool(fix_dx_BT),
-                            sigma_model=None if sigma_model == "same" else sigma_model)
+                            sigma_model=None if sigma_model == "same" else sigma_model,
+                            sigma_prior=None if sigma_prior == "same" else sigma_prior)

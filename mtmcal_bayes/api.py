@@ -81,6 +81,32 @@ def sigma_model_of(sigma_model_um: float | None) -> float | None:
     return to_internal(float(sigma_model_um), "um")
 
 
+def sigma_model_prior_of(sigma_model_prior, campaign: Campaign, sigma_model_um: float | None = None):
+    """The :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` of a σ_model prior file's path or of a SigmaModelPrior
+    (None: the assumed default).  A bad file is an :class:`~mtmcal_bayes.errors.InputError` naming it and the key;
+    a prior together with a fixed ``sigma_model_um``, or for a scale the campaign's ``[priors]`` already sets, is a
+    ``ParameterError``."""
+    from .errors import ParameterError
+    from .sigma_prior import SigmaModelPrior
+
+    if sigma_model_prior is None:
+        return None
+    if sigma_model_um is not None:
+        raise ParameterError("sigma_model_prior", f"a prior of σ_model needs σ_model sampled, and here it is fixed "
+                             f"(at {sigma_model_um} µm): give one or the other")
+    if isinstance(sigma_model_prior, SigmaModelPrior):
+        prior = sigma_model_prior
+    else:
+        from .io.sigma_prior_file import read_sigma_model_prior
+
+        prior = read_sigma_model_prior(sigma_model_prior)
+    both = [n for n in prior.scales if n in campaign.priors]
+    if both:
+        raise ParameterError("sigma_model_prior", f"{' and '.join(both)} already has a prior in the campaign's "
+                             f"[priors] ({campaign.source}): give it in one place")
+    return prior
+
+
 def analysis_or_campaign(given: CampaignLike, campaign: Campaign):
     """What a feature is handed: the analysis the caller gave (its cache then serves this command too), else the
     campaign."""
@@ -139,7 +165,7 @@ def sensitivity(campaign: CampaignLike = None, *, model: str = "htm-thesis") -> 
 def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | None = None, fix_dx_BT: bool = False,
            target_ess: float = TARGET_ESS, sampler: str = "emcee", max_steps: int = MAX_STEPS, checkpoint=None,
            output=None, progress: Progress | None = None, data: str = "ballbar", tolerances=None,
-           sigma_model_um: float | None = None) -> PosteriorResult:
+           sigma_model_um: float | None = None, sigma_model_prior=None) -> PosteriorResult:
     """The posterior of the deviations and nuisance offsets, summarised beside the ball-bar and touch-probe values.
 
     emcee ensembles run until the bulk and tail ESS of the eight quantities reach ``target_ess`` and R-hat
@@ -150,7 +176,9 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     TOML file with ``[tolerances]`` or ``{name: Tolerance}`` (default the campaign's own ``[tolerances]``):
     each toleranced quantity gets its probability of nonconformance, a verdict and, when undecided, the
     planner's next measurement for it.  ``sigma_model_um`` fixes the model-discrepancy scale (µm) instead of
-    sampling it.
+    sampling it.  ``sigma_model_prior``: a σ_model prior learnt elsewhere (a fleet of machines of the type), the path
+    of its file or a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`: the sampled scales it names get its
+    log-normal instead of the assumed half-normal, and the budget names its source (docs/inference.md).
     """
     from .inference.sampling import SamplerSettings
     from .models import check_data, check_model
@@ -163,10 +191,11 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     _writable(output, "posterior")
     _writable(checkpoint, "checkpoint")
     tol = tolerances_of(tolerances)
+    learnt = sigma_model_prior_of(sigma_model_prior, c, sigma_model_um)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     result = sample_posterior(analysis_or_campaign(campaign, c), model=model, fix_dx_BT=fix_dx_BT, settings=settings,
-                              checkpoint=checkpoint,
-                              progress=progress, data=data, tolerances=tol, sigma_model=sigma_model_of(sigma_model_um))
+                              checkpoint=checkpoint, progress=progress, data=data, tolerances=tol,
+                              sigma_model=sigma_model_of(sigma_model_um), sigma_prior=learnt)
     add_suggestions(result, c)
     if output is not None:
         result.save(output)
@@ -174,9 +203,16 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
 
 
 def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, fix_dx_BT: bool = False,
-                model: str = "linear") -> ClosedFormResult:
-    """The instant Gaussian posterior of the eight quantities: linear model, sigma_model fixed (µm)."""
+                model: str = "linear", sigma_model_prior=None) -> ClosedFormResult:
+    """The instant Gaussian posterior of the eight quantities: linear model, sigma_model fixed (µm).  It has no
+    σ_model prior: ``sigma_model_prior`` given is a ``ParameterError`` (the sampled posterior takes one)."""
     from .posterior import closed_form as gaussian
+
+    if sigma_model_prior is not None:
+        from .errors import ParameterError
+
+        raise ParameterError("sigma_model_prior", f"the closed form fixes σ_model (at {sigma_model_um} µm) and has "
+                             "no prior of it; a learnt prior is for the sampled posterior")
 
     return gaussian(campaign_of(campaign, measured=True), sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT,
                     model=model)
@@ -186,14 +222,15 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
            fix_dx_BT: bool = False, compare_models: bool = False, target_ess: float = TARGET_ESS,
            sampler: str = "emcee", max_steps: int = MAX_STEPS, posterior: PosteriorResult | None = None,
            progress: Progress | None = None, command: str = "", data: str = "ballbar", tolerances=None,
-           sigma_model_um: float | None = None) -> Report:
+           sigma_model_um: float | None = None, sigma_model_prior=None) -> Report:
     """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
 
     ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
     ``compare_models`` adds the same campaign under all three forward models.  ``data`` as for
     :func:`sample`; a campaign with touch-probe readings also gets its ball-bar-only, probe-only and
-    fused posteriors side by side and the instruments' consistency check.  ``tolerances`` and
-    ``sigma_model_um`` as for :func:`sample`.
+    fused posteriors side by side and the instruments' consistency check.  ``tolerances``,
+    ``sigma_model_um`` and ``sigma_model_prior`` as for :func:`sample` (the learnt prior for every posterior of
+    the report; with ``posterior``, it must be the one that posterior was sampled with).
     """
     from .inference.sampling import SamplerSettings
     from .models import check_data, check_model
@@ -202,11 +239,17 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     c = campaign_of(campaign, measured=True)
     check_model(model)
     check_data(data, c)
+    learnt = sigma_model_prior_of(sigma_model_prior, c, sigma_model_um)
+    if posterior is not None and learnt is not None and learnt != posterior.log_posterior.sigma_prior:
+        from .errors import ParameterError
+
+        raise ParameterError("sigma_model_prior", "is not the prior the given posterior was sampled with")
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     return build_report(analysis_or_campaign(campaign, c), output, model=model, settings=settings, fix_dx_BT=fix_dx_BT,
                         compare_models=compare_models,
                         posterior=posterior, progress=progress, command=command, data=data,
-                        tolerances=tolerances_of(tolerances), sigma_model=sigma_model_of(sigma_model_um))
+                        tolerances=tolerances_of(tolerances), sigma_model=sigma_model_of(sigma_model_um),
+                        sigma_prior=learnt)
 
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
@@ -359,20 +402,25 @@ def history_campaigns(paths) -> list[Campaign]:
     return [campaign_of(f, measured=True) for f in files]
 
 
-def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None) -> HistoryResult:
-    """One machine's history: every quantity at every date jointly (deviations as random walks in time), the
+def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None,
+            trend: str = "auto") -> HistoryResult:
+    """One machine's history: every quantity at every date jointly (deviations as random walks in time, with a
+    drift rate where the data want one, referred to 20 °C when the campaigns' temperatures are given), the
     changes that are real, and the date by which each toleranced quantity should be recalibrated.
 
     ``campaigns``: a directory of campaign files, a list of files, or Campaigns (each with its ``date``, one
     ``[machine] serial``); ``tolerances`` as for :func:`sample` (default: the latest campaign's); ``output``
-    receives history.json, CSV files, trend.png and index.html.
+    receives history.json, CSV files, trend.png and index.html.  ``model``: ``linear``, or a kinematic model
+    linearised per campaign at the history's estimate (the linearisation checked and stated); ``trend``:
+    ``"auto"`` (chosen per deviation by Bayes factor) or ``"off"`` (random walks only).
     """
     from .histories import fit_history
     from .models import check_model
 
     check_model(model)
     _writable(output, "history")
-    result = fit_history(history_campaigns(campaigns), model=model, seed=seed, tolerances=tolerances_of(tolerances))
+    result = fit_history(history_campaigns(campaigns), model=model, seed=seed, tolerances=tolerances_of(tolerances),
+                         trend=trend)
     if output is not None:
         result.write(output)
     return result
@@ -380,13 +428,15 @@ def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None,
 
 def simulate_history(campaign: CampaignLike = None, *, truth, n: int = 5, every_days: float = 91.0, start=None,
                      steps=(), ramps=(), serial: str = "SIM-001", model: str = "linear", seed: int = 0,
-                     output=None) -> list[Campaign]:
+                     output=None, temperatures=None, thermal=()) -> list[Campaign]:
     """A synthetic history of one machine: ``n`` campaigns ``every_days`` apart from ``start`` (a date, default
     2026-01-05), each simulated from ``truth`` plus the drifts at its date, with fresh set-up offsets and noise.
 
     ``steps`` / ``ramps``: ``"NAME=SIZE@K"`` strings (or :class:`~mtmcal_bayes.simulation.history.Drift`):
     ``beta_CZ=40@4`` adds 40″ from the 4th campaign on; ``alpha_XB=8@1`` adds 8″ per year from the 1st on
     (display units: ″ or µm).  ``output`` (a directory, created) receives ``<serial>_<date>.toml`` files.
+    ``temperatures``: each campaign's workshop temperature (°C; one value for all, or one per campaign);
+    ``thermal``: ``"NAME=K"`` strings, a thermal sensitivity in ″ or µm per °C (needs ``temperatures``).
     """
     import datetime
     from pathlib import Path
@@ -395,7 +445,7 @@ def simulate_history(campaign: CampaignLike = None, *, truth, n: int = 5, every_
     from .errors import ParameterError
     from .io.campaign_reader import load_truth
     from .io.campaign_writer import save_campaign
-    from .simulation.history import Drift, drift_from_display, synthetic_history
+    from .simulation.history import Drift, drift_from_display, synthetic_history, thermal_from_display
 
     if not (isinstance(n, int) and 2 <= n <= 200):
         raise ParameterError("n", f"{n}: a history has 2 to 200 campaigns")
@@ -418,11 +468,28 @@ def simulate_history(campaign: CampaignLike = None, *, truth, n: int = 5, every_
             raise ParameterError(parameter, f"{spec!r}: K = {k} is not a campaign number (1 to {n})")
         return drift_from_display(name.strip(), kind, size, dates[k - 1])
 
+    def sensitivity(spec) -> tuple[str, float]:
+        if not isinstance(spec, str):
+            return spec
+        try:
+            name, k = spec.split("=")
+            return thermal_from_display(name.strip(), float(k))
+        except ValueError:
+            raise ParameterError("thermal", f"{spec!r}: expected NAME=K (″ or µm per °C), e.g. alpha_XB=1.5") from None
+
     drifts = [drift(x, "step", "steps") for x in steps] + [drift(x, "ramp", "ramps") for x in ramps]
     c = campaign_of(campaign)
     _writable(output, "history")
     t = truth if isinstance(truth, Truth) else load_truth(truth, c)
-    series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed)
+    temps = None if temperatures is None else [float(x) for x in (
+        temperatures if isinstance(temperatures, (list, tuple)) else [temperatures])]
+    if temps is not None and len(temps) == 1:
+        temps = temps * n
+    if temps is not None and (len(temps) != n or not all(-50.0 <= x <= 100.0 for x in temps)):
+        raise ParameterError("temperatures", f"{temperatures}: one workshop temperature (−50 to 100 °C) for all "
+                             f"campaigns, or one for each of the {n}")
+    series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed, temperatures=temps,
+                               thermal=[sensitivity(x) for x in thermal])
     if output is not None:
         out = Path(output)
         out.mkdir(parents=True, exist_ok=True)
@@ -435,7 +502,7 @@ def simulate_history(campaign: CampaignLike = None, *, truth, n: int = 5, every_
 
 def fleet(directory, *, scheduler: str | None = None, workers: int | None = None, seed: int = 1, model: str = "linear",
           output=None, cache=None, progress: Progress | None = None, sampler: str = "emcee",
-          target_ess: float = TARGET_ESS, max_steps: int = MAX_STEPS) -> FleetResult:
+          target_ess: float = TARGET_ESS, max_steps: int = MAX_STEPS, tolerances=None) -> FleetResult:
     """Every machine's calibrations below ``directory`` (each ``*.toml``, recursively), in parallel on Dask: each
     campaign's posterior and each machine's history (two or more dated campaigns of one ``[machine] serial``),
     in one overview of machines × quantities with conformity, drift flags and recalibrate-by dates.
@@ -446,14 +513,17 @@ def fleet(directory, *, scheduler: str | None = None, workers: int | None = None
     ``<output>/.cache``, else the user's cache folder; ``False``: none), so a re-run computes only what is
     missing.  Each campaign is seeded from its content and ``seed``: the results do not depend on the
     cluster.  ``output`` receives index.html, fleet.json, fleet_summary.csv and a page per machine;
-    ``model``, ``sampler``, ``target_ess``, ``max_steps`` as for :func:`sample`.
+    ``model``, ``sampler``, ``target_ess``, ``max_steps`` as for :func:`sample`.  ``tolerances``: a plant-wide
+    ``[tolerances]`` file or ``{name: Tolerance}`` used for every machine instead of each campaign's own (each
+    campaign's conformity, each history's forecast and change thresholds, the overview's verdicts).
     """
     from .fleets import FleetSettings, run_fleet
     from .models import check_model
 
     check_model(model)
     _writable(output, "fleet overview")
-    settings = FleetSettings(model=model, seed=seed, sampler=sampler, target_ess=target_ess, max_steps=max_steps)
+    settings = FleetSettings(model=model, seed=seed, sampler=sampler, target_ess=target_ess, max_steps=max_steps,
+                             tolerances=tolerances_of(tolerances))
     result = run_fleet(directory, settings, scheduler=scheduler, workers=workers, output=output, cache=cache,
                        progress=progress)
     if output is not None:

@@ -29,6 +29,7 @@ class Machine:
     configuration: str = ""
     travel: dict[str, float] = field(default_factory=dict)  # axis letter -> travel, mm
     serial: str = ""  # the machine's identifier: campaigns with one serial form its history
+    type: str = ""  # the machine's type (make and model): machines of one type share a σ_model hyper-distribution
 
 
 @dataclass

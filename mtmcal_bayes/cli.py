@@ -44,13 +44,18 @@ def cmd_probe_fit(args) -> int:
     return _show(api.probe_fit(args.file, stylus_radius_mm=args.stylus_radius_mm), args)
 
 
+def _simulate_history(args) -> int:
+    series = api.simulate_history(
+        args.campaign, truth=args.truth, n=args.campaigns, every_days=args.every_days, start=args.start,
+        steps=args.step or (), ramps=args.ramp or (), serial=args.serial, model=args.model, seed=args.seed or 0,
+        output=args.history, temperatures=args.temperatures, thermal=args.thermal or ())
+    print(f"wrote {len(series)} campaigns of machine {args.serial} to {args.history}/")
+    return 0
+
+
 def cmd_simulate(args) -> int:
     if args.history:
-        series = api.simulate_history(args.campaign, truth=args.truth, n=args.campaigns, every_days=args.every_days,
-                                      start=args.start, steps=args.step or (), ramps=args.ramp or (), serial=args.serial,
-                                      model=args.model, seed=args.seed or 0, output=args.history)
-        print(f"wrote {len(series)} campaigns of machine {args.serial} to {args.history}/")
-        return 0
+        return _simulate_history(args)
     sim = api.simulate(args.campaign, truth=args.truth, model=args.model, noise=args.noise, seed=args.seed,
                        output=args.output)
     _warn(sim.warnings)
@@ -59,7 +64,7 @@ def cmd_simulate(args) -> int:
 
 def cmd_history(args) -> int:
     result = api.history(args.campaigns, model=args.model, seed=args.seed, tolerances=args.tolerances,
-                         output=args.output)
+                         output=args.output, trend=args.trend)
     return _show(result, args)
 
 
@@ -70,11 +75,11 @@ def cmd_sensitivity(args) -> int:
 def cmd_sample(args) -> int:
     if args.closed_form:
         return _show(api.closed_form(args.campaign, sigma_model_um=args.sigma_model_um or 0.0, fix_dx_BT=args.fix_dx_BT,
-                                     model=args.model), args)
+                                     model=args.model, sigma_model_prior=args.sigma_model_prior), args)
     result = api.sample(args.campaign, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                         target_ess=args.target_ess, sampler=args.sampler, max_steps=args.max_steps,
                         checkpoint=args.checkpoint, output=args.output, progress=None if args.quiet else StderrProgress(), data=args.data,
-                        tolerances=args.tolerances, sigma_model_um=args.sigma_model_um)
+                        tolerances=args.tolerances, sigma_model_um=args.sigma_model_um, sigma_model_prior=args.sigma_model_prior)
     _warn(result.warnings)
     return _show(result, args)
 
@@ -84,7 +89,7 @@ def cmd_report(args) -> int:
     rep = api.report(args.campaign, output=args.output, model=args.model, seed=args.seed, fix_dx_BT=args.fix_dx_BT,
                      compare_models=args.compare_models, target_ess=args.target_ess, sampler=args.sampler,
                      max_steps=args.max_steps, progress=None if args.quiet else StderrProgress(), command=command, data=args.data,
-                     tolerances=args.tolerances, sigma_model_um=args.sigma_model_um)
+                     tolerances=args.tolerances, sigma_model_um=args.sigma_model_um, sigma_model_prior=args.sigma_model_prior)
     _warn(rep.posterior.warnings)
     return _show(rep, args)
 
@@ -162,7 +167,7 @@ def cmd_validate_sbc(args) -> int:
 def cmd_fleet(args) -> int:
     result = api.fleet(args.directory, scheduler=args.scheduler, workers=args.workers, seed=args.seed,
                        model=args.model, output=args.output, cache=args.cache, sampler=args.sampler,
-                       target_ess=args.target_ess, max_steps=args.max_steps,
+                       target_ess=args.target_ess, max_steps=args.max_steps, tolerances=args.tolerances,
                        progress=None if args.quiet else StderrProgress())
     for e in result.errors:
         print(f"{PROG} fleet: error: {e['message']}", file=sys.stderr)
@@ -189,10 +194,19 @@ def _hide_dask_from_xarray() -> None:
     InferenceData, to recognise Dask arrays, and ``dask.distributed`` on writing NetCDF, to recognise its
     scheduler: 0.5 s of a 2.5 s ``sample``, for arrays and schedulers no command but ``fleet`` and ``validate``
     has.  Done only where the process is the command (``main()`` without arguments), never in a caller's
-    process."""
-    for name in ("dask.array", "dask.distributed", "distributed"):
-        if name not in sys.modules:
-            sys.modules[name] = None  # an import of it raises ImportError, which xarray takes as "not installed"
+    process.  A finder refuses the import (xarray takes the ImportError as "not installed"); a ``None`` entry in
+    ``sys.modules`` would do the same for imports but breaks SciPy, whose array-API checks look the module up
+    there (``stats.lognorm.logpdf`` failed with it)."""
+    hidden = {n for n in ("dask.array", "dask.distributed", "distributed") if n not in sys.modules}
+
+    class _Hidden:
+        @staticmethod
+        def find_spec(name, path=None, target=None):
+            if name in hidden:
+                raise ModuleNotFoundError(f"No module named {name!r} (hidden by {PROG})", name=name)
+            return None
+
+    sys.meta_path.insert(0, _Hidden())
 
 
 def main(argv: list[str] | None = None) -> int:

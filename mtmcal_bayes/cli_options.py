@@ -37,6 +37,14 @@ def _command(sub, name: str, func, help: str, *, campaign: str | None = "campaig
     return s
 
 
+def _floats(text: str) -> list[float]:
+    """``"19.5,21,20.2"`` -> floats (argparse type)."""
+    try:
+        return [float(x) for x in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected numbers separated by commas") from None
+
+
 def _model(s, default: str, choices=MODELS, help: str | None = None) -> None:
     s.add_argument("--model", choices=choices, default=default, help=help or f"forward model (default {default})")
 
@@ -54,6 +62,9 @@ def _sampler_options(s) -> None:
                    "(default: the campaign's own section, if any)")
     s.add_argument("--sigma-model-um", type=float, default=None, help="fix sigma_model at this value, µm "
                    "(default: sampled from its prior; 0 with --closed-form)")
+    s.add_argument("--sigma-model-prior", metavar="FILE.toml", default=None, help="the σ_model prior learnt "
+                   "elsewhere, e.g. by a fleet of the machine type (format mtmcal-sigma-model-prior/1; default: the "
+                   "assumed HalfNormal(2 µm); docs/inference.md)")
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
 
@@ -108,11 +119,18 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     h.add_argument("--step", action="append", metavar="NAME=SIZE@K", help="a step of SIZE (″ or µm) from campaign K on")
     h.add_argument("--ramp", action="append", metavar="NAME=RATE@K", help="a ramp of RATE per year from campaign K on")
     h.add_argument("--serial", default="SIM-001", help="the machine's serial (default SIM-001)")
+    h.add_argument("--temperatures", type=_floats, metavar="T1,T2,...", default=None,
+                   help="workshop temperature of each campaign, °C (one value for all, or one per campaign)")
+    h.add_argument("--thermal", action="append", metavar="NAME=K",
+                   help="a thermal sensitivity: NAME moves by K ″ or µm per °C away from 20 °C (needs --temperatures)")
 
     s = _command(sub, "history", handlers["history"], "one machine's history: every quantity at every date, real "
                  "changes, when to recalibrate", campaign=None, json_help="print JSON: serial, dates, summary, changes, forecast")
     s.add_argument("campaigns", nargs="+", metavar="DIR|FILES", help="a directory of campaign files, or the files")
-    _model(s, "linear", choices=("linear",), help="forward model (linear; the history model is linear-Gaussian)")
+    _model(s, "linear", help="forward model (default linear; a kinematic model is linearised per campaign at the "
+           "history's estimate, and the linearisation checked)")
+    s.add_argument("--trend", choices=("auto", "off"), default="auto", help="auto: a drift rate per deviation where the "
+                   "Bayes factor wants one (default); off: random walks only")
     s.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
     s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances] for the forecast (default: the latest campaign's)")
     s.add_argument("-o", "--output", metavar="DIR", help="write history.json, CSV files, trend.png and index.html to DIR")
@@ -225,6 +243,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--target-ess", type=float, default=api.TARGET_ESS,
                    help=f"ESS each campaign's sampling aims for (default {api.TARGET_ESS:g})")
     s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")
+    s.add_argument("--tolerances", metavar="FILE.toml", help="plant-wide [tolerances] for every machine: each "
+                   "campaign's conformity, each history's forecast (default: each campaign's own)")
     s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
     vsub = sub.add_parser("validate", help="check the inference itself: simulation-based calibration").add_subparsers(

@@ -27,7 +27,7 @@ def test_variants_share_one_cache(thesis):
     assert probe.identification is a.identification  # the deterministic identification of the campaign, once
     htm = analysis_of(a, model="htm-thesis")
     assert htm.data == "ballbar" and htm.linear() is a
-    assert analysis_of(thesis).key == ("linear", "ballbar", False, None)
+    assert analysis_of(thesis).key == ("linear", "ballbar", False, None, None)  # the last: the σ_model prior (assumed)
 
 
 def test_an_analysis_is_accepted_wherever_a_campaign_is(thesis):
@@ -46,14 +46,15 @@ def test_the_report_builds_each_analysis_of_the_campaign_once(thesis, tmp_path, 
     built = Counter()
     real = log_posterior.LogPosterior.__init__
 
-    def counting(self, campaign, model="linear", fix_dx_BT=False, sigma_model=None, *, data="ballbar"):
-        built[(id(campaign), model, fix_dx_BT, sigma_model, data)] += 1
-        real(self, campaign, model, fix_dx_BT, sigma_model, data=data)
+    def counting(self, campaign, model="linear", fix_dx_BT=False, sigma_model=None, *, data="ballbar",
+                 sigma_prior=None):
+        built[(id(campaign), model, fix_dx_BT, sigma_model, data, sigma_prior)] += 1
+        real(self, campaign, model, fix_dx_BT, sigma_model, data=data, sigma_prior=sigma_prior)
 
     monkeypatch.setattr(log_posterior.LogPosterior, "__init__", counting)
     build.build_report(thesis, tmp_path / "r", settings=build.SamplerSettings(seed=1, max_steps=500))
     assert built and max(built.values()) == 1, [k for k, n in built.items() if n > 1]
-    own = {k[1:] for k in built if k[0] == id(thesis)}
+    own = {k[1:-1] for k in built if k[0] == id(thesis)}
     assert {("linear", False, None, "ballbar"), ("linear", False, None, "probe"),
             ("linear", False, None, "both")} <= own
 

@@ -22,7 +22,8 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "units", "progress", "version", "datasets", "arviz_import"),  # foundation: nothing of the package
     ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
     ("conventions",),                                              # what a ball-bar offset means in machine axes
-    ("campaign", "observations", "machine_time"),                  # the data of a calibration, its machine time
+    ("campaign", "observations", "machine_time", "sigma_prior"),   # the data of a calibration, its machine time, a
+                                                                   # σ_model prior learnt elsewhere
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models
     ("identification", "inference", "figure_style", "html_page"),  # thesis method, Bayesian engine, figure and page look

@@ -8,7 +8,11 @@ The corpus lives in ``tests/data/bad/``, one manifest per kind (tab-separated,
   otherwise valid campaign ``<name>.toml`` that references it; ``traces/expected.tsv``:
   campaign, the file the error must name, key or line (or ``-``), fragment;
 * NC programs — ``nc/*.nc`` and ``nc/expected.tsv``: file, key, fragment;
-* DPRNT probe output — ``dprnt/*.txt`` and ``dprnt/expected.tsv``: file, key, fragment.
+* DPRNT probe output — ``dprnt/*.txt`` and ``dprnt/expected.tsv``: file, key, fragment;
+* tolerance sets (``--tolerances FILE``) — ``tolerances/*.toml`` and ``tolerances/expected.tsv``: file, key,
+  fragment;
+* σ_model prior files (``--sigma-model-prior FILE``) — ``sigma_prior/*.toml`` and ``sigma_prior/expected.tsv``:
+  file, key, fragment.
 
 Every command must exit with status 2, print nothing on stdout and exactly one
 line on stderr that names the file, the key or line and what is wrong — no
@@ -36,6 +40,8 @@ BAD = DATA / "bad"
 TRACES = BAD / "traces"
 PROGRAMS = BAD / "nc"
 DPRNT = BAD / "dprnt"
+TOLERANCES = BAD / "tolerances"
+SIGMA_PRIORS = BAD / "sigma_prior"
 VALID_PROGRAM = data_path("fig4_30a_bx_original.nc")  # compensate's PROGRAM while its campaign is the bad file
 VALID_TRUTH = "[deviations]\nbeta_XB_arcsec = -24.11\n"  # simulate's --truth (read after the campaign)
 
@@ -65,6 +71,21 @@ COMMANDS_READING_DPRNT = (
     ("probe-fit", "{file}"),
     ("probe-fit", "{file}", "--json"),
 )
+# Every command with --sigma-model-prior ({file} the bad prior; the thesis campaign is valid): it is read before
+# any sampling.  test_every_sigma_prior_command_is_listed fails until a new one is added.
+COMMANDS_READING_SIGMA_PRIORS = (
+    ("sample", "--sigma-model-prior", "{file}", "-o", "{out}", "--checkpoint", "{out}.h5", "--quiet"),
+    ("report", "--sigma-model-prior", "{file}", "-o", "{out}", "--quiet"),
+)
+# Every command with --tolerances ({file} the bad tolerance set; {campaigns} a folder of one valid campaign).
+# test_every_tolerances_command_is_listed fails until a new one is added.
+COMMANDS_READING_TOLERANCES = (
+    ("sample", "--tolerances", "{file}", "-o", "{out}", "--quiet"),
+    ("report", "--tolerances", "{file}", "-o", "{out}", "--quiet"),
+    ("design", "--tolerances", "{file}", "-o", "{out}"),
+    ("history", "{campaigns}", "--tolerances", "{file}", "-o", "{out}"),
+    ("fleet", "{campaigns}", "--tolerances", "{file}", "-o", "{out}", "--quiet"),
+)
 
 
 def manifest(path, columns: int) -> list[list[str]]:
@@ -81,6 +102,8 @@ CAMPAIGN_ROWS = manifest(BAD / "expected.tsv", 3)  # file, key, fragment
 TRACE_ROWS = manifest(TRACES / "expected.tsv", 4)  # campaign, named file, key, fragment
 PROGRAM_ROWS = manifest(PROGRAMS / "expected.tsv", 3)
 DPRNT_ROWS = manifest(DPRNT / "expected.tsv", 3)
+TOLERANCE_ROWS = manifest(TOLERANCES / "expected.tsv", 3)
+SIGMA_PRIOR_ROWS = manifest(SIGMA_PRIORS / "expected.tsv", 3)
 
 
 def _commands(parser: argparse.ArgumentParser, prefix: tuple = ()):
@@ -149,6 +172,10 @@ def test_every_corpus_file_is_in_a_manifest():
     assert sorted(p.name for p in TRACES.iterdir() if p.name != "expected.tsv") == sorted(listed)
     assert sorted(p.name for p in PROGRAMS.iterdir() if p.name != "expected.tsv") == sorted(r[0] for r in PROGRAM_ROWS)
     assert sorted(p.name for p in DPRNT.iterdir() if p.name != "expected.tsv") == sorted(r[0] for r in DPRNT_ROWS)
+    assert sorted(p.name for p in SIGMA_PRIORS.iterdir() if p.name != "expected.tsv") == \
+        sorted(r[0] for r in SIGMA_PRIOR_ROWS)
+    assert sorted(p.name for p in TOLERANCES.iterdir() if p.name != "expected.tsv") == \
+        sorted(r[0] for r in TOLERANCE_ROWS)
     assert len(CAMPAIGN_ROWS) + len(TRACE_ROWS) + len(PROGRAM_ROWS) + len(DPRNT_ROWS) >= 20
 
 
@@ -258,6 +285,26 @@ def test_bad_dprnt(run_cli, tmp_path, inputs, template, name, key, fragment):
     assert_one_line_error(run_cli, argv, tmp_path, DPRNT / name, key, fragment)
 
 
+# --------------------------------------------------------------------------- σ_model prior files
+def test_every_sigma_prior_command_is_listed():
+    """Every (sub)command with a --sigma-model-prior flag is in COMMANDS_READING_SIGMA_PRIORS."""
+    takes = [path for path, p in COMMANDS.items()
+             if any("--sigma-model-prior" in a.option_strings for a in p._actions)]
+    assert {("sample",), ("report",)} <= set(takes)
+    for path in takes:
+        assert any(t[:len(path)] == path for t in COMMANDS_READING_SIGMA_PRIORS), (
+            f"'{' '.join(path)}' reads a σ_model prior: add its argv template to COMMANDS_READING_SIGMA_PRIORS")
+
+
+@pytest.mark.parametrize("template", COMMANDS_READING_SIGMA_PRIORS, ids=lambda t: t[0])
+@pytest.mark.parametrize("name,key,fragment", SIGMA_PRIOR_ROWS, ids=[r[0] for r in SIGMA_PRIOR_ROWS])
+def test_bad_sigma_model_prior(run_cli, tmp_path, inputs, template, name, key, fragment):
+    """A bad --sigma-model-prior file is one line naming the file and the key, exit 2, before any sampling, nothing
+    written."""
+    argv = fill(template, file=SIGMA_PRIORS / name, **inputs)
+    assert_one_line_error(run_cli, argv, tmp_path, SIGMA_PRIORS / name, key, fragment)
+
+
 # --------------------------------------------------------------------------- stricter checks keep good input
 def test_sigma_model_priors_that_stay_valid():
     base = (DATA / "minimal_one_repeat.toml").read_text()
@@ -265,3 +312,26 @@ def test_sigma_model_priors_that_stay_valid():
                  '{dist = "normal", mean_um = 1, sd_um = 2}'):
         c = parse_campaign(base + f"\n[priors]\nsigma_model = {spec}\n", "p.toml")
         assert c.priors["sigma_model"]["dist"] in spec
+
+
+# --------------------------------------------------------------------------- tolerance sets
+def test_every_tolerances_command_is_listed():
+    """Every (sub)command with a --tolerances flag is in COMMANDS_READING_TOLERANCES."""
+    takes = [path for path, p in COMMANDS.items() if any("--tolerances" in a.option_strings for a in p._actions)]
+    assert {"fleet"} <= {p[0] for p in takes}
+    for path in takes:
+        assert any(t[:len(path)] == path for t in COMMANDS_READING_TOLERANCES), (
+            f"'{' '.join(path)}' reads a tolerance set: add its argv template to COMMANDS_READING_TOLERANCES")
+
+
+@pytest.mark.parametrize("template", COMMANDS_READING_TOLERANCES, ids=lambda t: t[0])
+@pytest.mark.parametrize("name,key,fragment", TOLERANCE_ROWS, ids=[r[0] for r in TOLERANCE_ROWS])
+def test_bad_tolerances(run_cli, tmp_path, inputs, template, name, key, fragment):
+    """A bad --tolerances file is one line naming the file and the key, exit 2, before any work, nothing written
+    (the fleet's cache included: it would be in {out}/.cache)."""
+    _skip_unless_available(template)
+    campaigns = tmp_path / "campaigns"
+    campaigns.mkdir()
+    shutil.copy(DATA / "minimal_one_repeat.toml", campaigns / "one.toml")
+    argv = fill(template, file=TOLERANCES / name, campaigns=campaigns, **inputs)
+    assert_one_line_error(run_cli, argv, tmp_path, TOLERANCES / name, key, fragment)

@@ -3,13 +3,14 @@ scheduler) with identical results, a bad campaign reported while the rest comple
 resumes from its cache computing only what had not finished.
 
 The tree: machine M-1 (two campaigns, a 40″ step in beta_XB between them, beta_XB toleranced ±30″), machine
-M-2 (one campaign, and a malformed one beside it), one campaign without a serial, and a hidden folder (skipped):
-four campaign units and one history unit.
+M-2 (one campaign, and a malformed one beside it), both of type MTX-200 and measured at 20.5–21 °C, one campaign
+without a serial, and a hidden folder (skipped): four campaign units and one history unit.
 """
 
 from __future__ import annotations
 
 import datetime
+import hashlib
 import inspect
 import json
 import os
@@ -50,7 +51,10 @@ def tree(tmp_path_factory) -> Path:
     step = drift_from_display("beta_XB", "step", 40.0, datetime.datetime(2025, 4, 1))
     for serial, drifts, seed, n in (("M-1", [step], 11, 2), ("M-2", [], 12, 1)):
         (root / serial).mkdir(parents=True)
-        for c in synthetic_history(base, truth, dates[:n], drifts=drifts, serial=serial, seed=seed):
+        # temperatures and a shared type: the thermal model and the σ_model pooled over the type run on Dask too
+        for c in synthetic_history(base, truth, dates[:n], drifts=drifts, serial=serial, seed=seed,
+                                   temperatures=[20.5, 21.0][:n]):
+            c.machine.type = "MTX-200"
             mb.save_campaign(c, root / serial / f"{c.date.date()}.toml")
     loose = synthetic_history(base, truth, dates[:1], serial="", seed=13)[0]
     (root / "loose").mkdir()
@@ -98,7 +102,8 @@ def test_the_overview_files(reference):
                  "machines/M-1/campaigns.html", "machines/M-1/trend.png", "machines/file-loose_bench-test.toml/index.html"):
         assert (out / name).is_file(), name
     page = (out / "index.html").read_text(encoding="utf-8")
-    assert 'href="machines/M-1/index.html"' in page and "broken.toml" in page and "Δ changed 2025-07-07" in page
+    assert 'href="machines/M-1/index.html"' in page and "broken.toml" in page
+    assert '<span class="b drift">Δ 2025-07-07</span>' in page and "changed at 2025-07-07" in page
     rows = (out / "fleet_summary.csv").read_text(encoding="utf-8").splitlines()
     assert len(rows) == 1 + sum(len(m["latest"]) for m in ref.machines) and len(ref.machines[0]["latest"]) >= 8
     assert rows[0].startswith("serial,machine,quantity,unit,date,file,mean,sd")
@@ -244,3 +249,56 @@ def test_cache_entries_are_whole_or_ignored(tmp_path):
     assert store.get("campaign", "k3") is None
     assert [p.name for p in (tmp_path / "c").iterdir() if p.name.startswith(".")] == []  # no temporary file left
     assert default_cache(tmp_path / "out") == tmp_path / "out" / ".cache"
+
+
+def test_plant_tolerances_change_conformity_and_every_cache_key(run_cli, tree, reference, tmp_path):
+    """``--tolerances FILE`` replaces each campaign's own [tolerances] everywhere: the campaigns' verdicts, the
+    history's forecast, the overview's verdicts; no unit of the reference (its own tolerances) is reused from the
+    cache, and the same set given from Python as a dict finds the same entries."""
+    ref, _, cache = reference
+    tight = tmp_path / "plant.toml"
+    tight.write_text("[tolerances]\nbeta_XB_arcsec = 5\nalpha_CZ_arcsec = {low = -100, high = 100}\n")
+    code, out, err = run_cli("fleet", tree, "--tolerances", tight, "--json", "--cache", cache, "--quiet",
+                             "--workers", "1")
+    assert code == 3, err
+    doc = json.loads(out)
+    assert doc["run"]["cached"] == 0 and doc["run"]["computed"] == N_UNITS  # other tolerances: other keys
+    assert doc["settings"]["tolerances"] == {"alpha_CZ": {"low": -100.0, "high": 100.0},
+                                             "beta_XB": {"low": -5.0, "high": 5.0}}
+    before = {m["id"]: m for m in ref.to_json()["machines"]}
+    for m in doc["machines"]:
+        assert before[m["id"]]["latest"]["alpha_CZ"]["conformity"] is None  # no tolerance of its own
+        assert m["latest"]["alpha_CZ"]["conformity"] == "conforms"
+        assert m["latest"]["beta_XB"]["tolerance"] == {"low": -5.0, "high": 5.0}
+        for c in m["campaigns"]:
+            assert c["summary"]["beta_XB"]["tolerance"] == {"low": -5.0, "high": 5.0}
+            assert c["summary"]["alpha_CZ"]["conformity"] == "conforms"
+    m1 = doc["machines"][0]
+    assert m1["id"] == "M-1" and sorted(f["quantity"] for f in m1["forecast"]) == ["alpha_CZ", "beta_XB"]
+    assert before["M-1"]["latest"]["beta_XB"]["tolerance"] == {"low": -30.0, "high": 30.0}
+    assert m1["latest"]["beta_XB"]["conformity"] == "does not conform"  # ≈ +30″ after the step, against ±5″
+    # the same set as {name: Tolerance} from Python: the same keys, all from the cache, the same results
+    again = mb.fleet(tree, cache=cache, tolerances=api.tolerances_of(tight))
+    assert again.run["computed"] == 0 and _cmp(again.to_json()) == _cmp(doc)
+
+
+def test_the_cache_key_names_the_tolerances(tree):
+    from mtmcal_bayes.fleets import FleetSettings
+    from mtmcal_bayes.fleets.units import UNIT_FORMAT, unit_key
+    from mtmcal_bayes.version import __version__
+
+    def tol(half: float) -> dict:
+        return {"beta_XB": Tolerance("beta_XB", units.to_internal(-half, "arcsec"), units.to_internal(half, "arcsec"))}
+
+    plain, a, a2, b = (FleetSettings(), FleetSettings(tolerances=tol(5)), FleetSettings(tolerances=tol(5)),
+                       FleetSettings(tolerances=tol(6)))
+    for kind in ("campaign", "history"):
+        keys = [unit_key(kind, ["d1", "d2"], s) for s in (plain, a, b)]
+        assert len(set(keys)) == 3 and unit_key(kind, ["d1", "d2"], a2) == keys[1]
+    # without plant-wide tolerances a campaign's key is what it was before they existed: old entries stay valid
+    old = {"model": "linear", "seed": 1, "sampler": "emcee", "target_ess": 1000.0, "max_steps": 20_000}
+    text = json.dumps({"format": UNIT_FORMAT, "kind": "campaign", "digests": ["d1"], "settings": old,
+                       "version": __version__}, sort_keys=True)
+    assert unit_key("campaign", ["d1"], plain) == hashlib.sha256(text.encode("utf-8")).hexdigest()
+    with pytest.raises(mb.MtmcalError, match="tolerances"):
+        FleetSettings(tolerances={"beta_XB": 5.0})

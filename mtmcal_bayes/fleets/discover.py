@@ -52,6 +52,32 @@ class Machine:
     def dated(self) -> list[CampaignFile]:
         return [c for c in self.campaigns if c.campaign.date is not None]
 
+    @property
+    def type(self) -> str:
+        """The machine's ``[machine] type`` (its latest campaign's; "" when not given)."""
+        return (self.dated or self.campaigns)[-1].campaign.machine.type
+
+
+def check_types(found: Discovery) -> None:
+    """Machines of one ``[machine] type`` share a σ_model hyper-distribution, so they must be one make and model:
+    the same configuration and axis travels.  Otherwise an :class:`~mtmcal_bayes.errors.InputError` naming the
+    file and ``machine.type``."""
+    from .sigma_model import geometry
+
+    first: dict[str, tuple] = {}
+    for m in found.machines:
+        for cf in m.campaigns:
+            t = cf.campaign.machine.type
+            if not t:
+                continue
+            g = geometry(cf.campaign.machine)
+            if t not in first:
+                first[t] = (g, cf.file)
+            elif first[t][0] != g:
+                raise InputError(cf.file, "machine.type", f"{t!r} is also the type of {first[t][1]}, whose machine has "
+                                 "another configuration or other travels; one type is one make and model "
+                                 "(machines of a type share their σ_model)")
+
 
 @dataclass
 class Discovery:

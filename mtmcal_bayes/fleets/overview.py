@@ -1,8 +1,12 @@
 """The fleet at a glance: the console table, ``index.html`` (machines × quantities), ``fleet_summary.csv``.
 
-Each cell of the overview is the latest campaign's posterior mean ± sd of a quantity, flagged with its
-conformity verdict (the campaign's own ``[tolerances]``), a drift flag when the machine's history found a
-change in it, and the date by which the history forecasts it leaves its tolerance (recalibrate by).
+Each cell of the overview is a machine's latest estimate of a quantity (``FleetResult.machines[i]["latest"]``):
+the history's at its latest date where the machine has a history (all its campaigns jointly), else its latest
+campaign's posterior; mean ± sd, the conformity verdict decided on that estimate (the plant-wide tolerances or
+the campaign's own ``[tolerances]``), a drift flag when the history found a change in it, and the date by which
+the history forecasts it leaves its tolerance (recalibrate by).  The value links to the latest campaign's own
+posterior on the machine's page.  The page's column is 1180 px wide: a cell is one short line of value and a
+line of small badges, the heads are the quantities' symbols, their names and units in a legend.
 """
 
 from __future__ import annotations
@@ -13,8 +17,10 @@ import math
 import pandas as pd
 
 from .. import units
+from ..campaign import tolerance_text
 from ..html_page import Page
-from ..parameters import IDENTIFIABLE
+from ..iso import iso_symbol
+from ..parameters import IDENTIFIABLE, QUANTITIES, quantity_unit
 from ..posterior.conformity import CONFORMS, DOES_NOT_CONFORM, UNDECIDED
 
 #: the quantities of the overview: the eight of the thesis ball-bar procedure
@@ -23,10 +29,56 @@ OVERVIEW_QUANTITIES = IDENTIFIABLE
 #: one-character flags of the console table, and their meaning
 FLAGS = {DOES_NOT_CONFORM: "!", UNDECIDED: "?", CONFORMS: ""}
 DRIFT_FLAG = "Δ"
+#: the overview's marks: conformity, a change the history found, the forecast's recalibrate-by date
+MARKS = {CONFORMS: "✓", DOES_NOT_CONFORM: "✗", UNDECIDED: "?"}
+RECALIBRATE_MARK = "↻"
 _CSS = """<style>
-td.cell{white-space:nowrap}.ok{background:#e9f6ef}.bad{background:#fde8e4}.maybe{background:#fff4e5}
-.flag{font-size:.8em;display:block;color:#555}.drift{color:#b34000;font-weight:bold}
+table.fleet th,table.fleet td{padding:3px 5px;vertical-align:top}table.fleet th.q{text-align:center}
+td.q{text-align:right;font-variant-numeric:tabular-nums}td.q a.v{white-space:nowrap;color:inherit;
+text-decoration:none;border-bottom:1px dotted #777}.ok{background:#e9f6ef}.bad{background:#fde8e4}
+.maybe{background:#fff4e5}.b{display:inline-block;white-space:nowrap;font-size:.78em;color:#444;margin-left:3px}
+.b.drift{color:#b34000;font-weight:bold}.sub{font-size:.8em;color:#555;white-space:nowrap}
+p.legend{font-size:.86em;color:#333}
 </style>"""
+_GREEK = {"alpha": "α", "beta": "β", "gamma": "γ", "sigma": "σ", "dx": "δx", "dy": "δy", "dz": "δz"}
+
+
+def html_symbol(name: str) -> str:
+    """The quantity's symbol as HTML: ``beta_XB`` → β<sub>XB</sub>, ``dx_CZ_minus_dx_BT`` →
+    δx<sub>CZ</sub>−δx<sub>BT</sub>."""
+    def one(n: str) -> str:
+        head, _, sub = n.partition("_")
+        return f"{_GREEK.get(head, html.escape(head))}<sub>{html.escape(sub)}</sub>" if sub else html.escape(n)
+
+    return "−".join(one(part) for part in name.split("_minus_"))
+
+
+def campaigns_page(m: dict) -> str:
+    """The machine's page of campaigns, below the overview: ``campaigns.html`` beside its history page, else its
+    ``index.html``."""
+    return m["page"].rsplit("/", 1)[0] + "/campaigns.html" if m["history"] is not None else m["page"]
+
+
+def campaign_anchor(index: int) -> str:
+    """The id of the ``index``-th (0-based) campaign's section on its machine's page of campaigns."""
+    return f"campaign-{index + 1}"
+
+
+def _decimals(sd) -> int:
+    """Decimals that show the sd with two significant digits (0 to 3)."""
+    if not isinstance(sd, (int, float)) or not math.isfinite(sd) or sd <= 0:
+        return 2
+    return min(3, max(0, 1 - math.floor(math.log10(sd))))
+
+
+def estimate_text(c: dict) -> str:
+    """``9.7 ± 1.6″`` / ``-3.41 ± 0.32 µm``: the mean ± sd of a ``latest`` entry, the sd to two digits."""
+    if c.get("mean") is None:
+        return "—"
+    d = _decimals(c.get("sd"))
+    sd = "?" if c.get("sd") is None else f"{c['sd']:.{d}f}"
+    unit = c.get("unit")
+    return f"{c['mean']:.{d}f} ± {sd}{' ' if unit == 'um' else ''}{units.SYMBOL.get(unit, '') if unit else ''}"
 
 
 def _quantities(result) -> list[str]:
@@ -54,23 +106,47 @@ def display(value, unit: str | None, digits: int = 2) -> str:
     return f"{value:.{digits}f}{' ' if unit == 'um' else ''}{units.SYMBOL.get(unit, '') if unit else ''}"
 
 
+def _source(m: dict) -> str:
+    """What a machine's overview shows: ``history`` where its latest estimates are the history's, else ``campaign``."""
+    return "history" if any(c.get("source") == "history" for c in m["latest"].values()) else "campaign"
+
+
+def _tolerances_text(result) -> str:
+    tol = result.settings.to_json().get("tolerances")
+    if tol is None:
+        return "each machine's latest campaign's own [tolerances]"
+    return "the plant-wide set given to the fleet: " + ", ".join(
+        f"{n} {tolerance_text(t['low'], t['high'], quantity_unit(n))}" for n, t in tol.items())
+
+
+#: how conformity is decided on what the overview shows (said on the page and in the docs)
+CONFORMITY_RULE = ("Conformity is decided on the estimate shown. For a history estimate, taken as normal with its "
+                   "mean and sd: P(outside) = Φ((low − mean)/sd) + Φ((mean − high)/sd); it conforms when mean ± "
+                   "1.96 sd lies inside the tolerance, does not conform when that interval lies wholly outside, and "
+                   "is undecided when it straddles a limit (ISO 14253-1 with guard bands of the uncertainty). For a "
+                   "single campaign's posterior, the campaign's own verdict: its 95 % HDI against the tolerance, "
+                   "P(outside) the share of its draws outside.")
+
+
 # --------------------------------------------------------------------------- console
 def text_overview(result) -> str:
     qs = _quantities(result)
     n_campaigns = sum(len(m["campaigns"]) for m in result.machines)
     s = result.settings
     lines = [f"Fleet below {result.directory}: {len(result.machines)} machines, {n_campaigns} campaigns "
-             f"(model {s.model}, seed {s.seed}); latest posterior mean per quantity, "
-             f"! does not conform, ? undecided, {DRIFT_FLAG} changed (history)", ""]
-    rows = [["machine", "campaigns", "latest"] + qs + ["recalibrate by"]]
+             f"(model {s.model}, seed {s.seed}); latest mean per quantity: the history's at the latest date "
+             f"(else the latest campaign's), ! does not conform, ? undecided, {DRIFT_FLAG} changed (history)", ""]
+    rows = [["machine", "campaigns", "latest", "from"] + qs + ["recalibrate by"]]
     for m in result.machines:
         last = next(iter(m["latest"].values()), {})
-        rows.append([_machine_name(m), str(len(m["campaigns"])), last.get("date") or "—"]
+        rows.append([_machine_name(m), str(len(m["campaigns"])), last.get("date") or "—", _source(m)]
                     + [display(m["latest"][q]["mean"], m["latest"][q]["unit"], 1) + _flags(m["latest"][q])
                        if q in m["latest"] else "—" for q in qs] + [_recalibrate_by(m) or "—"])
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
-    lines += ["  ".join(v.ljust(w) if i < 3 else v.rjust(w) for i, (v, w) in enumerate(zip(r, widths))).rstrip()
+    lines += ["  ".join(v.ljust(w) if i < 4 else v.rjust(w) for i, (v, w) in enumerate(zip(r, widths))).rstrip()
               for r in rows]
+    if s.tolerances is not None:
+        lines.append(f"  tolerances: {_tolerances_text(result)}")
     for m in result.machines:
         for c in m["changes"]:
             lines.append(f"  {_machine_name(m)}: change in {c.get('quantity')} at {c.get('date')}"
@@ -88,37 +164,87 @@ def text_overview(result) -> str:
 
 
 # --------------------------------------------------------------------------- CSV
+SUMMARY_COLUMNS = ["serial", "machine", "quantity", "unit", "date", "file", "mean", "sd", "hdi_low", "hdi_high",
+                   "conformity", "p_nonconformance", "drift", "drift_date", "drift_probability", "recalibrate_by",
+                   "page", "source", "campaign_mean", "campaign_sd", "campaign_conformity",
+                   "campaign_p_nonconformance"]
+
+
 def summary_table(result) -> pd.DataFrame:
-    """One row per machine × quantity: the latest campaign's mean, sd, 95 % HDI, conformity, drift, recalibrate-by."""
+    """One row per machine × quantity: the latest estimate (``source``: the history's at the latest date, or the
+    latest campaign's posterior) with its mean, sd, 95 % HDI, conformity, drift, recalibrate-by, and the single
+    latest campaign's own mean, sd and verdict beside it."""
     rows = []
     for m in result.machines:
         for q, c in m["latest"].items():
+            own = c.get("campaign") or {}
             rows.append({"serial": m["serial"], "machine": m["id"], "quantity": q, "unit": c["unit"],
                          "date": c["date"], "file": c["file"], "mean": c["mean"], "sd": c["sd"],
                          "hdi_low": c["hdi_low"], "hdi_high": c["hdi_high"], "conformity": c["conformity"],
                          "p_nonconformance": c["p_nonconformance"], "drift": c["drift"], "drift_date": c["drift_date"],
                          "drift_probability": c["drift_probability"], "recalibrate_by": c["recalibrate_by"],
-                         "page": m["page"]})
-    return pd.DataFrame(rows, columns=["serial", "machine", "quantity", "unit", "date", "file", "mean", "sd", "hdi_low",
-                                       "hdi_high", "conformity", "p_nonconformance", "drift", "drift_date",
-                                       "drift_probability", "recalibrate_by", "page"])
+                         "page": m["page"], "source": c.get("source"), "campaign_mean": own.get("mean"),
+                         "campaign_sd": own.get("sd"), "campaign_conformity": own.get("conformity"),
+                         "campaign_p_nonconformance": own.get("p_nonconformance")})
+    return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
 
 
 # --------------------------------------------------------------------------- HTML
+def _cell_title(c: dict) -> str:
+    """The hover text of a cell: where the estimate comes from, the single campaign's own, the flags in words."""
+    own = c.get("campaign")
+    parts = [(f"history estimate at {c['date']}, all campaigns jointly" if c.get("source") == "history"
+              else f"latest campaign's posterior ({c.get('date') or c.get('file')})") + f": {estimate_text(c)}"]
+    if own is not None and c.get("source") == "history":
+        parts.append(f"latest campaign alone ({own.get('date')}): {estimate_text({**own, 'unit': c.get('unit')})}"
+                     + (f", {own['conformity']}" if own.get("conformity") else "") + " (click)")
+    if c.get("conformity"):
+        t = c.get("tolerance") or {}
+        parts.append(f"{c['conformity']} to {tolerance_text(t.get('low'), t.get('high'), c['unit'])}"
+                     + (f", P(outside) {c['p_nonconformance']:.4f}"
+                        if isinstance(c.get("p_nonconformance"), float) else ""))
+    if c.get("drift"):
+        p = c.get("drift_probability")
+        parts.append(f"changed at {c.get('drift_date')}" + (f" (P {p:.2f})" if isinstance(p, float) else ""))
+    if c.get("recalibrate_by"):
+        parts.append(f"recalibrate by {c['recalibrate_by']}")
+    return "; ".join(parts)
+
+
 def _cell(c: dict | None) -> str:
     if c is None:
-        return '<td class="num">—</td>'
+        return '<td class="q">—</td>'
     kind = {CONFORMS: "ok", DOES_NOT_CONFORM: "bad", UNDECIDED: "maybe"}.get(c.get("conformity") or "", "")
-    parts = [html.escape(f"{display(c['mean'], c['unit'])} ± {display(c['sd'], c['unit'])}")]
+    value = html.escape(estimate_text(c))
+    own = c.get("campaign")
+    value = f'<a class="v" href="{html.escape(own["page"])}">{value}</a>' if own and own.get("page") else value
+    badges = []
     if c.get("conformity"):
         p = c.get("p_nonconformance")
-        parts.append(f'<span class="flag">{html.escape(c["conformity"])}'
-                     + (f", P(out) {p:.2f}" if isinstance(p, float) else "") + "</span>")
+        badges.append(f'<span class="b">{MARKS.get(c["conformity"], "")}'
+                      + (f" {p:.2f}" if isinstance(p, float) else "") + "</span>")
     if c.get("drift"):
-        parts.append(f'<span class="flag drift">{DRIFT_FLAG} changed {html.escape(str(c.get("drift_date") or ""))}</span>')
+        badges.append(f'<span class="b drift">{DRIFT_FLAG} {html.escape(str(c.get("drift_date") or ""))}</span>')
     if c.get("recalibrate_by"):
-        parts.append(f'<span class="flag">recalibrate by {html.escape(str(c["recalibrate_by"]))}</span>')
-    return f'<td class="num cell {kind}">{"".join(parts)}</td>'
+        badges.append(f'<span class="b">{RECALIBRATE_MARK} {html.escape(str(c["recalibrate_by"]))}</span>')
+    second = f"<br>{''.join(badges)}" if badges else ""
+    classes = f"q {kind}" if kind else "q"
+    return f'<td class="{classes}" title="{html.escape(_cell_title(c))}">{value}{second}</td>'
+
+
+def _head(q: str) -> str:
+    iso = iso_symbol(q)
+    title = f"{q}{f' ({iso})' if iso else ''}, {units.SYMBOL[quantity_unit(q)]}: {QUANTITIES[q].meaning}"
+    return f'<th class="q" title="{html.escape(title)}">{html_symbol(q)}</th>'
+
+
+def _machine_cell(m: dict) -> str:
+    n = len(m["campaigns"])
+    last = next(iter(m["latest"].values()), {})
+    own = campaigns_page(m)
+    return (f'<td><a href="{html.escape(m["page"])}">{html.escape(_machine_name(m))}</a><br>'
+            f'<span class="sub"><a href="{html.escape(own)}">{n} campaign{"s" * (n != 1)}</a></span><br>'
+            f'<span class="sub">{_source(m)}, {html.escape(str(last.get("date") or "—"))}</span></td>')
 
 
 def overview_page(result) -> Page:
@@ -126,23 +252,23 @@ def overview_page(result) -> Page:
     page = Page(f"Fleet overview — {len(result.machines)} machines below {result.directory}")
     page.raw(_CSS)
     page.section("machines", "Machines")
-    page.paragraph("Each cell: the latest campaign's posterior mean ± sd; its conformity verdict where the campaign "
-                   f"has tolerances (green conforms, red does not, amber undecided); {DRIFT_FLAG} where the machine's "
-                   "history found a change; the date by which the history forecasts the quantity to leave its "
-                   "tolerance.  Each machine links to its page.")
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in ["machine", "campaigns", "latest", *qs, "recalibrate by"])
-    body = []
-    for m in result.machines:
-        last = next(iter(m["latest"].values()), {})
-        link = f'<a href="{html.escape(m["page"])}">{html.escape(_machine_name(m))}</a>'
-        if m["history"] is not None:
-            campaigns = m["page"].rsplit("/", 1)[0] + "/campaigns.html"
-            link += f' (<a href="{html.escape(campaigns)}">campaigns</a>)'
-        body.append(f"<tr><td>{link}</td><td class=\"num\">{len(m['campaigns'])}</td>"
-                    f"<td>{html.escape(str(last.get('date') or '—'))}</td>"
-                    + "".join(_cell(m["latest"].get(q)) for q in qs)
-                    + f"<td>{html.escape(_recalibrate_by(m) or '—')}</td></tr>")
-    page.raw(f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>")
+    page.paragraph("Each cell: the machine's latest estimate, mean ± sd — the history's at its latest date (all "
+                   "its campaigns jointly, docs/history.md) where the machine has a history, else its latest "
+                   "campaign's posterior (the machine's column says which). The value links to the latest "
+                   "campaign's own posterior on the machine's page, and hovering it shows that campaign's value. "
+                   f"Below: {MARKS[CONFORMS]} conforms, {MARKS[DOES_NOT_CONFORM]} does not conform, "
+                   f"{MARKS[UNDECIDED]} undecided, with P(outside the tolerance) (green, red, amber); {DRIFT_FLAG} "
+                   f"date: the history found a change there; {RECALIBRATE_MARK} date: recalibrate by (the history's "
+                   "forecast of when the quantity leaves its tolerance).")
+    head = "".join(["<th>machine</th>", *(_head(q) for q in qs), "<th>recalibrate by</th>"])
+    body = [f"<tr>{_machine_cell(m)}" + "".join(_cell(m["latest"].get(q)) for q in qs)
+            + f"<td>{html.escape(_recalibrate_by(m) or '—')}</td></tr>" for m in result.machines]
+    page.raw(f'<table class="fleet"><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table>')
+    legend = " · ".join(f"{html_symbol(q)} {html.escape(q)}"
+                        + (f" ({html.escape(iso_symbol(q))})" if iso_symbol(q) else "")
+                        + f", {units.SYMBOL[quantity_unit(q)]}" for q in qs)
+    page.raw(f'<p class="legend">{legend}</p>')
+    page.paragraph(CONFORMITY_RULE + f" Tolerances: {_tolerances_text(result)}.")
     notes = [f"{_machine_name(m)}: {n}" for m in result.machines for n in m["notes"]]
     page.box("missing", "Notes", notes)
     if result.errors:
@@ -156,8 +282,24 @@ def overview_page(result) -> Page:
     return page
 
 
+def _campaign_rows(c: dict, history_at: dict, *, with_history: bool) -> pd.DataFrame:
+    rows = []
+    for q, s in c["summary"].items():
+        t = s.get("tolerance") or {}
+        h = history_at.get(q)
+        d = _decimals(s.get("sd"))
+        rows.append({"quantity": q, "mean ± sd": estimate_text(s),
+                     "95 % HDI": f"[{display(s.get('hdi_low'), None, d)}, {display(s.get('hdi_high'), None, d)}]",
+                     "tolerance": tolerance_text(t.get("low"), t.get("high"), s["unit"]) if t else None,
+                     "P(outside)": s.get("p_nonconformance"), "verdict": s.get("conformity"),
+                     **({"history at this date": estimate_text({**h, "unit": s["unit"]}) if h else None}
+                        if with_history else {})})
+    return pd.DataFrame(rows)
+
+
 def machine_page(result, m: dict) -> Page:
-    """A machine's campaigns side by side: each quantity's posterior mean ± sd (and verdict) per campaign."""
+    """A machine's campaigns side by side (each quantity's posterior mean ± sd and verdict per campaign), then each
+    campaign's own section (``#campaign-<k>``, what the overview links to) with the history's estimate at its date."""
     page = Page(f"Machine {_machine_name(m)} — {len(m['campaigns'])} campaign(s)")
     page.raw(f'<p>Part of the fleet below {html.escape(str(result.directory))} '
              '(<a href="../../index.html">overview</a>).</p>')
@@ -174,6 +316,19 @@ def machine_page(result, m: dict) -> Page:
                            + (f" ({s['conformity']})" if s.get("conformity") else "")
                            for q, s in c["summary"].items()}
         page.table(pd.DataFrame(cols), index=True)
+        page.section("each", "Each campaign")
+        summary = (m["history"] or {}).get("summary") or {}
+        links = " · ".join(f'<a href="#{campaign_anchor(i)}">{html.escape(c["date"] or c["file"])}</a>'
+                           for i, c in enumerate(m["campaigns"]))
+        page.raw(f"<p>{links}</p>")
+        if summary:
+            page.paragraph("Each campaign's own posterior, and the history's estimate at its date (all the machine's "
+                           "campaigns jointly: what the overview shows for the latest date).")
+        for i, c in enumerate(m["campaigns"]):
+            page.raw(f'<h3 id="{campaign_anchor(i)}">{html.escape(c["date"] or "undated")} — '
+                     f'{html.escape(c["file"])}</h3>')
+            page.table(_campaign_rows(c, summary.get(c["date"]) or {}, with_history=bool(summary)), index=False,
+                       digits=4)
     page.box("missing", "Notes", m["notes"])
     page.box("warn", "Sampler warnings", [f"{c['file']}: {w}" for c in m["campaigns"] for w in c["warnings"]])
     return page

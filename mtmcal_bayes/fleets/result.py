@@ -14,9 +14,14 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..io.sigma_prior_file import write_sigma_model_prior
+from ..parameters import quantity_unit
+from ..sigma_prior import SigmaModelPrior, log_sd_problem, median_problem
 from ..version import __version__
 from .discover import Discovery, Machine
-from .overview import machine_page, overview_page, summary_table, text_overview
+from .overview import campaign_anchor, campaigns_page, machine_page, overview_page, summary_table, text_overview
+from .sigma_model import pool
+from .tolerances import display_limits, estimate_conformity
 from .units import FleetSettings
 
 #: exit status of a fleet with failed campaigns or histories (the rest completed)
@@ -41,35 +46,99 @@ def _unique_slugs(ids: list[str]) -> dict[str, str]:
     return out
 
 
-def _latest(campaigns: list[dict], history: dict | None) -> dict:
-    """Per quantity of the latest campaign with a posterior: mean, sd, HDI, unit, conformity, and from the
-    history its drift flag (a change found) and its recalibrate-by date."""
-    if not campaigns:
-        return {}
-    last = campaigns[-1]
+#: what a machine's ``latest`` keeps of the campaign beside the history's estimate
+_CAMPAIGN_KEYS = ("mean", "sd", "hdi_low", "hdi_high", "conformity", "p_nonconformance")
+
+
+def _latest(campaigns: list[dict], history: dict | None, *, history_file: str | None, limits: dict,
+            page: str) -> dict:
+    """Per quantity, the latest estimate of the machine: the history's at its latest date where the machine has a
+    history (``"source": "history"``; conformity decided on that estimate taken as normal, with ``limits``
+    ``{name: {"low", "high"}}`` display units: :func:`~.tolerances.estimate_conformity`), else the latest
+    campaign's posterior (``"source": "campaign"``, its own verdict); always with the single campaign's posterior
+    of that date (``"campaign"``, its section on ``page`` linked), the history's drift flag (a change found) and
+    its recalibrate-by date."""
     dated = [c for c in campaigns if c["date"] is not None]
-    if dated:
-        last = dated[-1]
-    out = {}
+    fallback = (dated or campaigns or [None])[-1]  # the latest campaign with a posterior, dated ones first
+    at = history["dates"][-1] if history and history.get("dates") else None
+    now = ((history.get("summary") or {}).get(at) or {}) if at else {}
+    same = next((c for c in campaigns if c["file"] == history_file), None) if at else fallback
+    names = list(fallback["summary"] if fallback else {})
+    names += [q for q in now if q not in names]
     changes = (history or {}).get("changes") or []
     forecast = {f["quantity"]: f for f in (history or {}).get("forecast") or [] if isinstance(f, dict)}
-    for q, s in last["summary"].items():
-        entry = {k: s.get(k) for k in ("mean", "sd", "hdi_low", "hdi_high", "unit")}
-        entry.update({"file": last["file"], "date": last["date"], "conformity": s.get("conformity"),
-                      "p_nonconformance": s.get("p_nonconformance")})
+
+    def single(c: dict | None, q: str) -> dict | None:  # the campaign's own posterior of q, its section linked
+        own = None if c is None else c["summary"].get(q)
+        if own is None:
+            return None
+        return {"file": c["file"], "date": c["date"], **{k: own.get(k) for k in _CAMPAIGN_KEYS},
+                "page": f"{page}#{campaign_anchor(campaigns.index(c))}"}
+
+    out = {}
+    for q in names:
+        if q in now:
+            entry = {k: now[q].get(k) for k in ("mean", "sd", "hdi_low", "hdi_high")}
+            entry.update({"unit": quantity_unit(q), "file": history_file, "date": at, "conformity": None,
+                          "p_nonconformance": None})
+            tol = limits.get(q)
+            if tol is not None and entry["mean"] is not None and entry["sd"] is not None:
+                entry["conformity"], entry["p_nonconformance"] = estimate_conformity(
+                    entry["mean"], entry["sd"], tol["low"], tol["high"])
+            source, camp = "history", single(same, q)
+        else:
+            own = fallback["summary"][q]
+            entry = {k: own.get(k) for k in ("mean", "sd", "hdi_low", "hdi_high", "unit")}
+            entry.update({"file": fallback["file"], "date": fallback["date"], "conformity": own.get("conformity"),
+                          "p_nonconformance": own.get("p_nonconformance")})
+            tol, source, camp = own.get("tolerance"), "campaign", single(fallback, q)
         mine = [c for c in changes if isinstance(c, dict) and c.get("quantity") == q]
         entry["drift"] = bool(mine)
         entry["drift_date"] = mine[-1].get("date") if mine else None
         entry["drift_probability"] = mine[-1].get("probability") if mine else None
         entry["recalibrate_by"] = forecast.get(q, {}).get("recalibrate_by")
+        entry.update({"source": source, "tolerance": tol, "campaign": camp})
         out[q] = entry
     return out
+
+
+def pooled_types(found: Discovery, machines: list[dict], payloads: dict, of_machine: dict) -> dict:
+    """Per machine type shared by two or more machines: σ_model pooled over their histories (:mod:`.sigma_model`);
+    each machine entry of the type gets it as ``"sigma_model"`` (None for the others)."""
+    by_type: dict[str, list[int]] = {}
+    for i, m in enumerate(found.machines):
+        if m.type:
+            by_type.setdefault(m.type, []).append(i)
+    out = {}
+    for name, members in sorted(by_type.items()):
+        rows = [payloads[of_machine[found.machines[i].id]]["result"].get("sigma_model_loglik") for i in members
+                if found.machines[i].id in of_machine and "error" not in payloads[of_machine[found.machines[i].id]]]
+        rows = [r for r in rows if r is not None]
+        if len(members) < 2 or not rows:
+            continue
+        pooled = pool(rows)
+        # a predictive wider than a prior file may say (ln σ sd > 3: a factor 20 per sd) has learnt nothing to pass on
+        usable = median_problem(pooled["median_um"]) is None and log_sd_problem(pooled["log_sd"]) is None
+        out[name] = {"type": name, "machines": len(members), **pooled,
+                     "prior_file": f"sigma_model_{slug(name)}.toml" if usable else None}
+    for i, m in enumerate(found.machines):
+        machines[i]["sigma_model"] = out.get(m.type) if m.type else None
+    return out
+
+
+def learnt_prior(pooled: dict, directory: str) -> SigmaModelPrior:
+    """The ``sample --sigma-model-prior`` file of a pooled type."""
+    return SigmaModelPrior({"sigma_model": (pooled["median_um"], pooled["log_sd"])},
+                           f"fleet {directory}: type {pooled['type']!r}, {pooled['machines']} machines, "
+                           f"{pooled['histories']} histories (τ = {pooled['tau']['mean']:.2f} ± {pooled['tau']['sd']:.2f} "
+                           "in ln σ between machines)")
 
 
 @dataclass
 class FleetResult:
     """A fleet's machines (``serial``, ``id``, ``campaigns``, ``history``, ``changes``, ``forecast``,
-    ``latest``, ``page``, ``notes``), its ``errors`` (``file``, ``message``; ``machine`` for a history) and
+    ``latest``, ``sigma_model``, ``page``, ``notes``), the σ_model each machine type's histories taught
+    (``types``, :mod:`.sigma_model`), its ``errors`` (``file``, ``message``; ``machine`` for a history) and
     ``run``: units, how many came from the cache, failed, workers, times.  ``exit_status`` is 0 when
     everything ran, 3 when something failed and the rest completed."""
 
@@ -79,6 +148,7 @@ class FleetResult:
     errors: list[dict]
     run: dict
     pages: dict[str, dict[str, str]] = field(default_factory=dict)  # machine id -> {path: base64} of its history page
+    types: dict[str, dict] = field(default_factory=dict)  # machine type -> σ_model pooled by its histories
     files: list[str] = field(default_factory=list)  # what :meth:`write` wrote
 
     @property
@@ -94,20 +164,22 @@ class FleetResult:
         cached_files, cached_machines = [], []
         slugs = _unique_slugs([m.id for m in found.machines])
         for m in found.machines:
-            entry, page = cls._machine(m, payloads, of_file=of_file, of_machine=of_machine, errors=errors)
-            entry["page"] = f"machines/{slugs[m.id]}/index.html"
+            entry, files = cls._machine(m, payloads, of_file=of_file, of_machine=of_machine, errors=errors,
+                                        settings=settings, page=f"machines/{slugs[m.id]}/index.html")
             machines.append(entry)
-            if page:
-                pages[m.id] = page
+            if files:
+                pages[m.id] = files
             cached_files += [c.file for c in m.campaigns if of_file[c.file] in cached]
             if m.id in of_machine and of_machine[m.id] in cached:
                 cached_machines.append(m.id)
         errors.sort(key=lambda e: (e.get("file") or "", e.get("machine") or ""))
         run = {**run, "cached_campaigns": cached_files, "cached_histories": cached_machines}
-        return cls(found.directory, settings, machines, errors, run, pages)
+        types = pooled_types(found, machines, payloads, of_machine)
+        return cls(found.directory, settings, machines, errors, run, pages, types)
 
     @staticmethod
-    def _machine(m: Machine, payloads, *, of_file, of_machine, errors: list) -> tuple[dict, dict]:
+    def _machine(m: Machine, payloads, *, of_file, of_machine, errors: list, settings: FleetSettings,
+                 page: str) -> tuple[dict, dict]:
         campaigns, notes = [], []
         for cf in m.campaigns:
             p = payloads[of_file[cf.file]]
@@ -122,13 +194,13 @@ class FleetResult:
             notes.append(f"{len(undated)} campaign(s) without a date, not in the history: {', '.join(undated)}")
         if m.serial is None:
             notes.append("no [machine] serial: a machine of its own, known by its file")
-        history, page = None, {}
+        history, files = None, {}
         if m.id in of_machine:
             p = payloads[of_machine[m.id]]
             if "error" in p:
                 errors.append({"file": None, "machine": m.id, "message": f"history of {m.id}: {p['error']}"})
             else:
-                history, page = p["result"], p["files"]
+                history, files = p["result"], p["files"]
         elif len(m.campaigns) > 1 and len(m.dated) < 2:
             notes.append("no history: it needs at least two dated campaigns")
         entry = {"serial": m.serial, "id": m.id, "campaigns": campaigns,
@@ -136,14 +208,20 @@ class FleetResult:
                      "model": history.get("model"), "dates": history.get("dates"), "files": [c.file for c in m.dated],
                      "summary": history.get("summary"), "diagnostics": history.get("diagnostics")},
                  "changes": (history or {}).get("changes") or [], "forecast": (history or {}).get("forecast") or [],
-                 "latest": _latest(campaigns, history), "notes": notes}
-        return entry, page
+                 "latest": {}, "notes": notes, "page": page}
+        # the history's tolerances: the plant-wide set, else its latest campaign's own (as its forecast's)
+        limits = display_limits(settings.tolerance_set() if settings.tolerances is not None
+                                else m.dated[-1].campaign.tolerances if m.dated else {})
+        entry["latest"] = _latest(campaigns, history, history_file=m.dated[-1].file if history else None,
+                                  limits=limits, page=campaigns_page(entry))
+        return entry, files
 
     # ------------------------------------------------------------------ outputs
     def to_json(self) -> dict:
         """What ``fleet --json`` prints and ``fleet.json`` holds."""
         return {"directory": self.directory, "settings": {**self.settings.to_json(), "version": __version__},
-                "machines": self.machines, "errors": self.errors, "run": self.run, "files": self.files}
+                "machines": self.machines, "errors": self.errors, "sigma_model_types": self.types, "run": self.run,
+                "files": self.files}
 
     def results_json(self) -> dict:
         """The part of :meth:`to_json` that depends only on the files and the settings: ``machines``, ``errors``."""
@@ -160,7 +238,8 @@ class FleetResult:
         from ..io.textfiles import atomic_directory
 
         out = Path(output)
-        names = ["index.html", "fleet.json", "fleet_summary.csv"]
+        names = ["index.html", "fleet.json", "fleet_summary.csv"] + [t["prior_file"] for t in self.types.values()
+                                                                     if t["prior_file"]]
         self.files = [str(out / n) for n in names] + [str(out / m["page"]) for m in self.machines]
         old = None
         with atomic_directory(out) as tmp:
@@ -174,10 +253,14 @@ class FleetResult:
                     doc = {"serial": m["serial"], **m["history"], "changes": m["changes"], "forecast": m["forecast"],
                            "output": str(out / Path(m["page"]).parent)}
                     (folder / "history.json").write_text(json_text(doc) + "\n", encoding="utf-8")
-                own = "index.html" if not (folder / "index.html").exists() else "campaigns.html"
-                machine_page(self, m).write(folder / own, f"mtmcal-bayes {__version__}")
+                own = [Path(campaigns_page(m)).name] + ["index.html"] * (not (folder / "index.html").exists())
+                for name in dict.fromkeys(own):  # campaigns.html beside a history page; index.html if none
+                    machine_page(self, m).write(folder / name, f"mtmcal-bayes {__version__}")
             overview_page(self).write(tmp / "index.html", f"mtmcal-bayes {__version__}")
             summary_table(self).to_csv(tmp / "fleet_summary.csv", index=False)
+            for t in self.types.values():
+                if t["prior_file"]:
+                    write_sigma_model_prior(tmp / t["prior_file"], learnt_prior(t, self.directory))
             (tmp / "fleet.json").write_text(json_text(self.to_json()) + "\n", encoding="utf-8")
             if (out / "machines").exists():  # a folder is not replaced by os.replace: set the old one aside
                 old = out / f".machines-old-{os.getpid()}"

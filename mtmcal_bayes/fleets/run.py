@@ -10,6 +10,7 @@ is started when everything is cached.
 from __future__ import annotations
 
 import contextlib
+import functools
 import time
 import warnings
 from dataclasses import dataclass
@@ -18,7 +19,7 @@ from ..cluster import dask_client, default_workers
 from ..errors import ParameterError
 from ..progress import Progress, ProgressEvent, emit
 from .cache import UnitCache, default_cache
-from .discover import Discovery, discover
+from .discover import Discovery, check_types, discover
 from .result import FleetResult
 from .units import FleetSettings, campaign_unit, history_unit, unit_key, unit_seed
 
@@ -50,8 +51,10 @@ def plan_units(found: Discovery, settings: FleetSettings, *, pages: bool) -> tup
             digests = [c.digest for c in dated]
             key = unit_key("history", digests, settings)
             of_machine[m.id] = key
-            units.setdefault(key, Unit("history", key, m.id, history_unit,
-                                       ([c.campaign for c in dated], unit_seed(digests, settings.seed), pages)))
+            func = functools.partial(history_unit, tolerances=settings.tolerance_set())  # plant-wide, or None
+            units.setdefault(key, Unit("history", key, m.id, func,
+                                       ([c.campaign for c in dated], unit_seed(digests, settings.seed), pages,
+                                        settings.model)))
     return list(units.values()), of_file, of_machine
 
 
@@ -106,6 +109,7 @@ def run_fleet(directory, settings: FleetSettings, *, scheduler: str | None = Non
     folder = None if cache is False else (default_cache(output) if cache is None else cache)
     store = None if folder is None else UnitCache(folder)
     found = discover(directory, skip=[output, folder])
+    check_types(found)
     if not found.machines and not found.errors:
         raise ParameterError("directory", f"{directory}: no campaign files (*.toml) below it")
     units, of_file, of_machine = plan_units(found, settings, pages=output is not None)

@@ -16,30 +16,38 @@ import hashlib
 import json
 import tempfile
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 from ..errors import MtmcalError, ParameterError
 from ..io.json_text import rounded
 from ..version import __version__
+from .tolerances import display_limits, tolerance_dict, tolerance_tuple
+from .sigma_model import history_log_likelihood
 
 #: the cache entry's format; a change of what a unit returns must change it (or the package version)
 UNIT_FORMAT = "mtmcal-fleet-unit/1"
-#: the forward model of every history: the history model is built on the linear model (mtmcal_bayes.histories)
-HISTORY_MODEL = "linear"
 
 
 @dataclass(frozen=True)
 class FleetSettings:
-    """How every campaign of the fleet is sampled and every history fitted (all enter the cache key)."""
+    """How every campaign of the fleet is sampled and every history fitted (all enter the cache key).
+
+    ``tolerances``: a plant-wide set used instead of each campaign's own ``[tolerances]`` (its conformity, its
+    machine's forecast and change thresholds); given as ``{name: Tolerance}``, kept as ``((name, low, high), ...)``
+    (:func:`~.tolerances.tolerance_tuple`); None: each campaign's own.
+    """
 
     model: str = "linear"
     seed: int = 1
     sampler: str = "emcee"
     target_ess: float = 1000.0
     max_steps: int = 20_000
+    tolerances: tuple | None = None
 
     def __post_init__(self):  # bad settings fail here, before any work, not in every unit
+        if self.tolerances is not None:
+            object.__setattr__(self, "tolerances", tolerance_tuple(self.tolerances))
         from ..inference.sampling import SamplerSettings
         from ..models import check_model
 
@@ -51,14 +59,25 @@ class FleetSettings:
             raise ParameterError("sampler", f"exact: the exact posterior is known for the linear model only, "
                                  f"not for {self.model} (use the emcee sampler)")
 
+    def tolerance_set(self) -> dict | None:
+        """The plant-wide tolerances as ``{name: Tolerance}`` (what the units are given), or None."""
+        return None if self.tolerances is None else tolerance_dict(self.tolerances)
+
     def to_json(self) -> dict:
-        return asdict(self)
+        """The settings; ``tolerances`` as ``{name: {"low", "high"}}`` in ″ / µm (null: each campaign's own)."""
+        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "tolerances"}
+        return {**out, "tolerances": None if self.tolerances is None else display_limits(self.tolerance_set())}
 
 
 def unit_key(kind: str, digests: list[str], settings: FleetSettings) -> str:
     """The name of a unit's work: sha256 over its kind, its campaigns' fingerprints, the settings it depends on
-    (a history: the seed only) and the package version (a new version computes afresh)."""
-    used = settings.to_json() if kind == "campaign" else {"seed": settings.seed, "model": HISTORY_MODEL}
+    (a history: the seed only), the plant-wide tolerances when given (a campaign's verdicts, a history's forecast
+    and thresholds: a result with other tolerances is never reused) and the package version (a new version
+    computes afresh)."""
+    used = settings.to_json() if kind == "campaign" else {"seed": settings.seed, "model": settings.model}
+    used.pop("tolerances", None)  # without plant-wide tolerances, the key they had before these existed
+    if settings.tolerances is not None:  # a campaign's conformity, a history's forecast and thresholds
+        used["tolerances"] = [list(t) for t in settings.tolerances]
     text = json.dumps({"format": UNIT_FORMAT, "kind": kind, "digests": digests, "settings": used,
                        "version": __version__}, sort_keys=True)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
@@ -101,7 +120,7 @@ def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
 
         s = SamplerSettings(seed=seed, max_steps=settings.max_steps, target_ess=settings.target_ess,
                             sampler=settings.sampler)
-        post = sample_posterior(campaign, model=settings.model, settings=s)
+        post = sample_posterior(campaign, model=settings.model, settings=s, tolerances=settings.tolerance_set())
         add_suggestions(post, campaign)
         d = post.diagnostics
         out = {"seed": seed,
@@ -118,21 +137,22 @@ def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
 _HISTORY_PLACES = ("files", "output")
 
 
-def _machine_history(campaigns: list, seed: int):
+def _machine_history(campaigns: list, seed: int, model: str, tolerances: dict | None = None):
     """The history model of one machine (``mtmcal_bayes.histories``), imported when first needed; the
-    tolerances of the forecast are the latest campaign's own."""
+    tolerances of the forecast are ``tolerances`` (plant-wide), else the latest campaign's own."""
     from ..histories import fit_history
 
-    return fit_history(campaigns, model=HISTORY_MODEL, seed=seed)
+    return fit_history(campaigns, model=model, seed=seed, tolerances=tolerances)
 
 
-def history_unit(campaigns: list, seed: int, with_page: bool) -> dict:
+def history_unit(campaigns: list, seed: int, with_page: bool, model: str = "linear", *,
+                 tolerances: dict | None = None) -> dict:
     """The history of one machine from its dated campaigns: the history's JSON (without the places it names)
     and, ``with_page``, its page's files (``{path: base64}``, written by the history itself into a temporary
-    folder of the worker)."""
+    folder of the worker).  ``tolerances``: the plant-wide set, else the latest campaign's own."""
     t0 = time.perf_counter()
     try:
-        result = _machine_history(campaigns, seed)
+        result = _machine_history(campaigns, seed, model, tolerances)
         doc = {k: v for k, v in result.to_json().items() if k not in _HISTORY_PLACES}
         files = {}
         if with_page:
@@ -140,7 +160,8 @@ def history_unit(campaigns: list, seed: int, with_page: bool) -> dict:
                 result.write(tmp)
                 files = {p.relative_to(tmp).as_posix(): base64.b64encode(p.read_bytes()).decode("ascii")
                          for p in sorted(Path(tmp).rglob("*")) if p.is_file()}
-        return {"result": _plain({"seed": seed, "model": HISTORY_MODEL, **doc}), "files": files,
+        loglik = history_log_likelihood(result.fit.model, result.fit.q2)  # for the σ_model of the machine's type
+        return {"result": _plain({"seed": seed, **doc, "sigma_model_loglik": loglik}), "files": files,
                 "elapsed_s": time.perf_counter() - t0}
     except Exception as exc:  # a unit reports, it does not raise (module docstring)
         return {"error": _one_line(exc), "elapsed_s": time.perf_counter() - t0}

@@ -122,7 +122,7 @@ def _internal_scale(table: dict, names) -> np.ndarray:
     return np.array([units.to_internal(table[quantity_unit(n)], quantity_unit(n)) for n in names])
 
 
-def _sample_scales(hm: HistoryModel, rng: np.random.Generator, start: np.ndarray | None = None,
+def _sample_scales(hm: HistoryModel, rng: np.random.Generator, *, start: np.ndarray | None = None,
                    steps: int = N_STEPS, burn: int = BURN) -> tuple[np.ndarray, float, float, np.ndarray]:
     """N_STATE draws (n, d + 1) of (log q, log σ), the acceptance fraction, the largest autocorrelation time and
     the walkers' last positions (``start``: where the walkers begin, default spread around the prior scales)."""

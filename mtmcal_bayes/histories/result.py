@@ -67,6 +67,14 @@ class HistoryResult:
                       "log10_bayes_factor": max((self.fit.trend[n] for n in uses if n in self.fit.trend), default=None)}
         return out
 
+    def sigma_model(self) -> dict:
+        """What the history taught of σ_model (shared by its campaigns): median, mean and sd of ln(σ/µm), and the
+        prior it was learnt under."""
+        u = np.log(units.from_internal(np.sqrt(self.fit.s2), "um"))
+        prior = self.fit.model.sigma_prior
+        return {"median_um": float(np.exp(np.median(u))), "mean_log_um": float(u.mean()), "sd_log": float(u.std()),
+                "prior": f"{prior.dist}, sd {units.from_internal(prior.sd, 'um'):.3g} µm"}
+
     def thermal(self) -> dict:
         """Per quantity: the thermal sensitivity's posterior mean and sd per °C, its unit, and ``identified``
         (false where its posterior sd is not below :data:`~.fit.IDENTIFIED_SD_RATIO` of the prior's: the prior sets
@@ -101,7 +109,8 @@ class HistoryResult:
         return {
             "serial": self.serial, "dates": [_iso(d) for d in self.dates], "files": self.files,
             "summary": nested(self.summary), **extra, "model": self.model,
-            "trend": self.trend(), "thermal": self.thermal(), "linearisation": self.linearisation,
+            "trend": self.trend(), "thermal": self.thermal(), "sigma_model": self.sigma_model(),
+            "linearisation": self.linearisation,
             "changes": [{"quantity": c["quantity"], "date": _iso(c["date"]), "probability": c["probability"],
                          "delta": c["delta"], "threshold": c["threshold"]} for c in self.flagged],
             "forecast": [{"quantity": f["quantity"], "recalibrate_by": f["recalibrate_by"] and _iso(f["recalibrate_by"]),

@@ -19,6 +19,10 @@ these budgets over the scales' posterior and the variance of the conditional mea
 not knowing the scales adds.  The average runs over :data:`N_SIGMA` quantiles of the posterior draws of
 one scale, or :data:`N_SIGMA` posterior draws of several (evenly spaced through the chain).  The kinematic
 models are linearised at the posterior mean (the budget is then first order).
+
+The budget states where each sampled scale's prior comes from (:func:`sigma_prior_sources`): *assumed* (the
+package's default, or the campaign's ``[priors]``) or *learnt* elsewhere (a fleet of machines of the type,
+``--sigma-model-prior``), with the source the prior file names — a share of σ_model then rests on that source.
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from ..parameters import quantity_unit, weights
+from ..parameters import SCALE_LABEL, quantity_unit, weights
 from .analytic import REPORTED, linearisation
 from .log_posterior import LogPosterior
 
@@ -53,6 +57,39 @@ MEANING = {"repeatability": "the repeatability of the measurements (scatter of t
            "prior:W-ball clamping": "the W-ball clamping prior", "prior:stylus centring": "the stylus centring prior",
            "prior:dRS": "the stylus-length prior", "prior:rS": "the stylus-radius (pre-travel) prior",
            "prior:sphere placement": "the sphere-placement prior", "prior:reading datum": "the reading-datum prior"}
+
+
+def sigma_prior_sources(post: LogPosterior) -> dict[str, dict]:
+    """Where the prior of each sampled discrepancy scale comes from: ``{scale: {"source": "assumed" | "learnt",
+    "prior": "LogNormal(median 2.7 µm, log sd 0.2)", "from": <the learnt prior's source text> or None}}``; empty when
+    the scales are fixed."""
+    learnt = post.sigma_prior.scales if post.sigma_prior is not None else {}
+    out = {}
+    for q in post.priors.priors[post.p:]:
+        out[q.name] = {"source": "learnt" if q.name in learnt else "assumed", "prior": q.describe(),
+                       "from": post.sigma_prior.source if q.name in learnt else None}
+    return out
+
+
+def sigma_prior_sentence(post: LogPosterior) -> str:
+    """One sentence stating each sampled scale's prior and its source (empty when the scales are fixed):
+    "σ_model (ball bar) prior: learnt elsewhere, LogNormal(median 2.7 µm, log sd 0.2), from fleet plant/: …"."""
+    parts = []
+    for name, s in sigma_prior_sources(post).items():
+        where = "set in the campaign's [priors]" if name in post.campaign.priors else "the default"
+        how = (f"learnt elsewhere, {s['prior']}, from {s['from']}" if s["source"] == "learnt" else
+               f"assumed, {s['prior']} ({where}; not learnt from data)")
+        parts.append(f"{SCALE_LABEL[name]} prior: {how}")
+    return "; ".join(parts) + ("." if parts else "")
+
+
+def meaning(source: str, post: LogPosterior | None = None) -> str:
+    """What a budget source is, for sentences (:data:`MEANING`); a scale whose prior was learnt elsewhere is not
+    called assumed."""
+    text = MEANING.get(source, source)
+    if post is not None and post.sigma_prior is not None and source in post.sigma_prior.scales:
+        text = text.replace("the assumed ", "the ") + " (its prior learnt elsewhere)"
+    return text
 
 
 def source_of(parameter) -> str:

@@ -25,7 +25,7 @@ from ..models import check_data, make_model
 from ..observations import observation_instruments
 from ..parameters import DISCREPANCY_SCALES, ParameterSpace
 from .likelihood import GaussianMeanLikelihood
-from .priors import PriorSet, make_prior
+from .priors import PriorSet, learnt_prior, make_prior
 
 #: deviations sampled by default (Table 2.1 minus the linear-axis squareness)
 SAMPLED_DEVIATIONS = ("dx_BT", "dz_BT", "alpha_BT", "alpha_XB", "beta_XB", "gamma_XB",
@@ -42,6 +42,8 @@ class LogPosterior:
     fix_dx_BT : impose the thesis assumption dx_BT = 0 (Eq 4.2)
     sigma_model : fix the model-discrepancy scales (mm; one value for every scale) instead of sampling them
     data : ``"ballbar"`` (eccentricities), ``"probe"`` (touch-probe readings) or ``"both"``
+    sigma_prior : a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere: the prior of each scale it
+        names (log-normal) instead of the assumed default; None: the defaults (or the campaign's ``[priors]``)
 
     Attributes
     ----------
@@ -54,7 +56,9 @@ class LogPosterior:
     """
 
     def __init__(self, campaign, model: str = "linear", fix_dx_BT: bool = False, sigma_model: float | None = None, *,
-                 data: str = "ballbar"):
+                 data: str = "ballbar", sigma_prior=None):
+        if sigma_prior is not None and sigma_model is not None:
+            raise ValueError("a fixed sigma_model has no prior: give sigma_model or sigma_prior, not both")
         self.campaign = campaign
         self.model_name = model
         self.fix_dx_BT = fix_dx_BT
@@ -68,9 +72,11 @@ class LogPosterior:
         self.likelihood = GaussianMeanLikelihood(self.forward.observations, campaign.ballbar.accuracy, self.scale_of)
         priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
         self.fixed_sigma = sigma_model
+        self.sigma_prior = sigma_prior
         self.p = len(self.space)
         if sigma_model is None:
-            priors += [make_prior(n, n, "length", campaign.priors) for n in self.scales]
+            priors += [learnt_prior(n, sigma_prior) if sigma_prior is not None and n in sigma_prior.scales
+                       else make_prior(n, n, "length", campaign.priors) for n in self.scales]
         self.priors = PriorSet(priors)
         self._sigma_scale = np.array([q.scale for q in priors[self.p:]]) if sigma_model is None else None
         self.names = self.priors.names

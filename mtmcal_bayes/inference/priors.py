@@ -1,4 +1,4 @@
-"""Priors of the Bayesian analysis (SPEC §5): defaults with their reasons, campaign overrides.
+"""Priors of the Bayesian analysis (SPEC §5): defaults with their reasons, campaign overrides, learnt σ_model priors.
 
 Every prior is a :mod:`scipy.stats` distribution in internal units (mm, rad)
 (:meth:`Prior.frozen`: draws, quantiles, moments).  In the sampler's hot loop
@@ -52,7 +52,8 @@ class Prior:
     """Prior of one parameter, internal units.
 
     ``dist`` is ``"normal"`` (``loc``, ``scale`` = sd), ``"halfnormal"``
-    (``scale``) or ``"uniform"`` (``loc`` = low, ``scale`` = high − low).
+    (``scale``), ``"uniform"`` (``loc`` = low, ``scale`` = high − low) or
+    ``"lognormal"`` (``scale`` = median, ``shape`` = sd of ln x; a σ_model learnt elsewhere).
     """
 
     name: str
@@ -61,6 +62,7 @@ class Prior:
     scale: float
     unit: str
     reason: str
+    shape: float = 0.0
 
     def frozen(self):
         """The :mod:`scipy.stats` frozen distribution (made once)."""
@@ -68,6 +70,8 @@ class Prior:
 
     @functools.cached_property
     def _frozen(self):
+        if self.dist == "lognormal":
+            return stats.lognorm(s=self.shape, loc=self.loc, scale=self.scale)
         return {"normal": stats.norm, "halfnormal": stats.halfnorm, "uniform": stats.uniform}[self.dist](
             loc=self.loc, scale=self.scale)
 
@@ -78,6 +82,8 @@ class Prior:
             return float(self.scale)
         if self.dist == "halfnormal":
             return float(self.scale * math.sqrt(1.0 - 2.0 / math.pi))
+        if self.dist == "lognormal":
+            return float(self.scale * math.exp(0.5 * self.shape**2) * math.sqrt(math.expm1(self.shape**2)))
         return float(self.scale / math.sqrt(12.0))
 
     @functools.cached_property
@@ -85,12 +91,14 @@ class Prior:
         """Mean, in closed form (the scipy distribution's ``mean()``)."""
         if self.dist == "halfnormal":
             return float(self.loc + self.scale * math.sqrt(2.0 / math.pi))
+        if self.dist == "lognormal":
+            return float(self.loc + self.scale * math.exp(0.5 * self.shape**2))
         return float(self.loc + (0.5 * self.scale if self.dist == "uniform" else 0.0))
 
     @functools.cached_property
     def centre(self) -> float:
-        """Centre of the sampling coordinate (mean, or 0 for half-normal)."""
-        return {"normal": self.loc, "halfnormal": 0.0}.get(self.dist, self.loc + 0.5 * self.scale)
+        """Centre of the sampling coordinate (mean; 0 for half-normal and log-normal, sampled in log σ)."""
+        return {"normal": self.loc, "halfnormal": 0.0, "lognormal": 0.0}.get(self.dist, self.loc + 0.5 * self.scale)
 
     def describe(self) -> str:
         d = lambda v: f"{units.from_internal(v, self.unit):g}"  # noqa: E731
@@ -99,6 +107,8 @@ class Prior:
             return f"Normal({d(self.loc)}, {d(self.scale)} {sym})"
         if self.dist == "halfnormal":
             return f"HalfNormal({d(self.scale)} {sym})"
+        if self.dist == "lognormal":
+            return f"LogNormal(median {d(self.scale)} {sym}, log sd {self.shape:g})"
         return f"Uniform({d(self.loc)}, {d(self.loc + self.scale)} {sym})"
 
 
@@ -115,6 +125,14 @@ def make_prior(name: str, base: str, kind: str, overrides: dict[str, dict]) -> P
     return Prior(name, dist, 0.0, units.to_internal(sd, unit), unit, reason)
 
 
+def learnt_prior(name: str, sigma_prior) -> Prior:
+    """The prior of discrepancy scale ``name`` from a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` (which
+    must name it): log-normal, its reason the source it was learnt from."""
+    median, log_sd = sigma_prior.scales[name]
+    return Prior(name, "lognormal", 0.0, units.to_internal(median, "um"), "um",
+                 f"learnt elsewhere: {sigma_prior.source}", shape=log_sd)
+
+
 class PriorSet:
     """Joint prior of independent parameters, vectorised over batches ``(n, q)``."""
 
@@ -122,11 +140,15 @@ class PriorSet:
         self.priors = list(priors)
         self.names = [p.name for p in self.priors]
         self._groups = {}
-        for dist in ("normal", "halfnormal", "uniform"):
+        for dist in ("normal", "halfnormal", "uniform", "lognormal"):
             idx = np.array([i for i, p in enumerate(self.priors) if p.dist == dist], dtype=int)
             if len(idx):
                 loc = np.array([self.priors[i].loc for i in idx])
                 scale = np.array([self.priors[i].scale for i in idx])
+                if dist == "lognormal":  # ln x ~ N(ln median, shape²): the location and width of ln x
+                    shape = np.array([self.priors[i].shape for i in idx])
+                    self._groups[dist] = (idx, loc, (np.log(scale), shape), self._log_norm("normal", shape))
+                    continue
                 self._groups[dist] = (idx, loc, scale, self._log_norm(dist, scale))
         self.centre = np.array([p.centre for p in self.priors])
         self.width = np.array([p.sd for p in self.priors])
@@ -144,7 +166,8 @@ class PriorSet:
         """Joint log-density ``(n,)`` of a batch ``(n, q)`` (internal units); −inf outside the support.
 
         Plain numpy: normal ``−½((x−μ)/s)² − log s − log√(2π)``; half-normal the same
-        plus ``log 2`` on ``x ≥ loc``; uniform ``−log(width)`` on ``[low, high]``.
+        plus ``log 2`` on ``x ≥ loc``; uniform ``−log(width)`` on ``[low, high]``; log-normal
+        ``−½((ln x − ln m)/s)² − log s − log√(2π) − ln x`` on ``x > 0`` (``m`` the median).
         """
         theta = np.atleast_2d(theta)
         out = np.zeros(theta.shape[0])
@@ -153,6 +176,13 @@ class PriorSet:
             if dist == "uniform":
                 inside = np.all((x >= loc) & (x <= loc + scale), axis=1)
                 out += np.where(inside, log_norm, -np.inf)
+                continue
+            if dist == "lognormal":
+                log_median, shape = scale
+                positive = np.all(x > loc, axis=1)
+                lx = np.log(np.where(x > loc, x - loc, 1.0))  # outside the support: −inf below, not a warning
+                u = (lx - log_median) / shape
+                out += np.where(positive, log_norm - 0.5 * np.einsum("ij,ij->i", u, u) - lx.sum(axis=1), -np.inf)
                 continue
             u = (x - loc) / scale
             out += log_norm - 0.5 * np.einsum("ij,ij->i", u, u)

@@ -112,12 +112,12 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
 
 
 def _machine(r: TomlReader, t: dict) -> Machine:
-    allowed = {"name", "configuration", "serial"} | {f"travel_{a}_mm" for a in "XYZ"}
+    allowed = {"name", "configuration", "serial", "type"} | {f"travel_{a}_mm" for a in "XYZ"}
     r.check_keys(t, allowed, "machine")
     travel = {a: r.number(t, f"travel_{a}_mm", "machine", positive=True)
               for a in "XYZ" if f"travel_{a}_mm" in t}
     return Machine(r.string(t, "name", "machine"), r.string(t, "configuration", "machine"), travel,
-                   r.string(t, "serial", "machine").strip())
+                   r.string(t, "serial", "machine").strip(), r.string(t, "type", "machine").strip())
 
 
 def _date(r: TomlReader, doc: dict) -> datetime.datetime | None:

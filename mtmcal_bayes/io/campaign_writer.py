@@ -26,6 +26,7 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
         doc["temperature_C"] = c.temperature_C
     doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
                       **({"serial": c.machine.serial} if c.machine.serial else {}),
+                      **({"type": c.machine.type} if c.machine.type else {}),
                       **{f"travel_{a}_mm": v for a, v in c.machine.travel.items()}}
     bb = c.ballbar
     b: dict = {}

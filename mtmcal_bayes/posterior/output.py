@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from .. import units
+from ..inference.budget import sigma_prior_sentence, sigma_prior_sources
 from .checks import thesis_assumption_effect
 
 #: summary columns of the JSON (SPEC §10)
@@ -53,10 +54,12 @@ def quantity_json(name: str, row, conformity=None) -> dict:
 
 def posterior_json(result) -> dict:
     """JSON of a :class:`~mtmcal_bayes.posterior.PosteriorResult`: summary and comparison per quantity,
-    diagnostics."""
+    diagnostics; ``sigma_model_prior``: each sampled scale's prior and whether it was assumed or learnt (and from
+    what)."""
     post = result.log_posterior
     return {
         "model": post.model_name, "data": post.data, "campaign": post.campaign.source, "fix_dx_BT": post.fix_dx_BT,
+        "sigma_model_prior": sigma_prior_sources(post),
         "summary": {n: quantity_json(n, row, result.conformity) for n, row in result.summary.iterrows()},
         "comparison": {n: {k: (None if v is None or (isinstance(v, float) and math.isnan(v)) else v)
                            for k, v in row.items()} for n, row in result.comparison.iterrows()},
@@ -138,8 +141,9 @@ def budget_block(s, result) -> str:
            else f"averaged over the posterior of {scales}, law of total variance")
     lin = "" if post.model_name == "linear" else f"; {post.model_name} linearised at the posterior mean"
     heads = [BUDGET_HEADS.get(c.split(":", 1)[1], c.split(":", 1)[1]) for c in cols]
-    lines = [f"Uncertainty budget: % of each posterior variance by source ({how}{lin})",
-             f"{'quantity':18s} " + " ".join(f"{h:>9s}" for h in heads)]
+    lines = [f"Uncertainty budget: % of each posterior variance by source ({how}{lin})"]
+    lines += [sentence] if (sentence := sigma_prior_sentence(post)) else []
+    lines.append(f"{'quantity':18s} " + " ".join(f"{h:>9s}" for h in heads))
     for name, r in s.iterrows():
         if r[cols].isna().all():
             continue

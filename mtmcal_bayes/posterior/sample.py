@@ -163,16 +163,19 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
                      settings: SamplerSettings | None = None, checkpoint=None,
                      progress: Progress | None = None, data: str | None = None,
                      tolerances: dict | None = None, sigma_model: float | None | str = "same",
-                     statement: bool = True) -> PosteriorResult:
+                     statement: bool = True, sigma_prior="same") -> PosteriorResult:
     """Sample the posterior of ``campaign`` given its ``data`` (``"ballbar"``, ``"probe"`` or ``"both"``) and
     summarise it against the deterministic results; decide conformity with ``tolerances`` (``{name:
     Tolerance}``; default the campaign's own).  ``sigma_model`` (mm) fixes the model-discrepancy scale instead of
-    sampling it (None: sampled).  ``campaign`` may be a :class:`~mtmcal_bayes.analysis.CampaignAnalysis`: what it
-    has built (the log posterior, the linearised posterior, the identification) is used, not built again, and
-    ``model``, ``data``, ``fix_dx_BT`` and ``sigma_model``, where given, change its own choices (else a campaign
-    gets linear, ball bar, dx_BT and σ_model sampled).  ``statement=False``:
-    a summary without the GUM statement and the uncertainty budget (a posterior shown beside another)."""
-    analysis = analysis_of(campaign, model=model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model)
+    sampling it (None: sampled); ``sigma_prior`` (a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`) is the
+    prior of the sampled scales learnt elsewhere (None: the assumed default).  ``campaign`` may be a
+    :class:`~mtmcal_bayes.analysis.CampaignAnalysis`: what it has built (the log posterior, the linearised
+    posterior, the identification) is used, not built again, and ``model``, ``data``, ``fix_dx_BT``,
+    ``sigma_model`` and ``sigma_prior``, where given, change its own choices (else a campaign gets linear, ball
+    bar, dx_BT and σ_model sampled, σ_model under its assumed prior).  ``statement=False``: a summary without the
+    GUM statement and the uncertainty budget (a posterior shown beside another)."""
+    analysis = analysis_of(campaign, model=model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model,
+                           sigma_prior=sigma_prior)
     campaign, post = analysis.campaign, analysis.log_posterior
     result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress,
                            approximation=analysis.approximation)

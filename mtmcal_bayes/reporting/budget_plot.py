@@ -9,7 +9,7 @@ from matplotlib.patches import Patch
 
 from .. import units
 from ..figure_style import COLOURS, label, new_figure, symbol
-from ..inference.budget import MEANING, linearisation_point, sd_against_sigma
+from ..inference.budget import linearisation_point, meaning, sd_against_sigma
 from ..parameters import IDENTIFIABLE, SCALE_LABEL
 
 #: colour of each budget source (Okabe–Ito and greys; priors in warm colours, noise in cool ones)
@@ -92,21 +92,27 @@ def sigma_figure(rep, names=IDENTIFIABLE):
         if i // 4 == 1:
             ax.set_xlabel("σ_model fixed at [µm]", fontsize=8)
     ax = fig.add_subplot(gs[2, :])
-    xs = np.linspace(0.0, 4.0, 200)
     scale = post.scales[0]  # with both instruments every scale is fixed at the abscissa; the ball bar's is shown
+    top = 4.0
     if post.fixed_sigma is None:
         prior = post.priors.priors[post.p]
-        pdf = prior.frozen().pdf(units.to_internal(xs, "um")) * units.to_internal(1.0, "um")
-        ax.plot(xs, pdf, color=COLOURS["prior"], lw=2, label=f"prior ({prior.describe()})")
         draws = np.asarray(rep.idata.posterior[scale]).ravel()
-        ax.hist(draws, bins=np.linspace(0, max(4.0, float(np.quantile(draws, 0.995))), 50), density=True,
+        learnt = post.sigma_prior is not None and scale in post.sigma_prior.scales
+        if learnt:  # a learnt prior may sit beyond the assumed one's range: show its bulk
+            top = max(top, float(np.quantile(draws, 0.995)),
+                      units.from_internal(float(prior.frozen().ppf(0.995)), "um"))
+        xs = np.linspace(0.0, top, 200)
+        pdf = prior.frozen().pdf(units.to_internal(xs, "um")) * units.to_internal(1.0, "um")
+        ax.plot(xs, pdf, color=COLOURS["prior"], lw=2,
+                label=f"prior ({prior.describe()}, {'learnt elsewhere' if learnt else 'assumed'})")
+        ax.hist(draws, bins=np.linspace(0, max(top, float(np.quantile(draws, 0.995))), 50), density=True,
                 histtype="stepfilled", color=COLOURS["posterior"], alpha=0.45, label="posterior")
         ax.text(0.99, 0.9, f"contraction 1 − var_post/var_prior = {sigma_contraction(rep):.2f}", transform=ax.transAxes,
                 ha="right", fontsize=9)
     else:
         ax.text(0.5, 0.5, f"σ_model fixed at {here:g} µm (--sigma-model-um)", transform=ax.transAxes, ha="center")
     ax.axvline(here, color="0.3", ls="--", lw=1)
-    ax.set_xlim(0, 4.0)
+    ax.set_xlim(0, top)
     ax.set_xlabel(f"{SCALE_LABEL[scale]} [µm]")
     ax.set_ylabel("density [1/µm]", fontsize=9)
     ax.legend(fontsize=9, loc="upper center")
@@ -114,9 +120,10 @@ def sigma_figure(rep, names=IDENTIFIABLE):
     return fig
 
 
-def dominant_sentence(summary: pd.DataFrame, names=IDENTIFIABLE) -> str:
+def dominant_sentence(summary: pd.DataFrame, names=IDENTIFIABLE, *, post=None) -> str:
     """For each quantity of ``names``, the source that dominates its variance, grouped by source: "σ_model …
-    dominates the variance of alpha_CZ (89 %), …"."""
+    dominates the variance of alpha_CZ (89 %), …" (``post``, the log posterior: a σ_model prior learnt elsewhere
+    is said so)."""
     by_source: dict[str, list[str]] = {}
     for n in names:
         if n not in summary.index:
@@ -125,6 +132,6 @@ def dominant_sentence(summary: pd.DataFrame, names=IDENTIFIABLE) -> str:
         if not row.empty:
             src = str(row.idxmax()).split(":", 1)[1]
             by_source.setdefault(src, []).append(f"{n} ({100 * row.max():.0f} %)")
-    parts = [f"{MEANING.get(src, src)} dominates the variance of {', '.join(qs)}" for src, qs in by_source.items()]
+    parts = [f"{meaning(src, post)} dominates the variance of {', '.join(qs)}" for src, qs in by_source.items()]
     text = "; ".join(parts) + "."
     return text[0].upper() + text[1:]

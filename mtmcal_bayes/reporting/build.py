@@ -23,6 +23,7 @@ from ..errors import MtmcalError
 from ..html_page import Page
 from ..identification import IdentificationResult
 from ..identification.output import identification_table
+from ..inference.budget import sigma_prior_sentence
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
 from ..inference.sampling import SamplerSettings
 from ..io.netcdf import write_netcdf_atomic
@@ -160,7 +161,7 @@ def _check_output_dir(out_dir: Path) -> None:
 def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerSettings | None = None,
                  fix_dx_BT: bool = False, compare_models: bool = False, posterior: PosteriorResult | None = None,
                  progress: Progress | None = None, command: str = "", data: str = "ballbar",
-                 tolerances: dict | None = None, sigma_model: float | None = None) -> Report:
+                 tolerances: dict | None = None, sigma_model: float | None = None, sigma_prior=None) -> Report:
     """Sample, draw, tabulate and write the report of ``campaign`` into ``out_dir``.
 
     ``posterior``: a posterior of this campaign already sampled (its model and
@@ -169,7 +170,9 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     measurements of the main posterior (``"ballbar"``, ``"probe"``, ``"both"``); a campaign with
     touch-probe readings also gets the three posteriors side by side and the instruments' consistency.
     ``tolerances`` (``{name: Tolerance}``, default the campaign's own) adds the conformity decisions;
-    ``sigma_model`` (mm) fixes the model-discrepancy scale of every posterior instead of sampling it.
+    ``sigma_model`` (mm) fixes the model-discrepancy scale of every posterior instead of sampling it;
+    ``sigma_prior`` (a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`) is the prior of the sampled scales of every
+    posterior, learnt elsewhere (None: the assumed default).
     """
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
@@ -181,8 +184,9 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
 
     if posterior is not None:
         model, fix_dx_BT, data = posterior.model, posterior.log_posterior.fix_dx_BT, posterior.data
-        sigma_model = posterior.log_posterior.fixed_sigma
-    analysis = analysis_of(campaign, model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model)
+        sigma_model, sigma_prior = posterior.log_posterior.fixed_sigma, posterior.log_posterior.sigma_prior
+    analysis = analysis_of(campaign, model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model,
+                           sigma_prior=sigma_prior)
     campaign = analysis.campaign
     if posterior is not None:
         rep = posterior
@@ -491,7 +495,8 @@ def _budget_section(page: Page, rep: PosteriorResult, tmp: Path) -> None:
     page.paragraph(f"Where each quantity's posterior variance comes from ({how}"
                    + ("" if post.model_name == "linear" else f"; the {post.model_name} model linearised at the "
                       "posterior mean") + "). A share dominated by σ_model or by a prior says the interval is "
-                   "mostly a property of that assumption, not of the machine; docs/metrology.md, budget.csv.")
+                   "mostly a property of that assumption, not of the machine; docs/metrology.md, budget.csv. "
+                   + sigma_prior_sentence(post))
     page.figure(tmp / "budget.png", budget_plot.BUDGET_CAPTION, "uncertainty budget")
     page.table((100 * budget_table(rep.summary)).round(1), digits=1)
     page.figure(tmp / "sigma_model.png", budget_plot.SIGMA_CAPTION, "posterior sd against sigma_model")
@@ -544,7 +549,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     summary, ppc_df, diag, effect, planned, sigma_um = c.summary, c.ppc, c.diagnostics, c.thesis_effect, c.planned, c.sigma_um
     page = Page("Bayesian calibration report — B and C axes of a turn-mill machine")
     page.paragraph("What the intervals rest on (share of each posterior variance by source; section 'Uncertainty "
-                   "budget'): " + budget_plot.dominant_sentence(rep.summary))
+                   "budget'): " + budget_plot.dominant_sentence(rep.summary, post=rep.log_posterior))
     page.box("missing", "Missing from this campaign", c.missing)
     page.box("warn", "Warnings", rep.warnings + rep.not_identified)
 
@@ -616,7 +621,9 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         f"{budget_plot.sigma_contraction(rep):.2f}), i.e. hardly at all: the parameters absorb the residuals of "
         f"{info['means']} means. Redundant runs teach it: {t['name']} alone would bring the contraction to "
         f"{t['sigma_model_contraction']:.2f}; plan.csv lists each candidate's contraction and how many runs reach "
-        f"{info['target_contraction']:g} (docs/planning.md).")
+        f"{info['target_contraction']:g} (docs/planning.md)."
+        + (" The planner weighs the assumed prior of σ_model, not the one learnt elsewhere that the posterior above "
+           "uses." if rep.log_posterior.sigma_prior is not None else ""))
     page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
     shown = planned.table.head(10)
     cols = ["name", "eig_bits", "verdict", "newly_identified"] + [f"{t} sd_after" for t in planned.targets[:4]]

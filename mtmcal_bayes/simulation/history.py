@@ -84,14 +84,16 @@ def thermal_from_display(quantity: str, per_degree: float) -> tuple[str, float]:
 
 
 def synthetic_history(campaign: Campaign, truth: Truth, dates, *, drifts=(), serial: str = "SIM-001",
-                      model: str = "linear", seed: int = 0, temperatures=None, thermal=()) -> list[Campaign]:
+                      model: str = "linear", seed: int = 0, temperatures=None, thermal=(),
+                      sigma_model: float = 0.0) -> list[Campaign]:
     """One campaign per date (datetimes, increasing): data simulated (with noise) from ``truth`` plus ``drifts``
     at that date, fresh set-up offsets each time, ``[machine] serial`` = ``serial``.  Seeded: the same seed
     gives the same history.
 
     ``temperatures``: the workshop temperature of each campaign (°C, recorded as its ``temperature_C``);
     ``thermal``: ``(deviation, sensitivity)`` pairs (internal units per °C, :func:`thermal_from_display`): the
-    deviation is measured at ``truth + sensitivity·(temperature − 20 °C)``."""
+    deviation is measured at ``truth + sensitivity·(temperature − 20 °C)``.  ``sigma_model`` (mm): the machine's
+    model discrepancy (:func:`~.simulate.synthetic_campaign`)."""
     dates = list(dates)
     if any(b <= a for a, b in zip(dates, dates[1:])):
         raise ParameterError("dates", "the campaign dates must increase")
@@ -107,7 +109,7 @@ def synthetic_history(campaign: Campaign, truth: Truth, dates, *, drifts=(), ser
         for name, k in thermal:
             dev[name] = dev.get(name, 0.0) + k * (temperatures[i] - REFERENCE_TEMPERATURE_C)
         t = Truth(dev, setups, mounts, copy.deepcopy(truth.probe))
-        c = synthetic_campaign(campaign, t, model, noise=True, seed=int(rng.integers(2**31)))
+        c = synthetic_campaign(campaign, t, model, noise=True, seed=int(rng.integers(2**31)), sigma_model=sigma_model)
         c.reported = {}
         c.date = when
         c.temperature_C = None if temperatures is None else float(temperatures[i])

@@ -111,14 +111,15 @@ def noisy_repeats(mean: np.ndarray, n_repeats: np.ndarray, accuracy: float, rng:
 
 
 def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
-                       seed: int | None = None, repeats: int | None = None) -> Campaign:
+                       seed: int | None = None, repeats: int | None = None, sigma_model: float = 0.0) -> Campaign:
     """A copy of ``campaign`` whose runs carry simulated data and whose ``[truth]`` is ``truth``.
 
     Noise-free: one repeat per component equal to the prediction.  With
     ``noise``: as many repeats as the original run (or ``repeats``), scattered
     as described in the module docstring.  Planned runs are filled: measured runs after the others, in measuring
     order, with every component of their pattern and their planned number of repeats (one without ``noise``),
-    so the copy plans nothing.  Touch-probe readings are simulated too
+    so the copy plans nothing.  ``sigma_model`` (mm, with ``noise``): a model discrepancy, one N(0, σ²) offset per
+    observed eccentricity shared by its repeats (what the model leaves out).  Touch-probe readings are simulated too
     (:func:`simulated_probe`) when the campaign has them; published results are
     dropped (they belong to the real measurement).
     """
@@ -127,6 +128,8 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
     if noise:
         rng = np.random.default_rng(seed)
         n = np.full(len(obs), repeats) if repeats else obs.n
+        if sigma_model > 0:  # drawn only then: a history without discrepancy keeps its random stream
+            pred = pred + rng.normal(0.0, sigma_model, len(pred))
         values = noisy_repeats(pred, n, campaign.ballbar.accuracy, rng)
     else:
         values = [np.array([v]) for v in pred]
