@@ -34,6 +34,7 @@ if TYPE_CHECKING:  # the result types, for the signatures only
     from .posterior.instrument_check import InstrumentCheck
     from .reporting import Report
     from .simulation import SensitivityTable, Simulation
+    from .simulation.history import SimulatedHistory
     from .validation import SBCResult
 
 CampaignLike = Campaign | CampaignAnalysis | str | os.PathLike | None
@@ -143,8 +144,13 @@ def simulate(campaign: CampaignLike = None, *, truth, model: str = "htm-thesis",
     from .models import check_model
     from .simulation import simulate_truth
 
+    from .errors import ParameterError
+
     c = campaign_of(campaign)
     check_model(model)
+    if truth is None:
+        raise ParameterError("truth", "required: a TRUTH.toml with [deviations] (or [truth.deviations]) to simulate "
+                             "(a simulated history without one takes the campaign's own truth or posterior mean)")
     _writable(output, "synthetic campaign")
     source = "<truth>" if isinstance(truth, Truth) else str(truth)
     t = truth if isinstance(truth, Truth) else load_truth(truth, c)
@@ -426,79 +432,101 @@ def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None,
     return result
 
 
-def simulate_history(campaign: CampaignLike = None, *, truth, n: int = 5, every_days: float = 91.0, start=None,
+def simulate_history(campaign: CampaignLike = None, *, truth=None, n: int = 5, every_days: float = 91.0, start=None,
                      steps=(), ramps=(), serial: str = "SIM-001", model: str = "linear", seed: int = 0,
-                     output=None, temperatures=None, thermal=()) -> list[Campaign]:
+                     output=None, temperatures=None, thermal=(), machine_type: str | None = None) -> SimulatedHistory:
     """A synthetic history of one machine: ``n`` campaigns ``every_days`` apart from ``start`` (a date, default
     2026-01-05), each simulated from ``truth`` plus the drifts at its date, with fresh set-up offsets and noise.
 
+    ``truth``: a TRUTH.toml (``[deviations]`` or ``[truth.deviations]``, docs/campaign-format.md) or a Truth;
+    default the campaign's own ``[truth]``, else its posterior mean (the result's ``truth_source`` says which).
     ``steps`` / ``ramps``: ``"NAME=SIZE@K"`` strings (or :class:`~mtmcal_bayes.simulation.history.Drift`):
     ``beta_CZ=40@4`` adds 40″ from the 4th campaign on; ``alpha_XB=8@1`` adds 8″ per year from the 1st on
-    (display units: ″ or µm).  ``output`` (a directory, created) receives ``<serial>_<date>.toml`` files.
-    ``temperatures``: each campaign's workshop temperature (°C; one value for all, or one per campaign);
-    ``thermal``: ``"NAME=K"`` strings, a thermal sensitivity in ″ or µm per °C (needs ``temperatures``).
+    (display units: ″ or µm).  ``output`` (a directory, created with its parents) receives
+    ``<serial>_<date>.toml`` files.  ``temperatures``: each campaign's workshop temperature (°C; one value for
+    all, or one per campaign); ``thermal``: ``"NAME=K"`` strings, a thermal sensitivity in ″ or µm per °C (needs
+    ``temperatures``).  ``machine_type``: the ``[machine] type`` written into every campaign.
     """
-    import datetime
     from pathlib import Path
 
-    from .campaign import Truth
     from .errors import ParameterError
-    from .io.campaign_reader import load_truth
-    from .io.campaign_writer import save_campaign
-    from .simulation.history import Drift, drift_from_display, synthetic_history, thermal_from_display
+    from .simulation.history import SimulatedHistory, history_dates, parse_drift, parse_thermal, synthetic_history
 
-    if not (isinstance(n, int) and 2 <= n <= 200):
-        raise ParameterError("n", f"{n}: a history has 2 to 200 campaigns")
-    if not (isinstance(every_days, (int, float)) and 1 <= every_days <= 3650):
-        raise ParameterError("every_days", f"{every_days}: campaigns 1 to 3650 days apart")
-    t0 = start or datetime.date(2026, 1, 5)
-    t0 = datetime.datetime(t0.year, t0.month, t0.day)
-    dates = [t0 + datetime.timedelta(days=every_days * i) for i in range(n)]
-
-    def drift(spec, kind: str, parameter: str) -> Drift:
-        if isinstance(spec, Drift):
-            return spec
-        try:
-            name, rest = spec.split("=")
-            size, k = rest.split("@")
-            size, k = float(size), int(k)
-        except ValueError:
-            raise ParameterError(parameter, f"{spec!r}: expected NAME=SIZE@K, e.g. beta_CZ=40@4") from None
-        if not 1 <= k <= n:
-            raise ParameterError(parameter, f"{spec!r}: K = {k} is not a campaign number (1 to {n})")
-        return drift_from_display(name.strip(), kind, size, dates[k - 1])
-
-    def sensitivity(spec) -> tuple[str, float]:
-        if not isinstance(spec, str):
-            return spec
-        try:
-            name, k = spec.split("=")
-            return thermal_from_display(name.strip(), float(k))
-        except ValueError:
-            raise ParameterError("thermal", f"{spec!r}: expected NAME=K (″ or µm per °C), e.g. alpha_XB=1.5") from None
-
-    drifts = [drift(x, "step", "steps") for x in steps] + [drift(x, "ramp", "ramps") for x in ramps]
+    if not (isinstance(n, int) and 1 <= n <= 200):
+        raise ParameterError("n", f"{n}: a series of 1 to 200 campaigns")
+    dates = history_dates(n, every_days, start)
+    drifts = [parse_drift(x, "step", dates) for x in steps] + [parse_drift(x, "ramp", dates) for x in ramps]
     c = campaign_of(campaign)
-    _writable(output, "history")
-    t = truth if isinstance(truth, Truth) else load_truth(truth, c)
-    temps = None if temperatures is None else [float(x) for x in (
-        temperatures if isinstance(temperatures, (list, tuple)) else [temperatures])]
-    if temps is not None and len(temps) == 1:
-        temps = temps * n
-    if temps is not None and (len(temps) != n or not all(-50.0 <= x <= 100.0 for x in temps)):
+    _writable_folder(output, "history")
+    t, source = _history_truth(c, truth, seed)
+    series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed,
+                               temperatures=_temperatures(temperatures, n), thermal=[parse_thermal(x) for x in thermal])
+    if machine_type is not None:
+        for x in series:
+            x.machine.type = machine_type
+    if output is not None:
+        _save_series(series, Path(output), serial)
+    return SimulatedHistory(series, truth_source=source)
+
+
+def _history_truth(c: Campaign, truth, seed: int):
+    """The truth of a simulated history and where it came from: ``truth`` (a file or a Truth), else the campaign's
+    own ``[truth]``, else the posterior mean of its deviations (exact draws of the linear model)."""
+    from . import units
+    from .campaign import Truth
+    from .io.campaign_reader import load_truth
+    from .parameters import DEVIATIONS, quantity_unit
+
+    if isinstance(truth, Truth):
+        return truth, "the truth given"
+    if truth is not None:
+        return load_truth(truth, c), f"the truth in {truth}"
+    if c.truth is not None:
+        return c.truth, f"the [truth] of {c.source}"
+    post = sample(c, sampler="exact", seed=seed)
+    means = {n: units.to_internal(float(post.summary.loc[n, "mean"]), quantity_unit(n))
+             for n in DEVIATIONS if n in post.summary.index}
+    return Truth(means), f"the posterior mean of {c.source} (no --truth, and no [truth] in the campaign)"
+
+
+def _temperatures(temperatures, n: int) -> list[float] | None:
+    """One workshop temperature per campaign (°C) from one value for all or one per campaign."""
+    from .errors import ParameterError
+
+    if temperatures is None:
+        return None
+    temps = [float(x) for x in (temperatures if isinstance(temperatures, (list, tuple)) else [temperatures])]
+    temps = temps * n if len(temps) == 1 else temps
+    if len(temps) != n or not all(-50.0 <= x <= 100.0 for x in temps):
         raise ParameterError("temperatures", f"{temperatures}: one workshop temperature (−50 to 100 °C) for all "
                              f"campaigns, or one for each of the {n}")
-    series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed, temperatures=temps,
-                               thermal=[sensitivity(x) for x in thermal])
-    if output is not None:
-        out = Path(output)
-        out.mkdir(parents=True, exist_ok=True)
-        for x in series:
-            path = out / f"{serial}_{x.date.date().isoformat()}.toml"
-            save_campaign(x, path, header=f"Synthetic campaign {x.date.date()} of machine {serial}, simulated by "
-                          "mtmcal-bayes (a history with drift).")
-            x.source = str(path)
-    return series
+    return temps
+
+
+def _save_series(series, out, serial: str) -> None:
+    """Each campaign of ``series`` into ``out`` (created with its parents) as ``<serial>_<date>.toml``."""
+    from .io.campaign_writer import save_campaign
+
+    from pathlib import Path
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    for x in series:
+        path = out / f"{serial}_{x.date.date().isoformat()}.toml"
+        save_campaign(x, path, header=f"Synthetic campaign {x.date.date()} of machine {serial}, simulated by "
+                      "mtmcal-bayes (a history with drift).")
+        x.source = str(path)
+
+
+def _writable_folder(path, what: str) -> None:
+    """A folder to be created (with its parents): it must not be a file."""
+    from pathlib import Path
+
+    from .errors import MtmcalError
+
+    if path is not None and Path(path).exists() and not Path(path).is_dir():
+        raise MtmcalError(f"{path}: cannot write the {what}: it is a file, not a folder")
+
 
 def fleet(directory, *, scheduler: str | None = None, workers: int | None = None, seed: int = 1, model: str = "linear",
           output=None, cache=None, progress: Progress | None = None, sampler: str = "emcee",

@@ -48,8 +48,9 @@ def _simulate_history(args) -> int:
     series = api.simulate_history(
         args.campaign, truth=args.truth, n=args.campaigns, every_days=args.every_days, start=args.start,
         steps=args.step or (), ramps=args.ramp or (), serial=args.serial, model=args.model, seed=args.seed or 0,
-        output=args.history, temperatures=args.temperatures, thermal=args.thermal or ())
-    print(f"wrote {len(series)} campaigns of machine {args.serial} to {args.history}/")
+        output=args.history, temperatures=args.temperatures, thermal=args.thermal or (), machine_type=args.machine_type)
+    print(f"wrote {len(series)} campaigns of machine {args.serial} to {args.history}/, simulated from "
+          f"{series.truth_source}")
     return 0
 
 

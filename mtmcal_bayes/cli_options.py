@@ -104,8 +104,9 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
 
     s = _command(sub, "simulate", handlers["simulate"], "predicted eccentricities for a known truth, or a synthetic campaign",
                  json_help="print the noise-free eccentricities as JSON")
-    s.add_argument("--truth", required=True, metavar="TRUTH.toml",
-                   help="[deviations] <name>_arcsec/_um, [setups.<id>] xT_um.., [mounts.<id>] xW_um..; missing = 0")
+    s.add_argument("--truth", metavar="TRUTH.toml", help="[deviations] <name>_arcsec/_um (or [truth.deviations]), "
+                   "[setups.<id>] xT_um.., [mounts.<id>] xW_um..; missing = 0.  Required, except with --history "
+                   "(default there: the campaign's [truth], else its posterior mean)")
     _model(s, "htm-thesis")
     s.add_argument("-o", "--output", metavar="FILE", help="write a synthetic campaign TOML with the truth recorded")
     s.add_argument("--noise", action="store_true", help="with -o: scatter like a real measurement (repeats, instrument accuracy)")
@@ -119,6 +120,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     h.add_argument("--step", action="append", metavar="NAME=SIZE@K", help="a step of SIZE (″ or µm) from campaign K on")
     h.add_argument("--ramp", action="append", metavar="NAME=RATE@K", help="a ramp of RATE per year from campaign K on")
     h.add_argument("--serial", default="SIM-001", help="the machine's serial (default SIM-001)")
+    h.add_argument("--type", dest="machine_type", metavar="TYPE", default=None,
+                   help="the machine's [machine] type (make and model): a fleet pools σ_model over one type")
     h.add_argument("--temperatures", type=_floats, metavar="T1,T2,...", default=None,
                    help="workshop temperature of each campaign, °C (one value for all, or one per campaign)")
     h.add_argument("--thermal", action="append", metavar="NAME=K",

@@ -16,15 +16,16 @@ from mtmcal_bayes.histories import fit_history
 from mtmcal_bayes.simulation.history import synthetic_history
 
 def test_pooling_integrates_the_hierarchy_exactly():
-    """With Gaussian likelihoods N(u; m_i, s_i²) the marginal of each history given (μ, τ) is N(m_i; μ, s_i² + τ²):
-    the pooled posterior moments of μ and τ and the predictive equal that analytic computation on the same grid
+    """With Gaussian likelihoods N(u; m_i, s_i²) the marginal of each history given (μ, τ) is N(m_i; μ, s_i² + τ²);
+    with μ's prior (the assumed half-normal of σ_model, 2 µm) and τ's, the pooled posterior moments of μ and τ and the predictive equal that analytic computation on the same grid
     (to the grid's integration error, 1e-3 in ln σ)."""
     m, s = np.array([0.2, 0.5, 0.35]), np.array([0.2, 0.3, 0.25])
     rows = [(-0.5 * ((U_GRID - mi) / si) ** 2).tolist() for mi, si in zip(m, s)]
     got = pool(rows)
     var = s[:, None, None] ** 2 + TAU_GRID[None, None, :] ** 2
     log_marg = -0.5 * (m[:, None, None] - U_GRID[None, :, None]) ** 2 / var - 0.5 * np.log(var)
-    lp = log_marg.sum(axis=0) - 0.5 * (TAU_GRID / TAU_SCALE) ** 2
+    mu_prior = -0.5 * (np.exp(U_GRID) / 2.0) ** 2 + U_GRID  # half-normal(2 µm) in σ, as a density of u = ln σ
+    lp = log_marg.sum(axis=0) - 0.5 * (TAU_GRID / TAU_SCALE) ** 2 + mu_prior[:, None]
     w = np.exp(lp - lp.max())
     w /= w.sum()
     mu = np.sum(w.sum(axis=1) * U_GRID)

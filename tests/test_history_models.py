@@ -181,3 +181,16 @@ def test_kinematic_history_is_linearised_and_checked(base):
     a, b = kin.summary, lin.summary
     assert (np.abs(a["mean"] - b["mean"]) < 0.1 * b["sd"]).all()
     assert "linearised at the history's estimate" in kin.to_text().lower()
+
+
+def test_fleet_model_reaches_the_histories(base):
+    """``fleet --model htm-thesis`` is honoured for histories, never silently replaced by the linear model: the
+    history unit fits the kinematic history and its cache key names the model."""
+    from mtmcal_bayes.fleets.units import FleetSettings, history_unit, unit_key
+
+    camps = synthetic_history(base, Truth(), DATES[:2], seed=12, model="htm-thesis")
+    payload = history_unit(camps, 5, False, "htm-thesis")
+    assert "error" not in payload, payload
+    assert payload["result"]["model"] == "htm-thesis" and payload["result"]["linearisation"]["ok"]
+    keys = {m: unit_key("history", ["a", "b"], FleetSettings(model=m)) for m in ("linear", "htm-thesis")}
+    assert keys["linear"] != keys["htm-thesis"]

@@ -8,6 +8,7 @@ where it ran) and ``files`` (what was written).
 from __future__ import annotations
 
 import base64
+import json
 import os
 import re
 import shutil
@@ -53,7 +54,7 @@ _CAMPAIGN_KEYS = ("mean", "sd", "hdi_low", "hdi_high", "conformity", "p_nonconfo
 def _latest(campaigns: list[dict], history: dict | None, *, history_file: str | None, limits: dict,
             page: str) -> dict:
     """Per quantity, the latest estimate of the machine: the history's at its latest date where the machine has a
-    history (``"source": "history"``; conformity decided on that estimate taken as normal, with ``limits``
+    history (at 20 °C where it modelled the temperatures; ``"source": "history"``; conformity decided on that estimate taken as normal, with ``limits``
     ``{name: {"low", "high"}}`` display units: :func:`~.tolerances.estimate_conformity`), else the latest
     campaign's posterior (``"source": "campaign"``, its own verdict); always with the single campaign's posterior
     of that date (``"campaign"``, its section on ``page`` linked), the history's drift flag (a change found) and
@@ -61,7 +62,8 @@ def _latest(campaigns: list[dict], history: dict | None, *, history_file: str | 
     dated = [c for c in campaigns if c["date"] is not None]
     fallback = (dated or campaigns or [None])[-1]  # the latest campaign with a posterior, dated ones first
     at = history["dates"][-1] if history and history.get("dates") else None
-    now = ((history.get("summary") or {}).get(at) or {}) if at else {}
+    # at 20 °C where the history modelled the temperatures (ISO 1: results are referred to 20 °C)
+    now = ((history.get("summary_20C") or history.get("summary") or {}).get(at) or {}) if at else {}
     same = next((c for c in campaigns if c["file"] == history_file), None) if at else fallback
     names = list(fallback["summary"] if fallback else {})
     names += [q for q in now if q not in names]
@@ -206,7 +208,8 @@ class FleetResult:
         entry = {"serial": m.serial, "id": m.id, "campaigns": campaigns,
                  "history": None if history is None else {
                      "model": history.get("model"), "dates": history.get("dates"), "files": [c.file for c in m.dated],
-                     "summary": history.get("summary"), "diagnostics": history.get("diagnostics")},
+                     "summary": history.get("summary"), "diagnostics": history.get("diagnostics"),
+                     **({"summary_20C": history["summary_20C"]} if history.get("summary_20C") else {})},
                  "changes": (history or {}).get("changes") or [], "forecast": (history or {}).get("forecast") or [],
                  "latest": {}, "notes": notes, "page": page}
         # the history's tolerances: the plant-wide set, else its latest campaign's own (as its forecast's)
@@ -250,8 +253,8 @@ class FleetResult:
                     (folder / rel).parent.mkdir(parents=True, exist_ok=True)
                     (folder / rel).write_bytes(base64.b64decode(data))
                 if (folder / "history.json").exists():  # as the history wrote it, with the files and folder of this run
-                    doc = {"serial": m["serial"], **m["history"], "changes": m["changes"], "forecast": m["forecast"],
-                           "output": str(out / Path(m["page"]).parent)}
+                    doc = json.loads((folder / "history.json").read_text(encoding="utf-8"))
+                    doc.update(files=m["history"]["files"], output=str(out / Path(m["page"]).parent))
                     (folder / "history.json").write_text(json_text(doc) + "\n", encoding="utf-8")
                 own = [Path(campaigns_page(m)).name] + ["index.html"] * (not (folder / "index.html").exists())
                 for name in dict.fromkeys(own):  # campaigns.html beside a history page; index.html if none

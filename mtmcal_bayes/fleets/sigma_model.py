@@ -9,7 +9,8 @@ the same way, plausibly have similar discrepancies, so the fleet pools what thei
   rates (σ scales the scatter within campaigns, the rates the change between them, so the two are nearly
   separate).  Computed from the model, it has the right tails, which the history's own draws of σ — cut by
   the prior they were drawn under — do not.
-* **Hierarchy.** ``u_i ~ N(μ, τ²)``: μ (flat on the grid) is the type's typical scale, τ (half-normal prior of
+* **Hierarchy.** ``u_i ~ N(μ, τ²)``: μ is the type's typical scale (its prior the single campaign's assumed
+  σ_model prior, half-normal 2 µm, as a density of u), τ (half-normal prior of
   scale :data:`TAU_SCALE`) how much machines of the type differ.  The posterior of (μ, τ) is computed on a grid
   from ``Π_i ∫ L_i(u) N(u; μ, τ²) du``.
 * **For a new machine.** Its scale's predictive ``p(u_new) = Σ p(μ, τ | y) N(u_new; μ, τ²)``, summarised as a
@@ -60,7 +61,7 @@ def pool(log_likelihoods: list[list[float | None]]) -> dict:
     diff = U_GRID[None, :] - U_GRID[:, None]  # (μ, u)
     per = np.stack([lik @ _kernel(diff, t).T for t in TAU_GRID], axis=-1)  # (N, μ, τ)
     with np.errstate(divide="ignore"):
-        log_post = np.log(per).sum(axis=0) - 0.5 * (TAU_GRID / TAU_SCALE) ** 2  # (μ, τ)
+        log_post = np.log(per).sum(axis=0) - 0.5 * (TAU_GRID / TAU_SCALE) ** 2 + _log_mu_prior()[:, None]  # (μ, τ)
     log_post -= np.max(log_post)
     w = np.exp(log_post)
     w /= w.sum()
@@ -73,6 +74,17 @@ def pool(log_likelihoods: list[list[float | None]]) -> dict:
     var = float(np.sum(w * (TAU_GRID[None, :] ** 2 + (U_GRID[:, None] - mu_m) ** 2)))
     return {"median_um": math.exp(mean), "log_sd": math.sqrt(var), "mu": {"mean": mu_m, "sd": mu_sd},
             "tau": {"mean": tau_m, "sd": tau_sd}, "histories": len(log_likelihoods)}
+
+
+def _log_mu_prior() -> np.ndarray:
+    """log prior of μ on :data:`U_GRID`: the single campaign's assumed σ_model prior (half-normal, 2 µm) as a
+    density of u = ln(σ/µm).  A flat μ slid towards 0.01 µm wherever the histories only bound σ from above (σ at
+    or below the instrument's accuracy), and the new machines' intervals then covered 84 % for 90 %."""
+    from ..inference.priors import DEFAULTS
+
+    kind, scale_um, _ = DEFAULTS["sigma_model"]
+    sigma = np.exp(U_GRID) / scale_um  # in units of the scale
+    return -0.5 * sigma**2 + U_GRID  # half-normal density in σ, times dσ/du = σ
 
 
 def _kernel(diff: np.ndarray, tau: float) -> np.ndarray:

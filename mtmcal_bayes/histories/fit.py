@@ -36,6 +36,7 @@ from scipy.stats import norm
 
 from .. import units
 from ..errors import MtmcalError, ParameterError
+from ..inference.priors import PriorSet
 from ..parameters import IDENTIFIABLE, quantity_unit, weights
 from .model import SECONDS_PER_YEAR, THERMAL_SCALE, HistoryModel  # noqa: F401 - THERMAL_SCALE re-exported for the docs
 
@@ -99,14 +100,14 @@ class HistoryFit:
 
 def _log_prob_factory(hm: HistoryModel):
     scale = np.array([units.to_internal(DRIFT_SCALE[quantity_unit(n)], quantity_unit(n)) for n in hm.deviations])
-    sig = hm.sigma_prior
+    sig = PriorSet([hm.sigma_prior])  # plain numpy: scipy's frozen logpdf was a seventh of the fit
 
     def log_prob(z: np.ndarray) -> np.ndarray:
         z = np.atleast_2d(z)
         q = np.exp(z[:, :-1])
         s = np.exp(z[:, -1])
         lp = np.sum(np.log(2.0 / (math.pi * scale)) - np.log1p((q / scale) ** 2) + z[:, :-1], axis=1)
-        lp = lp + sig.frozen().logpdf(s) + z[:, -1]
+        lp = lp + sig.logpdf(s[:, None]) + z[:, -1]
         out = np.full(len(z), -np.inf)
         # a drift of 10⁵ times the prior scale or a σ_model of a millimetre is no machine: outside the support
         ok = np.isfinite(lp) & (z[:, :-1] < np.log(scale) + LOG_RANGE).all(axis=1) & (z[:, :-1] > np.log(scale) - 2 * LOG_RANGE).all(axis=1)

@@ -113,6 +113,7 @@ class HistoryModel:
         dTrow = self.dT[self.campaign_of_row]
         self.H_thermal = Hj * dTrow[:, None]  # (M, d): campaign t's rows of A_t·ΔT_t
         self.C_base = self.R + (Hj * self.var0) @ Hj.T + (self.H_thermal * self.thermal_var) @ self.H_thermal.T
+        self.noise_floor = float(min(np.min(post.likelihood.base_var) for post in posts))  # mm², the least noise
         self.set_trend(np.zeros(d))
 
     def set_trend(self, trend_var: np.ndarray) -> None:
@@ -133,21 +134,33 @@ class HistoryModel:
 
     def covariance(self, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
         """``C`` (n, M, M) of the observations for drift rates² ``q2`` (n, d) and σ² ``s2`` (n,)."""
-        C = self.C0 + np.einsum("nj,jab->nab", q2, self.G)
+        C = self.C0 + (q2 @ self.G.reshape(self.d, -1)).reshape(len(q2), self.M, self.M)
         C[:, np.arange(self.M), np.arange(self.M)] += s2[:, None]
         return C
 
     def log_marginal(self, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
-        """Log marginal likelihood (n,) of the scales: ``log N(resid; 0, C)``, batched Cholesky."""
-        C = self.covariance(q2, s2)
+        """Log marginal likelihood (n,) of the scales: ``log N(resid; 0, C)``, one batched Cholesky.
+
+        The Cholesky factor of C bordered by the residual r, ``[[C, r], [rᵀ, c]]``, holds both terms: its first M
+        pivots give log det C, its last pivot² is ``c − rᵀC⁻¹r``, so no triangular solve is needed (numpy has no
+        batched one; a general solve cost twice the factorisation).  c must exceed rᵀC⁻¹r: since every C holds the
+        measurement noise and σ², ``λ_min(C) ≥ min(noise variance) + σ²`` and ``rᵀC⁻¹r ≤ |r|² / λ_min``."""
+        n, M = len(q2), self.M
+        A = np.empty((n, M + 1, M + 1))
+        A[:, :M, :M] = self.covariance(q2, s2)
+        A[:, :M, M] = self.resid
+        A[:, M, :M] = self.resid
+        c = 2.0 * float(self.resid @ self.resid) / (self.noise_floor + s2) + 1.0
+        A[:, M, M] = c
         try:
-            L = np.linalg.cholesky(C)
+            L = np.linalg.cholesky(A)
         except np.linalg.LinAlgError:  # some rows numerically singular (absurd scales): those get −inf
-            return np.array([self.log_marginal(q2[i:i + 1], s2[i:i + 1])[0] if _is_pd(C[i]) else -np.inf
-                             for i in range(len(C))])
-        z = np.linalg.solve(L, np.broadcast_to(self.resid, (len(C), self.M))[..., None])[..., 0]
-        logdet = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)
-        return -0.5 * (np.einsum("ni,ni->n", z, z) + logdet + self.M * math.log(2 * math.pi))
+            return np.array([self.log_marginal(q2[i:i + 1], s2[i:i + 1])[0] if _is_pd(A[i]) else -np.inf
+                             for i in range(n)])
+        diag = np.diagonal(L, axis1=1, axis2=2)
+        logdet = 2.0 * np.log(diag[:, :M]).sum(axis=1)
+        quad = c - diag[:, M] ** 2
+        return -0.5 * (quad + logdet + M * math.log(2 * math.pi))
 
     def prior_state_cov(self, q2: np.ndarray) -> np.ndarray:
         """Σ_X (n, T·d, T·d): ``v0_j + q_j²·min(τ_s, τ_t)`` between the states of one deviation, 0 across."""

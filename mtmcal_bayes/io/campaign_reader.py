@@ -560,7 +560,19 @@ def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: P
 
 
 def load_truth(path, campaign: Campaign) -> Truth:
-    """Read a TRUTH.toml: ``[deviations]``, ``[setups.<id>]``, ``[mounts.<id>]``, ``[probe.<owner>]`` at top level."""
+    """Read a TRUTH.toml: ``[deviations]``, ``[setups.<id>]``, ``[mounts.<id>]``, ``[probe.<owner>]`` at top level,
+    or the same under ``[truth]`` as a campaign writes them (``[truth.deviations]``, docs/campaign-format.md; a
+    campaign file with its ``[truth]`` works too).  Both spellings in one file is an error naming ``truth``."""
     text = read_user_text(path, "truth file")
     doc = parse_toml(text, str(path), "[deviations], [setups.<id>], [mounts.<id>] tables")
-    return parse_truth(TomlReader(str(path)), doc, "", campaign.ballbar, probe=campaign.probe)
+    r = TomlReader(str(path))
+    if "truth" in doc:
+        if TRUTH_TABLES & set(doc):
+            r.fail("truth", f"both [truth.…] and top-level [{'], ['.join(sorted(TRUTH_TABLES & set(doc)))}]: write "
+                   "the truth one way")
+        return parse_truth(r, r.table(doc, "truth", ""), "truth", campaign.ballbar, probe=campaign.probe)
+    return parse_truth(r, doc, "", campaign.ballbar, probe=campaign.probe)
+
+
+#: the tables of a truth
+TRUTH_TABLES = {"deviations", "setups", "mounts", "probe"}

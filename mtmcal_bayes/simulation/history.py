@@ -117,3 +117,49 @@ def synthetic_history(campaign: Campaign, truth: Truth, dates, *, drifts=(), ser
         c.machine.serial = serial
         out.append(c)
     return out
+
+
+class SimulatedHistory(list):
+    """The campaigns of a simulated history (a list of Campaigns, by date) and ``truth_source``: where the truth
+    they were simulated from came from (a file, the campaign's ``[truth]``, its posterior mean)."""
+
+    def __init__(self, campaigns=(), *, truth_source: str = ""):
+        super().__init__(campaigns)
+        self.truth_source = truth_source
+
+
+def history_dates(n: int, every_days: float, start=None) -> list[datetime.datetime]:
+    """``n`` campaign dates ``every_days`` apart from ``start`` (a date; default 2026-01-05)."""
+    if not (isinstance(every_days, (int, float)) and 1 <= every_days <= 3650):
+        raise ParameterError("every_days", f"{every_days}: campaigns 1 to 3650 days apart")
+    t0 = start or datetime.date(2026, 1, 5)
+    t0 = datetime.datetime(t0.year, t0.month, t0.day)
+    return [t0 + datetime.timedelta(days=every_days * i) for i in range(n)]
+
+
+def parse_drift(spec, kind: str, dates) -> Drift:
+    """A :class:`Drift` from ``"NAME=SIZE@K"`` (display units; from the K-th of ``dates`` on), or a Drift as is.
+    ``kind``: ``"step"`` or ``"ramp"`` (the parameter an error names: ``steps`` / ``ramps``)."""
+    if isinstance(spec, Drift):
+        return spec
+    parameter = f"{kind}s"
+    try:
+        name, rest = spec.split("=")
+        size, k = rest.split("@")
+        size, k = float(size), int(k)
+    except ValueError:
+        raise ParameterError(parameter, f"{spec!r}: expected NAME=SIZE@K, e.g. beta_CZ=40@4") from None
+    if not 1 <= k <= len(dates):
+        raise ParameterError(parameter, f"{spec!r}: K = {k} is not a campaign number (1 to {len(dates)})")
+    return drift_from_display(name.strip(), kind, size, dates[k - 1])
+
+
+def parse_thermal(spec) -> tuple[str, float]:
+    """A thermal sensitivity ``(deviation, internal units per °C)`` from ``"NAME=K"`` (″ or µm per °C), or as is."""
+    if not isinstance(spec, str):
+        return spec
+    try:
+        name, k = spec.split("=")
+        return thermal_from_display(name.strip(), float(k))
+    except ValueError:
+        raise ParameterError("thermal", f"{spec!r}: expected NAME=K (″ or µm per °C), e.g. alpha_XB=1.5") from None
