@@ -46,6 +46,7 @@ def plant(tmp_path_factory):
     for serial, drifts, seed, n in (("P-1", [step], 21, 4), ("P-2", [ramp], 22, 4), ("P-3", [], 23, 1)):
         (root / serial).mkdir(parents=True)
         for c in synthetic_history(base, truth, dates[:n], drifts=drifts, serial=serial, seed=seed):
+            c.machine.type = "MTX-200"  # one type: the fleet pools σ_model over P-1's and P-2's histories
             mb.save_campaign(c, root / serial / f"{c.date.date()}.toml")
     out = tmp_path_factory.mktemp("plant-out") / "overview"
     result = mb.fleet(root, workers=1, sampler="exact", output=out, cache=tmp_path_factory.mktemp("plant-cache"))
@@ -183,3 +184,24 @@ def test_the_summary_csv_shows_the_history_estimate_and_its_source(plant):
     assert p1["source"] == "history" and p1["mean"] == pytest.approx(latest["mean"], rel=1e-12)
     assert p1["campaign_sd"] == pytest.approx(latest["campaign"]["sd"], rel=1e-12) and p1["campaign_sd"] > p1["sd"]
     assert set(csv[csv.machine == "P-3"]["source"]) == {"campaign"}
+
+
+def test_the_type_pools_sigma_model_and_teaches_the_single_campaign_machine(plant):
+    """P-1, P-2 and P-3 are one type: the fleet pools σ_model over the two histories (the simulated campaigns have
+    no discrepancy beyond the instrument, so the pooled scale is small), every machine of the type carries it, the
+    prior file is written, and P-3's single campaign sampled with it (``sample --sigma-model-prior``) has a narrower
+    alpha_CZ interval than under the assumed prior, its budget naming the fleet as the source."""
+    root, result, out = plant
+    pooled = result.types["MTX-200"]
+    assert pooled["machines"] == 3 and pooled["histories"] == 2
+    assert pooled["median_um"] < 1.0, pooled
+    assert all(m["sigma_model"] == pooled for m in result.machines)
+    doc = json.loads((out / "fleet.json").read_text())
+    assert doc["sigma_model_types"]["MTX-200"]["prior_file"] == pooled["prior_file"]
+    prior_file = out / pooled["prior_file"]
+    single = next(root.glob("P-3/*.toml"))
+    learnt = mb.sample(single, sampler="exact", seed=1, sigma_model_prior=prior_file)
+    assumed = mb.sample(single, sampler="exact", seed=1)
+    sd_l, sd_a = learnt.summary.loc["alpha_CZ", "sd"], assumed.summary.loc["alpha_CZ", "sd"]
+    assert sd_l < 0.8 * sd_a, (sd_l, sd_a)
+    assert "learnt elsewhere" in learnt.to_text() and str(root) in learnt.to_text()

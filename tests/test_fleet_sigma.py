@@ -2,7 +2,6 @@
 type in a hierarchy, and the predictive prior of a new machine."""
 
 import datetime
-import json
 import math
 
 import numpy as np
@@ -85,28 +84,7 @@ def _plant(root, base, *, sigmas_um, single_type="MTX-200", config=None):
     return root / "NEW" / "2025-01-06.toml"
 
 
-def test_a_fleet_teaches_a_new_machine_its_sigma_model(tmp_path, run_cli):
-    """Three machines of one type whose histories each show σ_model ≈ 1.5 µm: the fleet pools them, each machine
-    of the type carries the pooled σ_model, the prior file is written, and a new machine's first campaign sampled
-    with it (``sample --sigma-model-prior``) has a narrower alpha_CZ interval than under the assumed prior, the
-    budget naming the fleet as the source."""
-    base = mb.load_campaign()
-    new = _plant(tmp_path / "plant", base, sigmas_um=(1.5, 1.5, 1.5))
-    out = tmp_path / "out"
-    result = mb.fleet(tmp_path / "plant", workers=1, sampler="exact", output=out, cache=False)
-    assert result.exit_status == 0, result.errors
-    pooled = result.types["MTX-200"]
-    assert pooled["machines"] == 4 and pooled["histories"] == 3
-    assert 0.7 < pooled["median_um"] < 3.0 and pooled["log_sd"] < 0.6, pooled
-    assert all(m["sigma_model"] == pooled for m in result.machines)
-    prior_file = out / pooled["prior_file"]
-    assert prior_file.exists() and json.loads((out / "fleet.json").read_text())["sigma_model_types"]["MTX-200"]
-    learnt = mb.sample(new, sampler="exact", seed=1, sigma_model_prior=prior_file)
-    assumed = mb.sample(new, sampler="exact", seed=1)
-    sd_l, sd_a = learnt.summary.loc["alpha_CZ", "sd"], assumed.summary.loc["alpha_CZ", "sd"]
-    assert sd_l < 0.8 * sd_a, (sd_l, sd_a)
-    code, text, err = run_cli("sample", str(new), "--sampler", "exact", "--sigma-model-prior", str(prior_file))
-    assert code == 0, err
+# a fleet that teaches a new machine its σ_model: tests/test_fleet_latest.py (its plant is of one type)
 
 
 def test_a_type_shared_by_machines_of_another_geometry_is_one_line(tmp_path, run_cli):

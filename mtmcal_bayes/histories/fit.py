@@ -51,8 +51,10 @@ FORECAST_RISK = 0.05
 HORIZON_YEARS = 5.0
 N_STATE = 400
 WALKERS_PER_DIM = 2
-N_STEPS = 1000
-BURN = 300
+#: steps and burn-in of the scale sampler (22 walkers for 10 deviations; the largest autocorrelation time of a
+#: 5-campaign history is about 35 steps: 550 kept steps are 15 of them)
+N_STEPS = 800
+BURN = 250
 #: steps and burn-in of the second run, with the trends kept, started from the first run's walkers
 RESAMPLE_STEPS = 500
 RESAMPLE_BURN = 100
