@@ -458,7 +458,7 @@ def simulate_history(campaign: CampaignLike = None, *, truth=None, n: int = 5, e
     drifts = [parse_drift(x, "step", dates) for x in steps] + [parse_drift(x, "ramp", dates) for x in ramps]
     c = campaign_of(campaign)
     _writable_folder(output, "history")
-    t, source = _history_truth(c, truth, seed)
+    t, source = _history_truth(c, truth)
     series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed,
                                temperatures=_temperatures(temperatures, n), thermal=[parse_thermal(x) for x in thermal])
     if machine_type is not None:
@@ -469,13 +469,14 @@ def simulate_history(campaign: CampaignLike = None, *, truth=None, n: int = 5, e
     return SimulatedHistory(series, truth_source=source)
 
 
-def _history_truth(c: Campaign, truth, seed: int):
+def _history_truth(c: Campaign, truth):
     """The truth of a simulated history and where it came from: ``truth`` (a file or a Truth), else the campaign's
-    own ``[truth]``, else the posterior mean of its deviations (exact draws of the linear model)."""
-    from . import units
+    own ``[truth]``, else the posterior mean of its deviations (the linear model's exact σ-marginal posterior)."""
+    import numpy as np
+
     from .campaign import Truth
     from .io.campaign_reader import load_truth
-    from .parameters import DEVIATIONS, quantity_unit
+    from .parameters import DEVIATIONS
 
     if isinstance(truth, Truth):
         return truth, "the truth given"
@@ -483,10 +484,14 @@ def _history_truth(c: Campaign, truth, seed: int):
         return load_truth(truth, c), f"the truth in {truth}"
     if c.truth is not None:
         return c.truth, f"the [truth] of {c.source}"
-    post = sample(c, sampler="exact", seed=seed)
-    means = {n: units.to_internal(float(post.summary.loc[n, "mean"]), quantity_unit(n))
-             for n in DEVIATIONS if n in post.summary.index}
-    return Truth(means), f"the posterior mean of {c.source} (no --truth, and no [truth] in the campaign)"
+    analysis = CampaignAnalysis(c)  # linear, ball bar: its σ-marginal posterior is exact, its mean without draws
+    post = analysis.log_posterior
+    names = [q.name for q in post.space.parameters]
+    devs = [n for n in DEVIATIONS if n in names]
+    T = np.eye(post.p)[[names.index(n) for n in devs]]
+    mean, _ = analysis.marginal.target_moments(post.likelihood.y[None], T)
+    return Truth(dict(zip(devs, mean[0].tolist()))), (f"the posterior mean of {c.source} (no --truth, and no [truth] "
+                                                      "in the campaign)")
 
 
 def _temperatures(temperatures, n: int) -> list[float] | None:
