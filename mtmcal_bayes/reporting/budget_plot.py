@@ -115,7 +115,7 @@ def sigma_figure(rep, names=IDENTIFIABLE):
     ax.set_xlim(0, top)
     ax.set_xlabel(f"{SCALE_LABEL[scale]} [µm]")
     ax.set_ylabel("density [1/µm]", fontsize=9)
-    ax.legend(fontsize=9, loc="upper center")
+    ax.legend(fontsize=9, loc="upper right", bbox_to_anchor=(1.0, 0.88))  # under the contraction, over the tail
     fig.tight_layout()
     return fig
 
