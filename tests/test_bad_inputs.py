@@ -179,13 +179,23 @@ def test_every_corpus_file_is_in_a_manifest():
     assert len(CAMPAIGN_ROWS) + len(TRACE_ROWS) + len(PROGRAM_ROWS) + len(DPRNT_ROWS) >= 20
 
 
+def _commands_taking(takes) -> list[tuple]:
+    """The (sub)command paths of which an argparse action satisfies ``takes``."""
+    return [path for path, p in COMMANDS.items() if any(takes(a) for a in p._actions)]
+
+
+def _assert_listed(paths, templates, reads: str, name: str) -> None:
+    """Each command path has an argv template in ``templates`` (the list called ``name``)."""
+    for path in paths:
+        assert any(t[:len(path)] == path for t in templates), (
+            f"'{' '.join(path)}' reads {reads}: add its argv template to {name}")
+
+
 def test_every_campaign_command_is_listed():
     """Every (sub)command with a CAMPAIGN argument is in COMMANDS_READING_CAMPAIGNS."""
-    takes_campaign = [path for path, p in COMMANDS.items() if any(a.dest == "campaign" for a in p._actions)]
+    takes_campaign = _commands_taking(lambda a: a.dest == "campaign")
     assert takes_campaign
-    for path in takes_campaign:
-        assert any(t[:len(path)] == path for t in COMMANDS_READING_CAMPAIGNS), (
-            f"'{' '.join(path)}' reads a campaign: add its argv template to COMMANDS_READING_CAMPAIGNS")
+    _assert_listed(takes_campaign, COMMANDS_READING_CAMPAIGNS, "a campaign", "COMMANDS_READING_CAMPAIGNS")
 
 
 # --------------------------------------------------------------------------- campaigns
@@ -288,12 +298,9 @@ def test_bad_dprnt(run_cli, tmp_path, inputs, template, name, key, fragment):
 # --------------------------------------------------------------------------- σ_model prior files
 def test_every_sigma_prior_command_is_listed():
     """Every (sub)command with a --sigma-model-prior flag is in COMMANDS_READING_SIGMA_PRIORS."""
-    takes = [path for path, p in COMMANDS.items()
-             if any("--sigma-model-prior" in a.option_strings for a in p._actions)]
+    takes = _commands_taking(lambda a: "--sigma-model-prior" in a.option_strings)
     assert {("sample",), ("report",)} <= set(takes)
-    for path in takes:
-        assert any(t[:len(path)] == path for t in COMMANDS_READING_SIGMA_PRIORS), (
-            f"'{' '.join(path)}' reads a σ_model prior: add its argv template to COMMANDS_READING_SIGMA_PRIORS")
+    _assert_listed(takes, COMMANDS_READING_SIGMA_PRIORS, "a σ_model prior", "COMMANDS_READING_SIGMA_PRIORS")
 
 
 @pytest.mark.parametrize("template", COMMANDS_READING_SIGMA_PRIORS, ids=lambda t: t[0])
@@ -317,11 +324,9 @@ def test_sigma_model_priors_that_stay_valid():
 # --------------------------------------------------------------------------- tolerance sets
 def test_every_tolerances_command_is_listed():
     """Every (sub)command with a --tolerances flag is in COMMANDS_READING_TOLERANCES."""
-    takes = [path for path, p in COMMANDS.items() if any("--tolerances" in a.option_strings for a in p._actions)]
+    takes = _commands_taking(lambda a: "--tolerances" in a.option_strings)
     assert {"fleet"} <= {p[0] for p in takes}
-    for path in takes:
-        assert any(t[:len(path)] == path for t in COMMANDS_READING_TOLERANCES), (
-            f"'{' '.join(path)}' reads a tolerance set: add its argv template to COMMANDS_READING_TOLERANCES")
+    _assert_listed(takes, COMMANDS_READING_TOLERANCES, "a tolerance set", "COMMANDS_READING_TOLERANCES")
 
 
 @pytest.mark.parametrize("template", COMMANDS_READING_TOLERANCES, ids=lambda t: t[0])

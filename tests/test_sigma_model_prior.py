@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+import textwrap
 
 import numpy as np
 import pytest
@@ -21,6 +22,7 @@ from mtmcal_bayes.figure_style import save_png
 from mtmcal_bayes.html_page import Page
 from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.inference.priors import Prior, PriorSet, learnt_prior, make_prior
+from mtmcal_bayes.io import sigma_prior_file
 from mtmcal_bayes.io.sigma_prior_file import (
     FORMAT,
     parse_sigma_model_prior,
@@ -36,19 +38,8 @@ from .conftest import DATA
 SOURCE = 'fleet plant/: type "INTEGREX i-200", 3 machines, 14 campaigns'
 #: the learnt prior of the brief: median 2.7 µm, sd of ln σ 0.2
 LEARNT = SigmaModelPrior({"sigma_model": (2.7, 0.2)}, SOURCE)
-EXAMPLE = '''format = "mtmcal-sigma-model-prior/1"
-source = "fleet plant/: type \\"INTEGREX i-200\\", 3 machines, 14 campaigns"   # free text, required
-
-[sigma_model]            # the ball bar's discrepancy scale (required)
-distribution = "lognormal"
-median_um = 2.74         # > 0
-log_sd = 0.34            # sd of ln σ, > 0
-
-[sigma_model_probe]      # optional: the touch probe's scale, same keys
-distribution = "lognormal"
-median_um = 1.2
-log_sd = 0.5
-'''
+#: the example file of the format's documentation (the module docstring of mtmcal_bayes.io.sigma_prior_file)
+EXAMPLE = textwrap.dedent(sigma_prior_file.__doc__.split("::\n\n")[1].split("\nEvery problem")[0])
 
 
 def _write(path, prior: SigmaModelPrior = LEARNT):

@@ -80,11 +80,12 @@ def _log_mu_prior() -> np.ndarray:
     """log prior of μ on :data:`U_GRID`: the single campaign's assumed σ_model prior (half-normal, 2 µm) as a
     density of u = ln(σ/µm).  A flat μ slid towards 0.01 µm wherever the histories only bound σ from above (σ at
     or below the instrument's accuracy), and the new machines' intervals then covered 84 % for 90 %."""
+    from scipy import stats
+
     from ..inference.priors import DEFAULTS
 
     kind, scale_um, _ = DEFAULTS["sigma_model"]
-    sigma = np.exp(U_GRID) / scale_um  # in units of the scale
-    return -0.5 * sigma**2 + U_GRID  # half-normal density in σ, times dσ/du = σ
+    return stats.halfnorm(scale=scale_um).logpdf(np.exp(U_GRID)) + U_GRID  # density in σ (µm), times dσ/du = σ
 
 
 def _kernel(diff: np.ndarray, tau: float) -> np.ndarray:

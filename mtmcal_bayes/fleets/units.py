@@ -160,7 +160,8 @@ def history_unit(campaigns: list, seed: int, with_page: bool, model: str = "line
                 result.write(tmp)
                 files = {p.relative_to(tmp).as_posix(): base64.b64encode(p.read_bytes()).decode("ascii")
                          for p in sorted(Path(tmp).rglob("*")) if p.is_file()}
-        loglik = history_log_likelihood(result.fit.model, result.fit.q2)  # for the σ_model of the machine's type
+        typed = bool(campaigns[-1].machine.type)  # only a machine with a type has its σ_model pooled
+        loglik = history_log_likelihood(result.fit.model, result.fit.q2) if typed else None
         return {"result": _plain({"seed": seed, **doc, "sigma_model_loglik": loglik}), "files": files,
                 "elapsed_s": time.perf_counter() - t0}
     except Exception as exc:  # a unit reports, it does not raise (module docstring)

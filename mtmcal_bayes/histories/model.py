@@ -119,26 +119,26 @@ class HistoryModel:
     def set_trend(self, trend_var: np.ndarray) -> None:
         """The prior variance (d,) of each deviation's drift rate (internal units per year, squared; 0: no trend)."""
         self.trend_var = np.asarray(trend_var, float)
-        self.C0 = self.C_base + np.einsum("j,jab->ab", self.trend_var, self.G_trend)
+        self.C0 = self._static_cov(self.trend_var)
+
+    def _static_cov(self, trend_var: np.ndarray) -> np.ndarray:
+        """The covariance (M, M) of the observations without the random walks and σ, for rate variances (d,)."""
+        return self.C_base + np.einsum("j,jab->ab", trend_var, self.G_trend)
 
     def log_marginal_with_trend(self, q2: np.ndarray, s2: np.ndarray, j: int, var: float) -> np.ndarray:
         """:meth:`log_marginal` (n,) with deviation ``j``'s rate variance set to ``var`` (the others as they are)."""
-        saved = self.trend_var.copy()
-        tv = saved.copy()
+        tv = self.trend_var.copy()
         tv[j] = var
-        try:
-            self.set_trend(tv)
-            return self.log_marginal(q2, s2)
-        finally:
-            self.set_trend(saved)
+        return self.log_marginal(q2, s2, static=self._static_cov(tv))
 
-    def covariance(self, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
-        """``C`` (n, M, M) of the observations for drift rates² ``q2`` (n, d) and σ² ``s2`` (n,)."""
-        C = self.C0 + (q2 @ self.G.reshape(self.d, -1)).reshape(len(q2), self.M, self.M)
+    def covariance(self, q2: np.ndarray, s2: np.ndarray, static: np.ndarray | None = None) -> np.ndarray:
+        """``C`` (n, M, M) of the observations for drift rates² ``q2`` (n, d) and σ² ``s2`` (n,); ``static``: the part
+        without the random walks and σ (default that of the rate variances set)."""
+        C = (self.C0 if static is None else static) + (q2 @ self.G.reshape(self.d, -1)).reshape(len(q2), self.M, self.M)
         C[:, np.arange(self.M), np.arange(self.M)] += s2[:, None]
         return C
 
-    def log_marginal(self, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
+    def log_marginal(self, q2: np.ndarray, s2: np.ndarray, static: np.ndarray | None = None) -> np.ndarray:
         """Log marginal likelihood (n,) of the scales: ``log N(resid; 0, C)``, one batched Cholesky.
 
         The Cholesky factor of C bordered by the residual r, ``[[C, r], [rᵀ, c]]``, holds both terms: its first M
@@ -147,7 +147,7 @@ class HistoryModel:
         measurement noise and σ², ``λ_min(C) ≥ min(noise variance) + σ²`` and ``rᵀC⁻¹r ≤ |r|² / λ_min``."""
         n, M = len(q2), self.M
         A = np.empty((n, M + 1, M + 1))
-        A[:, :M, :M] = self.covariance(q2, s2)
+        A[:, :M, :M] = self.covariance(q2, s2, static)
         A[:, :M, M] = self.resid
         A[:, M, :M] = self.resid
         c = 2.0 * float(self.resid @ self.resid) / (self.noise_floor + s2) + 1.0
@@ -155,7 +155,7 @@ class HistoryModel:
         try:
             L = np.linalg.cholesky(A)
         except np.linalg.LinAlgError:  # some rows numerically singular (absurd scales): those get −inf
-            return np.array([self.log_marginal(q2[i:i + 1], s2[i:i + 1])[0] if _is_pd(A[i]) else -np.inf
+            return np.array([self.log_marginal(q2[i:i + 1], s2[i:i + 1], static)[0] if _is_pd(A[i]) else -np.inf
                              for i in range(n)])
         diag = np.diagonal(L, axis1=1, axis2=2)
         logdet = 2.0 * np.log(diag[:, :M]).sum(axis=1)
