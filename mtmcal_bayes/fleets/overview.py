@@ -271,6 +271,17 @@ def overview_page(result) -> Page:
     page.paragraph(CONFORMITY_RULE + f" Tolerances: {_tolerances_text(result)}.")
     notes = [f"{_machine_name(m)}: {n}" for m in result.machines for n in m["notes"]]
     page.box("missing", "Notes", notes)
+    if result.types:
+        page.section("sigma-model", "σ_model learnt by machine type")
+        page.paragraph("The model-discrepancy scale the histories of each type's machines taught, pooled (machines of "
+                       "one type share a hyper-distribution; docs/fleet.md). A new machine of the type samples its "
+                       "first campaign with it: mtmcal-bayes sample NEW.toml --sigma-model-prior FILE. Only right when "
+                       "the new machine really belongs with the others.")
+        page.table(pd.DataFrame([{"type": t["type"], "machines": t["machines"], "histories": t["histories"],
+                                  "median µm": t["median_um"], "sd of ln σ": t["log_sd"],
+                                  "τ between machines": t["tau"]["mean"],
+                                  "prior file": t["prior_file"] or "— (nothing learnt to pass on)"}
+                                 for t in result.types.values()]), digits=2, index=False)
     if result.errors:
         page.section("errors", f"Failed ({len(result.errors)}; the rest completed)")
         page.box("warn", "Not computed", [e["message"] for e in result.errors])
