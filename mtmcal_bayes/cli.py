@@ -23,6 +23,7 @@ from .cli_options import PROG, flag_of
 from .errors import MtmcalError, ParameterError
 from .io.json_text import json_text
 from .progress import StderrProgress
+from .without_dask import hide_dask
 
 
 def _show(result, args) -> int:
@@ -188,33 +189,11 @@ def build_parser():
 USES_DASK = frozenset({"fleet", "validate"})
 
 
-def _hide_dask_from_xarray() -> None:
-    """Make ``dask.array`` and ``dask.distributed`` unimportable in this process.
-
-    Whenever Dask is installed (it is, for fleets), xarray imports ``dask.array`` on building the first
-    InferenceData, to recognise Dask arrays, and ``dask.distributed`` on writing NetCDF, to recognise its
-    scheduler: 0.5 s of a 2.5 s ``sample``, for arrays and schedulers no command but ``fleet`` and ``validate``
-    has.  Done only where the process is the command (``main()`` without arguments), never in a caller's
-    process.  A finder refuses the import (xarray takes the ImportError as "not installed"); a ``None`` entry in
-    ``sys.modules`` would do the same for imports but breaks SciPy, whose array-API checks look the module up
-    there (``stats.lognorm.logpdf`` failed with it)."""
-    hidden = {n for n in ("dask.array", "dask.distributed", "distributed") if n not in sys.modules}
-
-    class _Hidden:
-        @staticmethod
-        def find_spec(name, path=None, target=None):
-            if name in hidden:
-                raise ModuleNotFoundError(f"No module named {name!r} (hidden by {PROG})", name=name)
-            return None
-
-    sys.meta_path.insert(0, _Hidden())
-
-
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     args.argv = argv
     if argv is None and args.command not in USES_DASK:
-        _hide_dask_from_xarray()
+        hide_dask(f"{PROG} {args.command}")
     try:
         return args.func(args)
     except ParameterError as exc:

@@ -19,7 +19,7 @@ PACKAGE = Path(mtmcal_bayes.__file__).parent
 #: the allowed layer order, lowest first: a unit (top-level module or subpackage) may import only units of
 #: lower layers; units of one layer are siblings and may not import each other
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "units", "progress", "version", "datasets", "arviz_import"),  # foundation: nothing of the package
+    ("errors", "units", "progress", "version", "datasets", "arviz_import", "without_dask"),  # foundation: nothing of the package
     ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
     ("conventions",),                                              # what a ball-bar offset means in machine axes
     ("campaign", "observations", "machine_time", "sigma_prior"),   # the data of a calibration, its machine time, a
@@ -165,9 +165,11 @@ def test_cli_is_thin():
 
 
 def test_cli_calls_the_api_only():
-    """The CLI reaches the library through ``api`` (and the errors, the model names, progress and JSON printing)."""
+    """The CLI reaches the library through ``api`` (and the errors, the model names, progress and JSON printing, and
+    the process set-up that keeps Dask out of the commands that do not use it)."""
     allowed = {"mtmcal_bayes.api", "mtmcal_bayes.errors", "mtmcal_bayes.models", "mtmcal_bayes.progress",
-               "mtmcal_bayes.version", "mtmcal_bayes.io.json_text", "mtmcal_bayes.cli_options"}
+               "mtmcal_bayes.version", "mtmcal_bayes.io.json_text", "mtmcal_bayes.cli_options",
+               "mtmcal_bayes.without_dask"}
     assert GRAPH["mtmcal_bayes.cli"] <= allowed, GRAPH["mtmcal_bayes.cli"] - allowed
 
 

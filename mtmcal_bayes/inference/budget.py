@@ -97,6 +97,44 @@ def source_of(parameter) -> str:
     return "prior:deviations" if parameter.group == "deviation" else f"prior:{PRIOR_GROUP[parameter.base]}"
 
 
+def _weight_matrix(names, space_names) -> np.ndarray:
+    """``(q, p)``: each quantity of ``names`` as weights on the parameters ``space_names``."""
+    rows = [weights(n, space_names) for n in names]
+    return np.array([[w.get(k, 0.0) for k in space_names] for w in rows]).reshape(len(rows), len(space_names))
+
+
+def _budgets(post: LogPosterior, grid: np.ndarray, names, theta0: np.ndarray | None):
+    """The variance contributions at each row of ``grid`` (``(g, s)`` scales, mm) in one batch: ``(sources,
+    contributions (g, q, sources), means (g, q))``, internal units (see :func:`conditional_budget`)."""
+    p = post.p
+    priors = post.priors.priors[:p]
+    var0 = np.array([q.sd for q in priors]) ** 2
+    mu0 = np.array([q.centre for q in priors])
+    A, c = linearisation(post, theta0)
+    g, m = len(grid), A.shape[0]
+    noise = {k: np.broadcast_to(np.asarray(r, float), (g, m)) for k, r in post.likelihood.noise.items()}
+    for k, name in enumerate(post.scales):
+        noise[name] = np.where(post.scale_of == k, grid[:, k, None] ** 2, 0.0)  # (g, m)
+    V = sum(noise.values())  # (g, m)
+    cov = np.linalg.inv(np.diag(1.0 / var0) + np.einsum("mi,gm,mj->gij", A, 1.0 / V, A))  # (g, p, p)
+    cov = 0.5 * (cov + cov.transpose(0, 2, 1))
+    mean = np.einsum("gij,gj->gi", cov, mu0 / var0 + ((post.likelihood.y - c) / V) @ A)  # (g, p)
+    W = _weight_matrix(names, list(post.space.names))  # (q, p)
+    H = np.einsum("qi,gij->gqj", W, cov)  # (g, q, p): aᵀΣ
+    G = (H @ A.T) / V[:, None, :]  # (g, q, m): aᵀK
+    out = {k: np.einsum("gqm,gm->gq", G**2, r) for k, r in noise.items()}
+    for j, param in enumerate(post.space.parameters):
+        key = source_of(param)
+        out[key] = out.get(key, 0.0) + H[:, :, j] ** 2 / var0[j]
+    sources = list(out)
+    return sources, np.stack([out[k] for k in sources], axis=-1), mean @ W.T
+
+
+def _scale_grid(post: LogPosterior, sigma_model) -> np.ndarray:
+    """``(1, s)``: one value of the discrepancy scales (one for all, or one per scale of ``post.scales``)."""
+    return np.broadcast_to(np.asarray(sigma_model, dtype=float), (len(post.scales),))[None, :]
+
+
 def conditional_budget(post: LogPosterior, sigma_model, names, *,
                        theta0: np.ndarray | None = None) -> tuple[pd.DataFrame, pd.Series]:
     """Variance contributions at fixed discrepancy scales ``sigma_model`` (mm; one value for all, or one per scale of
@@ -105,28 +143,8 @@ def conditional_budget(post: LogPosterior, sigma_model, names, *,
 
     Exact for the ``linear`` model; other models linearised at ``theta0``.  Every prior is taken as a normal
     of its mean and sd (the half-normal/uniform overrides as in the sampler's start)."""
-    p = post.p
-    priors = post.priors.priors[:p]
-    var0 = np.array([q.sd for q in priors]) ** 2
-    mu0 = np.array([q.centre for q in priors])
-    A, c = linearisation(post, theta0)
-    noise = dict(post.likelihood.noise)
-    sig = np.broadcast_to(np.asarray(sigma_model, dtype=float), (len(post.scales),))
-    for k, name in enumerate(post.scales):
-        noise[name] = np.where(post.scale_of == k, sig[k] ** 2, 0.0)
-    V = sum(noise.values())
-    cov = np.linalg.inv(np.diag(1.0 / var0) + A.T @ (A / V[:, None]))
-    cov = 0.5 * (cov + cov.T)
-    mean = cov @ (mu0 / var0 + A.T @ ((post.likelihood.y - c) / V))
-    space_names = list(post.space.names)
-    W = np.array([[weights(n, space_names).get(k, 0.0) for k in space_names] for n in names])  # (q, p)
-    H = W @ cov  # (q, p): aᵀΣ
-    G = (H @ A.T) / V  # (q, m): aᵀK
-    out = {k: (G**2) @ r for k, r in noise.items()}
-    for j, param in enumerate(post.space.parameters):
-        key = source_of(param)
-        out[key] = out.get(key, 0.0) + H[:, j] ** 2 / var0[j]
-    return pd.DataFrame(out, index=list(names)), pd.Series(W @ mean, index=list(names))
+    sources, parts, means = _budgets(post, _scale_grid(post, sigma_model), names, theta0)
+    return pd.DataFrame(parts[0], index=list(names), columns=sources), pd.Series(means[0], index=list(names))
 
 
 def variance_budget(post: LogPosterior, sigma_draws: np.ndarray | None, names=None, *,
@@ -135,6 +153,7 @@ def variance_budget(post: LogPosterior, sigma_draws: np.ndarray | None, names=No
 
     ``sigma_draws`` (mm): posterior draws of the scales, ``(n,)`` or ``(n, s)``, averaged over by the law of total
     variance (adds the ``sigma_model_uncertainty`` column); None when the scales are fixed (``post.fixed_sigma``).
+    The :data:`N_SIGMA` conditional budgets are computed in one batch.
     """
     names = [n for n in (names or REPORTED) if weights(n, post.space.names)]
     if sigma_draws is None:
@@ -146,9 +165,9 @@ def variance_budget(post: LogPosterior, sigma_draws: np.ndarray | None, names=No
             grid = np.quantile(draws[:, 0], (np.arange(N_SIGMA) + 0.5) / N_SIGMA)[:, None]
         else:  # several scales: their joint draws, evenly spaced through the chain
             grid = draws[np.linspace(0, len(draws) - 1, N_SIGMA).astype(int)]
-        parts = [conditional_budget(post, s, names, theta0=theta0) for s in grid]
-        var = sum(v for v, _ in parts) / len(parts)
-        var["sigma_model_uncertainty"] = np.var(np.stack([m.to_numpy() for _, m in parts]), axis=0)
+        sources, parts, means = _budgets(post, grid, names, theta0)
+        var = pd.DataFrame(parts.mean(axis=0), index=names, columns=sources)
+        var["sigma_model_uncertainty"] = np.var(means, axis=0)
     return var.div(var.sum(axis=1), axis=0)
 
 
@@ -168,10 +187,10 @@ def linearisation_point(idata, post: LogPosterior) -> np.ndarray | None:
 def sd_against_sigma(post: LogPosterior, sigma_grid: np.ndarray, names, *,
                      theta0: np.ndarray | None = None) -> pd.DataFrame:
     """Posterior sd of each quantity (display units) at each fixed sigma_model of ``sigma_grid`` (mm): rows the
-    grid, columns ``names``; closed form (kinematic models linearised at ``theta0``)."""
+    grid, columns ``names``; closed form (kinematic models linearised at ``theta0``), in one batch."""
     names = [n for n in names if weights(n, post.space.names)]
-    rows = []
-    for s in np.asarray(sigma_grid, float):
-        var, _ = conditional_budget(post, float(s), names, theta0=theta0)
-        rows.append({n: units.from_internal(float(np.sqrt(v)), quantity_unit(n)) for n, v in var.sum(axis=1).items()})
-    return pd.DataFrame(rows, index=units.from_internal(np.asarray(sigma_grid, float), "um"))
+    sigma = np.asarray(sigma_grid, float)
+    _, parts, _ = _budgets(post, np.repeat(sigma[:, None], len(post.scales), axis=1), names, theta0)
+    sd = np.sqrt(parts.sum(axis=-1))  # (g, q)
+    return pd.DataFrame({n: units.from_internal(sd[:, i], quantity_unit(n)) for i, n in enumerate(names)},
+                        index=units.from_internal(sigma, "um"))

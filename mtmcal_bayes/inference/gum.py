@@ -43,19 +43,22 @@ def numerical_tolerance(u: float, digits: int = DIGITS) -> float:
     return 0.5 * 10.0 ** (math.floor(math.log10(u)) - digits + 1)
 
 
-def _quantile_mcse(idata, name: str, prob: float) -> float:
+def _quantile_mcse(chains: np.ndarray, prob: float) -> float:
+    """Monte-Carlo standard error of the ``prob`` quantile of ``chains`` ``(chain, draw)`` (ArviZ, on the array:
+    the same as on the InferenceData, without building a Dataset for each of the 48 calls of a summary)."""
     prob = min(max(prob, 1e-4), 1 - 1e-4)
-    return float(az.mcse(idata, var_names=[name], method="quantile", prob=prob)[name])
+    return float(az.mcse(chains, method="quantile", prob=prob))
 
 
 def gum_statement(idata, name: str, hdi: tuple[float, float]) -> dict:
     """The GUM columns (:data:`GUM_COLUMNS`) of quantity ``name`` of ``idata``'s posterior, display units;
     ``hdi`` its shortest 95 % interval (from the summary)."""
-    draws = np.asarray(idata.posterior[name]).ravel()
+    chains = np.asarray(idata.posterior[name].transpose("chain", "draw"))
+    draws = chains.ravel()
     y, u = float(draws.mean()), float(draws.std(ddof=1))
     lo, hi = (float(v) for v in np.quantile(draws, [(1 - COVERAGE) / 2, (1 + COVERAGE) / 2]))
     probs = [(1 - COVERAGE) / 2, (1 + COVERAGE) / 2, float(np.mean(draws <= hdi[0])), float(np.mean(draws <= hdi[1]))]
-    mcse = [_quantile_mcse(idata, name, p) for p in probs]
+    mcse = [_quantile_mcse(chains, p) for p in probs]
     tol = 2.0 * max(mcse)
     allowed = max(numerical_tolerance(u), 2.0 * max(mcse[:2]))
     miss = max(abs(y - K_GAUSSIAN * u - lo), abs(y + K_GAUSSIAN * u - hi))

@@ -24,6 +24,8 @@ SWEEP_CAPTION = (
 KIND_COLOURS = {"tool length": "#0072B2", "existing setup": "#56B4E9", "repeats": "#999999",
                 "other pattern": "#E69F00", "other R_C": "#009E73", "bar length": "#CC79A7", "user": "#D55E00"}
 MAX_BARS = 20
+#: width of the ranking's axes, inches (the 11 in figure less the candidates' names): what its texts fit in
+ANNOTATED_AXES_WIDTH_IN = 7.5
 
 
 def ranking_figure(result):
@@ -36,20 +38,24 @@ def ranking_figure(result):
     ax.set_yticks(y, t["name"], fontsize=9)
     right = float(t["eig_bits"].max()) if len(t) else 1.0
     sym = {"arcsec": "″", "um": "µm"}
+    limit = right * 1.1
     for yi, (_, r) in zip(y, t.iterrows()):
         ratio = {tg: r[f"{tg} sd_after"] / r[f"{tg} sd_before"] for tg in result.targets}
         best = sorted(ratio, key=ratio.get)[:2]  # the two targets it helps most
         text = ", ".join(f"{tg} {r[f'{tg} sd_before']:.3g}→{r[f'{tg} sd_after']:.3g}"
                          f"{sym[result.target_units[result.targets.index(tg)]]}" for tg in best)
         ax.text(r["eig_bits"] + 0.01 * right, yi, text, va="center", fontsize=8)
-    ax.set_xlim(0, right * 1.45)
+        # room for the text after its bar, from its length (an 8 pt character is about 0.075 in wide)
+        share = min(0.6, len(text) * 0.075 / ANNOTATED_AXES_WIDTH_IN)
+        limit = max(limit, float(r["eig_bits"]) / (0.96 - share))
+    ax.set_xlim(0, limit)
     ax.set_xlabel("expected information gain about the targets [bits]")
     kinds = list(dict.fromkeys(t["kind"]))
     ax.legend(handles=[Rectangle((0, 0), 1, 1, color=KIND_COLOURS.get(k, "0.5")) for k in kinds], labels=kinds,
               loc="lower right", fontsize=8)
     if not len(t):
         ax.text(0.5, 0.5, "no feasible candidate improves the targets", transform=ax.transAxes, ha="center")
-    ax.set_title(f"targets: {', '.join(result.targets)}; beside each bar the (at most two) targets it "
+    ax.set_title(f"targets: {', '.join(result.targets)}\nbeside each bar the (at most two) targets it "
                  "narrows most, sd before→after", fontsize=9)
     fig.tight_layout()
     return fig

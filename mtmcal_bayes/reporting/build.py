@@ -221,8 +221,9 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                                       compare_models=compare_models, draw=draw)
             if not ppc_here:
                 ppc_df = content.ppc
+            extras = drawing.finish()
+            off_scale, content.conflict = extras["corner.png"], extras.get(CONFLICT_JOB)
             files = _write_tables(tmp, rep, content, ident=analysis.identification, ppc_df=ppc_df, loo=loo)
-            off_scale = drawing.finish()["corner.png"]
         finally:
             drawing.stop()
         files = [n for n in FIGURE_ORDER if n in drawing.names] + files + ["posterior.nc"]
@@ -240,6 +241,8 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     return Report(out_dir, files, content.summary, console, elapsed, rep, content.missing)
 
 
+#: the job that weighs the explanations of the instruments' conflict beside the figures (no file of its own)
+CONFLICT_JOB = "explanations"
 #: the figures in the order the report's file list names them
 FIGURE_ORDER = ("corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png", "loo.png",
                 "compare_forest.png", "compare_ppc.png", "instruments_forest.png", "budget.png", "sigma_model.png",
@@ -283,15 +286,22 @@ class _Rest:
 
 
 def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw) -> _Rest:
-    """The instruments' comparison and conflict, the model comparison, the tables, the dx_BT = 0 effect and the
-    plan; their figures are handed to ``draw`` in one batch once the plan exists (each batch forks processes of its
-    own: one more costs more than it gains), before the conflict, which only a table shows, is weighed."""
+    """The instruments' comparison, the model comparison, the tables, the dx_BT = 0 effect and the plan; their
+    figures are handed to ``draw`` in one batch once the plan exists (each batch forks processes of its own: one
+    more costs more than it gains).  The weighing of the instruments' conflict (only a table shows it) is handed to
+    ``draw`` as a job of its own as soon as the comparison says it is wanted, so it runs while the plan is made;
+    its result comes back with the figures (``_Rest.conflict`` is filled in then)."""
     model, data = analysis.model, analysis.data
     instruments = disputed = None
     if campaign.has_probe_readings():
         instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
         disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                        instruments.posteriors["probe"].log_posterior)
+        if campaign.ballbar.runs and (instruments.consistency.disagreeing or not reads_as_thesis(campaign.ballbar)):
+            say("weighing the explanations of the instruments' conflict and the readings of the B runs (beside the "
+                "plan)")
+            # the report shows its own consistency check: none for the candidates
+            draw([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis, consistency_of=0)))])
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:
@@ -319,14 +329,9 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
         ppc_df = ppc.ppc_table(bb_rep.idata, campaign)
         figures += _eccentricity_figures(bb_rep, ppc_df, campaign)
     draw(figures)
-    conflict = None
-    if instruments is not None and campaign.ballbar.runs and (instruments.consistency.disagreeing
-                                                               or not reads_as_thesis(campaign.ballbar)):
-        say("weighing the explanations of the instruments' conflict and the readings of the B runs")
-        conflict = explain_conflict(analysis, consistency_of=0)  # the report shows its own consistency check
     missing = missing_data(campaign, analysis.identification)
     effect = None if analysis.fix_dx_BT else thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
-    return _Rest(instruments, disputed, conflict, bb_rep, reports, missing, summary_table(rep),
+    return _Rest(instruments, disputed, None, bb_rep, reports, missing, summary_table(rep),
                  mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df)
 
 
