@@ -8,6 +8,7 @@ status 2, never a traceback; an API parameter named in an error is shown as the 
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 import time
@@ -187,6 +188,8 @@ def build_parser():
 
 #: the commands that run work on a Dask cluster (``fleet``, ``validate sbc``)
 USES_DASK = frozenset({"fleet", "validate"})
+#: the commands that may run for minutes (histories, fleets, validations): their process keeps the cyclic collector
+LONG_RUNNING = frozenset({"history", "fleet", "validate"})
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -194,6 +197,10 @@ def main(argv: list[str] | None = None) -> int:
     args.argv = argv
     if argv is None and args.command not in USES_DASK:
         hide_dask(f"{PROG} {args.command}")
+    if argv is None and args.command not in LONG_RUNNING:
+        # a command that ends in seconds: Python's cyclic collector walks every object it has imported, again and
+        # again, 5-10 % of its time, for cycles that would be freed at exit anyway (peak memory measured unchanged)
+        gc.disable()
     try:
         return args.func(args)
     except ParameterError as exc:

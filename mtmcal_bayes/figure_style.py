@@ -48,10 +48,23 @@ MAX_WIDTH_PX = 1180
 PALETTE = 256
 
 
+def figure(**figure_kw) -> Figure:
+    """A new figure on its own Agg canvas at the resolution it is saved at (:func:`png_dpi`): its layout
+    (``tight_layout``) and its drawing then measure every text with one renderer, once."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig = Figure(**figure_kw)
+    if "dpi" not in figure_kw:
+        fig.set_dpi(png_dpi(fig))
+    FigureCanvasAgg(fig)
+    return fig
+
+
 def new_figure(nrows: int = 1, ncols: int = 1, **subplots_kw) -> tuple[Figure, object]:
-    """A figure and its axes (``Figure.subplots``): ``figsize`` and the other figure options go to the figure."""
+    """A figure (:func:`figure`) and its axes (``Figure.subplots``): ``figsize`` and the other figure options go to
+    the figure."""
     fig_kw = {k: subplots_kw.pop(k) for k in ("figsize", "dpi") if k in subplots_kw}
-    fig = Figure(**fig_kw)
+    fig = figure(**fig_kw)
     return fig, fig.subplots(nrows, ncols, **subplots_kw)
 
 
@@ -102,17 +115,15 @@ def warm_up() -> None:
 
 
 def _canvas_rgb(fig: Figure, dpi: float) -> np.ndarray:
-    """``fig`` drawn once at ``dpi`` on its own canvas: ``(height, width, 3)`` uint8."""
+    """``fig`` drawn once at ``dpi`` on its Agg canvas (one is given to a figure made elsewhere):
+    ``(height, width, 3)`` uint8."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    before = fig.dpi
-    fig.set_dpi(dpi)
-    try:
-        canvas = FigureCanvasAgg(fig)
-        canvas.draw()
-        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
-    finally:
-        fig.set_dpi(before)
+    if fig.dpi != dpi:
+        fig.set_dpi(dpi)
+    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
 
 def touches_edge(rgb: np.ndarray) -> bool:

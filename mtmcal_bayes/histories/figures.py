@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..figure_style import COLOURS, label
+from ..figure_style import COLOURS, figure, label
 from .fit import HORIZON_YEARS, forecast_moments
 from .model import SECONDS_PER_YEAR
 
@@ -25,7 +25,7 @@ def trend_figure(result) -> Figure:
     names = hf.quantities
     ncols = 4
     nrows = -(-len(names) // ncols)
-    fig = Figure(figsize=(13, 3.0 * nrows + 0.6))
+    fig = figure(figsize=(13, 3.0 * nrows + 0.6))
     axes = fig.subplots(nrows, ncols, squeeze=False, sharex=True)
     span = max((dates[-1] - dates[0]).days * FORECAST_SHARE, 90.0)
     ahead = min(span, HORIZON_YEARS * 365.25)

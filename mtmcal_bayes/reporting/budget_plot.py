@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from .. import units
-from ..figure_style import COLOURS, label, new_figure, symbol
+from ..figure_style import COLOURS, figure, label, new_figure, symbol
 from ..inference.budget import linearisation_point, meaning, sd_against_sigma
 from ..parameters import IDENTIFIABLE, SCALE_LABEL
 
@@ -77,7 +76,7 @@ def sigma_figure(rep, names=IDENTIFIABLE):
     grid = units.to_internal(np.linspace(0.0, 4.0, 17), "um")  # every 0.25 µm: the curves are smooth
     curves = sd_against_sigma(post, grid, names, theta0=linearisation_point(rep.idata, post))
     names = list(curves.columns)
-    fig = Figure(figsize=(12, 7.6))
+    fig = figure(figsize=(12, 7.6))
     gs = fig.add_gridspec(3, 4, height_ratios=[1, 1, 0.8])
     here = rep.sigma_model_um
     for i, n in enumerate(names):

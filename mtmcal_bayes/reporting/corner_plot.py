@@ -5,10 +5,9 @@ from __future__ import annotations
 import corner
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..figure_style import COLOURS, REFERENCE_LABELS, label, symbol, unit_symbol
+from ..figure_style import COLOURS, REFERENCE_LABELS, figure, label, symbol, unit_symbol
 from ..parameters import IDENTIFIABLE
 
 #: probability mass inside the 2-D contours (corner's own default is 0.5σ…2σ of a 2-D Gaussian)
@@ -83,7 +82,7 @@ def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
     refs = reference_values(comparison, names)
     ranges, off = _ranges(x, refs, names)
     fig = corner.corner(
-        x, fig=Figure(figsize=(_corner_size(len(names)),) * 2), labels=[label(n) for n in names], range=ranges, bins=30, smooth=1.0, levels=LEVELS,
+        x, fig=figure(figsize=(_corner_size(len(names)),) * 2), labels=[label(n) for n in names], range=ranges, bins=30, smooth=1.0, levels=LEVELS,
         color=COLOURS["posterior"], truths=refs["ballbar"], truth_color=COLOURS["ballbar"],
         plot_datapoints=True, data_kwargs={"alpha": 0.02, "ms": 1.5}, label_kwargs={"fontsize": 13},
         max_n_ticks=4, labelpad=0.08,

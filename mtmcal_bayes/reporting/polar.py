@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from .. import units
 from ..conventions import machine_repeats
-from ..figure_style import COLOURS
+from ..figure_style import COLOURS, figure
 from ..observations import Observations
 from ..patterns import B_ANGLES_DEG, B_PATTERNS, COMPONENTS, polar_basis
 
@@ -51,7 +50,7 @@ def polar_figure(result, campaign, seed: int = 0):
     runs = _runs(campaign)
     ncols = min(3, len(runs))
     nrows = int(np.ceil(len(runs) / ncols))
-    fig = Figure(figsize=(5.0 * ncols, 5.2 * nrows + 0.6))
+    fig = figure(figsize=(5.0 * ncols, 5.2 * nrows + 0.6))
     for panel, (i, run, comps) in enumerate(runs, start=1):
         ax = fig.add_subplot(nrows, ncols, panel, projection="polar")
         idx = [j for j, _ in comps]
