@@ -133,6 +133,20 @@ def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):
     assert abs(mean - ref_mean) < 1e-4 * ref_sd and abs(sd / ref_sd - 1) < 1e-4
 
 
+def test_the_proposal_factors_its_cells_without_forming_their_covariance(thesis):
+    """The grid proposal's factors come from each cell's precision (the fused posterior: 2 304 cells of two
+    scales): the lower Cholesky factor of the covariance, its inverse and the cell means, each equal to the
+    covariance way (``numpy.linalg.inv`` of the precision, then ``cholesky``) to 1e-9 of its largest entry."""
+    a = PosteriorApproximation(LogPosterior(thesis, "linear", data="both"))
+    m, prop = a.marginal, a.proposal
+    assert len(m.sigma) == 48 * 48
+    chol = np.linalg.cholesky(m.cov)
+    for got, want in ((prop.chol, chol), (prop.chol_inv, np.linalg.inv(chol)),
+                      (prop.mean, m.means(a.post.likelihood.y[None])[:, 0])):
+        assert np.abs(got - want).max() <= 1e-9 * np.abs(want).max()
+    assert np.all(np.triu(prop.chol, 1) == 0) and np.all(np.diagonal(prop.chol, axis1=1, axis2=2) > 0)
+
+
 def test_kinematic_approximation_is_its_linearisation(thesis):
     post = LogPosterior(thesis, "htm-thesis")
     a = PosteriorApproximation(post)

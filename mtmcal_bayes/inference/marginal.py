@@ -147,14 +147,37 @@ class MarginalPosterior:
         self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
 
     @functools.cached_property
+    def _precision(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's posterior precision ``(G, P, P)`` and ``Aᵀ V⁻¹`` ``(G, P, m)``."""
+        AtVi = self.A.T[None] / self.V[:, None, :]  # (G, P, m): Aᵀ V⁻¹ of every cell (batched products, not einsum)
+        return np.diag(1.0 / self.prior_var)[None] + AtVi @ self.A, AtVi
+
+    @functools.cached_property
     def _posterior_cells(self) -> tuple[np.ndarray, np.ndarray]:
         """Each cell's posterior covariance ``(G, P, P)`` and gain ``(G, P, m)`` (mean = μ0 + gain @ residual): made
         when first needed (draws, means), not for the evidence or the moments of a few targets."""
-        AtVi = self.A.T[None] / self.V[:, None, :]  # (G, P, m): Aᵀ V⁻¹ of every cell (batched products, not einsum)
-        prec = np.diag(1.0 / self.prior_var)[None] + AtVi @ self.A
+        prec, AtVi = self._precision
         cov = np.linalg.inv(prec)
         cov = 0.5 * (cov + np.swapaxes(cov, 1, 2))
         return cov, cov @ AtVi
+
+    def cov_factors(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's lower Cholesky factor ``C`` of the posterior covariance (``C Cᵀ = Σ``) and its inverse, both
+        ``(G, P, P)``, from the precision without forming Σ: with the precision factored "upper-first",
+        ``Σ⁻¹ = U Uᵀ`` (``U`` upper triangular: the Cholesky factor of the precision with its order reversed),
+        ``Σ = U⁻ᵀ U⁻¹`` and ``C = U⁻ᵀ`` is lower triangular, so it is Σ's Cholesky factor, and ``C⁻¹ = Uᵀ``.
+        One factorisation and one triangular inverse instead of an inverse, a factorisation and an inverse."""
+        prec, _ = self._precision
+        U = np.linalg.cholesky(prec[:, ::-1, ::-1])[:, ::-1, ::-1]  # prec = U Uᵀ
+        inv = np.swapaxes(U, 1, 2)  # C⁻¹ = Uᵀ, lower triangular
+        return np.tril(np.linalg.inv(inv)), inv  # the inverse of a triangular matrix is triangular: no round-off above
+
+    def means_from_factors(self, y: np.ndarray, chol: np.ndarray) -> np.ndarray:
+        """Posterior mean of θ in each cell for one data vector ``y`` (m,), ``(G, P)``, from the covariance factors
+        ``chol`` (:meth:`cov_factors`): ``μ0 + C Cᵀ Aᵀ V⁻¹ r`` without the gain matrices."""
+        _, AtVi = self._precision
+        b = AtVi @ self._residual(y[None])[0]  # (G, P)
+        return self.prior_mean + np.einsum("gij,gj->gi", chol, np.einsum("gji,gj->gi", chol, b))
 
     @property
     def cov(self) -> np.ndarray:
@@ -315,9 +338,8 @@ class GridProposal:
         index = np.unravel_index(np.arange(len(self.sigma)), self.shape)
         self.low = np.stack([e[i] for e, i in zip(self.edges, index)], axis=-1)  # (G, s)
         self.width = np.stack([e[i + 1] - e[i] for e, i in zip(self.edges, index)], axis=-1)
-        self.mean = marginal.means(y[None])[:, 0]  # (G, P)
-        self.chol = np.linalg.cholesky(marginal.cov)  # (G, P, P)
-        self.chol_inv = np.linalg.inv(self.chol)
+        self.chol, self.chol_inv = marginal.cov_factors()  # (G, P, P) each
+        self.mean = marginal.means_from_factors(y, self.chol)  # (G, P)
         self.log_det = 2.0 * np.log(np.diagonal(self.chol, axis1=1, axis2=2)).sum(axis=1)
         self.P = self.mean.shape[1]
 
