@@ -147,6 +147,12 @@ class MarginalPosterior:
         self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
 
     @functools.cached_property
+    def _whitening(self) -> np.ndarray:
+        """``L⁻¹`` of every cell, ``(G, m, m)`` (``L`` the Cholesky factor of the prior predictive covariance): made
+        once, so that each data vector and target is whitened by a product, not by a factorisation of its own."""
+        return np.tril(np.linalg.inv(self.S_chol))  # the inverse of a triangular matrix is triangular
+
+    @functools.cached_property
     def _precision(self) -> tuple[np.ndarray, np.ndarray]:
         """Each cell's posterior precision ``(G, P, P)`` and ``Aᵀ V⁻¹`` ``(G, P, m)``."""
         AtVi = self.A.T[None] / self.V[:, None, :]  # (G, P, m): Aᵀ V⁻¹ of every cell (batched products, not einsum)
@@ -196,7 +202,7 @@ class MarginalPosterior:
     def log_joint(self, y: np.ndarray) -> np.ndarray:
         """``log p(y | σ) + log p(σ)`` of every cell, ``(G, N)``, for data ``y`` of shape ``(N, m)``."""
         r = self._residual(y)
-        z = np.linalg.solve(self.S_chol[:, None], r[None, :, :, None])[..., 0]  # (G, N, m)
+        z = r[None] @ np.swapaxes(self._whitening, 1, 2)  # (G, N, m): L⁻¹ r of every cell and data vector
         loglik = -0.5 * (np.sum(z**2, axis=-1) + self.S_logdet[:, None] + r.shape[1] * np.log(2 * np.pi))
         return loglik + self.log_prior[:, None]
 
@@ -228,8 +234,8 @@ class MarginalPosterior:
         ``Var[Tθ] = T Σ0 Tᵀ − T K S⁻¹ Kᵀ Tᵀ`` (the same as from the cell's posterior of θ; a test holds them equal)."""
         w = self.weights(y)  # (G, N)
         TK = (T * self.prior_var) @ self.A.T  # (t, m)
-        X = np.linalg.solve(self.S_chol, np.broadcast_to(TK.T, (len(self.S_chol),) + TK.T.shape))  # (G, m, t): L⁻¹ KᵀTᵀ
-        Z = np.linalg.solve(self.S_chol, self._residual(y).T[None])  # (G, m, N): L⁻¹ r
+        X = self._whitening @ TK.T  # (G, m, t): L⁻¹ KᵀTᵀ
+        Z = self._whitening @ self._residual(y).T  # (G, m, N): L⁻¹ r
         mean_g = (T @ self.prior_mean)[None, None, :] + np.swapaxes(Z, 1, 2) @ X  # (G, N, t)
         var_g = np.sum((T * self.prior_var) * T, axis=1)[None] - np.sum(X**2, axis=1)  # (G, t)
         mean = np.einsum("gn,gnt->nt", w, mean_g)
