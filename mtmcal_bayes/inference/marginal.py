@@ -50,6 +50,14 @@ DROP = 30.0
 SCAN_POINTS = 160
 
 
+def _lower_inverse(L: np.ndarray) -> np.ndarray:
+    """Inverse of each lower-triangular matrix of ``L`` ``(G, n, n)``, exactly lower triangular (an inverse by LU
+    leaves round-off above the diagonal)."""
+    out = np.linalg.inv(L)
+    out[:, *np.triu_indices(L.shape[-1], 1)] = 0.0
+    return out
+
+
 def _as_list(value, s: int) -> list:
     """``value`` (one for every scale, or a sequence of ``s``) as a list of ``s``."""
     if isinstance(value, (list, tuple, np.ndarray)):
@@ -144,28 +152,30 @@ class MarginalPosterior:
         S = (A * self.prior_var) @ A.T  # (m, m) prior predictive covariance of the means, without noise
         S = S[None] + V[:, :, None] * np.eye(m)[None]  # (G, m, m)
         self.S_chol = np.linalg.cholesky(S)
+        self._whitened_once = False
         self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
 
     @functools.cached_property
     def _whitening(self) -> np.ndarray:
         """``L⁻¹`` of every cell, ``(G, m, m)`` (``L`` the Cholesky factor of the prior predictive covariance): made
         once, so that each data vector and target is whitened by a product, not by a factorisation of its own."""
-        return np.tril(np.linalg.inv(self.S_chol))  # the inverse of a triangular matrix is triangular
+        return _lower_inverse(self.S_chol)
 
     @functools.cached_property
-    def _precision(self) -> tuple[np.ndarray, np.ndarray]:
-        """Each cell's posterior precision ``(G, P, P)`` and ``Aᵀ V⁻¹`` ``(G, P, m)``."""
-        AtVi = self.A.T[None] / self.V[:, None, :]  # (G, P, m): Aᵀ V⁻¹ of every cell (batched products, not einsum)
-        return np.diag(1.0 / self.prior_var)[None] + AtVi @ self.A, AtVi
+    def _precision(self) -> np.ndarray:
+        """Each cell's posterior precision ``(G, P, P)``: ``Σ0⁻¹ + Aᵀ V⁻¹ A``, all cells in one matrix product
+        (``V⁻¹`` ``(G, m)`` times the rows' outer products ``(m, P²)``)."""
+        m, P = self.A.shape
+        outer = (self.A[:, :, None] * self.A[:, None, :]).reshape(m, P * P)
+        return np.diag(1.0 / self.prior_var)[None] + ((1.0 / self.V) @ outer).reshape(-1, P, P)
 
     @functools.cached_property
     def _posterior_cells(self) -> tuple[np.ndarray, np.ndarray]:
         """Each cell's posterior covariance ``(G, P, P)`` and gain ``(G, P, m)`` (mean = μ0 + gain @ residual): made
         when first needed (draws, means), not for the evidence or the moments of a few targets."""
-        prec, AtVi = self._precision
-        cov = np.linalg.inv(prec)
+        cov = np.linalg.inv(self._precision)
         cov = 0.5 * (cov + np.swapaxes(cov, 1, 2))
-        return cov, cov @ AtVi
+        return cov, cov @ (self.A.T[None] / self.V[:, None, :])  # Aᵀ V⁻¹ of every cell (G, P, m)
 
     def cov_factors(self) -> tuple[np.ndarray, np.ndarray]:
         """Each cell's lower Cholesky factor ``C`` of the posterior covariance (``C Cᵀ = Σ``) and its inverse, both
@@ -173,16 +183,14 @@ class MarginalPosterior:
         ``Σ⁻¹ = U Uᵀ`` (``U`` upper triangular: the Cholesky factor of the precision with its order reversed),
         ``Σ = U⁻ᵀ U⁻¹`` and ``C = U⁻ᵀ`` is lower triangular, so it is Σ's Cholesky factor, and ``C⁻¹ = Uᵀ``.
         One factorisation and one triangular inverse instead of an inverse, a factorisation and an inverse."""
-        prec, _ = self._precision
-        U = np.linalg.cholesky(prec[:, ::-1, ::-1])[:, ::-1, ::-1]  # prec = U Uᵀ
+        U = np.linalg.cholesky(self._precision[:, ::-1, ::-1])[:, ::-1, ::-1]  # precision = U Uᵀ
         inv = np.swapaxes(U, 1, 2)  # C⁻¹ = Uᵀ, lower triangular
-        return np.tril(np.linalg.inv(inv)), inv  # the inverse of a triangular matrix is triangular: no round-off above
+        return _lower_inverse(inv), inv
 
     def means_from_factors(self, y: np.ndarray, chol: np.ndarray) -> np.ndarray:
         """Posterior mean of θ in each cell for one data vector ``y`` (m,), ``(G, P)``, from the covariance factors
         ``chol`` (:meth:`cov_factors`): ``μ0 + C Cᵀ Aᵀ V⁻¹ r`` without the gain matrices."""
-        _, AtVi = self._precision
-        b = AtVi @ self._residual(y[None])[0]  # (G, P)
+        b = (self._residual(y[None]) / self.V) @ self.A  # (G, P): Aᵀ V⁻¹ r of every cell
         return self.prior_mean + np.einsum("gij,gj->gi", chol, np.einsum("gji,gj->gi", chol, b))
 
     @property
@@ -202,7 +210,11 @@ class MarginalPosterior:
     def log_joint(self, y: np.ndarray) -> np.ndarray:
         """``log p(y | σ) + log p(σ)`` of every cell, ``(G, N)``, for data ``y`` of shape ``(N, m)``."""
         r = self._residual(y)
-        z = r[None] @ np.swapaxes(self._whitening, 1, 2)  # (G, N, m): L⁻¹ r of every cell and data vector
+        if "_whitening" in self.__dict__ or self._whitened_once:  # L⁻¹ made on the second use: products from then on
+            z = r[None] @ np.swapaxes(self._whitening, 1, 2)  # (G, N, m): L⁻¹ r of every cell and data vector
+        else:  # a single use (an evidence, a proposal's weights): one solve costs less than L⁻¹
+            self._whitened_once = True
+            z = np.linalg.solve(self.S_chol[:, None], r[None, :, :, None])[..., 0]
         loglik = -0.5 * (np.sum(z**2, axis=-1) + self.S_logdet[:, None] + r.shape[1] * np.log(2 * np.pi))
         return loglik + self.log_prior[:, None]
 
