@@ -83,3 +83,27 @@ def test_patterns_beyond_the_thesis_get_rows():
     model = LinearModel(parse_campaign(text, "bz.toml"))
     row = model.observations.labels.index("ez_BZ@RB1/B")
     assert model.design[row, model.space.index("dz_BT")] == pytest.approx(1.0, abs=1e-6)
+
+
+def test_only_the_runs_without_a_relation_are_simulated_and_their_rows_are_the_whole_campaigns():
+    """The Jacobian rows of the runs the thesis gives no relation for (BZ, BT, CZ here, among thesis patterns, CZ on
+    a mount whose W ball a CR run places) are those of the htm-thesis Jacobian of the whole campaign, to round-off
+    (1e-12 of the largest coefficient).  test_properties checks the same on random campaigns through the
+    small-scale limit."""
+    from mtmcal_bayes.campaign import Run
+    from mtmcal_bayes.models.kinematic import HTMModel, jacobian
+    from mtmcal_bayes.models.linear import LEFT_OUT
+    from mtmcal_bayes.patterns import COMPONENTS
+
+    text = (DATA / "minimal_one_repeat.toml").read_text().replace('pattern = "BY"', 'pattern = "BZ"')
+    campaign = parse_campaign(text, "bz.toml")
+    bb = campaign.ballbar
+    bb.runs = bb.runs + [Run(p, run.setup, run.mount, {c: np.zeros(1) for c in COMPONENTS[p]})
+                         for p, run in (("BT", bb.runs[0]), ("CZ", bb.runs[-1]))]
+    model = LinearModel(campaign)
+    whole = jacobian(HTMModel(campaign, "htm-thesis", model.space))
+    for name in LEFT_OUT:  # the squareness of the linear axes, left out by the linear model
+        whole[:, model.space.index(name)] = 0.0
+    beyond = [i for i, k in enumerate(model.observations.keys) if k.pattern in ("BZ", "BT", "CZ")]
+    assert len(beyond) >= 3
+    np.testing.assert_allclose(model.design[beyond], whole[beyond], rtol=0, atol=1e-12 * np.abs(whole[beyond]).max())

@@ -25,6 +25,8 @@ models do respond to them.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ..observations import Observations
@@ -60,6 +62,25 @@ def linear_coefficients(pattern: str, component: str, setup, mount) -> dict[str,
 LEFT_OUT = ("gamma_XY", "alpha_YZ", "beta_YZ")
 
 
+def _kinematic_rows(campaign, space: ParameterSpace, runs: set[int]) -> dict[tuple[int, str], np.ndarray]:
+    """Rows ``(p,)`` of the runs ``runs`` (indices into the campaign's ball-bar runs) by ``(run, component)``: the
+    htm-thesis model linearised at zero, for the patterns the thesis gives no relation for.  Only those runs are
+    simulated, with the first run on each of their mounts, which places the mount's W ball (its dummy sphere):
+    the rows are then those of the whole campaign's Jacobian."""
+    from .kinematic import HTMModel, jacobian
+
+    first = {}
+    for r, run in enumerate(campaign.ballbar.runs):
+        first.setdefault(run.mount, r)
+    chosen = sorted(set(runs) | {first[campaign.ballbar.runs[r].mount] for r in runs})
+    some = copy.copy(campaign)
+    some.ballbar = copy.copy(campaign.ballbar)
+    some.ballbar.runs = [campaign.ballbar.runs[r] for r in chosen]
+    model = HTMModel(some, "htm-thesis", space)
+    J = jacobian(model)
+    return {(chosen[k.run], k.component): J[j] for j, k in enumerate(model.observations.keys)}
+
+
 class LinearModel:
     """Thesis relations as a linear map for the runs of a campaign.
 
@@ -79,19 +100,20 @@ class LinearModel:
         bb = campaign.ballbar
         self._names = set(self.space.names)
         A = np.zeros((len(self.observations), len(self.space)))
-        kinematic_rows = None
+        kinematic = []  # observations of patterns the thesis gives no relation for
         for i, key in enumerate(self.observations.keys):
             coeffs = linear_coefficients(key.pattern, key.component, bb.setups[key.setup], bb.mounts[key.mount])
             if coeffs is None:
-                if kinematic_rows is None:
-                    from .kinematic import HTMModel, jacobian
-
-                    kinematic_rows = jacobian(HTMModel(campaign, "htm-thesis", self.space))
-                A[i] = kinematic_rows[i]
+                kinematic.append(i)
             else:
                 for name, c in coeffs.items():
                     if name in self._names:  # parameters outside the space are held at zero
                         A[i, self.space.index(name)] = c
+        if kinematic:
+            rows = _kinematic_rows(campaign, self.space, {self.observations.keys[i].run for i in kinematic})
+            for i in kinematic:
+                key = self.observations.keys[i]
+                A[i] = rows[key.run, key.component]
         for name in LEFT_OUT:
             if name in self.space.names:
                 A[:, self.space.index(name)] = 0.0
