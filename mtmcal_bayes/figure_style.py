@@ -115,15 +115,29 @@ def warm_up() -> None:
 
 
 def _canvas_rgb(fig: Figure, dpi: float) -> np.ndarray:
-    """``fig`` drawn once at ``dpi`` on its Agg canvas (one is given to a figure made elsewhere):
-    ``(height, width, 3)`` uint8."""
+    """``fig`` drawn once at ``dpi``: ``(height, width, 3)`` uint8.  On its Agg canvas (:func:`figure`; a bare
+    ``Figure`` is given one); a figure shown elsewhere (pyplot, a notebook) keeps its own canvas and resolution and
+    is drawn through ``savefig``."""
+    from matplotlib.backend_bases import FigureCanvasBase
     from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
 
-    if fig.dpi != dpi:
+    if not isinstance(fig.canvas, FigureCanvasAgg) and type(fig.canvas) is not FigureCanvasBase:
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
+        buf.seek(0)
+        with Image.open(buf) as img:
+            return np.asarray(img.convert("RGB"))
+    before = fig.dpi
+    if before != dpi:
         fig.set_dpi(dpi)
-    canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
-    canvas.draw()
-    return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+    try:
+        canvas = fig.canvas if isinstance(fig.canvas, FigureCanvasAgg) else FigureCanvasAgg(fig)
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+    finally:
+        if fig.dpi != before:
+            fig.set_dpi(before)
 
 
 def touches_edge(rgb: np.ndarray) -> bool:

@@ -53,3 +53,19 @@ def test_the_edge_test_sees_one_dark_pixel_on_each_edge():
     inner = blank.copy()
     inner[1:-1, 1:-1] = 0
     assert not touches_edge(inner)
+
+
+def test_a_figure_shown_elsewhere_keeps_its_canvas_and_resolution(tmp_path):
+    """A figure of another canvas (here SVG, as a notebook's or a window's would be) is saved without being moved
+    onto an Agg canvas, and its resolution is left as it was."""
+    from matplotlib.backends.backend_svg import FigureCanvasSVG
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4, 3), dpi=72)
+    canvas = FigureCanvasSVG(fig)
+    ax = fig.add_subplot()
+    ax.plot([0, 1], [1, 0])
+    fig.tight_layout()
+    save_png(fig, tmp_path / "elsewhere.png")
+    assert fig.canvas is canvas and fig.dpi == 72
+    assert Image.open(tmp_path / "elsewhere.png").size == (round(4 * png_dpi(fig)), round(3 * png_dpi(fig)))
