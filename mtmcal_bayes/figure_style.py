@@ -114,20 +114,27 @@ def warm_up() -> None:
     save_png(fig, io.BytesIO())
 
 
+def _savefig_rgb(fig: Figure, dpi: float, **savefig_kw) -> np.ndarray:
+    """``fig`` through matplotlib's ``savefig`` at ``dpi`` (``savefig_kw`` passed on): ``(height, width, 3)`` uint8,
+    by way of an intermediate PNG, compressed least, the fastest to write."""
+    from PIL import Image
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": 1}, **savefig_kw)
+    buf.seek(0)
+    with Image.open(buf) as img:
+        return np.asarray(img.convert("RGB"))
+
+
 def _canvas_rgb(fig: Figure, dpi: float) -> np.ndarray:
     """``fig`` drawn once at ``dpi``: ``(height, width, 3)`` uint8.  On its Agg canvas (:func:`figure`; a bare
     ``Figure`` is given one); a figure shown elsewhere (pyplot, a notebook) keeps its own canvas and resolution and
     is drawn through ``savefig``."""
     from matplotlib.backend_bases import FigureCanvasBase
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from PIL import Image
 
     if not isinstance(fig.canvas, FigureCanvasAgg) and type(fig.canvas) is not FigureCanvasBase:
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": 1})
-        buf.seek(0)
-        with Image.open(buf) as img:
-            return np.asarray(img.convert("RGB"))
+        return _savefig_rgb(fig, dpi)
     before = fig.dpi
     if before != dpi:
         fig.set_dpi(dpi)
@@ -160,10 +167,6 @@ def save_png(fig: Figure, path) -> None:
 
     rgb = _canvas_rgb(fig, png_dpi(fig))
     if touches_edge(rgb):
-        buf = io.BytesIO()  # an intermediate PNG, read back at once: compressed least, the fastest to write
-        fig.savefig(buf, format="png", dpi=png_dpi(fig), bbox_inches="tight", pil_kwargs={"compress_level": 1})
-        buf.seek(0)
-        with Image.open(buf) as img:
-            rgb = np.asarray(img.convert("RGB"))
+        rgb = _savefig_rgb(fig, png_dpi(fig), bbox_inches="tight")
     Image.fromarray(rgb).quantize(colors=PALETTE, method=Image.Quantize.FASTOCTREE,
                                   dither=Image.Dither.NONE).save(path, format="png")

@@ -60,6 +60,15 @@ class _RunPlan:
     commands: Commands
 
 
+def placing_runs(ballbar) -> dict[str, int]:
+    """The run that places each mount's W ball (its dummy sphere), by mount: the first run on it.  Every run on a
+    mount depends on that run's setup and pattern, so the runs of a mount are not simulated without it."""
+    first: dict[str, int] = {}
+    for i, run in enumerate(ballbar.runs):
+        first.setdefault(run.mount, i)
+    return first
+
+
 class HTMModel:
     """Nonlinear ball-bar model of a campaign: parameter batch ``(n, p)`` -> eccentricities ``(n, m)``.
 
@@ -98,13 +107,13 @@ class HTMModel:
         self.runs = [plan(r.pattern, r.setup, r.mount) for r in bb.runs]
         # the dummy sphere of each mount: first run on it, zero angle, X = 0 (B) or R_C (C), Z = Z_C + R_B
         self.placements: dict[str, _RunPlan] = {}
-        for r in bb.runs:
-            if r.mount not in self.placements:
-                s, m = bb.setups[r.setup], bb.mounts[r.mount]
-                x0 = 0.0 if r.pattern in B_PATTERNS else m.R_C
-                cmd = Commands(*(np.array([v]) for v in (x0, 0.0, m.Z_C + s.R_B, 0.0, 0.0, 0.0)))
-                self.placements[r.mount] = _RunPlan(r.pattern, r.setup, r.mount,
-                                                    Geometry(s.R_B, s.Z_T, s.X_T, m.Z_C, m.R_C), cmd)
+        for mount, i in placing_runs(bb).items():
+            r = bb.runs[i]
+            s, m = bb.setups[r.setup], bb.mounts[mount]
+            x0 = 0.0 if r.pattern in B_PATTERNS else m.R_C
+            cmd = Commands(*(np.array([v]) for v in (x0, 0.0, m.Z_C + s.R_B, 0.0, 0.0, 0.0)))
+            self.placements[mount] = _RunPlan(r.pattern, r.setup, mount, Geometry(s.R_B, s.Z_T, s.X_T, m.Z_C, m.R_C),
+                                              cmd)
         comp_index = {(k.run, k.component): i for i, k in enumerate(self.observations.keys)}
         self._columns = [[(comp_index.get((i, c)), j) for j, c in enumerate(COMPONENTS[r.pattern])]
                          for i, r in enumerate(bb.runs)]

@@ -65,13 +65,11 @@ LEFT_OUT = ("gamma_XY", "alpha_YZ", "beta_YZ")
 def _kinematic_rows(campaign, space: ParameterSpace, runs: set[int]) -> dict[tuple[int, str], np.ndarray]:
     """Rows ``(p,)`` of the runs ``runs`` (indices into the campaign's ball-bar runs) by ``(run, component)``: the
     htm-thesis model linearised at zero, for the patterns the thesis gives no relation for.  Only those runs are
-    simulated, with the first run on each of their mounts, which places the mount's W ball (its dummy sphere):
-    the rows are then those of the whole campaign's Jacobian."""
-    from .kinematic import HTMModel, jacobian
+    simulated, with the run that places each of their mounts' W ball (:func:`~.kinematic.placing_runs`): the rows
+    are then those of the whole campaign's Jacobian."""
+    from .kinematic import HTMModel, jacobian, placing_runs
 
-    first = {}
-    for r, run in enumerate(campaign.ballbar.runs):
-        first.setdefault(run.mount, r)
+    first = placing_runs(campaign.ballbar)
     chosen = sorted(set(runs) | {first[campaign.ballbar.runs[r].mount] for r in runs})
     some = copy.copy(campaign)
     some.ballbar = copy.copy(campaign.ballbar)
