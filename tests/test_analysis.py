@@ -95,6 +95,28 @@ def test_a_failing_job_is_raised_by_finish(tmp_path):
         drawing.finish()
 
 
+
+def test_one_batch_waited_for_while_another_goes_on_and_a_cancelled_batch_leaves_nothing(tmp_path):
+    """``wait`` returns the waited batch's extras without waiting for a slower batch; a cancelled batch's job is
+    ended (its file never written) and its name and extra are gone; ``finish`` still brings the rest."""
+    drawing = Drawing(tmp_path)
+    slow = drawing.start([("slow.png", _slow_figure(1.5, "slow"))])
+    quick = drawing.start([("quick", lambda: (None, 42))])
+    dropped = drawing.start([("dropped.png", _slow_figure(1.5, "dropped"))])
+    t0 = time.perf_counter()
+    assert drawing.wait(quick)["quick"] == 42
+    waited = time.perf_counter() - t0
+    drawing.cancel(dropped)
+    drawing.cancel(None)  # nothing begun: nothing to end
+    extras = drawing.finish()
+    drawing.stop()
+    assert "dropped.png" not in extras and "dropped.png" not in drawing.names
+    assert extras["slow.png"] == "slow" and extras["quick"] == 42
+    if drawing.fork:  # (without fork each batch is drawn when it starts, so the cancelled one wrote its file)
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["slow.png"]
+        assert waited < 1.5  # the slow batch was not waited for
+    assert slow != quick != dropped
+
 def test_exact_draws_per_cell_equal_the_gathered_product(thesis):
     """The proposal's draws, one product per σ cell, equal θ = μ_j + L_j z drawn row by row (to rounding)."""
     a = CampaignAnalysis(thesis, data="both")

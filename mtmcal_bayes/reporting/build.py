@@ -188,20 +188,21 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     analysis = analysis_of(campaign, model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model,
                            sigma_prior=sigma_prior)
     campaign = analysis.campaign
-    if posterior is not None:
-        rep = posterior
-    else:
-        say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
-        rep = sample_posterior(analysis, settings=settings, progress=progress)
-    tol = campaign.tolerances if tolerances is None else tolerances
-    if tol:
-        rep.conformity = conformity_table(rep.idata, rep.summary, tol)
-        say("asking the planner how to decide the undecided tolerances")
-        add_suggestions(rep, campaign)
-    loo = loo_check(rep.idata)
     with atomic_directory(out_dir) as tmp:
         drawing = Drawing(tmp)
         try:
+            ahead = _ahead(analysis, drawing, say)
+            if posterior is not None:
+                rep = posterior
+            else:
+                say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
+                rep = sample_posterior(analysis, settings=settings, progress=progress)
+            tol = campaign.tolerances if tolerances is None else tolerances
+            if tol:
+                rep.conformity = conformity_table(rep.idata, rep.summary, tol)
+                say("asking the planner how to decide the undecided tolerances")
+                add_suggestions(rep, campaign)
+            loo = loo_check(rep.idata)
             # the main posterior's figures and its NetCDF while the instruments are weighed and the plan is made
             first = _main_figures(rep, model, campaign, loo)
             first.insert(1, ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc")))
@@ -218,7 +219,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
 
             draw(first)
             content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
-                                      compare_models=compare_models, draw=draw)
+                                      compare_models=compare_models, draw=draw, ahead=ahead, drawing=drawing)
             if not ppc_here:
                 ppc_df = content.ppc
             extras = drawing.finish()
@@ -243,6 +244,27 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
 
 #: the job that weighs the explanations of the instruments' conflict beside the figures (no file of its own)
 CONFLICT_JOB = "explanations"
+#: the job that makes the plan of the next measurement beside the sampling (no file of its own)
+PLAN_JOB = "plan"
+
+
+def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
+    """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
+    sampler leaves the second core idle): the plan for all eight quantities (kept when the posterior identifies
+    every one, else made again for the unidentified ones, :func:`_planning`) and, for a campaign with both
+    instruments, the weighing of the explanations of a conflict between them (kept when the comparison finds one
+    or a B run reads otherwise than in the thesis).  Returns their batches by job name."""
+    campaign = analysis.campaign
+    ahead = {}
+    say("planning the next measurement (beside the sampling)")
+    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: (None, plan(campaign)))])
+    if campaign.has_probe_readings() and campaign.ballbar.runs:
+        say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
+            "(beside the sampling)")
+        # the report shows its own consistency check: none for the candidates
+        ahead[CONFLICT_JOB] = drawing.start([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis,
+                                                                                          consistency_of=0)))])
+    return ahead
 #: the figures in the order the report's file list names them
 FIGURE_ORDER = ("corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png", "loo.png",
                 "compare_forest.png", "compare_ppc.png", "instruments_forest.png", "budget.png", "sigma_model.png",
@@ -285,23 +307,20 @@ class _Rest:
     ppc: pd.DataFrame | None  # the ball-bar posterior's predictive check, when it is a side posterior
 
 
-def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw) -> _Rest:
+def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw, ahead, drawing) -> _Rest:
     """The instruments' comparison, the model comparison, the tables, the dx_BT = 0 effect and the plan; their
     figures are handed to ``draw`` in one batch once the plan exists (each batch forks processes of its own: one
-    more costs more than it gains).  The weighing of the instruments' conflict (only a table shows it) is handed to
-    ``draw`` as a job of its own as soon as the comparison says it is wanted, so it runs while the plan is made;
-    its result comes back with the figures (``_Rest.conflict`` is filled in then)."""
+    more costs more than it gains).  The plan and the weighing of the instruments' conflict (only a table shows it)
+    were begun before the sampling (``ahead``, :func:`_ahead`): the weighing is dropped here when the comparison
+    does not want it, else its result comes back with the figures (``_Rest.conflict`` is filled in then)."""
     model, data = analysis.model, analysis.data
     instruments = disputed = None
     if campaign.has_probe_readings():
         instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
         disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                        instruments.posteriors["probe"].log_posterior)
-        if campaign.ballbar.runs and (instruments.consistency.disagreeing or not reads_as_thesis(campaign.ballbar)):
-            say("weighing the explanations of the instruments' conflict and the readings of the B runs (beside the "
-                "plan)")
-            # the report shows its own consistency check: none for the candidates
-            draw([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis, consistency_of=0)))])
+        if not (instruments.consistency.disagreeing or not reads_as_thesis(campaign.ballbar)):
+            drawing.cancel(ahead.pop(CONFLICT_JOB, None))  # the instruments agree: nothing to explain
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:
@@ -312,8 +331,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                                                   progress=progress)
         reports = {m: reports[m] for m in MODELS}
     draw([])  # a figure of the first batch already failed: stop before planning
-    say("planning the next measurement")
-    planned = _planning(campaign, rep)
+    planned = _planning(campaign, rep, drawing, ahead[PLAN_JOB], say)
     figures = [("plan_sweep.png", lambda: plan_figures.sweep_figure(planned)),
                ("plan_ranking.png", lambda: plan_figures.ranking_figure(planned))]
     if instruments is not None:
@@ -542,11 +560,16 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
     page.table(pd.DataFrame(rows), digits={"P(nonconformance)": 3}, index=False)
 
 
-def _planning(campaign, rep):
-    """The plan for the quantities the data do not identify, else for all eight."""
+def _planning(campaign, rep, drawing: Drawing, batch: int, say) -> PlanResult:
+    """The plan for the quantities the data do not identify, else for all eight (that one begun before the
+    sampling, in ``batch``: waited for here)."""
     targets = [n for n in IDENTIFIABLE if n in rep.summary.index
                and rep.summary.loc[n, "identification"] == "not identified"]
-    return plan(campaign, targets or None)
+    if not targets:
+        return drawing.wait(batch)[PLAN_JOB]
+    drawing.cancel(batch)
+    say("planning the next measurement for the quantities the data do not identify")
+    return plan(campaign, targets)
 
 
 def _page(c: ReportContent, tmp: Path) -> Page:

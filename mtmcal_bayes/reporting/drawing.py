@@ -73,22 +73,28 @@ class Drawing:
         self.workers = min(workers, os.cpu_count() or 1)
         self.fork = self.workers > 1 and "fork" in multiprocessing.get_all_start_methods()
         self.names: list[str] = []
-        self._running: list[tuple[object, object]] = []  # (process, receiving end)
+        self._running: list[tuple[object, object, int]] = []  # (process, receiving end, batch)
+        self._batches = 0
+        self._jobs_of: dict[int, list[str]] = {}
         self._extras: dict[str, object] = {}
         self._errors: list[BaseException] = []
         self._counters: list = []
         self._warm = False
         self._frozen = False
 
-    def start(self, jobs: list[tuple[str, Callable]]) -> None:
-        """Begin drawing ``jobs`` (``(file name, make)``) and return; without fork, draw them now."""
+    def start(self, jobs: list[tuple[str, Callable]]) -> int:
+        """Begin drawing ``jobs`` (``(file name, make)``) and return the batch's number (for :meth:`wait` and
+        :meth:`cancel`); without fork, draw them now."""
         jobs = list(jobs)
+        batch = self._batches
+        self._batches += 1
         self.names += [name for name, _ in jobs]
+        self._jobs_of[batch] = [name for name, _ in jobs]
         if not jobs:
-            return
+            return batch
         if not self.fork:
             self._extras.update({name: _run((name, make), self.directory) for name, make in jobs})
-            return
+            return batch
         ctx = multiprocessing.get_context("fork")
         if not self._warm:  # once, here: every process forked from now on inherits it
             warm_up()
@@ -109,7 +115,8 @@ class Drawing:
             proc = ctx.Process(target=_work, args=(jobs, self.directory, counter, send), daemon=True)
             proc.start()
             send.close()
-            self._running.append((proc, receive))
+            self._running.append((proc, receive, batch))
+        return batch
 
     def _collect(self, proc, receive, block: bool) -> bool:
         """Take the answer of one drawing process (waiting for it when ``block``); False when it has none yet."""
@@ -131,13 +138,39 @@ class Drawing:
     def check(self) -> None:
         """Raise the exception of a job that has already failed (without waiting for the others): the report
         stops there instead of computing on for a page it cannot write."""
-        self._running = [(p, r) for p, r in self._running if not self._collect(p, r, block=False)]
+        self._running = [(p, r, b) for p, r, b in self._running if not self._collect(p, r, block=False)]
         if self._errors:
             raise self._errors[0]
 
+    def wait(self, batch: int) -> dict[str, object]:
+        """Wait for one batch (the others go on); returns the extras of every job ended so far, by file name.  A
+        job's exception is raised here."""
+        for proc, receive, b in self._running:
+            if b == batch:
+                self._collect(proc, receive, block=True)
+        self._running = [(p, r, b) for p, r, b in self._running if b != batch]
+        if self._errors:
+            raise self._errors[0]
+        return dict(self._extras)
+
+    def cancel(self, batch: int | None) -> None:
+        """End a batch whose results are no longer wanted (work begun before it was known to be needed); its jobs
+        are no longer the drawing's and it leaves no extras.  None: nothing to end."""
+        if batch is None:
+            return
+        for proc, receive, b in self._running:
+            if b == batch:
+                proc.terminate()
+                proc.join()
+                receive.close()
+        self._running = [(p, r, b) for p, r, b in self._running if b != batch]
+        for name in self._jobs_of.pop(batch, ()):
+            self._extras.pop(name, None)
+            self.names.remove(name)
+
     def finish(self) -> dict[str, object]:
         """Wait for every batch; returns each job's extra by file name.  A job's exception is raised here."""
-        for proc, receive in self._running:
+        for proc, receive, _ in self._running:
             self._collect(proc, receive, block=True)
         self._running = []
         self._counters = []
@@ -148,7 +181,7 @@ class Drawing:
     def stop(self) -> None:
         """End the drawing processes still running (the report failed elsewhere), and give the objects frozen at the
         forks back to the cyclic collector.  Always called, last."""
-        for proc, receive in self._running:
+        for proc, receive, _ in self._running:
             proc.terminate()
             proc.join()
             receive.close()
