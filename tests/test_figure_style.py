@@ -1,9 +1,10 @@
 """Saving figures: drawn once at the report resolution, drawn again with a tight box only where something is cut."""
 
 import numpy as np
+import pytest
 from PIL import Image
 
-from mtmcal_bayes.figure_style import MAX_WIDTH_PX, PALETTE, new_figure, png_dpi, save_png, touches_edge
+from mtmcal_bayes.figure_style import MAX_WIDTH_PX, PALETTE, new_figure, png_dpi, save_png, tight_layout, touches_edge
 
 
 def _ink_columns(path) -> np.ndarray:
@@ -69,3 +70,26 @@ def test_a_figure_shown_elsewhere_keeps_its_canvas_and_resolution(tmp_path):
     save_png(fig, tmp_path / "elsewhere.png")
     assert fig.canvas is canvas and fig.dpi == 72
     assert Image.open(tmp_path / "elsewhere.png").size == (round(4 * png_dpi(fig)), round(3 * png_dpi(fig)))
+
+
+@pytest.mark.parametrize("rows, cols", [(1, 1), (3, 1), (2, 3)])
+@pytest.mark.parametrize("rect, kw", [((0, 0.08, 1, 1), {}), ((0, 0.05, 1, 1), {"h_pad": 2.5}),
+                                      ((0, 0, 1, 0.93), {}), ((0.04, 0.1, 0.9, 0.95), {"h_pad": 0.6, "w_pad": 2.0})])
+def test_tight_layout_in_one_pass_places_the_axes_where_matplotlibs_two_passes_do(rows, cols, rect, kw):
+    """The subplot parameters of :func:`tight_layout` equal those of ``Figure.tight_layout(rect=…)`` (which
+    measures the decorations twice) to round-off, for grids of axes with long labels and two-line titles."""
+    def make():
+        fig, axes = new_figure(rows, cols, figsize=(8, 6))
+        for i, ax in enumerate(np.ravel(axes)):
+            ax.plot([0, 10_000 * i + 1], [0, i])
+            ax.set_title(f"panel {i}\nsecond line")
+            ax.set_ylabel("a long label, µm")
+            ax.set_xlabel("x")
+        return fig
+
+    theirs, ours = make(), make()
+    theirs.tight_layout(rect=rect, **kw)
+    tight_layout(ours, rect, **kw)
+    keys = ("left", "right", "bottom", "top", "wspace", "hspace")
+    np.testing.assert_allclose([getattr(ours.subplotpars, k) for k in keys],
+                               [getattr(theirs.subplotpars, k) for k in keys], rtol=0, atol=1e-12)

@@ -9,7 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..figure_style import COLOURS, figure, label
+from ..figure_style import COLOURS, figure, label, tight_layout
 from .fit import HORIZON_YEARS, forecast_moments
 from .model import SECONDS_PER_YEAR
 
@@ -67,5 +67,5 @@ def trend_figure(result) -> Figure:
         handles.insert(1, Line2D([], [], color="0.35", marker="x", ls="", ms=5,
                                  label="as measured, at the campaign's temperature"))
     fig.legend(handles=handles, loc="upper center", ncol=len(handles), fontsize=9, frameon=False)
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / fig.get_figheight()))
+    tight_layout(fig, (0, 0, 1, 1 - 0.35 / fig.get_figheight()))
     return fig

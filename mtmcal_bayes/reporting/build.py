@@ -20,6 +20,7 @@ from .. import units
 from ..analysis import analysis_of
 from ..conventions import reads_as_thesis
 from ..errors import MtmcalError
+from ..figure_style import save_png
 from ..html_page import Page
 from ..identification import IdentificationResult
 from ..identification.output import identification_table
@@ -227,7 +228,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             files = _write_tables(tmp, rep, content, ident=analysis.identification, ppc_df=ppc_df, loo=loo)
         finally:
             drawing.stop()
-        files = [n for n in FIGURE_ORDER if n in drawing.names] + files + ["posterior.nc"]
+        files = [n for n in FIGURE_ORDER if (tmp / n).exists()] + files + ["posterior.nc"]
         page_content = ReportContent(campaign, model, rep, content.reports if compare_models else None,
                                      analysis.identification, content.missing, content.summary, ppc_df,
                                      content.diagnostics, content.effect, off_scale, rep.sigma_model_um,
@@ -244,20 +245,32 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
 
 #: the job that weighs the explanations of the instruments' conflict beside the figures (no file of its own)
 CONFLICT_JOB = "explanations"
-#: the job that makes the plan of the next measurement beside the sampling (no file of its own)
+#: the job that makes the plan of the next measurement beside the sampling, and draws its figures
 PLAN_JOB = "plan"
+#: the plan's figures: file name, drawing function of a PlanResult
+PLAN_FIGURES = (("plan_sweep.png", plan_figures.sweep_figure), ("plan_ranking.png", plan_figures.ranking_figure))
+
+
+def _plan_and_figures(campaign, directory: Path, targets=None):
+    """A drawing job: the plan (:func:`~mtmcal_bayes.planning.plan.plan`) and its figures written into
+    ``directory``; returns ``(None, plan)``."""
+    planned = plan(campaign, targets)
+    for name, make in PLAN_FIGURES:
+        save_png(make(planned), directory / name)
+    return None, planned
 
 
 def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
     """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
-    sampler leaves the second core idle): the plan for all eight quantities (kept when the posterior identifies
-    every one, else made again for the unidentified ones, :func:`_planning`) and, for a campaign with both
+    sampler leaves the second core idle): the plan for all eight quantities and its figures (kept when the
+    posterior identifies every one, else made again for the unidentified ones, :func:`_planning`) and, for a
+    campaign with both
     instruments, the weighing of the explanations of a conflict between them (kept when the comparison finds one
     or a B run reads otherwise than in the thesis).  Returns their batches by job name."""
     campaign = analysis.campaign
     ahead = {}
     say("planning the next measurement (beside the sampling)")
-    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: (None, plan(campaign)))])
+    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory))])
     if campaign.has_probe_readings() and campaign.ballbar.runs:
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
@@ -308,19 +321,26 @@ class _Rest:
 
 
 def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw, ahead, drawing) -> _Rest:
-    """The instruments' comparison, the model comparison, the tables, the dx_BT = 0 effect and the plan; their
-    figures are handed to ``draw`` in one batch once the plan exists (each batch forks processes of its own: one
-    more costs more than it gains).  The plan and the weighing of the instruments' conflict (only a table shows it)
-    were begun before the sampling (``ahead``, :func:`_ahead`): the weighing is dropped here when the comparison
-    does not want it, else its result comes back with the figures (``_Rest.conflict`` is filled in then)."""
+    """The instruments' comparison, the model comparison, the tables, the dx_BT = 0 effect and the plan; the figures
+    of the comparison are handed to ``draw`` as soon as it exists, those of the model comparison (and of a plan made
+    here) once the plan exists.  The plan with its figures and the weighing of the instruments' conflict (only a
+    table shows it) were begun before the sampling (``ahead``, :func:`_ahead`): the weighing is dropped here when
+    the comparison does not want it, else its result comes back with the figures (``_Rest.conflict`` is filled in
+    then)."""
     model, data = analysis.model, analysis.data
-    instruments = disputed = None
+    instruments = disputed = ppc_df = None
     if campaign.has_probe_readings():
         instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
         disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                        instruments.posteriors["probe"].log_posterior)
         if not (instruments.consistency.disagreeing or not reads_as_thesis(campaign.ballbar)):
             drawing.cancel(ahead.pop(CONFLICT_JOB, None))  # the instruments agree: nothing to explain
+        figures = [("instruments_forest.png", lambda: forest.forest_figure(
+            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison))]
+        if data != "ballbar":  # the eccentricity plots show the ball-bar posterior, a side one here
+            ppc_df = ppc.ppc_table(instruments.posteriors["ballbar"].idata, campaign)
+            figures += _eccentricity_figures(instruments.posteriors["ballbar"], ppc_df, campaign)
+        draw(figures)
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:
@@ -330,22 +350,14 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                 reports[other] = sample_posterior(analysis.variant(model=other, data="ballbar"), settings=settings,
                                                   progress=progress)
         reports = {m: reports[m] for m in MODELS}
-    draw([])  # a figure of the first batch already failed: stop before planning
-    planned = _planning(campaign, rep, drawing, ahead[PLAN_JOB], say)
-    figures = [("plan_sweep.png", lambda: plan_figures.sweep_figure(planned)),
-               ("plan_ranking.png", lambda: plan_figures.ranking_figure(planned))]
-    if instruments is not None:
-        figures.insert(1, ("instruments_forest.png", lambda: forest.forest_figure(
-            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison)))
+    draw([])  # a figure of an earlier batch already failed: stop before planning
+    planned, drawn = _planning(campaign, rep, drawing, ahead[PLAN_JOB], say)
+    figures = [] if drawn else [(name, lambda make=make: make(planned)) for name, make in PLAN_FIGURES]
     if compare_models:
         figures[:0] = [("compare_forest.png",
                         lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
                        ("compare_ppc.png", lambda: ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign)
                                                                     for m, r in reports.items()}, campaign))]
-    ppc_df = None
-    if data != "ballbar":  # the eccentricity plots show the ball-bar posterior, a side one here
-        ppc_df = ppc.ppc_table(bb_rep.idata, campaign)
-        figures += _eccentricity_figures(bb_rep, ppc_df, campaign)
     draw(figures)
     missing = missing_data(campaign, analysis.identification)
     effect = None if analysis.fix_dx_BT else thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
@@ -560,16 +572,16 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
     page.table(pd.DataFrame(rows), digits={"P(nonconformance)": 3}, index=False)
 
 
-def _planning(campaign, rep, drawing: Drawing, batch: int, say) -> PlanResult:
+def _planning(campaign, rep, drawing: Drawing, batch: int, say) -> tuple[PlanResult, bool]:
     """The plan for the quantities the data do not identify, else for all eight (that one begun before the
-    sampling, in ``batch``: waited for here)."""
+    sampling, in ``batch``: waited for here), and whether its figures are drawn already (they are for that one)."""
     targets = [n for n in IDENTIFIABLE if n in rep.summary.index
                and rep.summary.loc[n, "identification"] == "not identified"]
     if not targets:
-        return drawing.wait(batch)[PLAN_JOB]
+        return drawing.wait(batch)[PLAN_JOB], True
     drawing.cancel(batch)
     say("planning the next measurement for the quantities the data do not identify")
-    return plan(campaign, targets)
+    return plan(campaign, targets), False
 
 
 def _page(c: ReportContent, tmp: Path) -> Page:

@@ -14,6 +14,7 @@ from ..figure_style import (
     iso_mathtext,
     new_figure,
     symbol,
+    tight_layout,
     unit_symbol,
 )
 from ..parameters import IDENTIFIABLE
@@ -96,6 +97,6 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
     for key, st in _REF_STYLE.items():
         if refs and any(v is not None for v in refs[key]):
             handles.append(Line2D([], [], color=COLOURS[key], ls="none", label=REFERENCE_LABELS[key], **st))
-    fig.tight_layout(rect=(0, 0.7 / fig.get_figheight(), 1, 1), h_pad=0.6)
+    tight_layout(fig, (0, 0.7 / fig.get_figheight(), 1, 1), h_pad=0.6)
     fig.legend(handles=handles, loc="lower center", ncol=2, fontsize=9.5, frameon=False)
     return fig

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.lines import Line2D
 
-from ..figure_style import COLOURS, new_figure
+from ..figure_style import COLOURS, new_figure, tight_layout
 from ..posterior.loo import ELPD_DROP, K_INFLUENTIAL, LooResult
 
 #: colour of a flagged observation
@@ -56,5 +56,5 @@ def loo_figure(result: LooResult):
                       label=f"elpd_loo ≥ {ELPD_DROP:g} below the median / Pareto k > {K_INFLUENTIAL}"),
                Line2D([], [], color="0.55", lw=1.0, label="median elpd_loo of the kind")]
     fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=9, frameon=False)
-    fig.tight_layout(rect=(0, 0.45 / fig.get_figheight(), 1, 1))
+    tight_layout(fig, (0, 0.45 / fig.get_figheight(), 1, 1))
     return fig

@@ -7,7 +7,7 @@ from matplotlib.lines import Line2D
 
 from .. import units
 from ..conventions import machine_repeats
-from ..figure_style import COLOURS, figure
+from ..figure_style import COLOURS, figure, tight_layout
 from ..observations import Observations
 from ..patterns import B_ANGLES_DEG, B_PATTERNS, COMPONENTS, polar_basis
 
@@ -88,5 +88,5 @@ def polar_figure(result, campaign, seed: int = 0):
                Line2D([], [], color=COLOURS["posterior"], lw=8, alpha=0.35, label="posterior 95 % band"),
                Line2D([], [], color="0.3", lw=1.0, ls=":", label="ΔL = 0")]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=9, frameon=False)
-    fig.tight_layout(rect=(0, 0.5 / fig.get_figheight(), 1, 1), h_pad=2.5)
+    tight_layout(fig, (0, 0.5 / fig.get_figheight(), 1, 1), h_pad=2.5)
     return fig

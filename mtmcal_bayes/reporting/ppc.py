@@ -8,7 +8,7 @@ from matplotlib.lines import Line2D
 
 from .. import units
 from ..conventions import machine_repeats
-from ..figure_style import COLOURS, MODEL_COLOURS, new_figure
+from ..figure_style import COLOURS, MODEL_COLOURS, new_figure, tight_layout
 from ..observations import Observations
 
 CAPTION = (
@@ -80,5 +80,5 @@ def ppc_figure(tables: dict[str, pd.DataFrame], campaign):
     handles += [Line2D([], [], color=COLOURS["observed"], marker=".", ls="none", label="repeats"),
                 Line2D([], [], color=COLOURS["observed"], marker="D", mfc="white", ls="none", label="mean of the repeats")]
     fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 3), fontsize=9, frameon=False)
-    fig.tight_layout(rect=(0, 0.5 / fig.get_figheight(), 1, 1))
+    tight_layout(fig, (0, 0.5 / fig.get_figheight(), 1, 1))
     return fig
