@@ -85,16 +85,16 @@ def tight_layout(fig: Figure, rect: tuple[float, float, float, float], **kw) -> 
     rows = max((ss.get_gridspec().nrows for ss in specs), default=1)
     cols = max((ss.get_gridspec().ncols for ss in specs), default=1)
 
-    def spaced(space, lo, hi, new_lo, new_hi, n):  # the same gap between n axes spanning [new_lo, new_hi]
+    def spaced(space, span, new_span, n):  # the same gap between n axes over a span of the figure shrunk to new_span
         if n < 2:
             return space
-        gap = space * (hi - lo) / (n + space * (n - 1))
-        return gap / ((new_hi - new_lo - gap * (n - 1)) / n)
+        gap = space * span / (n + space * (n - 1))
+        return gap / ((new_span - gap * (n - 1)) / n)
 
     left, right, bottom, top = rl + p.left, p.right - (1 - rr), rb + p.bottom, p.top - (1 - rt)
     fig.subplots_adjust(left=left, right=right, bottom=bottom, top=top,
-                        wspace=spaced(p.wspace, p.left, p.right, left, right, cols),
-                        hspace=spaced(p.hspace, p.bottom, p.top, bottom, top, rows))
+                        wspace=spaced(p.wspace, p.right - p.left, right - left, cols),
+                        hspace=spaced(p.hspace, p.top - p.bottom, top - bottom, rows))
 
 
 def symbol(name: str) -> str:

@@ -10,6 +10,7 @@ from matplotlib.image import imread
 
 from mtmcal_bayes import identify
 from mtmcal_bayes.figure_style import save_png
+from mtmcal_bayes.parameters import IDENTIFIABLE
 from mtmcal_bayes.reporting import build as report_build
 from mtmcal_bayes.reporting.corner_plot import corner_figure
 
@@ -123,6 +124,13 @@ def test_report_without_second_tool_length_says_what_is_missing(run_cli, tmp_pat
     assert "alpha_BT: not identified by the data" in html
     s = pd.read_csv(tmp_path / "rep" / "summary.csv", index_col="quantity")
     assert not s.loc["alpha_BT", "identified"] and np.isnan(s.loc["alpha_BT", "ballbar"])
+    # the plan begun before the sampling (for all eight) is replaced by one for what the data do not identify,
+    # and its figures are drawn from that one
+    unidentified = {n for n in IDENTIFIABLE if s.loc[n, "identification"] == "not identified"}
+    planned = pd.read_csv(tmp_path / "rep" / "plan.csv")
+    assert {c[: -len(" sd_after")] for c in planned.columns if c.endswith(" sd_after")} == unidentified
+    assert all((tmp_path / "rep" / f).stat().st_size > 0 and f in out for f in ("plan_sweep.png", "plan_ranking.png"))
+    assert f"Targets: {', '.join(n for n in IDENTIFIABLE if n in unidentified)}" in html
 
 
 def test_bad_input_writes_nothing(run_cli, tmp_path):
@@ -178,3 +186,17 @@ def test_report_json(thesis_report_run):
     assert set(data["summary"]["beta_XB"]) >= {"mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk",
                                                "ess_tail", "unit"}
     assert data["summary"]["beta_XB"]["unit"] == "arcsec" and data["missing"] == []
+
+
+def test_the_weighing_begun_before_the_sampling_is_dropped_when_nothing_needs_explaining(thesis, thesis_report,
+                                                                                         tmp_path, monkeypatch):
+    """The built-in campaign's instruments agree; read as the thesis reads it (patched here) nothing is left to
+    explain: the weighing begun beside the sampling is ended and the report has no explanations table, while the
+    built-in reading (the shared report) keeps it."""
+    assert (thesis_report / "explanations.csv").exists()
+    monkeypatch.setattr(report_build, "reads_as_thesis", lambda ballbar: True)
+    dropped = report_build.build_report(thesis, tmp_path / "dropped", settings=report_build.SamplerSettings(seed=2))
+    assert "explanations.csv" not in dropped.files and not (tmp_path / "dropped" / "explanations.csv").exists()
+    assert "instruments.csv" in dropped.files and "plan_sweep.png" in dropped.files
+    html = (tmp_path / "dropped" / "index.html").read_text(encoding="utf-8")
+    assert "Where a conflict could come from" not in html

@@ -351,7 +351,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                                                   progress=progress)
         reports = {m: reports[m] for m in MODELS}
     draw([])  # a figure of an earlier batch already failed: stop before planning
-    planned, drawn = _planning(campaign, rep, drawing, ahead[PLAN_JOB], say)
+    planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say)
     figures = [] if drawn else [(name, lambda make=make: make(planned)) for name, make in PLAN_FIGURES]
     if compare_models:
         figures[:0] = [("compare_forest.png",
@@ -572,7 +572,7 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
     page.table(pd.DataFrame(rows), digits={"P(nonconformance)": 3}, index=False)
 
 
-def _planning(campaign, rep, drawing: Drawing, batch: int, say) -> tuple[PlanResult, bool]:
+def _planning(campaign, rep, drawing: Drawing, *, batch: int, say) -> tuple[PlanResult, bool]:
     """The plan for the quantities the data do not identify, else for all eight (that one begun before the
     sampling, in ``batch``: waited for here), and whether its figures are drawn already (they are for that one)."""
     targets = [n for n in IDENTIFIABLE if n in rep.summary.index
