@@ -12,6 +12,9 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import signal
+import sys
+import threading
 from collections.abc import Iterator
 
 from .errors import ParameterError
@@ -71,3 +74,49 @@ def dask_client(scheduler: str | None = None, workers: int | None = None) -> Ite
             scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}, silence_logs=logging.ERROR) as cluster, \
             Client(cluster) as client:
         yield client
+
+
+class Interrupt:
+    """Whether Ctrl-C (SIGINT) arrived while :func:`remembered_interrupt` was active."""
+
+    def __init__(self) -> None:
+        self.arrived = False
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if Ctrl-C arrived (call it between results, and before writing them)."""
+        if self.arrived:
+            raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def remembered_interrupt() -> Iterator[Interrupt]:
+    """Ctrl-C while a cluster's results are collected: raised as ``KeyboardInterrupt`` where it arrives, as usual,
+    and also remembered, so that :meth:`Interrupt.check` raises it again.
+
+    Distributed runs callbacks in the caller's thread (its garbage-collector diagnostics) where an exception is
+    reported as "ignored" and dropped: a Ctrl-C arriving there was lost, and the run went on to write its results
+    as if never interrupted.  An interrupt dropped that way is not printed either (the run says "interrupted" once,
+    when ``check`` raises it).  Outside the main thread, or where SIGINT is ignored, nothing changes."""
+    interrupt = Interrupt()
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or previous in (signal.SIG_IGN, None):
+        yield interrupt
+        return
+
+    def on_sigint(signum, frame):
+        interrupt.arrived = True
+        raise KeyboardInterrupt
+
+    hook = sys.unraisablehook
+
+    def unraisable(info):
+        if not isinstance(info.exc_value, KeyboardInterrupt):
+            hook(info)
+
+    signal.signal(signal.SIGINT, on_sigint)
+    sys.unraisablehook = unraisable
+    try:
+        yield interrupt
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = hook

@@ -15,7 +15,7 @@ import time
 import warnings
 from dataclasses import dataclass
 
-from ..cluster import dask_client, default_workers
+from ..cluster import dask_client, default_workers, remembered_interrupt
 from ..errors import ParameterError
 from ..progress import Progress, ProgressEvent, emit
 from .cache import UnitCache, default_cache
@@ -79,18 +79,21 @@ def _compute(missing: list[Unit], store: UnitCache | None, *, scheduler, workers
         report(f"computing {len(missing)} units on {n_workers} worker{'s' * (n_workers != 1)} "
                f"({'scheduler ' + str(scheduler) if scheduler else 'local cluster'})")
         futures = {client.submit(u.func, *u.args, key=f"mtmcal-fleet-{u.kind}-{u.key}", pure=False): u for u in missing}
-        for fut in as_completed(futures):
-            u = futures[fut]
-            try:
-                payload = fut.result()
-            except Exception as exc:  # the worker died (KilledWorker) or the task could not run
-                payload = {"error": f"{u.label}: {type(exc).__name__}: {exc}".splitlines()[0], "elapsed_s": 0.0}
-            if "error" not in payload and store is not None:
-                store.put(u.kind, u.key, payload)
-            out[u.key] = payload
-            report(f"{u.kind} {u.label}: {'FAILED' if 'error' in payload else 'done'} in "
-                   f"{payload.get('elapsed_s', 0.0):.1f} s", done=True)
-            fut.release()
+        with remembered_interrupt() as interrupt:
+            for fut in as_completed(futures):
+                interrupt.check()
+                u = futures[fut]
+                try:
+                    payload = fut.result()
+                except Exception as exc:  # the worker died (KilledWorker) or the task could not run
+                    payload = {"error": f"{u.label}: {type(exc).__name__}: {exc}".splitlines()[0], "elapsed_s": 0.0}
+                if "error" not in payload and store is not None:
+                    store.put(u.kind, u.key, payload)
+                out[u.key] = payload
+                report(f"{u.kind} {u.label}: {'FAILED' if 'error' in payload else 'done'} in "
+                       f"{payload.get('elapsed_s', 0.0):.1f} s", done=True)
+                fut.release()
+            interrupt.check()
     return {"results": out, "workers": n_workers}
 
 

@@ -27,7 +27,7 @@ import pandas as pd
 from scipy import stats
 
 from ..arviz_import import az
-from ..cluster import dask_client, default_workers
+from ..cluster import dask_client, default_workers, remembered_interrupt
 from ..errors import ParameterError
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import display_draws
@@ -279,16 +279,19 @@ def _on_dask(campaign, s: SBCSettings, sampler, seeds: list, *, progress: Progre
         queued = min(2 * workers, n)
         try:
             done = 0
-            for f in tasks:
-                results, seconds = f.result()
-                for k, r in enumerate(results, start=first.pop(f)):
-                    out[k], done = r, done + 1
-                    _replicate_done(progress, s, done, time.perf_counter() - t0)
-                if queued < n:  # the first result: the rest, in chunks sized by its time
-                    size = _chunk_size(seconds / len(results), n - queued, workers)
-                    for i in range(queued, n, size):
-                        tasks.add(submit(i, size))
-                    queued = n
+            with remembered_interrupt() as interrupt:
+                for f in tasks:
+                    interrupt.check()
+                    results, seconds = f.result()
+                    for k, r in enumerate(results, start=first.pop(f)):
+                        out[k], done = r, done + 1
+                        _replicate_done(progress, s, done, time.perf_counter() - t0)
+                    if queued < n:  # the first result: the rest, in chunks sized by its time
+                        size = _chunk_size(seconds / len(results), n - queued, workers)
+                        for i in range(queued, n, size):
+                            tasks.add(submit(i, size))
+                        queued = n
+                interrupt.check()
         except BaseException:
             client.cancel(list(first), force=True)
             raise
