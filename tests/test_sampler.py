@@ -101,6 +101,40 @@ def test_target_moments_in_the_data_space_equal_those_of_the_cells_posteriors(th
     np.testing.assert_allclose(sd, ref_sd, rtol=1e-9)
 
 
+def test_first_use_solves_and_later_uses_multiply_alike_and_a_kept_joint_is_never_stale(thesis):
+    """A fresh grid's first ``target_moments`` (one solve for the residuals and the targets) equals one made with
+    ``L⁻¹`` already at hand, to 1e-9; the log joint kept for the last data vector is returned for it alone, and a
+    caller changing the array it got changes nothing kept."""
+    post = LogPosterior(thesis, "linear", data="both")
+
+    prior_var = np.array([q.sd for q in post.priors.priors[: post.p]]) ** 2
+
+    def fresh():
+        return MarginalPosterior(post.forward.design, post.likelihood.base_var, prior_var,
+                                 [q.frozen() for q in post.priors.priors[post.p:]], groups=post.scale_of,
+                                 y=post.likelihood.y, cells=12)
+
+    y1 = post.likelihood.y
+    y2 = y1 + np.random.default_rng(6).normal(scale=2e-3, size=y1.shape)
+    T = np.random.default_rng(7).normal(size=(3, post.p))
+    solved, inverted = fresh(), fresh()
+    inverted._whitening  # L⁻¹ made before any use
+    for a, b in zip(solved.target_moments(y1[None], T), inverted.target_moments(y1[None], T)):
+        np.testing.assert_allclose(a, b, rtol=1e-9)
+    ref = {k: fresh().log_joint(y[None]) for k, y in (("y1", y1), ("y2", y2))}
+    m = fresh()
+    got = m.log_joint(y1[None])
+    got += 1.0  # the caller's copy
+    # to round-off (the first use solves, the later ones multiply by L⁻¹); the two data vectors' joints differ by
+    # far more than that
+    close = dict(rtol=1e-9, atol=1e-9 * np.abs(ref["y1"]).max())
+    assert np.abs(ref["y1"] - ref["y2"]).max() > 1e3 * close["atol"]
+    np.testing.assert_allclose(m.log_joint(y1[None]), ref["y1"], **close)
+    np.testing.assert_allclose(m.log_joint(y2[None]), ref["y2"], **close)
+    np.testing.assert_allclose(m.log_joint(y1[None]), ref["y1"], **close)
+    assert m.log_evidence(y2) == pytest.approx(fresh().log_evidence(y2), rel=1e-9)
+
+
 def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):
     """Data that only a sigma_model far beyond the prior's 0.99999 quantile explains (50 µm noise added, seeded):
     the grid reaches where they put sigma_model, and its posterior mean and sd of sigma_model are those of an

@@ -153,6 +153,7 @@ class MarginalPosterior:
         S = S[None] + V[:, :, None] * np.eye(m)[None]  # (G, m, m)
         self.S_chol = np.linalg.cholesky(S)
         self._whitened_once = False
+        self._last_joint: tuple[bytes, np.ndarray] | None = None  # the last residuals' log_joint
         self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
 
     @functools.cached_property
@@ -207,21 +208,40 @@ class MarginalPosterior:
         """Data minus the prediction at the prior mean, ``(N, m)``."""
         return np.atleast_2d(y) - self.offset - self.A @ self.prior_mean
 
+    def _whiten(self, r: np.ndarray, extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
+        """``L⁻¹ rᵀ`` ``(G, m, N)`` of residuals ``r`` (N, m) and ``L⁻¹ extra`` ``(G, m, k)`` of ``extra`` (m, k) in
+        every cell.  ``L⁻¹`` is made on the second use and multiplied from then on; a first use (an evidence, a
+        proposal's weights, the moments of a few targets) solves for both at once, which costs less than ``L⁻¹``."""
+        if "_whitening" in self.__dict__ or self._whitened_once:
+            W = self._whitening
+            return W @ r.T, None if extra is None else W @ extra
+        self._whitened_once = True
+        rhs = r.T if extra is None else np.concatenate([r.T, extra], axis=1)
+        out = np.linalg.solve(self.S_chol, np.broadcast_to(rhs, (len(self.S_chol),) + rhs.shape))
+        return out[..., : len(r)], None if extra is None else out[..., len(r):]
+
+    def _joint_of_whitened(self, r: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """:meth:`log_joint` ``(G, N)`` from the residuals ``r`` (N, m) and their whitened ``z`` (G, m, N); kept for
+        the same residuals' next call (the evidence, weights and moments of one data vector each ask for it)."""
+        loglik = -0.5 * (np.sum(z**2, axis=1) + self.S_logdet[:, None] + r.shape[1] * np.log(2 * np.pi))
+        joint = loglik + self.log_prior[:, None]
+        self._last_joint = (r.tobytes(), joint)
+        return joint.copy()
+
     def log_joint(self, y: np.ndarray) -> np.ndarray:
         """``log p(y | σ) + log p(σ)`` of every cell, ``(G, N)``, for data ``y`` of shape ``(N, m)``."""
         r = self._residual(y)
-        if "_whitening" in self.__dict__ or self._whitened_once:  # L⁻¹ made on the second use: products from then on
-            z = r[None] @ np.swapaxes(self._whitening, 1, 2)  # (G, N, m): L⁻¹ r of every cell and data vector
-        else:  # a single use (an evidence, a proposal's weights): one solve costs less than L⁻¹
-            self._whitened_once = True
-            z = np.linalg.solve(self.S_chol[:, None], r[None, :, :, None])[..., 0]
-        loglik = -0.5 * (np.sum(z**2, axis=-1) + self.S_logdet[:, None] + r.shape[1] * np.log(2 * np.pi))
-        return loglik + self.log_prior[:, None]
+        if self._last_joint is not None and self._last_joint[0] == r.tobytes():
+            return self._last_joint[1].copy()
+        return self._joint_of_whitened(r, self._whiten(r)[0])
 
     def weights(self, y: np.ndarray) -> np.ndarray:
         """Posterior weights of the grid, ``(G, N)`` for data ``y`` of shape ``(N, m)``."""
-        lw = self.log_joint(y)
-        lw -= lw.max(axis=0)
+        return self._normalised(self.log_joint(y))
+
+    @staticmethod
+    def _normalised(lw: np.ndarray) -> np.ndarray:
+        lw = lw - lw.max(axis=0)
         w = np.exp(lw)
         return w / w.sum(axis=0)
 
@@ -244,10 +264,10 @@ class MarginalPosterior:
         In the data's space, which costs the ``t`` targets rather than the ``P`` parameters: with ``K = Σ0 Aᵀ``
         and ``S`` a cell's prior predictive covariance, ``E[Tθ] = Tμ0 + T K S⁻¹ r`` and
         ``Var[Tθ] = T Σ0 Tᵀ − T K S⁻¹ Kᵀ Tᵀ`` (the same as from the cell's posterior of θ; a test holds them equal)."""
-        w = self.weights(y)  # (G, N)
         TK = (T * self.prior_var) @ self.A.T  # (t, m)
-        X = self._whitening @ TK.T  # (G, m, t): L⁻¹ KᵀTᵀ
-        Z = self._whitening @ self._residual(y).T  # (G, m, N): L⁻¹ r
+        r = self._residual(y)
+        Z, X = self._whiten(r, TK.T)  # (G, m, N): L⁻¹ r; (G, m, t): L⁻¹ KᵀTᵀ
+        w = self._normalised(self._joint_of_whitened(r, Z))  # (G, N)
         mean_g = (T @ self.prior_mean)[None, None, :] + np.swapaxes(Z, 1, 2) @ X  # (G, N, t)
         var_g = np.sum((T * self.prior_var) * T, axis=1)[None] - np.sum(X**2, axis=1)  # (G, t)
         mean = np.einsum("gn,gnt->nt", w, mean_g)
