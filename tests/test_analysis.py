@@ -126,5 +126,7 @@ def test_exact_draws_per_cell_equal_the_gathered_product(thesis):
     j = r.choice(prop.cell_prob.size, size=3000, p=prop.cell_prob)
     r.rand(3000, prop.low.shape[1])
     z = r.randn(3000, prop.P)
-    expected = prop.mean[j] + np.einsum("nij,nj->ni", prop.chol[j], z)
+    k = prop.slot[j]
+    assert (k >= 0).all()  # only cells of some weight are drawn
+    expected = prop.mean[k] + np.einsum("nij,nj->ni", prop.chol[k], z)
     assert np.allclose(theta, expected, rtol=0, atol=1e-12 * np.abs(expected).max())

@@ -169,14 +169,17 @@ def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):
 
 def test_the_proposal_factors_its_cells_without_forming_their_covariance(thesis):
     """The grid proposal's factors come from each cell's precision (the fused posterior: 2 304 cells of two
-    scales): the lower Cholesky factor of the covariance, its inverse and the cell means, each equal to the
-    covariance way (``numpy.linalg.inv`` of the precision, then ``cholesky``) to 1e-9 of its largest entry."""
+    scales; only the cells of some weight): the lower Cholesky factor of the covariance, its inverse and the cell
+    means, each equal to the covariance way (``numpy.linalg.inv`` of the precision, then ``cholesky``) to 1e-9 of
+    its largest entry."""
     a = PosteriorApproximation(LogPosterior(thesis, "linear", data="both"))
     m, prop = a.marginal, a.proposal
     assert len(m.sigma) == 48 * 48
-    chol = np.linalg.cholesky(m.cov)
+    kept = prop.kept  # only the cells of some weight are factored
+    assert 0 < len(kept) < len(m.sigma) and (prop.cell_prob[prop.slot < 0] == 0).all()
+    chol = np.linalg.cholesky(m.cov[kept])
     for got, want in ((prop.chol, chol), (prop.chol_inv, np.linalg.inv(chol)),
-                      (prop.mean, m.means(a.post.likelihood.y[None])[:, 0])):
+                      (prop.mean, m.means(a.post.likelihood.y[None])[kept, 0])):
         assert np.abs(got - want).max() <= 1e-9 * np.abs(want).max()
     assert np.all(np.triu(prop.chol, 1) == 0) and np.all(np.diagonal(prop.chol, axis1=1, axis2=2) > 0)
 
@@ -214,7 +217,7 @@ def test_hastings_correction_keeps_a_wrong_proposal_exact(thesis, monkeypatch):
             super().__init__(p)
             g = self.proposal
             u = np.random.default_rng(0).normal(size=g.P)
-            g.mean = g.mean + 0.5 * np.einsum("gij,j->gi", g.chol, u / np.linalg.norm(u))
+            g.mean = g.mean + 0.5 * np.einsum("kij,j->ki", g.chol, u / np.linalg.norm(u))
             g.chol, g.chol_inv = 0.85 * g.chol, g.chol_inv / 0.85
             g.log_det = g.log_det + 2 * g.P * np.log(0.85)
 
