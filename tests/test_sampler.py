@@ -135,6 +135,25 @@ def test_first_use_solves_and_later_uses_multiply_alike_and_a_kept_joint_is_neve
     assert m.log_evidence(y2) == pytest.approx(fresh().log_evidence(y2), rel=1e-9)
 
 
+def test_exact_draws_factor_only_the_cells_drawn_and_equal_numpys_multivariate_normal(thesis):
+    """``MarginalPosterior.draw`` factors only the cells it draws from their precision; its draws are those of
+    ``Generator.multivariate_normal(mean, cov, method="cholesky")`` of each cell's posterior, with the same seed,
+    to 1e-9 of their spread."""
+    post = LogPosterior(thesis, "linear", data="both")
+    m = PosteriorApproximation(post).marginal
+    y = post.likelihood.y
+    theta, sigma = m.draw(y, 3000, np.random.default_rng(11))
+    rng = np.random.default_rng(11)
+    g = rng.choice(len(m.sigma), size=3000, p=m.weights(y[None])[:, 0])
+    means = m.means(y[None])[:, 0]
+    want = np.empty_like(theta)
+    for k in np.unique(g):
+        idx = np.flatnonzero(g == k)
+        want[idx] = rng.multivariate_normal(means[k], m.cov[k], size=len(idx), method="cholesky")
+    assert (np.abs(theta - want) / theta.std(axis=0)).max() <= 1e-9  # each parameter in its own posterior sd
+    assert len(np.unique(g)) < len(m.sigma)  # fewer cells factored than the grid has
+
+
 def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):
     """Data that only a sigma_model far beyond the prior's 0.99999 quantile explains (50 µm noise added, seeded):
     the grid reaches where they put sigma_model, and its posterior mean and sd of sigma_model are those of an

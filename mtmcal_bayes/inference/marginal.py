@@ -296,11 +296,13 @@ class MarginalPosterior:
         σ uniform within it (not its midpoint: a truth is ranked among continuous draws), θ from the cell's Gaussian."""
         w = self.weights(y[None])[:, 0]
         g = rng.choice(len(self.sigma), size=n, p=w)
-        means = self.means(y[None])[:, 0]
+        used = np.unique(g)  # the cells drawn: only theirs are factored
+        chol = self.cov_factors(used)[0]
+        means = self.means_from_factors(y, chol, used)
         theta = np.empty((n, self.A.shape[1]))
-        for k in np.unique(g):  # one Cholesky per grid point used, not per draw
-            idx = np.flatnonzero(g == k)
-            theta[idx] = rng.multivariate_normal(means[k], self.cov[k], size=len(idx), method="cholesky")
+        for k, cell in enumerate(used):  # the draws of numpy's multivariate_normal with the Cholesky factor
+            idx = np.flatnonzero(g == cell)
+            theta[idx] = means[k] + rng.standard_normal((len(idx), theta.shape[1])) @ chol[k].T
         if self.fixed:
             return theta, self.sigma[g]
         index = np.unravel_index(g, tuple(len(e) - 1 for e in self.edges))
