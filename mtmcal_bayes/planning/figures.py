@@ -6,7 +6,7 @@ import numpy as np
 from matplotlib.patches import Rectangle
 from matplotlib.ticker import ScalarFormatter
 
-from ..figure_style import label, new_figure, symbol
+from ..figure_style import label, new_figure, symbol, tight_layout
 
 RANKING_CAPTION = (
     "Candidate measurements ranked by the expected information they give about the targets "
@@ -90,8 +90,12 @@ def sweep_figure(result):
         ax.set_ylabel(f"sd of {label(t)}")
         ax.set_title(symbol(t))
         ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=8)
     for ax in axes.ravel()[k:]:
         ax.set_visible(False)
-    fig.tight_layout()
+    shown = {}  # one legend for every panel: each kind of line once, in the order first drawn
+    for ax in axes.ravel()[:k]:
+        for handle, text in zip(*ax.get_legend_handles_labels()):
+            shown.setdefault(text, handle)
+    fig.legend(shown.values(), shown.keys(), loc="lower center", ncol=len(shown), fontsize=9, frameon=False)
+    tight_layout(fig, (0, 0.4 / fig.get_figheight(), 1, 1))
     return fig
