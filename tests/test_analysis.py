@@ -3,7 +3,6 @@ of them once, the figures drawn in batches while the report goes on, the exact d
 
 from __future__ import annotations
 
-import os
 import time
 from collections import Counter
 
@@ -131,32 +130,3 @@ def test_exact_draws_per_cell_equal_the_gathered_product(thesis):
     assert (k >= 0).all()  # only cells of some weight are drawn
     expected = prop.mean[k] + np.einsum("nij,nj->ni", prop.chol[k], z)
     assert np.allclose(theta, expected, rtol=0, atol=1e-12 * np.abs(expected).max())
-
-
-def test_the_callers_process_draws_what_no_drawing_process_has_begun(tmp_path):
-    """``draw_here`` draws in the caller's process at once; ``help`` takes the jobs of a running shared batch that
-    no drawing process has begun (the caller's pid comes back as their extra) but never a job of a batch started
-    with ``shared=False``; every file is written once and every extra arrives."""
-    def job(seconds: float, name: str):
-        def make():
-            time.sleep(seconds)
-            fig = Figure(figsize=(2, 1))
-            fig.text(0.5, 0.5, name)
-            return fig, os.getpid()
-        return make
-
-    drawing = Drawing(tmp_path)
-    private = drawing.start([("private", lambda: (None, os.getpid()))], shared=False)
-    drawing.start([(f"s{i}.png", job(0.4, f"s{i}")) for i in range(8)])
-    drawing.draw_here([("here.png", job(0.0, "here"))])
-    drawing.wait(private)
-    drawing.help()
-    extras = drawing.finish()
-    drawing.stop()
-    names = [f"s{i}.png" for i in range(8)]
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names + ["here.png"])
-    assert extras["here.png"] == os.getpid()
-    if drawing.fork:
-        assert extras["private"] != os.getpid()  # never taken by the caller
-        helped = [n for n in names if extras[n] == os.getpid()]
-        assert 0 < len(helped) < len(names)  # the caller drew some, the drawing processes the others

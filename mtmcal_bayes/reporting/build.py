@@ -212,18 +212,17 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                 ppc_df = ppc.ppc_table(rep.idata, campaign)
                 first[2:2] = _eccentricity_figures(rep, ppc_df, campaign)
 
-            def draw(jobs, here=False):  # a batch of figures, drawn while the report goes on (``here``: by this
-                drawing.check()          # process, now); a figure already failed stops it
+            def draw(jobs):  # a batch of figures, drawn while the report goes on; a figure already failed stops it
+                drawing.check()
                 if jobs:
                     say("drawing " + ", ".join(name for name, _ in jobs))
-                    drawing.draw_here(jobs) if here else drawing.start(jobs)
+                    drawing.start(jobs)
 
             draw(first)
             content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
                                       compare_models=compare_models, draw=draw, ahead=ahead, drawing=drawing)
             if not ppc_here:
                 ppc_df = content.ppc
-            drawing.help()  # this process's own work done: it draws beside the drawing processes
             extras = drawing.finish()
             off_scale, content.conflict = extras["corner.png"], extras.get(CONFLICT_JOB)
             files = _write_tables(tmp, rep, content, ident=analysis.identification, ppc_df=ppc_df, loo=loo)
@@ -271,15 +270,13 @@ def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
     campaign = analysis.campaign
     ahead = {}
     say("planning the next measurement (beside the sampling)")
-    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory))],
-                                    shared=False)
+    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory))])
     if campaign.has_probe_readings() and campaign.ballbar.runs:
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
         # the report shows its own consistency check: none for the candidates
         ahead[CONFLICT_JOB] = drawing.start([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis,
-                                                                                          consistency_of=0)))],
-                                            shared=False)
+                                                                                          consistency_of=0)))])
     return ahead
 #: the figures in the order the report's file list names them
 FIGURE_ORDER = ("corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png", "loo.png",
@@ -343,7 +340,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
         if data != "ballbar":  # the eccentricity plots show the ball-bar posterior, a side one here
             ppc_df = ppc.ppc_table(instruments.posteriors["ballbar"].idata, campaign)
             figures += _eccentricity_figures(instruments.posteriors["ballbar"], ppc_df, campaign)
-        draw(figures, here=True)
+        draw(figures)
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:

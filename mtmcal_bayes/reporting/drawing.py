@@ -42,21 +42,18 @@ def _run(job: tuple[str, Callable], directory: Path):
     return extra
 
 
-def _next(jobs, counter) -> int | None:
-    """The index of the batch's next job not yet taken (and take it), or None when none is left."""
-    with counter.get_lock():
-        i = counter.value
-        counter.value += 1
-    return i if i < len(jobs) else None
-
-
 def _work(jobs, directory: Path, counter, conn) -> None:
     """A worker: take the batch's next job from ``counter`` until none is left; send ``{name: extra}`` (or the
     exception that stopped it) through ``conn``."""
     gc.disable()  # a short-lived process: no cyclic collection (it would walk every object inherited from the report)
     out = {}
     try:
-        while (i := _next(jobs, counter)) is not None:
+        while True:
+            with counter.get_lock():
+                i = counter.value
+                counter.value += 1
+            if i >= len(jobs):
+                break
             out[jobs[i][0]] = _run(jobs[i], directory)
         conn.send(("ok", out))
     except BaseException as exc:  # noqa: BLE001 - every failure goes back to the report, which raises it
@@ -82,14 +79,12 @@ class Drawing:
         self._extras: dict[str, object] = {}
         self._errors: list[BaseException] = []
         self._counters: list = []
-        self._shared: dict[int, tuple[list, object]] = {}  # batch: (jobs, counter) the report's process may help with
         self._warm = False
         self._frozen = False
 
-    def start(self, jobs: list[tuple[str, Callable]], *, shared: bool = True) -> int:
+    def start(self, jobs: list[tuple[str, Callable]]) -> int:
         """Begin drawing ``jobs`` (``(file name, make)``) and return the batch's number (for :meth:`wait` and
-        :meth:`cancel`); without fork, draw them now.  ``shared``: the report's own process may take the batch's
-        jobs not yet begun (:meth:`help`)."""
+        :meth:`cancel`); without fork, draw them now."""
         jobs = list(jobs)
         batch = self._batches
         self._batches += 1
@@ -115,8 +110,6 @@ class Drawing:
         # kept until the drawing ends: a counter freed while its batch still runs could be handed to the next batch
         # (the shared memory is reused), and two batches would then take jobs from one counter
         self._counters.append(counter)
-        if shared:
-            self._shared[batch] = (jobs, counter)
         for _ in range(min(self.workers, len(jobs))):
             receive, send = ctx.Pipe(duplex=False)
             proc = ctx.Process(target=_work, args=(jobs, self.directory, counter, send), daemon=True)
@@ -149,21 +142,6 @@ class Drawing:
         if self._errors:
             raise self._errors[0]
 
-    def draw_here(self, jobs: list[tuple[str, Callable]]) -> None:
-        """Draw ``jobs`` in this process, now (a figure the report's process can draw while its batches run: no
-        process forked for it)."""
-        jobs = list(jobs)
-        self.names += [name for name, _ in jobs]
-        for job in jobs:
-            self._extras[job[0]] = _run(job, self.directory)
-
-    def help(self) -> None:
-        """Take, in this process, the jobs of the running batches that no drawing process has begun, until none is
-        left: the report's process, done with its own work, draws beside them instead of waiting."""
-        for jobs, counter in self._shared.values():
-            while (i := _next(jobs, counter)) is not None:
-                self._extras[jobs[i][0]] = _run(jobs[i], self.directory)
-
     def wait(self, batch: int) -> dict[str, object]:
         """Wait for one batch (the others go on); returns the extras of every job ended so far, by file name.  A
         job's exception is raised here."""
@@ -186,7 +164,6 @@ class Drawing:
                 proc.join()
                 receive.close()
         self._running = [(p, r, b) for p, r, b in self._running if b != batch]
-        self._shared.pop(batch, None)
         for name in self._jobs_of.pop(batch, ()):
             self._extras.pop(name, None)
             self.names.remove(name)
@@ -197,7 +174,6 @@ class Drawing:
             self._collect(proc, receive, block=True)
         self._running = []
         self._counters = []
-        self._shared = {}
         if self._errors:
             raise self._errors[0]
         return dict(self._extras)
@@ -211,7 +187,6 @@ class Drawing:
             receive.close()
         self._running = []
         self._counters = []
-        self._shared = {}
         if self._frozen:
             gc.unfreeze()
             self._frozen = False
