@@ -87,7 +87,28 @@ class CampaignAnalysis:
         from .inference.log_posterior import LogPosterior
 
         return LogPosterior(self.campaign, self.model, fix_dx_BT=self.fix_dx_BT, sigma_model=self.sigma_model,
-                            data=self.data, sigma_prior=self.sigma_prior)
+                            data=self.data, sigma_prior=self.sigma_prior, space=self.space,
+                            observations=self.ballbar_observations,
+                            probe_layout=self.probe_layout if self.data != "ballbar" else None)
+
+    @property
+    def ballbar_observations(self):
+        """The campaign's ball-bar observations (repeat means of every run), made once for every variant."""
+        from .observations import Observations
+
+        if "observations" not in self._family:
+            self._family["observations"] = Observations.from_campaign(self.campaign)
+        return self._family["observations"]
+
+    @property
+    def probe_layout(self):
+        """The campaign's touch-probe readings and where they were taken (:class:`~mtmcal_bayes.models.probe_model.ProbeLayout`),
+        made once for every variant."""
+        from .models.probe_model import ProbeLayout
+
+        if "probe_layout" not in self._family:
+            self._family["probe_layout"] = ProbeLayout(self.campaign)
+        return self._family["probe_layout"]
 
     @property
     def observations(self):
@@ -96,7 +117,14 @@ class CampaignAnalysis:
 
     @property
     def space(self):
-        return self.log_posterior.space
+        """The parameter space of this data and dx_BT assumption, made once for every variant that shares them (the
+        forward models and the σ choices do not change it)."""
+        from .inference.log_posterior import parameter_space
+
+        key = ("space", self.fix_dx_BT, self.data)
+        if key not in self._family:
+            self._family[key] = parameter_space(self.campaign, self.fix_dx_BT, self.data)
+        return self._family[key]
 
     @property
     def forward(self):

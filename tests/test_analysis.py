@@ -14,6 +14,8 @@ import mtmcal_bayes as mb
 from mtmcal_bayes.analysis import CampaignAnalysis, analysis_of
 from mtmcal_bayes.inference import log_posterior
 from mtmcal_bayes.inference.marginal import GridProposal
+from mtmcal_bayes.models.probe_model import ProbeLayout
+from mtmcal_bayes.observations import Observations
 from mtmcal_bayes.reporting import build
 from mtmcal_bayes.reporting.drawing import Drawing
 
@@ -40,23 +42,40 @@ def test_an_analysis_is_accepted_wherever_a_campaign_is(thesis):
 
 
 def test_the_report_builds_each_analysis_of_the_campaign_once(thesis, tmp_path, monkeypatch):
-    """Following the built-in campaign down ``build_report``: every log posterior of the campaign (one per model,
-    data set, dx_BT assumption and σ_model) is built once; the conflict's candidates, each a campaign of its own,
-    once each too."""
-    built = Counter()
+    """Following the built-in campaign down ``build_report`` (in the report's process): every log posterior of the
+    campaign (one per model, data set, dx_BT assumption and σ_model) is built once, and from one set of its parts:
+    the ball-bar observations and the probe's readings made once, each parameter space (one per data set and dx_BT
+    assumption) once."""
+    built, parts = Counter(), Counter()
     real = log_posterior.LogPosterior.__init__
 
     def counting(self, campaign, model="linear", fix_dx_BT=False, sigma_model=None, *, data="ballbar",
-                 sigma_prior=None):
+                 sigma_prior=None, **kw):
         built[(id(campaign), model, fix_dx_BT, sigma_model, data, sigma_prior)] += 1
-        real(self, campaign, model, fix_dx_BT, sigma_model, data=data, sigma_prior=sigma_prior)
+        real(self, campaign, model, fix_dx_BT, sigma_model, data=data, sigma_prior=sigma_prior, **kw)
+
+    def counted(name, real_made):
+        def made(campaign, *args, **kw):
+            if campaign is thesis:
+                parts[(name, *args)] += 1
+            return real_made(campaign, *args, **kw)
+        return made
 
     monkeypatch.setattr(log_posterior.LogPosterior, "__init__", counting)
+    monkeypatch.setattr(log_posterior, "parameter_space", counted("space", log_posterior.parameter_space))
+    monkeypatch.setattr(Observations, "from_campaign", counted("observations", Observations.from_campaign))
+    real_layout = ProbeLayout.__init__
+    monkeypatch.setattr(ProbeLayout, "__init__", lambda self, campaign: counted("probe readings", lambda c: real_layout(
+        self, c))(campaign))
     build.build_report(thesis, tmp_path / "r", settings=build.SamplerSettings(seed=1, max_steps=500))
     assert built and max(built.values()) == 1, [k for k, n in built.items() if n > 1]
     own = {k[1:-1] for k in built if k[0] == id(thesis)}
     assert {("linear", False, None, "ballbar"), ("linear", False, None, "probe"),
             ("linear", False, None, "both")} <= own
+    assert parts[("observations",)] == 1 and parts[("probe readings",)] == 1, parts
+    spaces = {k: n for k, n in parts.items() if k[0] == "space"}
+    assert set(spaces.values()) == {1} and {("space", False, "ballbar"), ("space", False, "probe"),
+                                             ("space", False, "both")} <= set(spaces), spaces
 
 
 def _slow_figure(seconds: float, text: str):

@@ -21,7 +21,7 @@ import copy
 
 import numpy as np
 
-from ..models import check_data, make_model
+from ..models import JointModel, check_data, make_model
 from ..observations import observation_instruments
 from ..parameters import DISCREPANCY_SCALES, ParameterSpace
 from .likelihood import GaussianMeanLikelihood
@@ -30,6 +30,13 @@ from .priors import PriorSet, learnt_prior, make_prior
 #: deviations sampled by default (Table 2.1 minus the linear-axis squareness)
 SAMPLED_DEVIATIONS = ("dx_BT", "dz_BT", "alpha_BT", "alpha_XB", "beta_XB", "gamma_XB",
                       "dx_CZ", "dy_CZ", "alpha_CZ", "beta_CZ")
+
+
+def parameter_space(campaign, fix_dx_BT: bool, data: str) -> ParameterSpace:
+    """The parameter space of a posterior of ``campaign``'s ``data``: the sampled deviations (without dx_BT under
+    the thesis assumption ``fix_dx_BT``) and the campaign's nuisance terms."""
+    devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
+    return ParameterSpace.for_campaign(campaign, devs, data=data)
 
 
 class LogPosterior:
@@ -44,6 +51,10 @@ class LogPosterior:
     data : ``"ballbar"`` (eccentricities), ``"probe"`` (touch-probe readings) or ``"both"``
     sigma_prior : a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere: the prior of each scale it
         names (log-normal) instead of the assumed default; None: the defaults (or the campaign's ``[priors]``)
+    space, observations, probe_layout : the :func:`parameter_space` of these choices, the campaign's ball-bar
+        :class:`~mtmcal_bayes.observations.Observations` and its probe readings
+        (:class:`~mtmcal_bayes.models.probe_model.ProbeLayout`), when already made (an analysis shares them between its
+        variants); None: made here
 
     Attributes
     ----------
@@ -53,19 +64,25 @@ class LogPosterior:
     scales : names of the discrepancy scales, one per instrument in the data (``sigma_model``,
         ``sigma_model_probe``), sampled or fixed
     scale_of : (m,) index into ``scales`` of each observation
+    ballbar_observations : the campaign's ball-bar observations (None for touch-probe data alone)
     """
 
     def __init__(self, campaign, model: str = "linear", fix_dx_BT: bool = False, sigma_model: float | None = None, *,
-                 data: str = "ballbar", sigma_prior=None):
+                 data: str = "ballbar", sigma_prior=None, space: ParameterSpace | None = None, observations=None,
+                 probe_layout=None):
         if sigma_prior is not None and sigma_model is not None:
             raise ValueError("a fixed sigma_model has no prior: give sigma_model or sigma_prior, not both")
         self.campaign = campaign
         self.model_name = model
         self.fix_dx_BT = fix_dx_BT
         self.data = check_data(data, campaign)
-        devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
-        self.space = ParameterSpace.for_campaign(campaign, devs, data=data)
-        self.forward = make_model(model, campaign, self.space, data)
+        self.space = space or parameter_space(campaign, fix_dx_BT, data)
+        self.forward = make_model(model, campaign, self.space, data, observations=observations,
+                                  probe_layout=probe_layout)
+        #: the campaign's ball-bar observations (None for probe data alone)
+        self.ballbar_observations = observations or (
+            self.forward.parts[0].observations if isinstance(self.forward, JointModel) else
+            self.forward.observations if data == "ballbar" else None)
         instruments = observation_instruments(self.forward.observations)
         self.scales = tuple(DISCREPANCY_SCALES[i].name for i in dict.fromkeys(instruments))
         self.scale_of = np.array([self.scales.index(DISCREPANCY_SCALES[i].name) for i in instruments], dtype=int)

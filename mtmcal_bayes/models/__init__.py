@@ -45,27 +45,32 @@ def check_data(data: str, campaign=None, parameter: str = "data") -> str:
     return data
 
 
-def make_model(name: str, campaign, space=None, data: str = "ballbar"):
-    """The forward model ``name`` (one of :data:`MODELS`) for ``campaign``'s ``data`` (one of :data:`DATA`)."""
+def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
+    """The forward model ``name`` (one of :data:`MODELS`) for ``campaign``'s ``data`` (one of :data:`DATA`);
+    ``observations``, ``probe_layout``: the campaign's ball-bar :class:`~mtmcal_bayes.observations.Observations` and
+    its :class:`~.probe_model.ProbeLayout` (the probe's readings), if already made."""
     check_model(name)
     check_data(data, campaign)
     if space is None:
         space = ParameterSpace.for_campaign(campaign, data=data)
     parts = []
     if data in ("ballbar", "both"):
-        parts.append(LinearModel(campaign, space) if name == "linear" else HTMModel(campaign, name, space))
+        parts.append(LinearModel(campaign, space, observations=observations) if name == "linear"
+                     else HTMModel(campaign, name, space, observations=observations))
     if data in ("probe", "both"):
-        parts.append(LinearProbeModel(campaign, space) if name == "linear" else ProbeModel(campaign, name, space))
+        parts.append(LinearProbeModel(campaign, space, probe_layout) if name == "linear"
+                     else ProbeModel(campaign, name, space, probe_layout))
     return parts[0] if len(parts) == 1 else JointModel(parts)
 
 
-def first_order_gap(campaign, theta: np.ndarray, space=None) -> float:
-    """Largest difference, mm, between ``htm-thesis`` and its first order (``linear``) at ``theta`` (p,).
+def first_order_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -> float:
+    """Largest difference, mm, between ``htm-thesis`` and its first order (``linear``) at ``theta`` (p,)
+    (``observations``: the campaign's ball-bar observations, if already made).
 
     Above the instrument accuracy, the deviations are too large for the linear model.
     """
-    linear = LinearModel(campaign, space)
-    kinematic = HTMModel(campaign, "htm-thesis", linear.space)
+    linear = LinearModel(campaign, space, observations=observations)
+    kinematic = HTMModel(campaign, "htm-thesis", linear.space, observations=linear.observations)
     return float(np.abs(kinematic.predict(theta) - linear.predict(theta)).max())
 
 

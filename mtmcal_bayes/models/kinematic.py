@@ -82,12 +82,12 @@ class HTMModel:
     """
 
     def __init__(self, campaign, pivots: Pivots | str = "htm-thesis", space: ParameterSpace | None = None, *,
-                 b_angles_deg=None, c_angles_deg=None):
+                 b_angles_deg=None, c_angles_deg=None, observations: Observations | None = None):
         self.pivots = PIVOTS[pivots] if isinstance(pivots, str) else pivots
         self.name = self.pivots.name
         self.campaign = campaign
         self.space = space or ParameterSpace.for_campaign(campaign)
-        self.observations = Observations.from_campaign(campaign)
+        self.observations = observations or Observations.from_campaign(campaign)
         bb = campaign.ballbar
         geometry = getattr(bb, "cr_geometry", "RC-LB")
         for r in bb.runs:  # campaigns built in Python skip the loader's check

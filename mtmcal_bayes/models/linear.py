@@ -91,10 +91,10 @@ class LinearModel:
 
     name = "linear"
 
-    def __init__(self, campaign, space: ParameterSpace | None = None):
+    def __init__(self, campaign, space: ParameterSpace | None = None, *, observations: Observations | None = None):
         self.campaign = campaign
         self.space = space or ParameterSpace.for_campaign(campaign)
-        self.observations = Observations.from_campaign(campaign)
+        self.observations = observations or Observations.from_campaign(campaign)
         bb = campaign.ballbar
         self._names = set(self.space.names)
         A = np.zeros((len(self.observations), len(self.space)))

@@ -28,7 +28,7 @@ def linear_model_check(result: SamplingResult) -> list[str]:
     if post.model_name != "linear":
         return []
     theta = result.chains.reshape(-1, result.chains.shape[-1])[:, : post.p].mean(axis=0)
-    gap = first_order_gap(post.campaign, theta, post.space)
+    gap = first_order_gap(post.campaign, theta, post.space, observations=post.ballbar_observations)
     accuracy = post.campaign.ballbar.accuracy
     if gap <= accuracy:
         return []

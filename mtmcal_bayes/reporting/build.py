@@ -209,7 +209,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             first.insert(1, ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc")))
             ppc_here = data == "ballbar"  # the eccentricity plots show the ball-bar posterior: the main one here
             if ppc_here:
-                ppc_df = ppc.ppc_table(rep.idata, campaign)
+                ppc_df = ppc.ppc_table(rep.idata, campaign, analysis.ballbar_observations)
                 first[2:2] = _eccentricity_figures(rep, ppc_df, campaign)
 
             def draw(jobs):  # a batch of figures, drawn while the report goes on; a figure already failed stops it
@@ -338,7 +338,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
         figures = [("instruments_forest.png", lambda: forest.forest_figure(
             {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison))]
         if data != "ballbar":  # the eccentricity plots show the ball-bar posterior, a side one here
-            ppc_df = ppc.ppc_table(instruments.posteriors["ballbar"].idata, campaign)
+            ppc_df = ppc.ppc_table(instruments.posteriors["ballbar"].idata, campaign, analysis.ballbar_observations)
             figures += _eccentricity_figures(instruments.posteriors["ballbar"], ppc_df, campaign)
         draw(figures)
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots

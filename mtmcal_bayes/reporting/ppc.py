@@ -21,9 +21,10 @@ CAPTION = (
 )
 
 
-def ppc_table(idata, campaign) -> pd.DataFrame:
-    """One row per observation: observed mean/sd/n (µm), predictive mean, sd, 2.5/25/75/97.5 % and z."""
-    obs = Observations.from_campaign(campaign)
+def ppc_table(idata, campaign, observations=None) -> pd.DataFrame:
+    """One row per observation: observed mean/sd/n (µm), predictive mean, sd, 2.5/25/75/97.5 % and z
+    (``observations``: the campaign's ball-bar observations, if already made)."""
+    obs = observations or Observations.from_campaign(campaign)
     rep = np.asarray(idata.posterior_predictive["eccentricity"]).reshape(-1, len(obs))
     q = np.quantile(rep, [0.025, 0.25, 0.75, 0.975], axis=0)
     mean, sd = rep.mean(axis=0), rep.std(axis=0)
