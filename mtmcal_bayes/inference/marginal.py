@@ -198,6 +198,19 @@ class MarginalPosterior:
         inv = np.swapaxes(U, 1, 2)  # C⁻¹ = Uᵀ, lower triangular
         return _lower_inverse(inv), inv
 
+    def _cell_factors(self, cells: np.ndarray) -> np.ndarray:
+        """The covariance factors ``C`` (:meth:`cov_factors`) of ``cells``, ``(k, P, P)``: each cell factored when
+        first drawn from and kept (one grid serves many data vectors in simulation-based calibration)."""
+        if "_factors" not in self.__dict__:
+            P = self.A.shape[1]
+            self._factors = (np.empty((len(self.sigma), P, P)), np.zeros(len(self.sigma), dtype=bool))
+        store, have = self._factors
+        new = cells[~have[cells]]
+        if len(new):
+            store[new] = self.cov_factors(new)[0]
+            have[new] = True
+        return store[cells]
+
     def means_from_factors(self, y: np.ndarray, chol: np.ndarray, cells: np.ndarray | None = None) -> np.ndarray:
         """Posterior mean of θ in each cell of ``cells`` (None: all) for one data vector ``y`` (m,), ``(k, P)``, from
         their covariance factors ``chol`` (:meth:`cov_factors`): ``μ0 + C Cᵀ Aᵀ V⁻¹ r`` without the gain matrices."""
@@ -296,8 +309,8 @@ class MarginalPosterior:
         σ uniform within it (not its midpoint: a truth is ranked among continuous draws), θ from the cell's Gaussian."""
         w = self.weights(y[None])[:, 0]
         g = rng.choice(len(self.sigma), size=n, p=w)
-        used = np.unique(g)  # the cells drawn: only theirs are factored
-        chol = self.cov_factors(used)[0]
+        used = np.unique(g)
+        chol = self._cell_factors(used)
         means = self.means_from_factors(y, chol, used)
         theta = np.empty((n, self.A.shape[1]))
         for k, cell in enumerate(used):  # the draws of numpy's multivariate_normal with the Cholesky factor
