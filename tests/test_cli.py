@@ -1,6 +1,8 @@
 """Command line: JSON shapes and human output."""
 
 import json
+import subprocess
+import sys
 
 import pytest
 
@@ -60,3 +62,15 @@ def test_probe_fit_bad_input(run_cli, tmp_path, content, fragment):
 def test_unknown_command_one_line(run_cli):
     code, _, err = run_cli("frobnicate")
     assert code == 2 and len(err.strip().splitlines()) == 1
+
+
+def test_a_command_ends_its_process_with_its_status_and_all_its_output(tmp_path):
+    """The command line ends a short command's process itself (no teardown of the heap): the exit status, the whole
+    of stdout through a pipe and the one-line error still arrive."""
+    ok = subprocess.run([sys.executable, "-m", "mtmcal_bayes.cli", "identify", "--json"], cwd=tmp_path,
+                        capture_output=True, text=True, timeout=120)
+    assert ok.returncode == 0 and json.loads(ok.stdout)  # complete JSON: every buffered byte was flushed
+    bad = subprocess.run([sys.executable, "-m", "mtmcal_bayes.cli", "report", "nowhere.toml", "-o", "r"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and bad.stdout == "" and bad.stderr.count("\n") == 1, bad.stderr
+    assert "nowhere.toml" in bad.stderr and not (tmp_path / "r").exists()

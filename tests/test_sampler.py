@@ -152,6 +152,9 @@ def test_exact_draws_factor_only_the_cells_drawn_and_equal_numpys_multivariate_n
         want[idx] = rng.multivariate_normal(means[k], m.cov[k], size=len(idx), method="cholesky")
     assert (np.abs(theta - want) / theta.std(axis=0)).max() <= 1e-9  # each parameter in its own posterior sd
     assert len(np.unique(g)) < len(m.sigma)  # fewer cells factored than the grid has
+    # a cell's factors do not depend on the cells made with it (a draw does not depend on the draws before it)
+    some, more = np.array([3, 500, 901]), np.arange(0, 1200, 1)
+    assert np.array_equal(m.cov_factors(some)[0], m.cov_factors(more)[0][some])
 
 
 def test_linear_approximation_is_exact_and_its_grid_follows_the_data(thesis):

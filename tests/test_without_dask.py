@@ -10,19 +10,23 @@ import arviz  # noqa: F401 - xarray imported in this process, as in any caller's
 from mtmcal_bayes.without_dask import hide_dask
 
 SCRIPT = textwrap.dedent("""
-    import json, sys
+    import atexit, json, sys
     sys.argv = ["mtmcal-bayes", *json.loads(sys.argv[1])]
+
+    def modules_at_exit():  # the command ends the process itself (cli._exit_now), after the exit handlers
+        loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("dask", "distributed"))
+        print(json.dumps({"dask": loaded, "xarray": "xarray" in sys.modules}), file=sys.stderr)
+
+    atexit.register(modules_at_exit)
     from mtmcal_bayes.cli import main
-    status = main()
-    loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("dask", "distributed"))
-    print(json.dumps({"status": status, "dask": loaded, "xarray": "xarray" in sys.modules}), file=sys.stderr)
+    sys.exit(main())
 """)
 
 
 def _command(args, cwd):
     done = subprocess.run([sys.executable, "-c", SCRIPT, json.dumps(args)], cwd=cwd, capture_output=True, text=True,
                           timeout=300)
-    return done.stdout, json.loads(done.stderr.strip().splitlines()[-1])
+    return done.stdout, {"status": done.returncode, **json.loads(done.stderr.strip().splitlines()[-1])}
 
 
 def test_sample_imports_no_dask_and_writes_a_readable_posterior(tmp_path):

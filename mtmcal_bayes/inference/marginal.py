@@ -168,12 +168,17 @@ class MarginalPosterior:
         return self._precision_of(None)
 
     def _precision_of(self, cells: np.ndarray | None) -> np.ndarray:
-        """The posterior precision ``Σ0⁻¹ + Aᵀ V⁻¹ A`` of the grid cells ``cells`` (indices; None: all), ``(k, P, P)``,
-        in one matrix product (``V⁻¹`` ``(k, m)`` times the rows' outer products ``(m, P²)``)."""
+        """The posterior precision ``Σ0⁻¹ + Aᵀ V⁻¹ A`` of the grid cells ``cells`` (indices; None: all), ``(k, P, P)``.
+        Every cell: one matrix product (``V⁻¹`` ``(G, m)`` times the rows' outer products ``(m, P²)``).  Some cells:
+        one product per cell, so that a cell's precision does not depend on which others it is made with (a large
+        product's rounding does): a draw is then the same whatever was drawn before (simulation-based calibration's
+        results are identical, bit for bit, whatever the number of workers)."""
         m, P = self.A.shape
-        outer = (self.A[:, :, None] * self.A[:, None, :]).reshape(m, P * P)
-        V = self.V if cells is None else self.V[cells]
-        return np.diag(1.0 / self.prior_var)[None] + ((1.0 / V) @ outer).reshape(-1, P, P)
+        prior = np.diag(1.0 / self.prior_var)[None]
+        if cells is None:
+            outer = (self.A[:, :, None] * self.A[:, None, :]).reshape(m, P * P)
+            return prior + ((1.0 / self.V) @ outer).reshape(-1, P, P)
+        return prior + (self.A.T[None] / self.V[cells][:, None, :]) @ self.A
 
     @functools.cached_property
     def _posterior_cells(self) -> tuple[np.ndarray, np.ndarray]:
@@ -190,10 +195,7 @@ class MarginalPosterior:
         ``Σ⁻¹ = U Uᵀ`` (``U`` upper triangular: the Cholesky factor of the precision with its order reversed),
         ``Σ = U⁻ᵀ U⁻¹`` and ``C = U⁻ᵀ`` is lower triangular, so it is Σ's Cholesky factor, and ``C⁻¹ = Uᵀ``.
         One factorisation and one triangular inverse instead of an inverse, a factorisation and an inverse."""
-        if cells is None:
-            precision = self._precision
-        else:  # those cells' only, unless every cell's is at hand
-            precision = self._precision[cells] if "_precision" in self.__dict__ else self._precision_of(cells)
+        precision = self._precision if cells is None else self._precision_of(cells)
         U = np.linalg.cholesky(precision[:, ::-1, ::-1])[:, ::-1, ::-1]  # precision = U Uᵀ
         inv = np.swapaxes(U, 1, 2)  # C⁻¹ = Uᵀ, lower triangular
         return _lower_inverse(inv), inv
