@@ -204,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
         # a command that ends in seconds: Python's cyclic collector walks every object it has imported, again and
         # again, 5-10 % of its time, for cycles that would be freed at exit anyway (peak memory measured unchanged)
         gc.disable()
-    code = _run(args)
+    code = _run(args, process=argv is None)
     if short:
         _exit_now(code)
     return code
@@ -224,8 +224,9 @@ def _exit_now(code: int) -> NoReturn:
     os._exit(code)
 
 
-def _run(args) -> int:
-    """Run the parsed command; its exit status (errors as one line on stderr, status 2)."""
+def _run(args, *, process: bool) -> int:
+    """Run the parsed command; its exit status (errors as one line on stderr, status 2).  ``process``: the command
+    line's own process, which an interruption ends at once."""
     try:
         return args.func(args)
     except ParameterError as exc:
@@ -236,6 +237,10 @@ def _run(args) -> int:
         return 2
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
+        # the command line's process ends here, while the interrupted frames are alive: freeing them would run the
+        # finalisers of objects the interrupt left half-made (a Dask future's prints an "ignored" traceback)
+        if process:
+            _exit_now(130)
         return 130
     except BrokenPipeError:  # output piped into head & co.: stop quietly, like other Unix tools
         sys.stdout = None
