@@ -91,24 +91,27 @@ class CampaignAnalysis:
                             observations=self.ballbar_observations,
                             probe_layout=self.probe_layout if self.data != "ballbar" else None)
 
+    def _shared(self, key, make):
+        """What ``make()`` derives from the campaign, made once for every variant of the family (kept under
+        ``key``)."""
+        if key not in self._family:
+            self._family[key] = make()
+        return self._family[key]
+
     @property
     def ballbar_observations(self):
         """The campaign's ball-bar observations (repeat means of every run), made once for every variant."""
         from .observations import Observations
 
-        if "observations" not in self._family:
-            self._family["observations"] = Observations.from_campaign(self.campaign)
-        return self._family["observations"]
+        return self._shared("observations", lambda: Observations.from_campaign(self.campaign))
 
     @property
     def probe_layout(self):
-        """The campaign's touch-probe readings and where they were taken (:class:`~mtmcal_bayes.models.probe_model.ProbeLayout`),
-        made once for every variant."""
+        """The campaign's touch-probe readings and where they were taken
+        (:class:`~mtmcal_bayes.models.probe_model.ProbeLayout`), made once for every variant."""
         from .models.probe_model import ProbeLayout
 
-        if "probe_layout" not in self._family:
-            self._family["probe_layout"] = ProbeLayout(self.campaign)
-        return self._family["probe_layout"]
+        return self._shared("probe_layout", lambda: ProbeLayout(self.campaign))
 
     @property
     def observations(self):
@@ -121,10 +124,8 @@ class CampaignAnalysis:
         forward models and the σ choices do not change it)."""
         from .inference.log_posterior import parameter_space
 
-        key = ("space", self.fix_dx_BT, self.data)
-        if key not in self._family:
-            self._family[key] = parameter_space(self.campaign, self.fix_dx_BT, self.data)
-        return self._family[key]
+        return self._shared(("space", self.fix_dx_BT, self.data),
+                            lambda: parameter_space(self.campaign, self.fix_dx_BT, self.data))
 
     @property
     def forward(self):
@@ -146,11 +147,9 @@ class CampaignAnalysis:
     @property
     def identification(self) -> IdentificationResult:
         """The thesis' deterministic identification of the campaign (shared by every variant)."""
-        if "identification" not in self._family:
-            from .identification import identify
+        from .identification import identify
 
-            self._family["identification"] = identify(self.campaign)
-        return self._family["identification"]
+        return self._shared("identification", lambda: identify(self.campaign))
 
     def __repr__(self) -> str:
         sigma = "sampled" if self.sigma_model is None else f"{self.sigma_model:g} mm"
