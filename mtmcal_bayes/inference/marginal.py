@@ -191,8 +191,8 @@ class MarginalPosterior:
     def cov_factors(self, cells: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The lower Cholesky factor ``C`` of the posterior covariance (``C Cᵀ = Σ``) of each cell of ``cells``
         (indices; None: every cell) and its inverse, both ``(k, P, P)``, from the precision without forming Σ: with
-        the precision factored "upper-first",
-        ``Σ⁻¹ = U Uᵀ`` (``U`` upper triangular: the Cholesky factor of the precision with its order reversed),
+        the precision factored "upper-first", ``Σ⁻¹ = U Uᵀ`` (``U`` upper triangular: the Cholesky factor of the
+        precision with its order reversed),
         ``Σ = U⁻ᵀ U⁻¹`` and ``C = U⁻ᵀ`` is lower triangular, so it is Σ's Cholesky factor, and ``C⁻¹ = Uᵀ``.
         One factorisation and one triangular inverse instead of an inverse, a factorisation and an inverse."""
         precision = self._precision if cells is None else self._precision_of(cells)
@@ -386,8 +386,8 @@ class GridProposal:
     ``log g(θ, σ)`` is that density for the cell holding σ (−inf beyond the grid); with fixed scales
     there is one cell and no σ dimension.  Only the cells of some weight (:attr:`kept`) are ever drawn, so
     only theirs are factored: ``chol``, ``chol_inv``, ``mean`` and ``log_det`` are indexed by a cell's
-    :attr:`slot` (its place among the kept cells; −1 for the others).  No heavier-tailed defensive component is mixed in: on
-    the thesis campaign it cost 10 % of the effective sample size and, in 24 dimensions, did not
+    :attr:`slot` (its place among the kept cells; −1 for the others).  No heavier-tailed defensive component is
+    mixed in: on the thesis campaign it cost 10 % of the effective sample size and, in 24 dimensions, did not
     rescue a proposal that was badly wrong (the acceptance stayed near zero either way).  A poor
     proposal shows instead as a low independence acceptance, the differential-evolution moves carry
     the chains, and R-hat and ESS decide as usual.

@@ -264,9 +264,8 @@ def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
     """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
     sampler leaves the second core idle): the plan for all eight quantities and its figures (kept when the
     posterior identifies every one, else made again for the unidentified ones, :func:`_planning`) and, for a
-    campaign with both
-    instruments, the weighing of the explanations of a conflict between them (kept when the comparison finds one
-    or a B run reads otherwise than in the thesis).  Returns their batches by job name."""
+    campaign with both instruments, the weighing of the explanations of a conflict between them (kept when the
+    comparison finds one or a B run reads otherwise than in the thesis).  Returns their batches by job name."""
     campaign = analysis.campaign
     ahead = {}
     say("planning the next measurement (beside the sampling)")
@@ -278,6 +277,8 @@ def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
         ahead[CONFLICT_JOB] = drawing.start([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis,
                                                                                           consistency_of=0)))])
     return ahead
+
+
 #: the figures in the order the report's file list names them
 FIGURE_ORDER = ("corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png", "loo.png",
                 "compare_forest.png", "compare_ppc.png", "instruments_forest.png", "budget.png", "sigma_model.png",

@@ -1,14 +1,14 @@
 """Drawing a report's figures in forked processes while the report goes on computing.
 
 Each figure is independent once what it shows exists, and drawing is most of a report's CPU time.  A job may
-also compute a result instead of a figure (the report's weighing of the instruments' conflict), which then
-runs beside the report's own work instead of after it.  A
-:class:`Drawing` takes the figures in batches: :meth:`Drawing.start` forks two processes for a batch and
-returns at once, so the figures of the main posterior are drawn while the report weighs the instruments
-and plans the next measurement; :meth:`Drawing.finish` waits for every batch.  The jobs reach the workers
-through the fork (nothing is pickled but each job's small return value); the workers take the jobs of
-their batch in turn from a shared counter and write their files into the report's temporary directory, so
-a failure still leaves nothing half-written.  The processes are forked with :mod:`multiprocessing`'s
+also compute a result instead of a figure (the report's plan, its weighing of the instruments' conflict), which
+then runs beside the report's own work instead of after it.  A :class:`Drawing` takes the jobs in batches:
+:meth:`Drawing.start` forks up to two processes for a batch and returns at once, so the figures of the main
+posterior are drawn while the report compares the instruments; :meth:`Drawing.wait` waits for one batch,
+:meth:`Drawing.cancel` ends one whose result is no longer wanted, :meth:`Drawing.finish` waits for every batch.
+The jobs reach the workers through the fork (nothing is pickled but each job's small return value); the workers
+take the jobs of their batch in turn from a shared counter and write their files into the report's temporary
+directory, so a failure still leaves nothing half-written.  The processes are forked with :mod:`multiprocessing`'s
 ``Process`` and a pipe each — no helper thread runs in the report's process, so a later batch forks a
 process without threads.  Where the platform does not fork, a batch is drawn at once, in order.
 """
@@ -118,6 +118,21 @@ class Drawing:
             self._running.append((proc, receive, batch))
         return batch
 
+    def _take(self, batch: int | None) -> list[tuple[object, object, int]]:
+        """The running processes of ``batch`` (None: of every batch), no longer the drawing's to track."""
+        taken, kept = [], []
+        for run in self._running:
+            (taken if batch is None or run[2] == batch else kept).append(run)
+        self._running = kept
+        return taken
+
+    @staticmethod
+    def _end(proc, receive) -> None:
+        """Stop one drawing process without its answer."""
+        proc.terminate()
+        proc.join()
+        receive.close()
+
     def _collect(self, proc, receive, block: bool) -> bool:
         """Take the answer of one drawing process (waiting for it when ``block``); False when it has none yet."""
         if not block and not receive.poll():
@@ -145,10 +160,8 @@ class Drawing:
     def wait(self, batch: int) -> dict[str, object]:
         """Wait for one batch (the others go on); returns the extras of every job ended so far, by file name.  A
         job's exception is raised here."""
-        for proc, receive, b in self._running:
-            if b == batch:
-                self._collect(proc, receive, block=True)
-        self._running = [(p, r, b) for p, r, b in self._running if b != batch]
+        for proc, receive, _ in self._take(batch):
+            self._collect(proc, receive, block=True)
         if self._errors:
             raise self._errors[0]
         return dict(self._extras)
@@ -158,21 +171,16 @@ class Drawing:
         are no longer the drawing's and it leaves no extras.  None: nothing to end."""
         if batch is None:
             return
-        for proc, receive, b in self._running:
-            if b == batch:
-                proc.terminate()
-                proc.join()
-                receive.close()
-        self._running = [(p, r, b) for p, r, b in self._running if b != batch]
+        for proc, receive, _ in self._take(batch):
+            self._end(proc, receive)
         for name in self._jobs_of.pop(batch, ()):
             self._extras.pop(name, None)
             self.names.remove(name)
 
     def finish(self) -> dict[str, object]:
         """Wait for every batch; returns each job's extra by file name.  A job's exception is raised here."""
-        for proc, receive, _ in self._running:
+        for proc, receive, _ in self._take(None):
             self._collect(proc, receive, block=True)
-        self._running = []
         self._counters = []
         if self._errors:
             raise self._errors[0]
@@ -181,11 +189,8 @@ class Drawing:
     def stop(self) -> None:
         """End the drawing processes still running (the report failed elsewhere), and give the objects frozen at the
         forks back to the cyclic collector.  Always called, last."""
-        for proc, receive, _ in self._running:
-            proc.terminate()
-            proc.join()
-            receive.close()
-        self._running = []
+        for proc, receive, _ in self._take(None):
+            self._end(proc, receive)
         self._counters = []
         if self._frozen:
             gc.unfreeze()
