@@ -357,8 +357,9 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     if compare_models:
         figures[:0] = [("compare_forest.png",
                         lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
-                       ("compare_ppc.png", lambda: ppc.ppc_figure({m: ppc.ppc_table(r.idata, campaign)
-                                                                    for m, r in reports.items()}, campaign))]
+                       ("compare_ppc.png", lambda: ppc.ppc_figure(
+                           {m: ppc.ppc_table(r.idata, campaign, analysis.ballbar_observations)
+                            for m, r in reports.items()}, campaign))]
     draw(figures)
     missing = missing_data(campaign, analysis.identification)
     effect = None if analysis.fix_dx_BT else thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
