@@ -51,10 +51,38 @@ SCAN_POINTS = 160
 
 
 def _lower_inverse(L: np.ndarray) -> np.ndarray:
-    """Inverse of each lower-triangular matrix of ``L`` ``(G, n, n)``, exactly lower triangular (an inverse by LU
-    leaves round-off above the diagonal)."""
-    out = np.linalg.inv(L)
+    """Inverse of each lower-triangular matrix of ``L`` ``(G, n, n)``, exactly lower triangular.
+
+    LAPACK's triangular inverse (``dtrtri``), one call per matrix: a sixth of the arithmetic of an inverse by LU
+    (which also leaves round-off above the diagonal), 3–8× faster on the grids here even called cell by cell.  A
+    C-ordered lower factor is, read in Fortran order, its upper transpose, so each call inverts ``L[g].T`` in place
+    of a copy and the result is transposed back."""
+    from scipy.linalg import lapack
+
+    out = np.empty_like(L, dtype=float)
+    for g in range(len(L)):
+        inv_t, info = lapack.dtrtri(np.asarray(L[g], dtype=float).T, lower=0)
+        if info:
+            raise np.linalg.LinAlgError(f"singular triangular factor (dtrtri info {info})")
+        out[g] = inv_t.T
     out[:, *np.triu_indices(L.shape[-1], 1)] = 0.0
+    return out
+
+
+def _lower_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``L[g]⁻¹ b[g]`` for each lower-triangular matrix of ``L`` ``(G, n, n)``; ``b`` ``(n, k)`` (the same for every
+    matrix) or ``(G, n, k)``; returns ``(G, n, k)``.  LAPACK's triangular solve (``dtrtrs``), one call per matrix:
+    a general solve would factor each triangular matrix again (3–5× the time here).  As in :func:`_lower_inverse`,
+    ``L[g].T`` read in Fortran order is ``L[g]``, solved transposed."""
+    from scipy.linalg import lapack
+
+    b = np.asarray(b, dtype=float)
+    out = np.empty((len(L),) + b.shape[-2:])
+    for g in range(len(L)):
+        x, info = lapack.dtrtrs(np.asarray(L[g], dtype=float).T, b if b.ndim == 2 else b[g], lower=0, trans=1)
+        if info:
+            raise np.linalg.LinAlgError(f"singular triangular factor (dtrtrs info {info})")
+        out[g] = x
     return out
 
 
@@ -150,16 +178,27 @@ class MarginalPosterior:
         V = self.base_var[None, :] + self.sigma[:, self.groups] ** 2  # (G, m)
         self.V = V
         S = (A * self.prior_var) @ A.T  # (m, m) prior predictive covariance of the means, without noise
-        S = S[None] + V[:, :, None] * np.eye(m)[None]  # (G, m, m)
-        self.S_chol = np.linalg.cholesky(S)
         self._whitened_once = False
         self._last_joint: tuple[bytes, np.ndarray] | None = None  # the last residuals' log_joint
-        self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
+        if s == 1 and not self.groups.any():
+            # one scale: every cell's S + diag(V) is M + σ² I with M = S + diag(base_var), so one eigendecomposition
+            # M = Q Λ Qᵀ whitens every cell (z = (Λ + σ²)^(-1/2) Qᵀ r) and gives its log-determinant, without a
+            # factorisation per cell
+            lam, self._eig_vectors = np.linalg.eigh(S + np.diag(self.base_var))
+            self._eig_values = lam[None, :] + self.sigma[:, :1] ** 2  # (G, m): the eigenvalues of every cell's S
+            self.S_chol = None
+            self.S_logdet = np.log(self._eig_values).sum(axis=1)
+        else:
+            self._eig_vectors = None
+            self.S_chol = np.linalg.cholesky(S[None] + V[:, :, None] * np.eye(m)[None])  # (G, m, m)
+            self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
 
     @functools.cached_property
     def _whitening(self) -> np.ndarray:
         """``L⁻¹`` of every cell, ``(G, m, m)`` (``L`` the Cholesky factor of the prior predictive covariance): made
         once, so that each data vector and target is whitened by a product, not by a factorisation of its own."""
+        if self._eig_vectors is not None:  # one scale: (Λ + σ²)^(-1/2) Qᵀ (:meth:`_whiten`)
+            return self._eig_vectors.T[None] / np.sqrt(self._eig_values)[:, :, None]
         return _lower_inverse(self.S_chol)
 
     @functools.cached_property
@@ -237,13 +276,20 @@ class MarginalPosterior:
     def _whiten(self, r: np.ndarray, extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """``L⁻¹ rᵀ`` ``(G, m, N)`` of residuals ``r`` (N, m) and ``L⁻¹ extra`` ``(G, m, k)`` of ``extra`` (m, k) in
         every cell.  ``L⁻¹`` is made on the second use and multiplied from then on; a first use (an evidence, a
-        proposal's weights, the moments of a few targets) solves for both at once, which costs less than ``L⁻¹``."""
+        proposal's weights, the moments of a few targets) solves for both at once, which costs less than ``L⁻¹``.
+        With one scale the whitening is ``(Λ + σ²)^(-1/2) Qᵀ`` (``__init__``) instead of ``L⁻¹``: another square root
+        of the same ``S⁻¹``, so every norm and inner product of whitened vectors (all that is made of them) is the
+        same."""
+        if self._eig_vectors is not None:
+            rhs = r.T if extra is None else np.concatenate([r.T, extra], axis=1)
+            out = (self._eig_vectors.T @ rhs)[None] / np.sqrt(self._eig_values)[:, :, None]  # (G, m, N + k)
+            return out[..., : len(r)], None if extra is None else out[..., len(r):]
         if "_whitening" in self.__dict__ or self._whitened_once:
             W = self._whitening
             return W @ r.T, None if extra is None else W @ extra
         self._whitened_once = True
         rhs = r.T if extra is None else np.concatenate([r.T, extra], axis=1)
-        out = np.linalg.solve(self.S_chol, np.broadcast_to(rhs, (len(self.S_chol),) + rhs.shape))
+        out = _lower_solve(self.S_chol, rhs)
         return out[..., : len(r)], None if extra is None else out[..., len(r):]
 
     def _joint_of_whitened(self, r: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -350,12 +396,19 @@ def sigma_range(A: np.ndarray, base_var: np.ndarray, prior_var: np.ndarray, sigm
     scans = [np.geomspace(min(hi, float(p.ppf(1e-5))) * SCAN_FROM if a else hi * SCAN_FROM,
                           max(hi, 10.0 * spread) * SCAN_TO, SCAN_POINTS) for hi, p, a in zip(prior_hi, priors, away)]
 
-    def log_post(sig: np.ndarray) -> np.ndarray:  # (N, s) -> (N,)
-        V = base_var[None] + sig[:, groups] ** 2
-        L = np.linalg.cholesky(S0[None] + V[:, :, None] * np.eye(m)[None])
-        z = np.linalg.solve(L, np.broadcast_to(r, (len(sig), m))[..., None])[..., 0]
+    if s == 1:  # S(σ) = M + σ² I with M = S0 + diag(base_var): one eigendecomposition serves every σ of the scan
+        lam, Q = np.linalg.eigh(S0 + np.diag(base_var))
+        r2 = (Q.T @ r) ** 2
+
+    def log_post(sig: np.ndarray) -> np.ndarray:  # (N, s) -> (N,): log p(σ | y) up to a constant
         with np.errstate(divide="ignore"):
             lp = sum(p.logpdf(sig[:, k]) for k, p in enumerate(priors))
+        if s == 1:
+            d = lam[None] + sig[:, :1] ** 2  # (N, m): the eigenvalues of S(σ)
+            return -0.5 * np.sum(r2 / d, axis=1) - 0.5 * np.log(d).sum(axis=1) + lp
+        V = base_var[None] + sig[:, groups] ** 2
+        L = np.linalg.cholesky(S0[None] + V[:, :, None] * np.eye(m)[None])
+        z = _lower_solve(L, r[:, None])[..., 0]
         return -0.5 * np.sum(z**2, axis=1) - np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1) + lp
 
     best = np.array([float(p.median()) for p in priors])

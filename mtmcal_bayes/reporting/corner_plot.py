@@ -75,20 +75,46 @@ def _corner_size(K: int) -> float:
     return 0.5 * factor + factor * K + factor * (K - 1.0) * whspace + 0.2 * factor
 
 
+class _LowerTriangle:
+    """A figure as ``corner.corner`` is given it: the figure's attributes, and its ``axes`` as the K×K cells corner
+    reshapes them into, each cell on or below the diagonal an axes of its own and every cell above it one shared
+    placeholder (:meth:`remove_placeholder` takes it off afterwards).
+
+    Corner only blanks the cells above the diagonal (frame and ticks off); made as axes of their own they were 28
+    of the 64 axes of an eight-quantity plot, a fifth of its drawing time, for nothing drawn."""
+
+    def __init__(self, fig, K: int):
+        grid = fig.add_gridspec(K, K)
+        cells = {(i, j): fig.add_subplot(grid[i, j]) for i in range(K) for j in range(i + 1)}  # corner's order
+        self.placeholder = fig.add_subplot(grid[0, K - 1]) if K > 1 else None
+        self.axes = [cells.get((i, j), self.placeholder) for i in range(K) for j in range(K)]
+        self.figure = fig
+
+    def __getattr__(self, name):
+        return getattr(self.figure, name)
+
+    def remove_placeholder(self):
+        if self.placeholder is not None:
+            self.placeholder.remove()
+
+
 def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
     """The corner figure and a list of reference values left off the axes (too far away)."""
     names = [n for n in names if n in idata.posterior]
     x = _draws(idata, names)
     refs = reference_values(comparison, names)
     ranges, off = _ranges(x, refs, names)
-    fig = corner.corner(
-        x, fig=figure(figsize=(_corner_size(len(names)),) * 2), labels=[label(n) for n in names], range=ranges, bins=30, smooth=1.0, levels=LEVELS,
+    K = len(names)
+    cells = _LowerTriangle(figure(figsize=(_corner_size(K),) * 2), K)
+    corner.corner(
+        x, fig=cells, labels=[label(n) for n in names], range=ranges, bins=30, smooth=1.0, levels=LEVELS,
         color=COLOURS["posterior"], truths=refs["ballbar"], truth_color=COLOURS["ballbar"],
         plot_datapoints=True, data_kwargs={"alpha": 0.02, "ms": 1.5}, label_kwargs={"fontsize": 13},
         max_n_ticks=4, labelpad=0.08,
     )
-    K = len(names)
-    axes = np.array(fig.axes).reshape(K, K)
+    cells.remove_placeholder()
+    fig = cells.figure
+    axes = np.array(cells.axes).reshape(K, K)
     mean, sd = x.mean(axis=0), x.std(axis=0)
     for i, n in enumerate(names):
         axes[i, i].set_title(f"{symbol(n)} = {mean[i]:.1f} ± {sd[i]:.1f} {unit_symbol(n)}", fontsize=11)
