@@ -20,6 +20,7 @@ from mtmcal_bayes.inference import (
 from mtmcal_bayes.inference.results import not_identified
 from mtmcal_bayes.io import parse_campaign
 from mtmcal_bayes.parameters import weights
+from mtmcal_bayes.posterior.sample import sample_posterior
 from mtmcal_bayes.simulation import synthetic_campaign, truth_from_vector
 
 from . import variants
@@ -199,3 +200,21 @@ def test_sampler_matches_the_exact_sigma_marginal_posterior(thesis):
         sd_i = units.from_internal(sd[0, i], pl.target_units[i])
         assert abs(s.loc[name, "mean"] - m_i) < 0.05 * sd_i, name
         assert s.loc[name, "sd"] == pytest.approx(sd_i, rel=0.03), name
+
+
+def test_exact_draws_shown_beside_another_posterior_are_summarised_alike_without_chain_diagnostics(thesis):
+    """A posterior of exact draws shown beside another (``statement=False``, ``sampler="exact"``, the report's
+    probe-only and fused posteriors) keeps only its posterior group and no chain diagnostics; its intervals are
+    those the full summary gives for the same draws (same seed), to round-off (1e-12 of the posterior sd)."""
+    settings = SamplerSettings(sampler="exact", seed=3)
+    full = sample_posterior(thesis, data="probe", settings=settings)
+    beside = sample_posterior(thesis, data="probe", settings=settings, statement=False)
+    assert set(beside.idata.groups()) == {"posterior", "sample_stats"}
+    assert {"prior", "posterior_predictive", "log_likelihood"} <= set(full.idata.groups())
+    cols = ["mean", "sd", "hdi_low", "hdi_high", "prior_sd", "prior_growth", "nuisance_growth"]
+    b, f = beside.summary.loc[full.summary.index], full.summary
+    np.testing.assert_allclose(b[cols].to_numpy(float), f[cols].to_numpy(float),
+                               atol=1e-12 * float(f["sd"].min()), rtol=1e-12)
+    assert b[["r_hat", "ess_bulk", "ess_tail", "mcse_mean", "mcse_sd"]].isna().all().all()
+    assert f["r_hat"].notna().all() and beside.reference is None and full.reference is not None
+    assert not any("R-hat" in w or "ESS" in w for w in beside.warnings)

@@ -396,28 +396,37 @@ def sigma_range(A: np.ndarray, base_var: np.ndarray, prior_var: np.ndarray, sigm
     scans = [np.geomspace(min(hi, float(p.ppf(1e-5))) * SCAN_FROM if a else hi * SCAN_FROM,
                           max(hi, 10.0 * spread) * SCAN_TO, SCAN_POINTS) for hi, p, a in zip(prior_hi, priors, away)]
 
-    if s == 1:  # S(σ) = M + σ² I with M = S0 + diag(base_var): one eigendecomposition serves every σ of the scan
-        lam, Q = np.linalg.eigh(S0 + np.diag(base_var))
-        r2 = (Q.T @ r) ** 2
-
-    def log_post(sig: np.ndarray) -> np.ndarray:  # (N, s) -> (N,): log p(σ | y) up to a constant
+    def scan(k: int, others: np.ndarray) -> np.ndarray:
+        """log p(σ | y) up to a constant, ``(SCAN_POINTS,)``, along ``scans[k]`` with the other scales at
+        ``others`` ``(s,)``.  Along one scale ``S(σ) = M + σ² D``, ``D`` selecting that scale's observations ``a``:
+        with the others ``b`` eliminated by their Cholesky factor (the Schur complement
+        ``C = M_aa − M_ab M_bb⁻¹ M_ba`` and residual ``r_a − M_ab M_bb⁻¹ r_b``), one eigendecomposition ``C = Q Λ Qᵀ``
+        gives the quadratic form and log-determinant at every σ: no factorisation per point of the scan."""
+        a = groups == k
+        b = ~a
+        M = S0 + np.diag(base_var + np.where(b, others[groups], 0.0) ** 2)
+        quad_b, logdet_b, r_a, C = 0.0, 0.0, r[a], M[np.ix_(a, a)]
+        if b.any():
+            L = np.linalg.cholesky(M[np.ix_(b, b)])
+            W = _lower_solve(L[None], np.column_stack([M[np.ix_(b, a)], r[b]]))[0]  # L⁻¹ [M_ba, r_b]
+            u = W[:, -1]
+            quad_b, logdet_b = float(u @ u), 2.0 * float(np.log(np.diag(L)).sum())
+            r_a = r_a - W[:, :-1].T @ u
+            C = C - W[:, :-1].T @ W[:, :-1]
+        lam, Q = np.linalg.eigh(C)
+        c2 = (Q.T @ r_a) ** 2
+        sig = np.repeat(others[None], len(scans[k]), axis=0)
+        sig[:, k] = scans[k]
         with np.errstate(divide="ignore"):
-            lp = sum(p.logpdf(sig[:, k]) for k, p in enumerate(priors))
-        if s == 1:
-            d = lam[None] + sig[:, :1] ** 2  # (N, m): the eigenvalues of S(σ)
-            return -0.5 * np.sum(r2 / d, axis=1) - 0.5 * np.log(d).sum(axis=1) + lp
-        V = base_var[None] + sig[:, groups] ** 2
-        L = np.linalg.cholesky(S0[None] + V[:, :, None] * np.eye(m)[None])
-        z = _lower_solve(L, r[:, None])[..., 0]
-        return -0.5 * np.sum(z**2, axis=1) - np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1) + lp
+            lp = sum(p.logpdf(sig[:, j]) for j, p in enumerate(priors))
+        d = lam[None] + scans[k][:, None] ** 2  # (N, m_a): the eigenvalues of C + σ² I
+        return -0.5 * (quad_b + np.sum(c2 / d, axis=1)) - 0.5 * (logdet_b + np.log(d).sum(axis=1)) + lp
 
     best = np.array([float(p.median()) for p in priors])
     lo, hi = [0.0] * s, list(floor)
     for _ in range(2 if s > 1 else 1):
         for k in range(s):
-            sig = np.repeat(best[None], len(scans[k]), axis=0)
-            sig[:, k] = scans[k]
-            logp = log_post(sig)
+            logp = scan(k, best)
             above = np.flatnonzero(logp >= logp.max() - drop)
             best[k] = scans[k][int(np.argmax(logp))]
             hi[k] = max(floor[k], float(scans[k][min(above[-1] + 1, len(scans[k]) - 1)]))

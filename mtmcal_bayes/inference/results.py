@@ -43,9 +43,10 @@ def observation_parts(observations) -> list[tuple[str, object, slice]]:
 
 
 def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
-                      seed: int | None = None) -> az.InferenceData:
+                      seed: int | None = None, *, posterior_only: bool = False) -> az.InferenceData:
     """InferenceData of a :class:`~.sampling.SamplingResult`: posterior, prior, posterior predictive, observed data
-    and sample stats.
+    and sample stats (``posterior_only``: the posterior and sample stats alone, for a posterior shown beside
+    another, whose prior, predictions and pointwise log-likelihood nothing reads).
 
     Posterior draws: chain = ensemble, draw = the walkers' sequences one after the
     other, so that ArviZ's autocorrelation-based ESS sees each walker's own
@@ -61,6 +62,8 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
     flat = np.swapaxes(chains, 1, 2).reshape(K, W * S, q)
     lp = np.swapaxes(logp, 1, 2).reshape(K, W * S)
     posterior = display_draws(post.names, flat)
+    if posterior_only:
+        return _with_attrs(az.from_dict(posterior=posterior, sample_stats={"lp": lp}), result, thin)
     rng = np.random.default_rng(seed)
     prior = display_draws(post.names, post.priors.rvs(n_prior, rng)[None])
 
@@ -96,6 +99,17 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
         coords=coords,
         dims=dims,
     )
+    idata = _with_attrs(idata, result, thin)
+    idata.observed_data.attrs["unit"] = "um (mean of the repeats; probe readings minus their nominal)"
+    idata.log_likelihood.attrs["unit"] = ("log density of the observed mean in um (Normal, variance base + the "
+                                          "instrument's discrepancy scale²)")
+    return idata
+
+
+def _with_attrs(idata, result, thin: int):
+    """``idata`` with the run's facts as attributes of its posterior group."""
+    post = result.posterior
+    K, _, W, _ = result.chains.shape
     idata.posterior.attrs.update({
         "model": post.model_name, "campaign": post.campaign.source, "fix_dx_BT": int(post.fix_dx_BT),
         "data": post.data,
@@ -106,9 +120,6 @@ def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,
         "seed": -1 if result.settings.seed is None else int(result.settings.seed),
         "units": "arc seconds for angles, micrometres for lengths",
     })
-    idata.observed_data.attrs["unit"] = "um (mean of the repeats; probe readings minus their nominal)"
-    idata.log_likelihood.attrs["unit"] = ("log density of the observed mean in um (Normal, variance base + the "
-                                          "instrument's discrepancy scale²)")
     return idata
 
 
@@ -121,7 +132,7 @@ def prior_sd(result_or_post, names) -> dict[str, float]:
     return {n: sd[n] for n in names if n in sd}
 
 
-def summarize(idata, post, names=None, *, statement: bool = True) -> pd.DataFrame:
+def summarize(idata, post, names=None, *, statement: bool = True, diagnostics: bool = True) -> pd.DataFrame:
     """One row per quantity: its ISO 230-7 symbol, mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit,
     prior sd, identifiability, the Monte-Carlo standard errors of mean and sd, and the GUM statement
     (:data:`~mtmcal_bayes.inference.gum.GUM_COLUMNS`).
@@ -137,11 +148,16 @@ def summarize(idata, post, names=None, *, statement: bool = True) -> pd.DataFram
     None where no check applies (the discrepancy scales).
 
     ``statement=False`` leaves out the GUM statement and the uncertainty budget (intervals and identifiability
-    only: what a posterior shown beside another needs).
+    only: what a posterior shown beside another needs).  ``diagnostics=False``, for independent draws of the exact
+    posterior: no chain diagnostics (R-hat, ESS and Monte-Carlo standard errors are NaN: they describe a Markov
+    chain, and these draws are not one).
     """
     names = list(names or (list(REPORTED) + list(post.scales)))
     names = [n for n in names if n in idata.posterior]
-    s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none")
+    s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none",
+                   kind="all" if diagnostics else "stats")
+    if not diagnostics:
+        s = s.assign(**{c: np.nan for c in ("r_hat", "ess_bulk", "ess_tail", "mcse_mean", "mcse_sd")})
     s = s.rename(columns={"hdi_2.5%": "hdi_low", "hdi_97.5%": "hdi_high"})
     s["median"] = [float(idata.posterior[n].median()) for n in s.index]
     s["unit"] = [quantity_unit(n) for n in s.index]

@@ -173,18 +173,22 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     posterior, the identification) is used, not built again, and ``model``, ``data``, ``fix_dx_BT``,
     ``sigma_model`` and ``sigma_prior``, where given, change its own choices (else a campaign gets linear, ball
     bar, dx_BT and σ_model sampled, σ_model under its assumed prior).  ``statement=False``: a summary without the
-    GUM statement and the uncertainty budget (a posterior shown beside another)."""
+    GUM statement and the uncertainty budget (a posterior shown beside another); with exact draws
+    (``settings.sampler == "exact"``) it is also leaner: an InferenceData of the posterior alone, and no chain
+    diagnostics or check against the exact posterior (the draws are independent draws of it)."""
     analysis = analysis_of(campaign, model=model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model,
                            sigma_prior=sigma_prior)
     campaign, post = analysis.campaign, analysis.log_posterior
     result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress,
                            approximation=analysis.approximation)
     seed = settings.seed if settings else None
-    idata = to_inference_data(result, seed=seed)
-    summary = summarize(idata, post, statement=statement)
+    beside = not statement and result.settings.sampler == "exact"  # exact draws shown beside another posterior
+    idata = to_inference_data(result, seed=seed, posterior_only=beside)
+    summary = summarize(idata, post, statement=statement, diagnostics=not beside)
     comp = comparison(summary, analysis.identification)
-    ref = reference_check(result, summary)
-    warn = result.messages + linear_model_check(result) + diagnostics_warnings(summary) + reference_warnings(ref, summary)
+    ref = None if beside else reference_check(result, summary)
+    warn = result.messages + linear_model_check(result) + ([] if beside else diagnostics_warnings(summary))
+    warn += reference_warnings(ref, summary)
     warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data
     tol = campaign.tolerances if tolerances is None else tolerances
     conf = conformity_table(idata, summary, tol) if tol and statement else None
