@@ -17,7 +17,7 @@ from .candidates import (
     feasibility_check,
 )
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
-from .preposterior import realised_sd
+from .preposterior import current_posterior, realised_sd
 from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility
 
 #: tool-length differences of the sweep, mm
@@ -173,8 +173,9 @@ def monte_carlo_check(planner: Planner, table: pd.DataFrame, *, n: int = N_CHECK
         return pd.DataFrame()
     picked = [r for _, r in table.iterrows() if r["feasible"] and r["kind"] not in ("repeats", "probe")][:n]
     rows = []
+    now = current_posterior(planner) if picked else None
     for r in picked:
-        mc = realised_sd(planner, index[r["name"]], n_sim=n_sim, seed=seed)
+        mc = realised_sd(planner, index[r["name"]], n_sim=n_sim, seed=seed, now=now)
         for i, (t, u) in enumerate(zip(planner.targets, planner.target_units)):
             closed = r[f"{t} sd_after"]
             rows.append({"candidate": r["name"], "target": t, "unit": u, "sd_before_closed_form": r[f"{t} sd_before"],

@@ -19,22 +19,30 @@ from ..inference.priors import make_prior
 from .design import Planner
 
 
-def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, seed: int | None = 0) -> dict:
+def current_posterior(planner: Planner) -> MarginalPosterior:
+    """The exact σ-marginal posterior of the planner's campaign today (one scale, σ_model's prior), from which
+    :func:`realised_sd` simulates: one for every candidate checked, so that its grid is factored once."""
+    sigma_prior = make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors).frozen()
+    return MarginalPosterior(planner.A, planner.V - planner.sigma_model**2, planner.prior_var, sigma_prior)
+
+
+def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, seed: int | None = 0,
+                now: MarginalPosterior | None = None) -> dict:
     """Monte-Carlo preposterior of one candidate: current and realised target sds (display units).
 
     Returns ``{"sd_now": (t,), "sd_realised": (t,), "sd_realised_spread": (t,)}``: the exact
     posterior sd today, the root mean square of the realised posterior sd over ``n_sim``
-    simulated outcomes, and the standard deviation of the realised sd across them.
+    simulated outcomes, and the standard deviation of the realised sd across them.  ``now``: the planner's
+    :func:`current_posterior`, when several candidates are checked (made here otherwise).
     """
     c = planner.candidates[candidate_index]
     if c.repeat_of is not None:
         raise ValueError("the Monte-Carlo check covers new runs; repeats change an existing run's noise only")
     rng = np.random.default_rng(seed)
-    campaign = planner.campaign
-    sigma_prior = make_prior("sigma_model", "sigma_model", "length", campaign.priors).frozen()
+    now = current_posterior(planner) if now is None else now
+    sigma_prior = make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors).frozen()
     base_var = planner.V - planner.sigma_model**2
     y = planner.observations.mean
-    now = MarginalPosterior(planner.A, base_var, planner.prior_var, sigma_prior)
     A_c, _ = planner.candidate_rows([c])[0]
     base_c = np.full(len(A_c), planner.noise_var(c.repeats) - planner.sigma_model**2)
     theta, sigma = now.draw(y, n_sim, rng)
@@ -49,4 +57,4 @@ def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, see
             "sd_realised_spread": sd_after.std(axis=0) * scale}
 
 
-__all__ = ["realised_sd"]
+__all__ = ["current_posterior", "realised_sd"]
