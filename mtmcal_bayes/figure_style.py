@@ -140,6 +140,7 @@ def warm_up() -> None:
     ax.plot([0, 1], [0, 1])
     ax.set_xlabel(label("alpha_CZ"))
     ax.set_title("µm ″")
+    fig.tight_layout()  # as every figure lays itself out: drawn once, not again through savefig's tight bbox
     save_png(fig, io.BytesIO())
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import corner
 import numpy as np
 import pandas as pd
+from matplotlib.contour import ContourSet
 from matplotlib.lines import Line2D
 
 from ..figure_style import COLOURS, REFERENCE_LABELS, figure, label, symbol, unit_symbol
@@ -15,6 +16,11 @@ LEVELS = (0.68, 0.95)
 #: a reference value further than this many posterior sd from the mean is not drawn, but listed
 OFF_SCALE_SD = 8.0
 MAX_POINTS = 40_000
+#: how the individual draws are drawn (corner's ``data_kwargs``, with corner's own marker, zorder and rasterising)
+DRAW_STYLE = {"alpha": 0.02, "ms": 1.5, "mec": "none", "zorder": -1, "rasterized": True}
+#: a draw at least this far inside the fill that hides the densest draws is left out, pixels (its marker is
+#: about 1.4 px wide at the report's resolution; the rest is room for antialiasing)
+HIDDEN_MARGIN_PX = 3.0
 
 CAPTION = (
     "Corner plot of the posterior of the eight quantities the thesis identifies. Diagonal: marginal "
@@ -75,6 +81,28 @@ def _corner_size(K: int) -> float:
     return 0.5 * factor + factor * K + factor * (K - 1.0) * whspace + 0.2 * factor
 
 
+def _shown_draws(ax, xy: np.ndarray) -> np.ndarray:
+    """The draws ``xy`` ``(N, 2)`` of one 2-D panel that can be seen: those not under corner's opaque fill of the
+    region inside the outer contour (drawn over the draws, it hides them; 95 % of them here).  Leaving the hidden
+    ones out draws the same image with a twentieth of the markers.  Should the panel not hold exactly one filled
+    contour set (another corner), every draw is kept."""
+    fills = [c for c in ax.collections if isinstance(c, ContourSet) and c.filled]
+    if len(fills) != 1:
+        return xy
+    pixels = ax.transData.transform(xy)
+    hidden = np.zeros(len(xy), dtype=bool)
+    for path in fills[0].get_paths():
+        if len(path.vertices) < 3:
+            continue
+        path = path.transformed(ax.transData)
+        # contains_points widens a path by radius/2 on the side its orientation gives: the sign that shrinks this
+        # one's filled area (its signed area says which way round it goes)
+        x, y = path.vertices[:, 0], path.vertices[:, 1]
+        area = 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+        hidden |= path.contains_points(pixels, radius=-2.0 * HIDDEN_MARGIN_PX * np.sign(area))
+    return xy[~hidden]
+
+
 class _LowerTriangle:
     """A figure as ``corner.corner`` is given it: the figure's attributes, and its ``axes`` as the K×K cells corner
     reshapes them into, each cell on or below the diagonal an axes of its own and every cell above it one shared
@@ -109,12 +137,15 @@ def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
     corner.corner(
         x, fig=cells, labels=[label(n) for n in names], range=ranges, bins=30, smooth=1.0, levels=LEVELS,
         color=COLOURS["posterior"], truths=refs["ballbar"], truth_color=COLOURS["ballbar"],
-        plot_datapoints=True, data_kwargs={"alpha": 0.02, "ms": 1.5}, label_kwargs={"fontsize": 13},
-        max_n_ticks=4, labelpad=0.08,
+        plot_datapoints=False, label_kwargs={"fontsize": 13}, max_n_ticks=4, labelpad=0.08,
     )
     cells.remove_placeholder()
     fig = cells.figure
     axes = np.array(cells.axes).reshape(K, K)
+    for i in range(K):  # the draws, under corner's fill as corner draws them, those the fill hides left out
+        for j in range(i):
+            shown = _shown_draws(axes[i, j], x[:, [j, i]])
+            axes[i, j].plot(shown[:, 0], shown[:, 1], "o", color=COLOURS["posterior"], **DRAW_STYLE)
     mean, sd = x.mean(axis=0), x.std(axis=0)
     for i, n in enumerate(names):
         axes[i, i].set_title(f"{symbol(n)} = {mean[i]:.1f} ± {sd[i]:.1f} {unit_symbol(n)}", fontsize=11)
