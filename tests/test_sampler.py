@@ -103,14 +103,14 @@ def test_target_moments_in_the_data_space_equal_those_of_the_cells_posteriors(th
 
 @pytest.mark.parametrize("data", ["ballbar", "probe", "both"])
 def test_grid_log_joint_is_scipys_multivariate_normal_in_every_cell(thesis, data):
-    """Each cell's ``log p(y | σ) + log p(σ)`` (one scale: whitened through one eigendecomposition; two scales: a
-    Cholesky factor per cell) equals ``scipy.stats.multivariate_normal.logpdf`` of the means under that cell's
+    """Each cell's ``log p(y | σ) + log p(σ)`` (whitened by blocks: one eigendecomposition per cell of the second
+    scale) equals ``scipy.stats.multivariate_normal.logpdf`` of the means under that cell's
     prior predictive covariance plus the grid's log prior, for data vectors near the campaign's.  Tolerance: 1e-6
     nats, the round-off of a quadratic form of ~100 nats in a covariance of condition 3e7 (the probe's; ε·cond·100
     ≈ 7e-7, which is what a Cholesky solve of scipy's own covariance also misses by), 1e-9 relative at most."""
     post = LogPosterior(thesis, "linear", data=data)
     m = PosteriorApproximation(post).marginal
-    assert (m._eig_vectors is not None) == (data != "both")  # the path this parameter is meant to exercise
+    assert m._blocks is not None and (m._blocks.L_b is None) == (data != "both")  # one scale: no second block
     y = post.likelihood.y[None] + np.random.default_rng(8).normal(scale=2e-3, size=(2, len(post.likelihood.y)))
     got = m.log_joint(y)  # (G, 2)
     S0 = (m.A * m.prior_var) @ m.A.T
@@ -119,6 +119,32 @@ def test_grid_log_joint_is_scipys_multivariate_normal_in_every_cell(thesis, data
     for g in cells:
         want = stats.multivariate_normal(mean, S0 + np.diag(m.V[g])).logpdf(y) + m.log_prior[g]
         np.testing.assert_allclose(got[g], want, rtol=1e-9, atol=1e-6)
+
+
+def test_grid_without_observations_of_its_first_scale_is_whitened_by_cholesky_factors_alike():
+    """A grid whose first scale has no observations (whitened cell by cell through Cholesky factors, not by blocks)
+    gives scipy's log joint too, and the same as when its scales are given the other way round (by blocks), to
+    1e-9 relative."""
+    rng = np.random.default_rng(9)
+    m, P = 12, 4
+    A, prior_var, base = rng.normal(size=(m, P)), rng.uniform(0.5, 2.0, P), rng.uniform(0.01, 0.1, m)
+    y = A @ rng.normal(size=P) + rng.normal(scale=0.3, size=m)
+    prior = stats.halfnorm(scale=0.5)
+    two = np.r_[np.ones(8), np.ones(4) * 2].astype(int)  # scales 1 and 2 observed, scale 0 not
+    chol = MarginalPosterior(A, base, prior_var, [prior] * 3, groups=two, cells=5, sigma_max=[1.5] * 3,
+                             sigma_min=[0.0] * 3)
+    assert chol._blocks is None
+    got = chol.log_joint(y[None])[:, 0]
+    S0 = (A * prior_var) @ A.T
+    for g in range(0, len(chol.sigma), 17):
+        want = stats.multivariate_normal(np.zeros(m), S0 + np.diag(chol.V[g])).logpdf(y) + chol.log_prior[g]
+        assert got[g] == pytest.approx(want, rel=1e-9)
+    blocks = MarginalPosterior(A, base, prior_var, [prior] * 2, groups=two - 1, cells=5, sigma_max=[1.5] * 2,
+                               sigma_min=[0.0] * 2)
+    assert blocks._blocks is not None
+    # the same two observed scales: chol's cells with σ0 at its first cell are blocks' cells, in the same order
+    np.testing.assert_allclose(blocks.log_joint(y[None])[:, 0] - blocks.log_prior,
+                               (got - chol.log_prior)[:25], rtol=1e-9)
 
 
 def test_first_use_solves_and_later_uses_multiply_alike_and_a_kept_joint_is_never_stale(thesis):

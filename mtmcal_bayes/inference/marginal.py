@@ -108,6 +108,54 @@ def _scale_count(sigma_prior, sigma_fixed, groups) -> int:
     return int(np.max(groups)) + 1 if groups is not None and len(groups) else 1
 
 
+class _BlockWhitening:
+    """A whitening of every grid cell's prior predictive covariance ``S = S0 + diag(base_var + σ[groups]²)`` from
+    one eigendecomposition per combination of the other scales' cells, not one factorisation per cell.
+
+    The observations of the first scale (``a``) and of the others (``b``): with the others' block
+    ``S_bb = L_b L_bᵀ`` factored (one Cholesky factor per combination of their cells) and ``W = L_b⁻¹ S0_ba``, the
+    Schur complement of ``b`` is ``C + σ₀² I`` with ``C = S0_aa + diag(base_var_a) − WᵀW``, and ``C = Q Λ Qᵀ`` once
+    serves every cell of the first scale.  ``v ↦ [L_b⁻¹ v_b ; (Λ + σ₀²)^(-1/2) Qᵀ (v_a − Wᵀ L_b⁻¹ v_b)]`` is then a
+    linear map ``T`` with ``TᵀT = S⁻¹`` (block LDLᵀ), and ``log det S = 2 Σ log diag L_b + Σ log(Λ + σ₀²)``.  With one
+    scale ``b`` is empty: one eigendecomposition for the whole grid.  Another square root of ``S⁻¹`` than a
+    Cholesky factor's inverse, so every norm and inner product of whitened vectors (all that is made of them) is
+    the same.  The cells are the grid's (first scale slowest, as :class:`MarginalPosterior` orders them)."""
+
+    def __init__(self, S0: np.ndarray, base_var: np.ndarray, sigma: np.ndarray, groups: np.ndarray, n_first: int):
+        first = groups == 0
+        self.a, self.b = np.flatnonzero(first), np.flatnonzero(~first)
+        G = len(sigma)
+        cells = sigma.reshape(n_first, G // n_first, sigma.shape[1])
+        sigma_first, others = cells[:, 0, 0], cells[0]  # (n0,) and (Gb, s): σ of the first scale, of the others
+        C = S0[np.ix_(self.a, self.a)] + np.diag(base_var[self.a])
+        if len(self.b):
+            mb = len(self.b)
+            S_bb = S0[np.ix_(self.b, self.b)][None] + (base_var[self.b][None] + others[:, groups[self.b]] ** 2
+                                                        )[:, :, None] * np.eye(mb)[None]  # (Gb, mb, mb)
+            self.L_b = np.linalg.cholesky(S_bb)
+            self.W = _lower_solve(self.L_b, S0[np.ix_(self.b, self.a)])  # (Gb, mb, ma)
+            C = C[None] - np.swapaxes(self.W, 1, 2) @ self.W
+            logdet_b = 2.0 * np.log(np.diagonal(self.L_b, axis1=1, axis2=2)).sum(axis=1)
+        else:
+            self.L_b = self.W = None
+            C, logdet_b = C[None], np.zeros(1)
+        lam, self.Q = np.linalg.eigh(C)  # (Gb, ma), (Gb, ma, ma)
+        self.eigenvalues = lam[None] + sigma_first[:, None, None] ** 2  # (n0, Gb, ma): of every cell's C + σ₀² I
+        self.logdet = (logdet_b[None] + np.log(self.eigenvalues).sum(axis=2)).reshape(G)
+
+    def __call__(self, v: np.ndarray) -> np.ndarray:
+        """``T v`` of every cell, ``(G, m, k)``, for ``v`` ``(m, k)``."""
+        v_a = v[self.a][None]  # (1, ma, k)
+        parts = []
+        if self.L_b is not None:
+            u_b = _lower_solve(self.L_b, v[self.b])  # (Gb, mb, k)
+            v_a = v_a - np.swapaxes(self.W, 1, 2) @ u_b
+            parts.append(np.broadcast_to(u_b[None], (len(self.eigenvalues),) + u_b.shape))
+        z_a = (np.swapaxes(self.Q, 1, 2) @ v_a)[None] / np.sqrt(self.eigenvalues)[..., None]  # (n0, Gb, ma, k)
+        out = np.concatenate(parts + [z_a], axis=2)
+        return out.reshape(-1, out.shape[2], v.shape[1])
+
+
 class MarginalPosterior:
     """The σ-marginal posterior of a linear-Gaussian model on a grid of its discrepancy scales.
 
@@ -180,16 +228,12 @@ class MarginalPosterior:
         S = (A * self.prior_var) @ A.T  # (m, m) prior predictive covariance of the means, without noise
         self._whitened_once = False
         self._last_joint: tuple[bytes, np.ndarray] | None = None  # the last residuals' log_joint
-        if s == 1 and not self.groups.any():
-            # one scale: every cell's S + diag(V) is M + σ² I with M = S + diag(base_var), so one eigendecomposition
-            # M = Q Λ Qᵀ whitens every cell (z = (Λ + σ²)^(-1/2) Qᵀ r) and gives its log-determinant, without a
-            # factorisation per cell
-            lam, self._eig_vectors = np.linalg.eigh(S + np.diag(self.base_var))
-            self._eig_values = lam[None, :] + self.sigma[:, :1] ** 2  # (G, m): the eigenvalues of every cell's S
+        if (self.groups == 0).any():  # the first scale has observations: whitened by blocks (_BlockWhitening)
+            self._blocks = _BlockWhitening(S, self.base_var, self.sigma, self.groups, len(self.edges[0]) - 1)
             self.S_chol = None
-            self.S_logdet = np.log(self._eig_values).sum(axis=1)
+            self.S_logdet = self._blocks.logdet
         else:
-            self._eig_vectors = None
+            self._blocks = None
             self.S_chol = np.linalg.cholesky(S[None] + V[:, :, None] * np.eye(m)[None])  # (G, m, m)
             self.S_logdet = 2.0 * np.log(np.diagonal(self.S_chol, axis1=1, axis2=2)).sum(axis=1)
 
@@ -197,8 +241,8 @@ class MarginalPosterior:
     def _whitening(self) -> np.ndarray:
         """``L⁻¹`` of every cell, ``(G, m, m)`` (``L`` the Cholesky factor of the prior predictive covariance): made
         once, so that each data vector and target is whitened by a product, not by a factorisation of its own."""
-        if self._eig_vectors is not None:  # one scale: (Λ + σ²)^(-1/2) Qᵀ (:meth:`_whiten`)
-            return self._eig_vectors.T[None] / np.sqrt(self._eig_values)[:, :, None]
+        if self._blocks is not None:  # the block whitening as a matrix (:meth:`_whiten`)
+            return self._blocks(np.eye(len(self.base_var)))
         return _lower_inverse(self.S_chol)
 
     @functools.cached_property
@@ -277,12 +321,10 @@ class MarginalPosterior:
         """``L⁻¹ rᵀ`` ``(G, m, N)`` of residuals ``r`` (N, m) and ``L⁻¹ extra`` ``(G, m, k)`` of ``extra`` (m, k) in
         every cell.  ``L⁻¹`` is made on the second use and multiplied from then on; a first use (an evidence, a
         proposal's weights, the moments of a few targets) solves for both at once, which costs less than ``L⁻¹``.
-        With one scale the whitening is ``(Λ + σ²)^(-1/2) Qᵀ`` (``__init__``) instead of ``L⁻¹``: another square root
-        of the same ``S⁻¹``, so every norm and inner product of whitened vectors (all that is made of them) is the
-        same."""
-        if self._eig_vectors is not None:
-            rhs = r.T if extra is None else np.concatenate([r.T, extra], axis=1)
-            out = (self._eig_vectors.T @ rhs)[None] / np.sqrt(self._eig_values)[:, :, None]  # (G, m, N + k)
+        Mostly the whitening is :class:`_BlockWhitening`'s instead of ``L⁻¹`` (another square root of the same
+        ``S⁻¹``), applied at once."""
+        if self._blocks is not None:
+            out = self._blocks(r.T if extra is None else np.concatenate([r.T, extra], axis=1))  # (G, m, N + k)
             return out[..., : len(r)], None if extra is None else out[..., len(r):]
         if "_whitening" in self.__dict__ or self._whitened_once:
             W = self._whitening
