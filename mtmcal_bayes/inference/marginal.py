@@ -121,7 +121,8 @@ class _BlockWhitening:
     Cholesky factor's inverse, so every norm and inner product of whitened vectors (all that is made of them) is
     the same.  The cells are the grid's (first scale slowest, as :class:`MarginalPosterior` orders them)."""
 
-    def __init__(self, S0: np.ndarray, base_var: np.ndarray, sigma: np.ndarray, groups: np.ndarray, n_first: int):
+    def __init__(self, S0: np.ndarray, base_var: np.ndarray, sigma: np.ndarray, groups: np.ndarray, *,
+                 n_first: int):
         first = groups == 0
         self.a, self.b = np.flatnonzero(first), np.flatnonzero(~first)
         G = len(sigma)
@@ -229,7 +230,7 @@ class MarginalPosterior:
         self._whitened_once = False
         self._last_joint: tuple[bytes, np.ndarray] | None = None  # the last residuals' log_joint
         if (self.groups == 0).any():  # the first scale has observations: whitened by blocks (_BlockWhitening)
-            self._blocks = _BlockWhitening(S, self.base_var, self.sigma, self.groups, len(self.edges[0]) - 1)
+            self._blocks = _BlockWhitening(S, self.base_var, self.sigma, self.groups, n_first=len(self.edges[0]) - 1)
             self.S_chol = None
             self.S_logdet = self._blocks.logdet
         else:
