@@ -203,12 +203,15 @@ def test_sampler_matches_the_exact_sigma_marginal_posterior(thesis):
 
 
 def test_exact_draws_shown_beside_another_posterior_are_summarised_alike_without_chain_diagnostics(thesis):
-    """A posterior of exact draws shown beside another (``statement=False``, ``sampler="exact"``, the report's
-    probe-only and fused posteriors) keeps only its posterior group and no chain diagnostics; its intervals are
-    those the full summary gives for the same draws (same seed), to round-off (1e-12 of the posterior sd)."""
+    """A posterior of exact draws whose intervals alone are shown (``lean=True``, ``sampler="exact"``: the report's
+    probe-only and fused side posteriors) keeps only its posterior group and no chain diagnostics; its intervals
+    are those the full summary gives for the same draws (same seed), to round-off (1e-12 of the posterior sd).
+    Without ``lean`` a side posterior keeps its predictions (the ball-bar one draws the eccentricity plots)."""
     settings = SamplerSettings(sampler="exact", seed=3)
     full = sample_posterior(thesis, data="probe", settings=settings)
-    beside = sample_posterior(thesis, data="probe", settings=settings, statement=False)
+    beside = sample_posterior(thesis, data="probe", settings=settings, statement=False, lean=True)
+    shown = sample_posterior(thesis, data="probe", settings=settings, statement=False)
+    assert "posterior_predictive" in shown.idata.groups() and shown.summary["r_hat"].notna().all()
     assert set(beside.idata.groups()) == {"posterior", "sample_stats"}
     assert {"prior", "posterior_predictive", "log_likelihood"} <= set(full.idata.groups())
     cols = ["mean", "sd", "hdi_low", "hdi_high", "prior_sd", "prior_growth", "nuisance_growth"]

@@ -121,6 +121,20 @@ def test_corner_leaves_out_only_the_draws_its_fill_hides(thesis_report, monkeypa
     np.testing.assert_array_equal(_canvas_rgb(fig, png_dpi(fig)), _canvas_rgb(every, png_dpi(every)))
 
 
+def test_report_on_both_instruments_draws_the_ball_bar_posteriors_eccentricity_plots(run_cli, tmp_path):
+    """``report --data both``: the main posterior is the fused one, and the eccentricity plots (predictive check,
+    polar trajectories) come from the ball-bar side posterior, which therefore keeps its predictions; the probe-only
+    side posterior is shown by its intervals."""
+    code, out, err = run_cli("report", "--data", "both", "-o", tmp_path / "rep", *QUICK)
+    assert code == 0, err
+    ppc_table = pd.read_csv(tmp_path / "rep" / "ppc.csv")
+    assert len(ppc_table) and ppc_table.notna().all().all()
+    for name in ("ppc.png", "polar.png", "instruments_forest.png"):
+        assert (tmp_path / "rep" / name).stat().st_size > 10_000
+    intervals = pd.read_csv(tmp_path / "rep" / "instruments.csv")
+    assert set(intervals["data"]) == {"ball bar only", "probe only", "fused"}
+
+
 def test_report_without_probe_data_says_so(run_cli, tmp_path):
     src = tmp_path / "no_probe.toml"
     src.write_text(variants.without_probe(), encoding="utf-8")

@@ -163,7 +163,7 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
                      settings: SamplerSettings | None = None, checkpoint=None,
                      progress: Progress | None = None, data: str | None = None,
                      tolerances: dict | None = None, sigma_model: float | None | str = "same",
-                     statement: bool = True, sigma_prior="same") -> PosteriorResult:
+                     statement: bool = True, sigma_prior="same", lean: bool = False) -> PosteriorResult:
     """Sample the posterior of ``campaign`` given its ``data`` (``"ballbar"``, ``"probe"`` or ``"both"``) and
     summarise it against the deterministic results; decide conformity with ``tolerances`` (``{name:
     Tolerance}``; default the campaign's own).  ``sigma_model`` (mm) fixes the model-discrepancy scale instead of
@@ -173,16 +173,17 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     posterior, the identification) is used, not built again, and ``model``, ``data``, ``fix_dx_BT``,
     ``sigma_model`` and ``sigma_prior``, where given, change its own choices (else a campaign gets linear, ball
     bar, dx_BT and σ_model sampled, σ_model under its assumed prior).  ``statement=False``: a summary without the
-    GUM statement and the uncertainty budget (a posterior shown beside another); with exact draws
-    (``settings.sampler == "exact"``) it is also leaner: an InferenceData of the posterior alone, and no chain
-    diagnostics or check against the exact posterior (the draws are independent draws of it)."""
+    GUM statement and the uncertainty budget (a posterior shown beside another).  ``lean=True`` with exact draws
+    (``settings.sampler == "exact"``), for a posterior whose intervals alone are shown: an InferenceData of the
+    posterior alone (no prior, predictions or log-likelihood), no chain diagnostics and no check against the
+    exact posterior (the draws are independent draws of it); with sampled chains it changes nothing."""
     analysis = analysis_of(campaign, model=model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model,
                            sigma_prior=sigma_prior)
     campaign, post = analysis.campaign, analysis.log_posterior
     result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress,
                            approximation=analysis.approximation)
     seed = settings.seed if settings else None
-    beside = not statement and result.settings.sampler == "exact"  # exact draws shown beside another posterior
+    beside = lean and result.settings.sampler == "exact"  # exact draws whose intervals alone are shown
     idata = to_inference_data(result, seed=seed, posterior_only=beside)
     summary = summarize(idata, post, statement=statement, diagnostics=not beside)
     comp = comparison(summary, analysis.identification)

@@ -141,14 +141,15 @@ def priors_table(post) -> pd.DataFrame:
 def _side_posterior(analysis, settings: SamplerSettings, say, progress):
     """How the report gets the posterior of other data than its main one, for the instruments' comparison: for the
     linear model (normal priors) exact draws of its closed-form σ-marginal posterior, which is what sampling would
-    converge to; for a kinematic model the sampler."""
+    converge to; for a kinematic model the sampler.  The report shows their intervals; the ball-bar one, when the
+    main posterior is not, also supplies the eccentricity plots (its predictions)."""
     def side(data: str) -> PosteriorResult:
         other = analysis.variant(data=data)
         exact = other.model == "linear" and other.approximation.exact
         how = "exact draws" if exact else "sampling"
         say(f"{how} of the posterior ({other.model}, {DATA_LABELS[data]}) to compare the instruments")
         s = dataclasses.replace(settings, sampler="exact") if exact else settings
-        return sample_posterior(other, settings=s, progress=progress, statement=False)  # the report shows intervals
+        return sample_posterior(other, settings=s, progress=progress, statement=False, lean=data != "ballbar")
     return side
 
 
