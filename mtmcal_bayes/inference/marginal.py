@@ -70,16 +70,16 @@ def _lower_inverse(L: np.ndarray) -> np.ndarray:
 
 
 def _lower_solve(L: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``L[g]⁻¹ b[g]`` for each lower-triangular matrix of ``L`` ``(G, n, n)``; ``b`` ``(n, k)`` (the same for every
-    matrix) or ``(G, n, k)``; returns ``(G, n, k)``.  LAPACK's triangular solve (``dtrtrs``), one call per matrix:
+    """``L[g]⁻¹ b`` for each lower-triangular matrix of ``L`` ``(G, n, n)`` and one ``b`` ``(n, k)``; returns
+    ``(G, n, k)``.  LAPACK's triangular solve (``dtrtrs``), one call per matrix:
     a general solve would factor each triangular matrix again (3–5× the time here).  As in :func:`_lower_inverse`,
     ``L[g].T`` read in Fortran order is ``L[g]``, solved transposed."""
     from scipy.linalg import lapack
 
     b = np.asarray(b, dtype=float)
-    out = np.empty((len(L),) + b.shape[-2:])
+    out = np.empty((len(L),) + b.shape)
     for g in range(len(L)):
-        x, info = lapack.dtrtrs(np.asarray(L[g], dtype=float).T, b if b.ndim == 2 else b[g], lower=0, trans=1)
+        x, info = lapack.dtrtrs(np.asarray(L[g], dtype=float).T, b, lower=0, trans=1)
         if info:
             raise np.linalg.LinAlgError(f"singular triangular factor (dtrtrs info {info})")
         out[g] = x
@@ -441,29 +441,16 @@ def sigma_range(A: np.ndarray, base_var: np.ndarray, prior_var: np.ndarray, sigm
 
     def scan(k: int, others: np.ndarray) -> np.ndarray:
         """log p(σ | y) up to a constant, ``(SCAN_POINTS,)``, along ``scans[k]`` with the other scales at
-        ``others`` ``(s,)``.  Along one scale ``S(σ) = M + σ² D``, ``D`` selecting that scale's observations ``a``:
-        with the others ``b`` eliminated by their Cholesky factor (the Schur complement
-        ``C = M_aa − M_ab M_bb⁻¹ M_ba`` and residual ``r_a − M_ab M_bb⁻¹ r_b``), one eigendecomposition ``C = Q Λ Qᵀ``
-        gives the quadratic form and log-determinant at every σ: no factorisation per point of the scan."""
-        a = groups == k
-        b = ~a
-        M = S0 + np.diag(base_var + np.where(b, others[groups], 0.0) ** 2)
-        quad_b, logdet_b, r_a, C = 0.0, 0.0, r[a], M[np.ix_(a, a)]
-        if b.any():
-            L = np.linalg.cholesky(M[np.ix_(b, b)])
-            W = _lower_solve(L[None], np.column_stack([M[np.ix_(b, a)], r[b]]))[0]  # L⁻¹ [M_ba, r_b]
-            u = W[:, -1]
-            quad_b, logdet_b = float(u @ u), 2.0 * float(np.log(np.diag(L)).sum())
-            r_a = r_a - W[:, :-1].T @ u
-            C = C - W[:, :-1].T @ W[:, :-1]
-        lam, Q = np.linalg.eigh(C)
-        c2 = (Q.T @ r_a) ** 2
+        ``others`` ``(s,)``: the scan as a grid whose first scale is scale ``k`` (its other scales one cell each),
+        whitened by :class:`_BlockWhitening` (one eigendecomposition for every point of the scan)."""
+        order = [k] + [j for j in range(s) if j != k]  # scale k first
         sig = np.repeat(others[None], len(scans[k]), axis=0)
         sig[:, k] = scans[k]
+        blocks = _BlockWhitening(S0, base_var, sig[:, order], np.argsort(order)[groups], n_first=len(scans[k]))
+        z = blocks(r[:, None])[..., 0]
         with np.errstate(divide="ignore"):
             lp = sum(p.logpdf(sig[:, j]) for j, p in enumerate(priors))
-        d = lam[None] + scans[k][:, None] ** 2  # (N, m_a): the eigenvalues of C + σ² I
-        return -0.5 * (quad_b + np.sum(c2 / d, axis=1)) - 0.5 * (logdet_b + np.log(d).sum(axis=1)) + lp
+        return -0.5 * (np.sum(z**2, axis=1) + blocks.logdet) + lp
 
     best = np.array([float(p.median()) for p in priors])
     lo, hi = [0.0] * s, list(floor)

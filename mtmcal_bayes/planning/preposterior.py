@@ -19,11 +19,15 @@ from ..inference.priors import make_prior
 from .design import Planner
 
 
+def _sigma_prior(planner: Planner):
+    """σ_model's prior (frozen scipy distribution, mm) of the planner's campaign."""
+    return make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors).frozen()
+
+
 def current_posterior(planner: Planner) -> MarginalPosterior:
     """The exact σ-marginal posterior of the planner's campaign today (one scale, σ_model's prior), from which
     :func:`realised_sd` simulates: one for every candidate checked, so that its grid is factored once."""
-    sigma_prior = make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors).frozen()
-    return MarginalPosterior(planner.A, planner.V - planner.sigma_model**2, planner.prior_var, sigma_prior)
+    return MarginalPosterior(planner.A, planner.V - planner.sigma_model**2, planner.prior_var, _sigma_prior(planner))
 
 
 def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, seed: int | None = 0,
@@ -40,7 +44,6 @@ def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, see
         raise ValueError("the Monte-Carlo check covers new runs; repeats change an existing run's noise only")
     rng = np.random.default_rng(seed)
     now = current_posterior(planner) if now is None else now
-    sigma_prior = make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors).frozen()
     base_var = planner.V - planner.sigma_model**2
     y = planner.observations.mean
     A_c, _ = planner.candidate_rows([c])[0]
@@ -48,7 +51,7 @@ def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, see
     theta, sigma = now.draw(y, n_sim, rng)
     y_c = theta @ A_c.T + rng.normal(size=(n_sim, len(A_c))) * np.sqrt(base_c[None] + sigma ** 2)
     after = MarginalPosterior(np.vstack([planner.A, A_c]), np.concatenate([base_var, base_c]), planner.prior_var,
-                              sigma_prior)
+                              _sigma_prior(planner))
     y_all = np.hstack([np.broadcast_to(y, (n_sim, len(y))), y_c])
     _, sd_after = after.target_moments(y_all, planner.T)
     _, sd_now = now.target_moments(y[None], planner.T)
