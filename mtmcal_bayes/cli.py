@@ -23,7 +23,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 from . import api, cli_options  # noqa: E402 - after the BLAS threads are chosen
 from .cli_options import PROG, flag_of
-from .errors import MtmcalError, ParameterError
+from .errors import MtmcalError, ParameterError, StepFailure
 from .io.json_text import json_text
 from .progress import StderrProgress
 from .without_dask import hide_dask
@@ -245,6 +245,12 @@ def _run(args, *, process: bool) -> int:
     except BrokenPipeError:  # output piped into head & co.: stop quietly, like other Unix tools
         sys.stdout = None
         return 141
+    except StepFailure as exc:  # an internal error in another process: the step it stopped, and its traceback there
+        if os.environ.get("MTMCAL_DEBUG"):
+            print(exc.trace, end="", file=sys.stderr)
+        print(f"{PROG} {args.command}: internal error in {exc.step}: {exc.kind}: {exc.message} "
+              "(set MTMCAL_DEBUG=1 for a traceback and please report it)", file=sys.stderr)
+        return 1
     except Exception as exc:  # an internal error: still one line unless debugging
         if os.environ.get("MTMCAL_DEBUG"):
             raise

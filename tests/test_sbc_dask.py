@@ -19,7 +19,7 @@ from distributed import Client
 
 import mtmcal_bayes as mb
 from mtmcal_bayes import cluster
-from mtmcal_bayes.errors import ParameterError
+from mtmcal_bayes.errors import InputError, ParameterError, StepFailure
 from mtmcal_bayes.io.json_text import json_text
 from mtmcal_bayes.validation import SBCSettings, run_sbc
 from mtmcal_bayes.validation.samplers import ExactDraws
@@ -30,6 +30,8 @@ VENV_BIN = Path(sys.executable).parent
 ROOT = Path(__file__).resolve().parents[1]
 #: exact sampler (fast), enough replicates that the chunks differ with the number of workers (sbc._chunk_size:
 #: 9 replicates per task on one worker, 4 on two)
+#: a malformed campaign: its loader raises InputError at ballbar.runs[1].pattern
+BAD = Path(__file__).parent / "data" / "bad" / "unknown_pattern.toml"
 RUN = {"n": 40, "sampler": "exact", "seed": 7}
 
 
@@ -85,6 +87,20 @@ class _Refusing(ExactDraws):
         raise ParameterError("max_steps", "only 12 posterior draws for 99 ranks: raise the step budget")
 
 
+class _ReadingABadFile(ExactDraws):
+    """A sampler that meets a real input error in the worker: it reads a malformed campaign of the bad corpus."""
+
+    def __call__(self, post, n_ranked, rng):
+        mb.load_campaign(BAD)
+
+
+class _Faulty(ExactDraws):
+    """A sampler with a fault of its own (not the user's)."""
+
+    def __call__(self, post, n_ranked, rng):
+        raise ZeroDivisionError("a fault of the sampler")
+
+
 class _Interrupted:
     """A progress callback that stops the run after two replicates, as Ctrl-C would."""
 
@@ -107,6 +123,23 @@ def test_a_users_error_in_a_worker_comes_back_as_itself(thesis, scheduler_file):
         run_sbc(thesis, SBCSettings(n=6, sampler="exact", scheduler=scheduler_file), sampler=_Refusing())
     assert type(info.value) is ParameterError and info.value.parameter == "max_steps"
     assert "raise the step budget" in info.value.message
+
+
+def test_an_input_error_in_a_worker_arrives_as_the_loaders_line(thesis, scheduler_file):
+    with pytest.raises(InputError) as here:
+        mb.load_campaign(BAD)
+    with pytest.raises(InputError) as info:
+        run_sbc(thesis, SBCSettings(n=6, sampler="exact", scheduler=scheduler_file), sampler=_ReadingABadFile())
+    assert type(info.value) is InputError and str(info.value) == str(here.value)
+    assert (info.value.source, info.value.key) == (str(BAD), "ballbar.runs[1].pattern")
+
+
+def test_an_unexpected_exception_in_a_worker_names_its_replicate(thesis, scheduler_file):
+    with pytest.raises(StepFailure) as info:
+        run_sbc(thesis, SBCSettings(n=6, sampler="exact", scheduler=scheduler_file), sampler=_Faulty())
+    assert info.value.kind == "ZeroDivisionError" and info.value.message == "a fault of the sampler"
+    assert info.value.step.startswith("replicate ") and "simulation-based calibration (linear)" in info.value.step
+    assert 'raise ZeroDivisionError("a fault of the sampler")' in info.value.trace  # its traceback on the worker
 
 
 def test_an_interruption_cancels_the_remaining_replicates(thesis, scheduler_file):

@@ -102,10 +102,12 @@ def _default(v):
     return str(v)  # dates, paths
 
 
-def _one_line(exc: BaseException) -> str:
+def _one_line(exc: BaseException, step: str) -> str:
+    """The line a failed unit reports: the package's own error as it is, anything else as an internal error of
+    ``step`` (what the worker was doing)."""
     if isinstance(exc, MtmcalError):
         return str(exc)
-    return f"internal error: {type(exc).__name__}: {exc}".splitlines()[0]
+    return f"internal error in {step}: {type(exc).__name__}: {exc}".splitlines()[0]
 
 
 def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
@@ -130,7 +132,7 @@ def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
                "warnings": list(post.warnings)}
         return {"result": _plain(out), "files": {}, "elapsed_s": time.perf_counter() - t0}
     except Exception as exc:  # a unit reports, it does not raise (module docstring)
-        return {"error": _one_line(exc), "elapsed_s": time.perf_counter() - t0}
+        return {"error": _one_line(exc, f"the posterior of {campaign.source}"), "elapsed_s": time.perf_counter() - t0}
 
 
 #: keys of the history's JSON that are not results of its campaigns' content: where it was read and written
@@ -165,4 +167,4 @@ def history_unit(campaigns: list, seed: int, with_page: bool, model: str = "line
         return {"result": _plain({"seed": seed, **doc, "sigma_model_loglik": loglik}), "files": files,
                 "elapsed_s": time.perf_counter() - t0}
     except Exception as exc:  # a unit reports, it does not raise (module docstring)
-        return {"error": _one_line(exc), "elapsed_s": time.perf_counter() - t0}
+        return {"error": _one_line(exc, "the history"), "elapsed_s": time.perf_counter() - t0}

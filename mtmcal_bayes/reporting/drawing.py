@@ -22,6 +22,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from ..errors import StepFailure
 from ..figure_style import save_png, warm_up
 
 #: processes drawing one batch
@@ -47,6 +48,7 @@ def _work(jobs, directory: Path, counter, conn) -> None:
     exception that stopped it) through ``conn``."""
     gc.disable()  # a short-lived process: no cyclic collection (it would walk every object inherited from the report)
     out = {}
+    name = None
     try:
         while True:
             with counter.get_lock():
@@ -54,15 +56,24 @@ def _work(jobs, directory: Path, counter, conn) -> None:
                 counter.value += 1
             if i >= len(jobs):
                 break
-            out[jobs[i][0]] = _run(jobs[i], directory)
+            name = jobs[i][0]
+            out[name] = _run(jobs[i], directory)
         conn.send(("ok", out))
     except BaseException as exc:  # noqa: BLE001 - every failure goes back to the report, which raises it
+        sent = StepFailure.of(_step(name), exc) if isinstance(exc, Exception) else exc
         try:
-            conn.send(("error", exc))
-        except Exception:  # noqa: BLE001 - an exception that cannot be pickled: its text
-            conn.send(("error", RuntimeError(f"{type(exc).__name__}: {exc}")))
+            conn.send(("error", sent))
+        except Exception as unsent:  # noqa: BLE001 - an exception that cannot be pickled: its text
+            conn.send(("error", StepFailure(_step(name), type(sent).__name__, f"{sent} (not sent: {unsent})")))
     finally:
         conn.close()
+
+
+def _step(name: str | None) -> str:
+    """What a drawing process was doing when it stopped: its job's file name, or the job's name."""
+    if name is None:
+        return "a drawing process"
+    return f"drawing {name}" if "." in name else f"the report's {name} (beside the sampling)"
 
 
 class Drawing:
@@ -133,15 +144,16 @@ class Drawing:
         proc.join()
         receive.close()
 
-    def _collect(self, proc, receive, block: bool) -> bool:
+    def _collect(self, proc, receive, batch: int, block: bool) -> bool:
         """Take the answer of one drawing process (waiting for it when ``block``); False when it has none yet."""
         if not block and not receive.poll():
             return False
         try:
             status, value = receive.recv()
         except EOFError:
-            status, value = "error", RuntimeError(f"a drawing process ended without an answer "
-                                                  f"(exit status {proc.exitcode})")
+            proc.join()
+            status, value = "error", StepFailure(f"a drawing process ({', '.join(self._jobs_of.get(batch, ()))})",
+                                                 "EOFError", f"ended without an answer (exit status {proc.exitcode})")
         proc.join()
         receive.close()
         if status == "ok":
@@ -153,15 +165,15 @@ class Drawing:
     def check(self) -> None:
         """Raise the exception of a job that has already failed (without waiting for the others): the report
         stops there instead of computing on for a page it cannot write."""
-        self._running = [(p, r, b) for p, r, b in self._running if not self._collect(p, r, block=False)]
+        self._running = [(p, r, b) for p, r, b in self._running if not self._collect(p, r, b, block=False)]
         if self._errors:
             raise self._errors[0]
 
     def wait(self, batch: int) -> dict[str, object]:
         """Wait for one batch (the others go on); returns the extras of every job ended so far, by file name.  A
         job's exception is raised here."""
-        for proc, receive, _ in self._take(batch):
-            self._collect(proc, receive, block=True)
+        for proc, receive, b in self._take(batch):
+            self._collect(proc, receive, b, block=True)
         if self._errors:
             raise self._errors[0]
         return dict(self._extras)
@@ -179,8 +191,8 @@ class Drawing:
 
     def finish(self) -> dict[str, object]:
         """Wait for every batch; returns each job's extra by file name.  A job's exception is raised here."""
-        for proc, receive, _ in self._take(None):
-            self._collect(proc, receive, block=True)
+        for proc, receive, b in self._take(None):
+            self._collect(proc, receive, b, block=True)
         self._counters = []
         if self._errors:
             raise self._errors[0]

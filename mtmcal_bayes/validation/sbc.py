@@ -28,7 +28,7 @@ from scipy import stats
 
 from ..arviz_import import az
 from ..cluster import dask_client, default_workers, remembered_interrupt
-from ..errors import ParameterError
+from ..errors import ParameterError, StepFailure
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import display_draws
 from ..inference.sampling import SamplerSettings
@@ -223,21 +223,17 @@ class _Replicates:
         return {**self.__dict__, "_post": None}
 
     def __call__(self, seeds: list[np.random.SeedSequence]) -> list[dict]:
-        if self._post is None:
-            self._post = LogPosterior(self.campaign, self.model, data=self.data)
+        step = f"the posterior of {self.campaign.source} ({self.model}, data {self.data}) on a Dask worker"
         try:
-            return [one_replicate(self._post, self.sampler, self.n_ranked, seed) for seed in seeds]
-        except ParameterError as exc:  # e.g. too few draws for L: the user's error, back as itself
-            raise _SentParameterError(exc.parameter, exc.message) from None
-
-
-class _SentParameterError(ParameterError):
-    """A :class:`ParameterError` on its way back from a worker: pickled as the plain ParameterError it is
-    (pickle cannot rebuild an exception whose constructor takes two arguments; Dask would send a bare
-    ``Exception`` instead)."""
-
-    def __reduce__(self):
-        return ParameterError, (self.parameter, self.message)
+            if self._post is None:
+                self._post = LogPosterior(self.campaign, self.model, data=self.data)
+            out = []
+            for seed in seeds:
+                step = f"replicate {seed.spawn_key[-1] + 1} of the simulation-based calibration ({self.model})"
+                out.append(one_replicate(self._post, self.sampler, self.n_ranked, seed))
+        except Exception as exc:  # the package's errors as themselves (e.g. too few draws for L), the rest named
+            raise StepFailure.of(step, exc) from None
+        return out
 
 
 def _run_chunk(replicates: _Replicates, seeds: list[np.random.SeedSequence]) -> tuple[list[dict], float]:
