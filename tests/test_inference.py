@@ -3,7 +3,9 @@
 Statistical tolerances are stated in units of the posterior sd.
 """
 
+import copy
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -125,8 +127,61 @@ def test_checkpoint_of_another_run_is_refused(tmp_path, thesis):
     settings = SamplerSettings(seed=1, max_steps=50, n_walkers=48)
     ckpt = tmp_path / "run.h5"
     run_ensembles(LogPosterior(thesis, "linear"), settings, checkpoint=ckpt)
-    with pytest.raises(MtmcalError, match="another run"):
+    with pytest.raises(MtmcalError, match="checkpoint of another posterior"):
         run_ensembles(LogPosterior(thesis, "linear", fix_dx_BT=True), settings, checkpoint=ckpt)
+
+
+@pytest.mark.parametrize("other", ["σ prior", "campaign", "model", "data", "seed"])
+def test_a_checkpoint_resumes_only_its_own_posterior_and_is_left_as_it_was(tmp_path, thesis, other):
+    """A checkpoint stores what it belongs to: under another σ_model prior, campaign content, model, data or seed
+    the run stops with one line naming both, and the file is not touched."""
+    import hashlib
+
+    from mtmcal_bayes.errors import MtmcalError
+    from mtmcal_bayes.sigma_prior import SigmaModelPrior
+
+    settings = SamplerSettings(seed=1, max_steps=50, n_walkers=48)
+    ckpt = tmp_path / "run.h5"
+    run_ensembles(LogPosterior(thesis, "linear"), settings, checkpoint=ckpt)
+    before = hashlib.sha256(ckpt.read_bytes()).hexdigest()
+    changed = thesis
+    if other == "campaign":  # one repeat of one run read 0.1 µm otherwise: another campaign content
+        changed = copy.deepcopy(thesis)
+        changed.ballbar.runs[0].repeats["ex"] = changed.ballbar.runs[0].repeats["ex"] + 1e-4
+    post = LogPosterior(changed, "htm-thesis" if other == "model" else "linear",
+                        data="both" if other == "data" else "ballbar",
+                        sigma_prior=SigmaModelPrior({"sigma_model": (1.0, 0.3)}, "fleet X") if other == "σ prior"
+                        else None)
+    again = replace(settings, seed=2) if other == "seed" else settings
+    with pytest.raises(MtmcalError) as info:
+        run_ensembles(post, again, checkpoint=ckpt)
+    message = str(info.value)
+    assert message.startswith(f"{ckpt}: checkpoint of ") and "\n" not in message
+    assert ("seed 1 there, 2 here" in message) if other == "seed" else ("this run: campaign" in message)
+    assert hashlib.sha256(ckpt.read_bytes()).hexdigest() == before
+
+
+def test_a_checkpoint_that_does_not_say_what_it_holds_is_refused(tmp_path, thesis):
+    import h5py
+
+    from mtmcal_bayes.errors import MtmcalError
+
+    ckpt = tmp_path / "old.h5"
+    with h5py.File(ckpt, "w") as f:
+        f.create_group("ensemble_0")
+    with pytest.raises(MtmcalError, match="does not say which posterior it holds"):
+        run_ensembles(LogPosterior(thesis, "linear"), SamplerSettings(seed=1, max_steps=50), checkpoint=ckpt)
+
+
+def test_the_fingerprint_is_the_posteriors_not_the_files(thesis, tmp_path):
+    """The same content under another file name has the same fingerprint; the fingerprint is deterministic."""
+    import mtmcal_bayes as mb
+
+    copy_path = tmp_path / "same.toml"
+    mb.save_campaign(thesis, copy_path)
+    a, b = LogPosterior(thesis, "linear"), LogPosterior(mb.load_campaign(copy_path), "linear")
+    assert a.fingerprint() == b.fingerprint() == LogPosterior(thesis, "linear").fingerprint()
+    assert a.fingerprint() != LogPosterior(thesis, "linear", sigma_model=2e-3).fingerprint()
 
 
 def test_fix_dx_BT_recovers_thesis_beta_XB(thesis):

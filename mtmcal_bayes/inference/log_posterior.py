@@ -21,6 +21,7 @@ import copy
 
 import numpy as np
 
+from .. import units
 from ..models import JointModel, check_data, make_model
 from ..observations import observation_instruments
 from ..parameters import DISCREPANCY_SCALES, ParameterSpace
@@ -111,6 +112,37 @@ class LogPosterior:
 
     def __len__(self) -> int:
         return len(self.names)
+
+    #: points (in sampling coordinates) at which :meth:`fingerprint` evaluates the density, and its seed
+    FINGERPRINT_POINTS, FINGERPRINT_SEED = 16, 20261126
+
+    def fingerprint(self) -> str:
+        """A sha256 (hex) of what defines this posterior: the parameter names, model, data, fixed quantities and
+        σ_model prior, and the log density at :data:`FINGERPRINT_POINTS` fixed points (9 significant digits), through
+        which the campaign's observations, geometry and priors enter.  Equal for the same campaign content under
+        the same choices, whatever the file is called."""
+        import hashlib
+        import json
+
+        z = np.random.default_rng(self.FINGERPRINT_SEED).normal(size=(self.FINGERPRINT_POINTS, len(self)))
+        prior = (None if self.sigma_prior is None else
+                 {"scales": sorted(self.sigma_prior.scales.items()), "source": self.sigma_prior.source})
+        text = json.dumps({"names": list(self.names), "model": self.model_name, "data": self.data,
+                           "fix_dx_BT": self.fix_dx_BT, "sigma_model": self.fixed_sigma, "sigma_prior": prior,
+                           "log_density": [f"{v:.9e}" for v in self(z)]})
+        return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+    def describe(self) -> str:
+        """The posterior's choices in words: ``"campaign c.toml, linear model, ballbar data, dx_BT sampled, σ_model
+        sampled under its assumed prior"``."""
+        if self.fixed_sigma is not None:
+            sigma = f"σ_model fixed at {units.from_internal(self.fixed_sigma, 'um'):g} µm"
+        elif self.sigma_prior is not None:
+            sigma = f"σ_model sampled under the prior learnt by {self.sigma_prior.source}"
+        else:
+            sigma = "σ_model sampled under its assumed prior"
+        return (f"campaign {self.campaign.source}, {self.model_name} model, {self.data} data, "
+                f"dx_BT {'fixed at 0' if self.fix_dx_BT else 'sampled'}, {sigma}")
 
     # ------------------------------------------------------------ coordinates
     @property

@@ -28,7 +28,9 @@
 * Storage is preallocated and grows geometrically; with a checkpoint, emcee's
   HDF5 backend stores every step.  Every decision depends only on the stored chain
   and emcee stores its random state with every step, so a run resumed from its
-  checkpoint continues exactly as the uninterrupted run would have.
+  checkpoint continues exactly as the uninterrupted run would have.  A checkpoint
+  says which posterior and chain settings it holds (:mod:`.checkpoint`); one of
+  another is refused before anything is written to it.
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ from ..errors import MtmcalError, ParameterError
 from ..parameters import IDENTIFIABLE, is_scale
 from ..progress import Progress, ProgressEvent, emit
 from .approximation import PosteriorApproximation
+from .checkpoint import claim
 from .log_posterior import LogPosterior
 from .results import display_draws
 
@@ -231,15 +234,10 @@ def _next_length(c: Check, s: SamplerSettings) -> int:
     return int(min(s.max_steps, max(c.steps + 10, min(2 * c.steps, math.ceil(wanted)))))
 
 
-def _backend(checkpoint: Path | None, k: int, post: LogPosterior, walkers: int):
+def _backend(checkpoint: Path | None, k: int):
     if checkpoint is None:
         return _GrowingBackend()
-    backend = emcee.backends.HDFBackend(str(checkpoint), name=f"ensemble_{k}")
-    if backend.initialized and backend.shape != (walkers, len(post)):
-        raise MtmcalError(f"{checkpoint}: checkpoint holds another run ({backend.shape[1]} parameters, "
-                          f"{backend.shape[0]} walkers; this run has {len(post)}, {walkers}); remove it or "
-                          "use another file")
-    return backend
+    return emcee.backends.HDFBackend(str(checkpoint), name=f"ensemble_{k}")  # whose it is: checkpoint.claim
 
 
 def _starts(post: LogPosterior, approx: PosteriorApproximation, n: int, random) -> np.ndarray:
@@ -270,11 +268,13 @@ def run_ensembles(post: LogPosterior, settings: SamplerSettings | None = None, c
     q, W = len(post), s.walkers(len(post))
     approx = approximation or PosteriorApproximation(post)
     ckpt = Path(checkpoint) if checkpoint else None
+    if ckpt is not None:
+        claim(ckpt, post, s, W)  # the checkpoint is this run's, or the run stops here
     seeds = np.random.SeedSequence(s.seed).spawn(s.n_ensembles)
     samplers, starts, moves = [], [], []
     for k in range(s.n_ensembles):
         rng = np.random.default_rng(seeds[k])
-        backend = _backend(ckpt, k, post, W)
+        backend = _backend(ckpt, k)
         k_moves = s.moves(approx)
         sampler = emcee.EnsembleSampler(W, q, post, vectorize=True, backend=backend, moves=k_moves)
         if sampler.iteration == 0:
