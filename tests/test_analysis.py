@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 
 import mtmcal_bayes as mb
 from mtmcal_bayes.analysis import CampaignAnalysis, analysis_of
+from mtmcal_bayes.errors import StepFailure
 from mtmcal_bayes.inference import log_posterior
 from mtmcal_bayes.inference.marginal import GridProposal
 from mtmcal_bayes.models.probe_model import ProbeLayout
@@ -109,9 +110,22 @@ def test_a_failing_job_is_raised_by_finish(tmp_path):
         raise RuntimeError("simulated failure while drawing")
 
     drawing = Drawing(tmp_path)
-    drawing.start([("ok.png", _slow_figure(0.0, "ok")), ("bad.png", broken)])
-    with pytest.raises(RuntimeError, match="simulated failure"):
+    with pytest.raises(StepFailure) as info:  # forked, at finish; drawn in this process, at once
+        drawing.start([("ok.png", _slow_figure(0.0, "ok")), ("bad.png", broken)])
         drawing.finish()
+    assert (info.value.step, info.value.kind) == ("drawing bad.png", "RuntimeError")
+    assert info.value.message == "simulated failure while drawing"
+
+
+def test_a_failing_job_drawn_without_fork_names_its_step_too(tmp_path):
+    def broken():
+        raise RuntimeError("simulated failure while drawing")
+
+    drawing = Drawing(tmp_path, workers=1)
+    assert not drawing.fork
+    with pytest.raises(StepFailure) as info:
+        drawing.start([("ok.png", _slow_figure(0.0, "ok")), ("bad.png", broken)])
+    assert (info.value.step, info.value.kind) == ("drawing bad.png", "RuntimeError")
 
 
 

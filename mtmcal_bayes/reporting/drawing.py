@@ -103,8 +103,12 @@ class Drawing:
         self._jobs_of[batch] = [name for name, _ in jobs]
         if not jobs:
             return batch
-        if not self.fork:
-            self._extras.update({name: _run((name, make), self.directory) for name, make in jobs})
+        if not self.fork:  # drawn here, failing as a drawing process would (the same error, the same step named)
+            for name, make in jobs:
+                try:
+                    self._extras[name] = _run((name, make), self.directory)
+                except Exception as exc:  # noqa: BLE001 - what a drawing process would have sent back
+                    raise StepFailure.of(_step(name), exc) from exc
             return batch
         ctx = multiprocessing.get_context("fork")
         if not self._warm:  # once, here: every process forked from now on inherits it
