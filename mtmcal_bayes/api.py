@@ -335,7 +335,8 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
 
     A campaign with both instruments is checked first (:func:`instruments`): where they disagree on a deviation the
     compensation uses, it is refused (a ``ParameterError`` naming ``accept_disagreement``) unless
-    ``accept_disagreement``, which compensates and warns.
+    ``accept_disagreement``, which compensates and warns; so is a campaign on which the check cannot run (a gap of
+    its probe readings, :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
     """
     from .compensation import compensate as rewrite_program
     from .errors import ParameterError
@@ -346,10 +347,13 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     parsed = read_program(program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
-    if c.has_probe_readings() and c.ballbar.runs:
+    if c.has_probe_readings() and c.ballbar.runs and (gap := c.probe_gap()) is not None:
+        refusal = (f"whether the instruments of {c.source} agree on the deviations it uses cannot be checked: "
+                   f"{gap.reason()}")
+    elif c.has_probe_readings() and c.ballbar.runs:
         refusal = instruments(c, explain=False).refusal(SAMPLED_DEVIATIONS)
-        if refusal and not accept_disagreement:
-            raise ParameterError("accept_disagreement", f"not given, and {refusal}")
+    if refusal and not accept_disagreement:
+        raise ParameterError("accept_disagreement", f"not given, and {refusal}")
     result = rewrite_program(c, parsed, method=method, model=model, values=values, posterior=posterior, point=point,
                              setup=setup, mount=mount)
     if refusal:

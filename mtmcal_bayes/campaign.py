@@ -171,6 +171,34 @@ class BAxisProbe:
     Z_C: float | None = None  # sphere height above the table, mm (default: the C-axis sphere's)
 
 
+@dataclass(frozen=True)
+class Gap:
+    """Something a valid campaign leaves out that some of its analyses need (one verdict for every command).
+
+    The campaign is loaded and every analysis that does not need it runs; one that does raises :meth:`error`, and a
+    command that can go on without such a part says :meth:`skipped`.  ``key`` is where it would be given,
+    ``what`` what is missing, ``needed_by`` the analyses that need it, ``fix`` what to add (with the value that
+    would be assumed, never assumed silently).
+    """
+
+    key: str
+    what: str
+    needed_by: str
+    fix: str
+
+    def error(self, source: str) -> InputError:
+        """The one-line error of an analysis that cannot run without it."""
+        return InputError(source, self.key, f"missing: {self.what}, and {self.needed_by} need it; {self.fix}")
+
+    def reason(self) -> str:
+        """What is missing, where and what to add."""
+        return f"{self.what} ({self.key}; {self.fix})"
+
+    def skipped(self, part: str) -> str:
+        """The sentence of a command that goes on without ``part``."""
+        return f"{part} skipped: {self.reason()}."
+
+
 @dataclass
 class Probe:
     instrument: str = ""
@@ -180,6 +208,22 @@ class Probe:
 
     #: owner of the C-axis run's own stylus (when it names none of the B-axis run) and of each run's sphere terms
     C_RUN, B_RUN = "c_axis", "b_axis"
+
+    def gaps(self) -> list[Gap]:
+        """What the probe's readings leave out that its likelihood needs: the stylus of a C-axis run that names
+        none (campaigns written before the key existed; the deterministic Eqs 5.1–5.7 do not need it)."""
+        c = self.c_axis
+        if c is None or c.stylus is not None or c.R_B is not None:
+            return []
+        styli = sorted(self.b_axis.styli.values(), key=lambda s: s.R_B) if self.b_axis is not None else []
+        if styli:
+            fix = (f"add stylus = \"{styli[0].id}\" (the shortest of [probe.b_axis.styli]: "
+                   f"{', '.join(s.id for s in styli)}; the one to assume unless you know which probed the C axis) "
+                   "or give its length R_B_mm")
+        else:
+            fix = "give its length R_B_mm (and ball_radius_mm when it is measured to the stylus-ball tip)"
+        return [Gap("probe.c_axis.stylus", "the C-axis run names no stylus",
+                    "the touch-probe likelihood (probe or both data) and the comparison of the instruments", fix)]
 
     def stylus_of_c_run(self) -> str:
         """Owner of the stylus the C-axis run probes with: a B-axis stylus id, or ``"c_axis"``."""
@@ -312,6 +356,14 @@ class Campaign:
             msg = ("no measured runs: the campaign has set-ups and mounts but no [[ballbar.runs]]; add the measured "
                    "runs (or plan them with design, then fill them in or run simulate)")
         raise InputError(self.source, "ballbar.runs", msg)
+
+    def gaps(self) -> list[Gap]:
+        """What this (valid) campaign leaves out that some analyses need; empty for a complete campaign."""
+        return self.probe.gaps() if self.probe is not None else []
+
+    def probe_gap(self) -> Gap | None:
+        """The first gap that keeps the touch-probe likelihood from running on this campaign, or None."""
+        return next(iter(self.probe.gaps()), None) if self.probe is not None else None
 
     def has_probe_readings(self) -> bool:
         """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""

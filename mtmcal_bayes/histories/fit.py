@@ -275,7 +275,8 @@ def recalibrate_by(hf: HistoryFit, k: int, low: float, high: float, *,
 def check_history(campaigns) -> None:
     """A history needs two or more campaigns of one machine, each dated, on different dates."""
     if len(campaigns) < 2:
-        raise ParameterError("campaigns", "a history needs at least two campaigns")
+        got = f"; given one, {campaigns[0].source}" if campaigns else ""
+        raise ParameterError("campaigns", f"a history needs at least two campaigns{got}")
     undated = [c.source for c in campaigns if c.date is None]
     if undated:
         raise MtmcalError(f"{undated[0]}: date: missing (a campaign of a history needs its top-level date = YYYY-MM-DD)")

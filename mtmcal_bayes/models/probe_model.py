@@ -82,10 +82,9 @@ class ProbeLayout:
         b, c = probe.b_axis, probe.c_axis
         X_T = b.X_T if b is not None else primary.X_T
         positions, geos, runs = [], [], []
+        if (gap := campaign.probe_gap()) is not None:
+            raise gap.error(src)
         if c is not None:
-            if c.stylus is None and c.R_B is None:
-                raise InputError(src, "probe.c_axis", "name the stylus it probes with (stylus = \"<id of "
-                                 "[probe.b_axis.styli]>\") or give its length R_B_mm")
             st = b.styli[c.stylus] if c.stylus else None
             length, rb = (st.R_B, st.ball_radius) if st else (c.R_B, c.ball_radius)
             owner = probe.stylus_of_c_run()

@@ -18,7 +18,7 @@ from .candidates import (
 )
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
-from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility
+from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility, probe_skipped
 
 #: tool-length differences of the sweep, mm
 SWEEP_MM = np.arange(0.0, 250.0 + 1e-9, 5.0)
@@ -230,6 +230,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
               "separates alpha_XB and gamma_XB, which a B = 90° reading sees only as their sum"
               if any(isinstance(c, ProbeCandidate) for c in candidates) else
               "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus")]
+    notes += probe_skipped(campaign)
     if data != "ballbar":
         notes.append(f"the current posterior rests on {'both instruments' if data == 'both' else 'the probe'}: the "
                      "sigma_model information and the Monte-Carlo check (one scale for all data) are for ball-bar "

@@ -108,7 +108,7 @@ def probe_catalogue(campaign) -> list[ProbeCandidate]:
     out.append(ProbeCandidate(f"probe B 0/90° (stylus {longest.R_B + LONGER_STYLUS_MM:g} mm)", f"P{len(out) + 1}",
                               "b_axis", (0.0, 90.0), longest.R_B + LONGER_STYLUS_MM, longest.ball_radius, 0.0, Z_C))
     c = p.c_axis
-    if c is not None:
+    if c is not None and campaign.probe_gap() is None:  # a C-axis run of a known stylus (probe_skipped says why not)
         st = p.b_axis.styli.get(c.stylus) if c.stylus else None
         length, radius = (st.R_B, st.ball_radius) if st else (c.R_B, c.ball_radius)
         every45 = tuple(float(a) for a in range(0, 360, 45))
@@ -122,6 +122,15 @@ def probe_catalogue(campaign) -> list[ProbeCandidate]:
                 out.append(ProbeCandidate(f"probe C 0/90/180/270°, R_C {R_C:g} mm", f"P{len(out) + 1}", "c_axis",
                                           (0.0, 90.0, 180.0, 270.0), length, radius, R_C, c.Z_C, datum=c.datum))
     return out
+
+
+def probe_skipped(campaign) -> list[str]:
+    """Sentences naming the probe candidates the catalogue leaves out, and why (empty when none is)."""
+    p = campaign.probe
+    gap = campaign.probe_gap()
+    if gap is None or p is None or p.repeatability is None or p.b_axis is None or not p.b_axis.styli:
+        return []
+    return [gap.skipped("the touch-probe candidates on the C axis (more angles, another sphere height or radius)")]
 
 
 def probe_terms(candidate: ProbeCandidate, campaign) -> list[tuple[str, str]]:

@@ -271,7 +271,7 @@ def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
     ahead = {}
     say("planning the next measurement (beside the sampling)")
     ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory))])
-    if campaign.has_probe_readings() and campaign.ballbar.runs:
+    if campaign.has_probe_readings() and campaign.ballbar.runs and campaign.probe_gap() is None:
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
         # the report shows its own consistency check: none for the candidates
@@ -331,7 +331,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     then)."""
     model, data = analysis.model, analysis.data
     instruments = disputed = ppc_df = None
-    if campaign.has_probe_readings():
+    if campaign.has_probe_readings() and campaign.probe_gap() is None:  # else missing_data says why not
         instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
         disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                        instruments.posteriors["probe"].log_posterior)

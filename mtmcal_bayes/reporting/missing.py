@@ -19,6 +19,9 @@ def missing_data(campaign, ident) -> list[str]:
             out.append("No C-axis touch-probe data: alpha_CZ, beta_CZ, dx_CZ and dy_CZ have no probe value.")
         if probe.b_axis is None or not probe.b_axis.styli:
             out.append("No B-axis touch-probe data: alpha_XB, beta_XB, gamma_XB, dx_BT and dz_BT have no probe value.")
+    if campaign.has_probe_readings() and (gap := campaign.probe_gap()) is not None:
+        out.append(gap.skipped("The comparison of the instruments (the ball-bar-only, probe-only and fused posteriors "
+                               "side by side, the consistency check, the weighing of a conflict's explanations)"))
     for name, v in ident.ballbar.items():
         if v.value is None and v.missing:
             out.append(f"No ball-bar value for {name} (thesis Eq {v.equation}): it {v.missing}. "

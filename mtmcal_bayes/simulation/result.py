@@ -52,9 +52,14 @@ class Simulation:
 
     def save(self, path) -> None:
         """Write :meth:`synthetic_campaign` as a campaign TOML with a header saying how it was made."""
-        save_campaign(self.synthetic_campaign(), path, header=(
-            f"Synthetic campaign simulated by mtmcal-bayes with model {self.model}, {self.describe_noise()},\n"
-            f"from {self.campaign.source} and truth {self.truth_source}."))
+        dropped = self.campaign.probe_gap() if self.campaign.has_probe_readings() else None
+        header = (f"Synthetic campaign simulated by mtmcal-bayes with model {self.model}, {self.describe_noise()},\n"
+                  f"from {self.campaign.source} and truth {self.truth_source}.")
+        if dropped is not None:
+            skipped = dropped.skipped("The simulation of the touch-probe readings (no [probe] written)")
+            header += "\n" + skipped
+            self.warnings.append(skipped)
+        save_campaign(self.synthetic_campaign(), path, header=header)
         self.output = str(path)
 
     def to_json(self) -> dict:

@@ -141,7 +141,8 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
 
 def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
                     rng: np.random.Generator | None = None, repeats: int | None = None):
-    """The campaign's ``[probe]`` with sphere centres simulated for ``truth`` (``None`` without probe readings).
+    """The campaign's ``[probe]`` with sphere centres simulated for ``truth`` (``None`` without probe readings, or
+    where a gap of the campaign keeps the probe model from running: :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
 
     The readings are those of the probe model (:class:`~mtmcal_bayes.models.ProbeModel`; ``linear``: its
     first order) in the campaign's reading frame.  Noise-free: one repeat equal to the prediction.  With
@@ -150,6 +151,8 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
     """
     if not campaign.has_probe_readings() or campaign.probe.repeatability is None:
         return copy.deepcopy(campaign.probe) if campaign.probe is not None else None
+    if campaign.probe_gap() is not None:  # readings the probe model cannot simulate: none (Simulation.save says so)
+        return None
     fm = make_model(model, campaign, data="probe")
     theta = truth_vector(fm.space, truth.probe_part())
     layout = fm.layout

@@ -1,0 +1,149 @@
+"""Earlier campaign files stay valid: every command on every file of the corpus ``tests/data/formats/``.
+
+The corpus holds campaign files as earlier versions of the package wrote or published them (its README says which
+wrote each).  A file is valid or not the same way for every command (the loader's verdict, with the gaps it
+records: :meth:`~mtmcal_bayes.campaign.Campaign.gaps`); a command then exits 0, or — where the file lacks what that
+command needs — 2 with one line naming the file and what is missing.  Which commands need what each file lacks is
+written out below (``NEEDS``); every other command must succeed on it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import mtmcal_bayes as mb
+
+from .conftest import DATA
+
+FORMATS = DATA / "formats"
+CORPUS = sorted(FORMATS.glob("*.toml"))
+TRUTH = DATA / "formats_truth.toml"
+NC = Path(mb.__file__).parent / "datasets" / "fig4_30a_bx_original.nc"
+
+#: every command that reads a campaign, as ``name: argv after the command`` (``{f}`` the file, ``{out}`` a fresh
+#: folder); the fast samplers where a command offers them (what is tested is the reading of the file)
+COMMANDS = {
+    "identify": ["identify", "{f}"],
+    "sensitivity": ["sensitivity", "{f}"],
+    "simulate": ["simulate", "{f}", "--truth", str(TRUTH), "--json"],
+    "simulate -o": ["simulate", "{f}", "--truth", str(TRUTH), "--noise", "--seed", "2", "-o", "{out}/sim.toml"],
+    "sample": ["sample", "{f}", "--quiet"],
+    "sample --data both": ["sample", "{f}", "--data", "both", "--sampler", "exact", "--quiet"],
+    "report": ["report", "{f}", "-o", "{out}/report", "--sampler", "exact", "--quiet"],
+    "plan": ["plan", "{f}"],
+    "plan --data both": ["plan", "{f}", "--data", "both"],
+    "design": ["design", "{f}", "-o", "{out}/design"],
+    "next": ["next", "{f}"],
+    "instruments": ["instruments", "{f}"],
+    "compensate": ["compensate", "{f}", str(NC), "-o", "{out}/compensated.nc"],
+    "ncgen": ["ncgen", "BX", "{f}"],
+    "validate sbc": ["validate", "sbc", "{f}", "--n", "3", "--sampler", "exact", "--scheduler", "{scheduler}",
+                     "--quiet"],
+    "history": ["history", "{f}"],
+}
+
+PROBE_BOTH = ("sample --data both", "plan --data both", "instruments")
+MEASURED = ("identify", "sample", "sample --data both", "report", "plan", "plan --data both", "instruments",
+            "compensate", "validate sbc", "history")
+#: ``{file: {command: what the one-line error must name}}``: what each file lacks for which command
+NEEDS = {
+    "thesis_first_published.toml": {**{c: "probe.c_axis.stylus" for c in PROBE_BOTH + ("compensate",)},
+                                    "history": "at least two campaigns"},
+    "simulated_ballbar_566b977.toml": {"sample --data both": "needs touch-probe readings",
+                                       "plan --data both": "needs touch-probe readings",
+                                       "instruments": "needs ball-bar runs and touch-probe readings",
+                                       "history": "at least two campaigns"},
+    "simulated_probe_ae98686.toml": {"history": "at least two campaigns"},
+    "history_M-7_1_5d7542f.toml": {"history": "at least two campaigns"},
+    "history_M-7_2_5d7542f.toml": {"history": "at least two campaigns"},
+    "designed_thesis_d54cc98.toml": {"history": "at least two campaigns"},
+    "designed_new_machine_d54cc98.toml": {c: "ballbar.runs: no measured runs" for c in MEASURED},
+}
+
+
+def test_the_corpus_is_what_its_readme_lists():
+    readme = (FORMATS / "README.md").read_text()
+    assert {f.name for f in CORPUS} == set(NEEDS) and all(f"`{f.name}`" in readme for f in CORPUS)
+    assert len(CORPUS) >= 7
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """One in-process Dask cluster for every ``validate sbc`` of the module (a local cluster per run costs more
+    than the run)."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        yield cluster.scheduler_address
+
+
+@pytest.mark.parametrize("command", list(COMMANDS))
+@pytest.mark.parametrize("file", CORPUS, ids=lambda f: f.stem)
+def test_every_command_on_every_earlier_file(run_cli, tmp_path, request, file, command):
+    scheduler = request.getfixturevalue("scheduler") if command == "validate sbc" else ""
+    argv = [a.format(f=file, out=tmp_path, scheduler=scheduler) for a in COMMANDS[command]]
+    code, out, err = run_cli(*argv)
+    needed = NEEDS[file.name].get(command)
+    if needed is None:
+        assert code == 0, err
+        return
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    prog = " ".join(["mtmcal-bayes"] + argv[:2 if command == "validate sbc" else 1])
+    assert lines[0].startswith(f"{prog}: error: ") and needed in lines[0] and file.name in lines[0], lines[0]
+    assert not any(tmp_path.iterdir()), "nothing written"
+
+
+FIRST = FORMATS / "thesis_first_published.toml"
+
+
+def test_the_first_published_thesis_file_reports_without_its_probe_comparison(run_cli, tmp_path):
+    code, out, err = run_cli("report", FIRST, "-o", tmp_path / "r", "--sampler", "exact", "--quiet")
+    assert code == 0, err
+    page = (tmp_path / "r" / "index.html").read_text()
+    assert "The comparison of the instruments" in page and "skipped: the C-axis run names no stylus" in page
+    assert "instruments_forest.png" not in page and "skipped: the C-axis run names no stylus" in out
+
+
+def test_a_ball_bar_plan_on_it_skips_only_the_probe_candidates_that_need_the_stylus(run_cli):
+    code, out, err = run_cli("plan", FIRST, "--target", "alpha_BT", "--json")
+    assert code == 0, err
+    import json
+
+    plan = json.loads(out)
+    kinds = {r["name"] for r in plan["candidates"] if r["kind"] == "probe"}
+    assert kinds and all(name.startswith("probe B") for name in kinds)  # the B-axis runs need no C-axis stylus
+    assert any("the touch-probe candidates on the C axis" in n and "probe.c_axis.stylus" in n for n in plan["notes"])
+
+
+def test_where_the_stylus_is_needed_the_line_says_what_would_be_assumed(run_cli):
+    code, out, err = run_cli("sample", FIRST, "--data", "probe", "--sampler", "exact", "--quiet")
+    assert code == 2
+    assert 'probe.c_axis.stylus: missing: the C-axis run names no stylus' in err
+    assert 'add stylus = "short" (the shortest of [probe.b_axis.styli]: short, long' in err
+
+
+def test_naming_the_stylus_is_all_the_first_published_file_needs(tmp_path, run_cli):
+    """The gap closes with the key its message names, and the probe then enters the likelihood."""
+    text = FIRST.read_text().replace("datum", "datum").replace(
+        "[probe.c_axis]\n", '[probe.c_axis]\nstylus = "short"\n', 1)
+    fixed = tmp_path / "fixed.toml"
+    fixed.write_text(text)
+    assert mb.load_campaign(FIRST).gaps() and not mb.load_campaign(fixed).gaps()
+    code, out, err = run_cli("instruments", fixed)
+    assert code == 0, err
+
+
+def test_a_fleet_of_the_corpus_reports_the_file_it_cannot_use_and_completes_the_rest(run_cli, tmp_path):
+    code, out, err = run_cli("fleet", FORMATS, "-o", tmp_path / "fleet", "--workers", "1", "--sampler", "exact",
+                             "--cache", tmp_path / "cache", "--quiet")
+    lines = err.strip().splitlines()
+    assert code == 3 and len(lines) == 1, err
+    assert "designed_new_machine_d54cc98.toml: ballbar.runs: no measured runs" in lines[0]
+
+
+def test_the_corpus_history_is_a_history(run_cli):
+    code, out, err = run_cli("history", *sorted(FORMATS.glob("history_M-7_*.toml")))
+    assert code == 0, err
