@@ -260,13 +260,16 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
          sigma_model_um: float | None = None, sweep_pattern: str | None = None, output=None,
-         data: str = "ballbar") -> PlanResult:
+         data: str = "ballbar", sigma_model_prior=None) -> PlanResult:
     """Rank candidate extra measurements — ball-bar runs and touch-probe runs — by how much they would reduce the
     uncertainty of ``targets`` (default the eight identified quantities), given the campaign's ``data``
     (``"ballbar"``, ``"probe"`` or ``"both"``).
 
     ``candidates``: a TOML file of your own ``[[candidate]]`` tables, or a list of
-    :class:`~mtmcal_bayes.planning.Candidate`, ranked with the catalogue.
+    :class:`~mtmcal_bayes.planning.Candidate`, ranked with the catalogue.  ``sigma_model_prior``: a σ_model prior
+    learnt elsewhere (its file's path or a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`): the closed form's
+    σ_model is then the rms of the learnt prior (unless ``sigma_model_um`` fixes it), and the σ_model information and
+    the Monte-Carlo check use it (docs/planning.md).
     """
     import math
 
@@ -281,9 +284,10 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     _writable(output, "plan")
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
         raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a non-negative number")
+    learnt = sigma_model_prior_of(sigma_model_prior, c)  # the closed form's fixed σ_model does not exclude a prior
     extra = read_candidates(candidates, c) if isinstance(candidates, (str, os.PathLike)) else list(candidates or [])
     result = rank(c, targets, extra=extra, sigma_model_um=sigma_model_um, sweep_pattern=sweep_pattern, model=model,
-                  data=data)
+                  data=data, sigma_prior=learnt)
     if output is not None:
         result.write(output)
     return result
@@ -600,7 +604,7 @@ def _user_candidates(candidates, c: Campaign) -> list:
 
 def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolerances=None,
            budget_min: float | None = None, contraction: float | None = 0.5, candidates=None, times=None,
-           seed: int = 0, model: str = "linear", output=None) -> DesignResult:
+           seed: int = 0, model: str = "linear", output=None, sigma_model_prior=None) -> DesignResult:
     """Design the whole campaign: the ball-bar runs, in measuring order, that reach ``targets`` in the fewest
     machine minutes, or that improve most within ``budget_min`` (docs/design.md).
 
@@ -610,6 +614,10 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     ``candidates`` a TOML file of your own ``[[candidate]]`` tables, added to the catalogue; ``times`` a TOML
     file (or dict) overriding the machine-time model.  ``output`` receives design.json, campaign.toml (the
     designed runs as planned runs, ready to fill in), programs/NN_<pattern>.nc and design.html.
+    ``sigma_model_prior``: a σ_model prior learnt elsewhere (file path or
+    :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`): σ_model is integrated out over it, and the contraction is
+    measured against the wider of the assumed and the learnt prior, so a narrow learnt prior may meet it before any run
+    (docs/design.md).
     """
     from .machine_time import TimeModel
     from .models import check_model
@@ -620,11 +628,13 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     c = campaign_of(campaign)
     check_model(model)
     _writable(output, "design")
+    learnt = sigma_model_prior_of(sigma_model_prior, c)
     items = _time_items(c, times)
     extra = planned_candidates(c) + _user_candidates(candidates, c)
     d = make_design(c, targets=targets, tolerances=tolerances_of(tolerances), contraction=contraction,
                     budget_min=budget_min, candidates=extra, time_model=TimeModel(**items), model=model, seed=seed,
-                    candidates_source=str(candidates) if isinstance(candidates, (str, os.PathLike)) else "candidates")
+                    candidates_source=str(candidates) if isinstance(candidates, (str, os.PathLike)) else "candidates",
+                    sigma_prior=learnt)
     if output is None:
         return DesignResult(d)
     files, path = write_design(d, output, program=_program, times=items)
@@ -633,10 +643,11 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
 
 def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, contraction: float | None = None,
              budget_min: float | None = None, candidates=None, times=None, seed: int = 0, model: str = "linear",
-             output=None) -> NextResult:
+             output=None, sigma_model_prior=None) -> NextResult:
     """On a partly measured designed campaign: the next run to measure (the rest re-planned from what is measured)
     or "stop: every target reached" (docs/design.md).  Targets, contraction, budget and times default to the
-    campaign's ``[design]``; ``output`` receives the re-planned campaign and programs."""
+    campaign's ``[design]``; ``output`` receives the re-planned campaign and programs; ``sigma_model_prior`` as for
+    :func:`design` (the campaign does not record it: give the one it was designed under)."""
     from .machine_time import TimeModel
     from .models import check_model
     from .planning.design_output import NextResult, write_next
@@ -645,9 +656,11 @@ def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, cont
     c = campaign_of(campaign)
     check_model(model)
     _writable(output, "next")
+    learnt = sigma_model_prior_of(sigma_model_prior, c)
     items = _time_items(c, times)
     step = next_step(c, targets=targets, contraction=contraction, budget_min=budget_min,
-                     time_model=TimeModel(**items), candidates=_user_candidates(candidates, c), model=model, seed=seed)
+                     time_model=TimeModel(**items), candidates=_user_candidates(candidates, c), model=model, seed=seed,
+                     sigma_prior=learnt)
     if output is None:
         return NextResult(step)
     files, program = write_next(step, output, program=_program, times=items)

@@ -102,7 +102,7 @@ def cmd_report(args) -> int:
 def cmd_plan(args) -> int:
     return _show(api.plan(args.campaign, targets=args.targets, model=args.model, candidates=args.candidates,
                           sigma_model_um=args.sigma_model_um, sweep_pattern=args.sweep_pattern, output=args.output,
-                          data=args.data),
+                          data=args.data, sigma_model_prior=args.sigma_model_prior),
                  args)
 
 
@@ -126,13 +126,13 @@ def cmd_design(args) -> int:
     return _show(api.design(args.campaign, targets=_targets(args.targets), tolerances=args.tolerances,
                             budget_min=args.budget_min, contraction=None if args.contraction == 0 else args.contraction,
                             candidates=args.candidates, times=args.times, seed=args.seed, model=args.model,
-                            output=args.output), args)
+                            output=args.output, sigma_model_prior=args.sigma_model_prior), args)
 
 
 def cmd_next(args) -> int:
     return _show(api.next_run(args.campaign, targets=_targets(args.targets), contraction=args.contraction,
                               budget_min=args.budget_min, candidates=args.candidates, times=args.times, seed=args.seed,
-                              model=args.model, output=args.output), args)
+                              model=args.model, output=args.output, sigma_model_prior=args.sigma_model_prior), args)
 
 
 def cmd_ncgen(args) -> int:

@@ -62,10 +62,15 @@ def _sampler_options(s) -> None:
                    "(default: the campaign's own section, if any)")
     s.add_argument("--sigma-model-um", type=float, default=None, help="fix sigma_model at this value, µm "
                    "(default: sampled from its prior; 0 with --closed-form)")
+    _sigma_prior_option(s)
+    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+
+def _sigma_prior_option(s, uses: str = "") -> None:
+    """``--sigma-model-prior FILE`` (sample, report, plan, design, next); ``uses``: what the command does with it."""
     s.add_argument("--sigma-model-prior", metavar="FILE.toml", default=None, help="the σ_model prior learnt "
                    "elsewhere, e.g. by a fleet of the machine type (format mtmcal-sigma-model-prior/1; default: the "
-                   "assumed HalfNormal(2 µm); docs/inference.md)")
-    s.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+                   f"assumed HalfNormal(2 µm); docs/inference.md){uses}")
 
 
 def _design_goal(s, *, contraction_default) -> None:
@@ -87,6 +92,8 @@ def _design_goal(s, *, contraction_default) -> None:
     s.add_argument("--times", metavar="FILE.toml", help="override the machine-time model (docs/design.md)")
     s.add_argument("--seed", type=int, default=0, help="random seed of the search and the check (default 0)")
     _model(s, "linear", help="forward model (default linear; htm models are linearised at zero)")
+    _sigma_prior_option(s, ": σ_model is integrated out over it, and its contraction measured against the wider "
+                        "of it and the assumed prior (docs/design.md)")
 
 
 def build_parser(handlers: dict) -> argparse.ArgumentParser:
@@ -174,6 +181,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
                    "(default), probe, or both; probe runs are candidates whenever the campaign has a [probe]")
     s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
                    help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
+    _sigma_prior_option(s, ": the closed form at its rms, the σ_model information and the Monte-Carlo check under it "
+                        "(docs/planning.md)")
     s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")
 
     s = _command(sub, "design", handlers["design"], "design the whole campaign: the runs that reach target "

@@ -72,10 +72,13 @@ COMMANDS_READING_DPRNT = (
     ("probe-fit", "{file}", "--json"),
 )
 # Every command with --sigma-model-prior ({file} the bad prior; the thesis campaign is valid): it is read before
-# any sampling.  test_every_sigma_prior_command_is_listed fails until a new one is added.
+# any sampling or planning.  test_every_sigma_prior_command_is_listed fails until a new one is added.
 COMMANDS_READING_SIGMA_PRIORS = (
     ("sample", "--sigma-model-prior", "{file}", "-o", "{out}", "--checkpoint", "{out}.h5", "--quiet"),
     ("report", "--sigma-model-prior", "{file}", "-o", "{out}", "--quiet"),
+    ("plan", "--sigma-model-prior", "{file}", "-o", "{out}"),
+    ("design", "--sigma-model-prior", "{file}", "-o", "{out}"),
+    ("next", "--sigma-model-prior", "{file}", "-o", "{out}"),
 )
 # Every command with --tolerances ({file} the bad tolerance set; {campaigns} a folder of one valid campaign).
 # test_every_tolerances_command_is_listed fails until a new one is added.

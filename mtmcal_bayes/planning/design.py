@@ -24,11 +24,14 @@ priors) carry almost none of it: only means beyond what the parameters absorb
 (redundant runs) do.  The posterior variance of σ is taken as
 ``1/(1/var_prior + I(σ0))`` (Laplace approximation), its contraction
 ``1 − var_post/var_prior = var_prior·I/(1 + var_prior·I)``: 0.5 once ``I``
-equals the prior precision.  A candidate run ``k`` times means ``k`` runs of it
-at its setup, the second and later ones each on its own W-ball placement (own
-mount offsets, as the campaign format requires of a second run of one pattern,
-setup and mount); more repeats of an existing run add no mean, so no degree of
-freedom about σ.
+equals the prior precision.  Under a σ_model prior learnt elsewhere (a fleet of the machine type,
+:class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`) ``var_prior`` is the learnt prior's, and the contraction is
+measured against the wider of the assumed and the learnt prior (:meth:`Planner.contraction_reference`):
+``1 − var_post/max(var_assumed, var_learnt)``, so that a learnt prior narrower than the assumption counts as
+knowledge of σ_model and a wider one is narrowed by the data as the assumed one would be (docs/design.md).  A
+candidate run ``k`` times means ``k`` runs of it at its setup, the second and later ones each on its own W-ball
+placement (own mount offsets, as the campaign format requires of a second run of one pattern, setup and mount);
+more repeats of an existing run add no mean, so no degree of freedom about σ.
 """
 
 from __future__ import annotations
@@ -53,6 +56,7 @@ from ..parameters import IDENTIFIABLE, QUANTITIES, ParameterSpace, weights
 from ..patterns import COMPONENTS
 from .candidates import Candidate
 from .probe_candidates import ProbeCandidate, probe_rows, probe_terms
+from .scale_priors import contraction_reference, default_sigma_model, scale_prior
 
 #: a candidate that changes no target's sd by this fraction identifies nothing new
 MIN_GAIN = 0.01
@@ -69,13 +73,6 @@ def check_targets(targets) -> list[str]:
         if t not in allowed:
             raise ParameterError("targets", f"unknown quantity {t!r} (expected one of: {', '.join(allowed)})")
     return list(dict.fromkeys(targets))
-
-
-def default_sigma_model(campaign, name: str = "sigma_model") -> float:
-    """Root mean square of a discrepancy scale's prior (``sigma_model``, ``sigma_model_probe``), mm: the fixed value
-    the closed form uses."""
-    prior = make_prior(name, name, "length", campaign.priors)
-    return float(np.sqrt(prior.sd**2 + prior.mean**2))
 
 
 @dataclass
@@ -100,10 +97,14 @@ class Evaluation:
         return np.any(self.sd_after < (1.0 - MIN_GAIN) * self.sd_before, axis=1)
 
 
-def sigma_contraction(fisher, prior_var: float):
-    """``1 − var_post/var_prior`` of sigma_model with ``var_post = 1/(1/var_prior + fisher)`` (Laplace)."""
+def sigma_contraction(fisher, prior_var: float, reference_var: float | None = None):
+    """``1 − var_post/var_prior`` of sigma_model with ``var_post = 1/(1/var_prior + fisher)`` (Laplace); with
+    ``reference_var`` (under a learnt prior, the wider prior's variance, :meth:`Planner.contraction_reference`)
+    ``1 − var_post/reference_var``.  ``fisher`` any shape (1/mm²), variances mm²."""
     x = prior_var * np.asarray(fisher, dtype=float)
-    return x / (1.0 + x)
+    if reference_var is None:
+        return x / (1.0 + x)
+    return 1.0 - prior_var / (1.0 + x) / reference_var
 
 
 def trace_inv_sq(M1: np.ndarray, M2: np.ndarray, M3: np.ndarray, t) -> np.ndarray:
@@ -132,7 +133,8 @@ class SigmaInformation:
     ``sigma`` the value it is evaluated at and ``prior_var`` the variance of its prior (mm, mm²);
     ``fisher_now`` (1/mm²) and ``contraction_now`` of the campaign as it is; ``fisher`` (K, R) after
     1..R runs of each candidate; ``contraction`` (K,) after one run; ``runs_needed`` (K,) the fewest runs
-    whose contraction reaches :data:`SIGMA_CONTRACTION`, 0 where R runs do not.
+    whose contraction reaches :data:`SIGMA_CONTRACTION`, 0 where R runs do not; ``reference_var`` (mm²) the
+    variance the contraction is measured against when it is not the prior's (a learnt prior: the wider one's).
     """
 
     sigma: float
@@ -142,6 +144,7 @@ class SigmaInformation:
     fisher: np.ndarray
     contraction: np.ndarray
     runs_needed: np.ndarray
+    reference_var: float | None = None
 
 
 class Planner:
@@ -156,17 +159,23 @@ class Planner:
     sigma_model : fixed model-discrepancy sd of the ball bar, mm (default :func:`default_sigma_model`); the probe's
         is the rms of the ``sigma_model_probe`` prior
     data : what the campaign's current posterior rests on: ``"ballbar"`` (default), ``"probe"`` or ``"both"``
+    sigma_prior : a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere, or None (the assumed
+        priors): the prior of each scale it names, so the default ``sigma_model`` and the probe's scale are the rms
+        of the learnt priors, and σ_model's prior is the learnt one wherever it is used (:meth:`sigma_prior`);
+        kept as :attr:`learnt` (:mod:`.scale_priors` states it in outputs)
     """
 
     def __init__(self, campaign, candidates: list, targets=None, *, sigma_model: float | None = None,
-                 model: str = "linear", data: str = "ballbar"):
+                 model: str = "linear", data: str = "ballbar", sigma_prior=None):
         self.campaign = campaign
         self.model = model
         self.data = check_data(data, campaign)
         self.candidates = list(candidates)
         self.targets = check_targets(targets)
-        self.sigma_model = default_sigma_model(campaign) if sigma_model is None else float(sigma_model)
-        self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe")
+        self.learnt = sigma_prior
+        self.sigma_model = default_sigma_model(campaign, learnt=sigma_prior) if sigma_model is None \
+            else float(sigma_model)
+        self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe", sigma_prior)
         bb = campaign.ballbar
         setups = dict(bb.setups)
         mounts = dict(bb.mounts)
@@ -301,8 +310,13 @@ class Planner:
 
     # ------------------------------------------------------------------ sigma_model
     def sigma_prior(self):
-        """The campaign's prior of sigma_model (frozen scipy distribution, mm)."""
-        return make_prior("sigma_model", "sigma_model", "length", self.campaign.priors).frozen()
+        """The prior of sigma_model (frozen scipy distribution, mm): learnt elsewhere, else the campaign's."""
+        return scale_prior(self.campaign, "sigma_model", self.learnt).frozen()
+
+    def contraction_reference(self) -> float | None:
+        """The variance σ_model's contraction is measured against, mm² (:func:`.scale_priors.contraction_reference`):
+        None (its prior's) without a learnt prior, the wider of the assumed and the learnt prior's under one."""
+        return contraction_reference(self.campaign, self.learnt)
 
     def sigma_information(self, candidates: list[Candidate] | None = None, *, rows=None,
                           max_runs: int = MAX_RUNS) -> SigmaInformation:
@@ -317,10 +331,11 @@ class Planner:
         candidates = self.candidates if candidates is None else candidates
         rows = self.candidate_rows(candidates) if rows is None else rows
         prior_var = float(self.sigma_prior().var())
+        ref = self.contraction_reference()
         if self.data != "ballbar":  # the formula below holds for one scale on every row (docs/planning.md)
             zero = np.zeros((len(candidates), max_runs))
             return SigmaInformation(self.sigma_model, prior_var, 0.0, 0.0, zero, zero[:, 0], np.zeros(len(candidates),
-                                                                                                     dtype=int))
+                                                                                                     dtype=int), ref)
         scale = np.sqrt(self.prior_var)
         X0 = self.A * scale
         used = np.any(X0 != 0.0, axis=0)
@@ -336,11 +351,11 @@ class Planner:
             else:
                 tr = self._trace_more_repeats(c, X0[:, used], runs)
             fisher[k] = 2.0 * self.sigma_model**2 * tr
-        contraction = sigma_contraction(fisher, prior_var)
+        contraction = sigma_contraction(fisher, prior_var, ref)
         reached = contraction >= SIGMA_CONTRACTION
         needed = np.where(reached.any(axis=1), np.argmax(reached, axis=1) + 1, 0)
-        return SigmaInformation(self.sigma_model, prior_var, now, float(sigma_contraction(now, prior_var)), fisher,
-                                contraction[:, 0], needed)
+        return SigmaInformation(self.sigma_model, prior_var, now, float(sigma_contraction(now, prior_var, ref)), fisher,
+                                contraction[:, 0], needed, ref)
 
     def _trace_new_runs(self, c: Candidate, X0: np.ndarray, Xc: np.ndarray, *, noise: np.ndarray,
                         runs: np.ndarray) -> np.ndarray:

@@ -6,7 +6,9 @@ the priors for a new machine; the new runs' own nuisance offsets from their prio
 means are simulated with the repeat scatter, the instrument error and σ_model, and the exact
 posterior of each simulated campaign gives the realised posterior sd of every target and the realised
 posterior variance of σ_model.  Reported: their mean and 10–90 % spread, the share of machines whose
-realised sd meets each target, and the expected contraction ``1 − E[var(σ | y)]/var_prior(σ)``.
+realised sd meets each target, and the expected contraction ``1 − E[var(σ | y)]/var_prior(σ)`` (under a σ_model
+prior learnt elsewhere, drawn from and inferred with that prior, and measured against the wider of the assumed
+and the learnt prior's variance, :meth:`.design.Planner.contraction_reference`).
 
 For a kinematic model the rows are its Jacobian at zero deviations (the model linearised), as in the
 planner.
@@ -121,7 +123,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     s = after.sigma[:, 0]
     mean_s = s @ w
     var_s = (s**2) @ w - mean_s**2
-    prior_var_s = float(sigma_prior.var())
+    prior_var_s = planner.contraction_reference() or float(sigma_prior.var())  # a learnt prior: the wider one's
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     return Preposterior(list(planner.targets), sd * scale, sd_now[0] * scale, 1.0 - var_s / prior_var_s,
                         float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"))

@@ -74,6 +74,15 @@ def sd_figure(design):
     return fig
 
 
+def _sigma_sentence(reached: bool, learnt: bool = False) -> str:
+    """Whether σ_model is then set by knowledge (the data; or they and a prior ``learnt`` elsewhere) or by the
+    assumption."""
+    if learnt:
+        return ("the learnt prior and the data, not an assumption, then set σ_model." if reached else
+                "σ_model is not yet known as well as the goal asks.")
+    return "the data, not the prior, then set σ_model." if reached else "σ_model still rests mostly on its prior."
+
+
 def write_design_html(design, out_dir, *, doc: dict, runs: pd.DataFrame, expected: pd.DataFrame) -> list[str]:
     """Write the figures and design.html into ``out_dir`` (``doc`` the design's JSON, ``runs`` and ``expected`` its
     tables); returns the files written."""
@@ -91,8 +100,11 @@ def write_design_html(design, out_dir, *, doc: dict, runs: pd.DataFrame, expecte
         f"{len(design.runs)} runs in {doc['total_minutes']:.0f} machine minutes, set-up changes included.",
         f"σ_model contraction {sig['contraction_before']:.2f} today → {sig['contraction_after']:.2f} expected"
         + (f" (target {sig['target']:g})" if sig["target"] is not None else "") + ": "
-        + ("the data, not the prior, then set σ_model." if sig["contraction_after"] >= 0.5
-           else "σ_model still rests mostly on its prior."),
+        + (_sigma_sentence(sig["contraction_after"] >= 0.5) if "prior_source" not in sig else
+           f"measured against the {sig['contraction_reference']['which']} prior "
+           f"{sig['contraction_reference']['prior']} (the wider), σ_model's prior "
+           f"{sig['prior']} being learnt elsewhere ({sig['prior_source']['from']}): "
+           + _sigma_sentence(sig["contraction_after"] >= 0.5, learnt=True)),
         (f"Every target met in {met:.0%} of simulated machines; each target alone in at least {PROMISE:.0%} "
          "(the design's promise)." if np.isfinite(design.goal.targets).any() else
          "No sd targets: the design is for σ_model's contraction (and the budget)."),

@@ -30,6 +30,7 @@ from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
 from .design_runs import DesignedRun, designed_runs
 from .design_search import Goal, Search
 from .design_timing import Timing
+from .scale_priors import learnt_notes, learnt_summary
 
 #: default σ_model contraction target: the data, not the prior, then set σ_model
 CONTRACTION = 0.5
@@ -64,6 +65,8 @@ class Design:
     notes: list[str] = field(default_factory=list)
     start: tuple = (False, None, None)
     rounds: int = 1
+    #: the σ_model prior learnt elsewhere, as :func:`.scale_priors.learnt_summary` gives it (empty: assumed)
+    learnt: dict = field(default_factory=dict)
 
     @property
     def total_minutes(self) -> float:
@@ -202,13 +205,16 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                 contraction: float | None = CONTRACTION, budget_min: float | None = None,
                 candidates: list[Candidate] | None = None, time_model: TimeModel | None = None,
                 model: str = "linear", seed: int | None = 0, start=None, n_sim: int | None = None,
-                candidates_source: str = "candidates") -> Design:
+                candidates_source: str = "candidates", sigma_prior=None) -> Design:
     """The designed campaign for ``campaign`` (see the module docstring).
 
     ``targets`` {quantity: sd in ″/µm}; ``tolerances`` {quantity: Tolerance} (targets from them where no sd is
     given); ``contraction`` σ_model's (None: none); ``budget_min`` machine minutes; ``candidates`` the user's, added
     to the catalogue; ``start`` (ball bar mounted, setup id, mount id) the machine's state (default: a new session,
-    nothing mounted).
+    nothing mounted); ``sigma_prior`` a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere (None:
+    the assumed prior): σ_model's quantiles, the contraction's Laplace prior and the exact check's draws and
+    posteriors are then the learnt prior's, and the contraction is measured against the wider prior's variance
+    (:meth:`.design.Planner.contraction_reference`).
     """
     if contraction is not None and not (0.0 < contraction < 1.0):
         raise ParameterError("contraction", f"must lie between 0 and 1, got {contraction!r}")
@@ -220,7 +226,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     if not cands:
         raise ParameterError("candidates", "no candidate run fits the machine's travels")
     names = list(dict.fromkeys(list(want) + [q for q in (tolerances or {}) if q in IDENTIFIABLE] + list(IDENTIFIABLE)))
-    planner = Planner(campaign, cands, names, model=model)
+    planner = Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
     if tolerances:
         for q, sd in targets_from_tolerances(planner, tolerances).items():
             want.setdefault(q, sd)
@@ -290,14 +296,20 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         "a designed run at an existing set-up assumes the T ball re-set to that set-up's offsets; re-centred, give "
         "the set-up a new id",
     ]
+    notes += learnt_notes(campaign, sigma_prior, "σ_model's quantiles, its contraction and the exact check use it")
+    c_now = float(problem.value_now().contraction[0])
+    if planner.learnt is not None and goal.contraction is not None and c_now >= goal.contraction:
+        notes.append(f"σ_model's contraction target {goal.contraction:g} is met before any run ({c_now:.2f}): with "
+                     "its prior learnt elsewhere σ_model is known that well already, so no run is designed to teach "
+                     "it")
     if not kept:
         notes.append(f"the exact check finds some target met in fewer than {PROMISE:.0%} of the simulated machines "
                      f"after {ROUNDS} rounds (see 'met in'): the promise is not kept in full")
     return Design(campaign, runs, minutes_each, why, timing, list(planner.targets), list(planner.target_units), goal,
                   check, {"sd_promised": result.value.sd_promised[0], "sd_mean": result.value.sd_mean[0],
                           "contraction": float(result.value.contraction[0]),
-                          "contraction_now": float(problem.value_now().contraction[0])},
-                  cands, model, notes, start, rounds)
+                          "contraction_now": c_now},
+                  cands, model, notes, start, rounds, learnt_summary(campaign, sigma_prior))
 
 
 def _refuse_within_budget(problem: DesignProblem, goal: Goal, minutes, *, seed, units_of) -> None:

@@ -66,7 +66,7 @@ def design_document(design: Design, campaign_path: str | None = None, programs: 
                             "contraction_after": float(c.mean()) if c.size else design.check.contraction_now,
                             "contraction_after_p10": float(np.quantile(c, 0.1)) if c.size else None,
                             "contraction_after_p90": float(np.quantile(c, 0.9)) if c.size else None,
-                            "target": design.goal.contraction},
+                            "target": design.goal.contraction} | design.learnt,
             "budget_min": design.goal.budget, "promise": PROMISE,
             "probability_targets_met": design.check.share_all_met(design.goal.targets),
             "schedule": [e.__dict__ | {} for e in design.timing.events(design.runs, design.start)],
@@ -91,9 +91,19 @@ def design_text(design: Design) -> str:
     c = design.check.contraction
     ctext = f"{c.mean():.2f}" if c.size else "unchanged"
     lines += ["", f"σ_model contraction: {design.check.contraction_now:.2f} now → {ctext} after"
-              + (f" (target {design.goal.contraction:g})" if design.goal.contraction is not None else "")]
+              + (f" (target {design.goal.contraction:g})" if design.goal.contraction is not None else "")
+              + _against(design.learnt)]
     lines += [f"note: {n}" for n in design.notes]
     return "\n".join(lines)
+
+
+def _against(learnt: dict) -> str:
+    """What the contraction is measured against, under a σ_model prior learnt elsewhere (empty otherwise)."""
+    if not learnt:
+        return ""
+    ref = learnt["contraction_reference"]
+    return (f", against the {ref['which']} prior {ref['prior']} (the wider); σ_model's prior "
+            f"{learnt['prior']} learnt elsewhere, from {learnt['prior_source']['from']}")
 
 
 def designed_campaign(design: Design, goal: DesignGoal | None = None):
@@ -158,7 +168,8 @@ def next_document(step: NextStep, program: str | None = None) -> dict:
             "probability_targets_met": step.probability_targets_met, "expected": exp,
             "sigma_model": {"contraction_now": step.contraction_now, "target": step.contraction_target,
                             "contraction_after": (float(step.design.check.contraction.mean())
-                                                  if step.design is not None and step.design.runs else None)},
+                                                  if step.design is not None and step.design.runs else None)}
+            | step.learnt,
             "measured_runs": step.measured, "planned_left": step.planned_left, "dropped": step.dropped,
             "added": step.added}
 
@@ -189,7 +200,8 @@ def next_text(step: NextStep) -> str:
         tg = "" if not np.isfinite(step.target_sd[i]) else f"{step.target_sd[i]:.3g} {u:<2}"
         lines.append(f"{t:<18} {step.sd_now[i]:>7.3g} {u:<2} {tg:>10}")
     lines.append(f"σ_model contraction now {step.contraction_now:.2f}"
-                 + (f" (target {step.contraction_target:g})" if step.contraction_target is not None else ""))
+                 + (f" (target {step.contraction_target:g})" if step.contraction_target is not None else "")
+                 + _against(step.learnt))
     return "\n".join(lines)
 
 

@@ -15,7 +15,9 @@ posterior is exact and does not depend on the data, so in the parameters' prior-
 ``I(σ) = 2σ² tr C⁻²``, follows by Woodbury (:func:`.design.trace_inv_sq`).  Per node:
 
 * the target sds ``sd_t(σ_s) = sqrt(T′ (I + M₁)⁻¹ T′ᵀ)``;
-* the σ_model contraction by Laplace, ``1 − 1/(1 + var_prior·I(σ_s))``.
+* the σ_model contraction by Laplace, ``1 − 1/(1 + var_prior·I(σ_s))`` (under a prior learnt elsewhere,
+  ``var_prior`` the learnt prior's and the contraction measured against the wider of the assumed and the learnt
+  prior's variance, :func:`.design.sigma_contraction`).
 
 A target is *promised* when ``sd_t`` at the :data:`PROMISE` quantile of σ meets it (``sd_t`` grows
 with σ, so that is the sd met in that share of machines, before the extra spread of σ being learnt
@@ -114,6 +116,7 @@ class DesignProblem:
         self.candidates = planner.candidates
         self.nodes = sigma_nodes(planner) if nodes is None else np.asarray(nodes, float)
         self.sigma_prior_var = float(planner.sigma_prior().var())
+        self.sigma_reference_var = planner.contraction_reference()  # None: the prior's
         scale = np.sqrt(planner.prior_var)
         rows = planner.candidate_rows()
         s2 = self.nodes**2  # (S,)
@@ -198,7 +201,7 @@ class DesignProblem:
         # traces of products of symmetric matrices as element sums: tr(AB) = Σ A∘B, tr(GG) = Σ G∘Gᵀ
         tr = t - 2.0 * np.sum(Sinv * M[2], axis=(-2, -1)) + np.sum(G * np.swapaxes(G, -1, -2), axis=(-2, -1))
         fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
-        return DesignValue(sd, sigma_contraction(fisher, self.sigma_prior_var))
+        return DesignValue(sd, sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var))
 
     def value_plus_one(self, counts: np.ndarray) -> tuple[DesignValue, np.ndarray]:
         """The criterion of ``counts`` plus one more run of each candidate ``k`` (K designs) and which of them are
@@ -244,7 +247,8 @@ class DesignProblem:
         tr = t[0][None] + dt - 2.0 * trSM3_new + trE2
         fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
         sd = np.sqrt(np.maximum(var_new, 0.0)) * self.to_display
-        return DesignValue(sd, sigma_contraction(fisher, self.sigma_prior_var)), counts < MAX_INSTANCES
+        contraction = sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)
+        return DesignValue(sd, contraction), counts < MAX_INSTANCES
 
     def value_now(self) -> DesignValue:
         """The criterion of the campaign as it is."""

@@ -25,6 +25,7 @@ from .candidates import Candidate
 from .design import Planner
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets
 from .design_problem import current_posterior
+from .scale_priors import learnt_summary
 
 
 #: re-plans with the targets tightened when the closed form finds nothing left to measure but the exact posterior
@@ -49,6 +50,8 @@ class NextStep:
     planned_left: list[str] = field(default_factory=list)
     dropped: list[str] = field(default_factory=list)
     added: list[str] = field(default_factory=list)
+    #: the σ_model prior learnt elsewhere (:func:`.scale_priors.learnt_summary`; empty: assumed)
+    learnt: dict = field(default_factory=dict)
 
     @property
     def minutes_left(self) -> float:
@@ -81,9 +84,10 @@ def _conditional_met(planner: Planner, targets: np.ndarray, contraction_ok: bool
 
 def next_step(campaign, *, targets: dict | None = None, contraction: float | None = None,
               budget_min: float | None = None, time_model: TimeModel | None = None, candidates=None,
-              model: str = "linear", seed: int | None = 0, n_sim: int | None = None) -> NextStep:
+              model: str = "linear", seed: int | None = 0, n_sim: int | None = None, sigma_prior=None) -> NextStep:
     """The next run of a designed campaign, or stop (see the module docstring).  Targets, contraction and budget
-    default to the campaign's ``[design]``."""
+    default to the campaign's ``[design]``; ``sigma_prior`` a σ_model prior learnt elsewhere, as for
+    :func:`.design_make.make_design` (a campaign does not record the prior it was designed under: give it again)."""
     goal = campaign.design
     want = parse_targets(targets if targets is not None else (goal.targets if goal else {}))
     if contraction is None:
@@ -93,7 +97,7 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     bb = campaign.ballbar
     cands = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []))
     names = list(dict.fromkeys(list(want) + list(IDENTIFIABLE)))
-    planner = Planner(campaign, cands, names, model=model)
+    planner = Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
     tg = np.array([want.get(t, np.nan) for t in planner.targets])
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     if bb.runs:
@@ -102,15 +106,16 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         sd_now = sd[0] * scale
         w = now.weights(planner.observations.mean[None])[:, 0]
         s = now.sigma[:, 0]
-        prior_var = float(planner.sigma_prior().var())
+        prior_var = planner.contraction_reference() or float(planner.sigma_prior().var())
         c_now = float(1.0 - (w @ s**2 - (w @ s) ** 2) / prior_var)
-    else:  # nothing measured yet: the priors
+    else:  # nothing measured yet: the priors (a learnt σ_model prior measured against the wider one's variance)
         sd_now = np.sqrt((planner.T**2) @ planner.prior_var) * scale
-        c_now = 0.0
+        ref = planner.contraction_reference()
+        c_now = 0.0 if ref is None else float(1.0 - planner.sigma_prior().var() / ref)
     met = bool(np.all(sd_now <= np.where(np.isfinite(tg), tg, np.inf))) and c_now >= contraction
     base = dict(targets=list(planner.targets), target_units=list(planner.target_units), target_sd=tg, sd_now=sd_now,
                 contraction_now=c_now, contraction_target=contraction, measured=len(bb.runs),
-                planned_left=[p.label for p in bb.planned])
+                planned_left=[p.label for p in bb.planned], learnt=learnt_summary(campaign, sigma_prior))
     if met:
         return NextStep("stop", probability_targets_met=_conditional_met(planner, tg, c_now >= contraction), **base)
     start = (True, bb.runs[-1].setup, bb.runs[-1].mount) if bb.runs else (False, None, None)
@@ -118,7 +123,8 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     for _ in range(RETRIES):
         design = make_design(campaign, targets=goal, contraction=contraction, budget_min=budget_min,
                              candidates=[c for c in cands if c.kind in ("planned", "user")],
-                             time_model=time_model, model=model, seed=seed, start=start, n_sim=n_sim)
+                             time_model=time_model, model=model, seed=seed, start=start, n_sim=n_sim,
+                             sigma_prior=sigma_prior)
         if design.runs:
             break
         # the closed form already promises what the exact posterior has not reached: ask it for the ratio more

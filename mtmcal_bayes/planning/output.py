@@ -62,7 +62,9 @@ def format_plan(result) -> str:
     return "\n".join(lines)
 
 
-def _runs(value, max_runs: int) -> str:
+def _runs(value, max_runs: int, met: bool = False) -> str:
+    if met:  # a learnt prior meets the target before any run
+        return "0 (met already)"
     return f"not within {max_runs}" if pd.isna(value) else str(int(value))
 
 
@@ -75,19 +77,25 @@ def sigma_lines(result) -> list[str]:
     if info["evaluated_at_um"] == 0:
         return ["", "What would teach sigma_model: not computed at sigma_model = 0 (see the notes)"]
     ok = t[t["feasible"]].sort_values("sigma_model_rank")
-    lines = ["", f"What would teach sigma_model (prior {info['prior']}; closed form at {info['evaluated_at_um']:.2f} µm; "
-             "contraction = 1 − posterior/prior variance, Laplace approximation):",
+    ref = info.get("contraction_reference")
+    met = bool(ref) and info["contraction_now"] >= target
+    learnt = f" learnt elsewhere, from {info['prior_source']['from']}" if ref else ""
+    measure = (f"1 − posterior variance/that of the {ref['which']} prior {ref['prior']} (the wider)" if ref else
+               "1 − posterior/prior variance")
+    lines = ["", f"What would teach sigma_model (prior {info['prior']}{learnt}; closed form at "
+             f"{info['evaluated_at_um']:.2f} µm; contraction = {measure}, Laplace approximation):",
              f"  today: {info['contraction_now']:.3f} from {info['means']} means"
              + (" — its posterior is almost its prior: the parameters absorb the residuals" if
-                info["contraction_now"] < 0.1 else ""),
+                info["contraction_now"] < 0.1 and not ref else "")
+             + (f" — {target:g} met already, with the learnt prior" if met else ""),
              f"  {'#':>3s}  {'candidate (best of its pattern)':34s} {'contraction':>11s}  runs to reach {target:g}"]
     for _, r in ok.drop_duplicates("pattern").head(SIGMA_SHOWN).iterrows():
         lines.append(f"  {int(r['sigma_model_rank']):3d}  {r['name'][:34]:34s} {r['sigma_model_contraction']:11.3f}  "
-                     f"{_runs(r['sigma_model_runs_needed'], cap)}")
+                     f"{_runs(r['sigma_model_runs_needed'], cap, met)}")
     if len(ok):
         best = ok.sort_values("rank").iloc[0]
         lines.append(f"  best for the targets, {best['name']}: {best['sigma_model_contraction']:.3f}, runs to reach "
-                     f"{target:g}: {_runs(best['sigma_model_runs_needed'], cap)}")
+                     f"{target:g}: {_runs(best['sigma_model_runs_needed'], cap, met)}")
     never = ok[ok["sigma_model_runs_needed"].isna()]
     if len(never):
         names = ", ".join(never["name"].head(4)) + (f" and {len(never) - 4} more" if len(never) > 4 else "")

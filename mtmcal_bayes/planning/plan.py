@@ -8,7 +8,6 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from ..inference.priors import make_prior
 from .candidates import (
     Candidate,
     candidate_mount,
@@ -19,6 +18,7 @@ from .candidates import (
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
 from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility, probe_skipped
+from .scale_priors import learnt_notes, learnt_summary, scale_prior
 
 #: tool-length differences of the sweep, mm
 SWEEP_MM = np.arange(0.0, 250.0 + 1e-9, 5.0)
@@ -148,7 +148,7 @@ def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP
     cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
                        mount, campaign.ballbar.length, extension=float(e)) for e in extensions]
     sub = Planner(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
-                  data=planner.data)
+                  data=planner.data, sigma_prior=planner.learnt)
     ev = sub.evaluate()
     rows = []
     fits = feasibility_check(campaign)
@@ -202,14 +202,18 @@ def best_measurement(campaign, target: str, *, sigma_model_um: float | None = No
 
 
 def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_model_um: float | None = None,
-         sweep_pattern: str | None = None, model: str = "linear", data: str = "ballbar") -> PlanResult:
+         sweep_pattern: str | None = None, model: str = "linear", data: str = "ballbar",
+         sigma_prior=None) -> PlanResult:
     """Rank the catalogue — ball-bar runs and, with a ``[probe]``, touch-probe runs — plus ``extra`` user candidates
     for ``targets``, given the campaign's ``data`` (``"ballbar"``, ``"probe"``, ``"both"``); sweep the tool length;
-    check three by Monte Carlo (ball-bar data)."""
+    check three by Monte Carlo (ball-bar data).  ``sigma_prior``: a
+    :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere (None: the assumed priors): the closed form's
+    σ_model (unless ``sigma_model_um``) and the probe's scale are the rms of its priors, and the σ_model information
+    and the Monte-Carlo check use it (:class:`.design.Planner`)."""
     ballbar = [c for c in catalogue(campaign) if data != "probe" or c.repeat_of is None]
     candidates = ballbar + probe_catalogue(campaign) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
-    planner = Planner(campaign, candidates, targets, sigma_model=sigma, model=model, data=data)
+    planner = Planner(campaign, candidates, targets, sigma_model=sigma, model=model, data=data, sigma_prior=sigma_prior)
     table, si = _tables(planner, candidates, campaign)
     if sweep_pattern is None:
         best = table[table["kind"] == "tool length"]
@@ -217,8 +221,9 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     sweep = tool_length_sweep(planner, campaign, sweep_pattern)
     check = monte_carlo_check(planner, table)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"
+    learnt = " learnt elsewhere" if planner.learnt is not None and sigma_model_um is None else ""
     notes = [f"closed form for {form} at sigma_model = {units.from_internal(planner.sigma_model, 'um'):.2f} µm "
-             "(the root mean square of its prior); new runs measured "
+             f"(the root mean square of its prior{learnt}); new runs measured "
              f"{candidates[0].repeats if candidates else 3} times with repeat sd "
              f"{units.from_internal(planner.pooled_sd, 'um'):.2f} µm (pooled from the campaign) and instrument "
              f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm",
@@ -238,19 +243,25 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     if planner.sigma_model == 0.0:
         notes.append("at sigma_model = 0 the data carry no Fisher information about sigma_model (its variance "
                      "enters as sigma_model²): the sigma_model ranking needs a positive sigma_model_um")
+    notes += learnt_notes(campaign, planner.learnt, "used by the closed form's sigma_model, the σ_model information "
+                          "and the Monte-Carlo check")
     return PlanResult(table, sweep, check, planner.targets, planner.target_units,
                       units.from_internal(planner.sigma_model, "um"), sweep_pattern, model, notes, campaign.source,
                       sigma_model=sigma_summary(planner, si) if data == "ballbar" else {})
 
 
 def sigma_summary(planner: Planner, si: SigmaInformation) -> dict:
-    """The campaign's closed-form sigma_model contraction and how it is computed (JSON-ready)."""
-    prior = make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors)
+    """The campaign's closed-form sigma_model contraction and how it is computed (JSON-ready); under a learnt prior
+    also ``prior_source`` and what the contraction is measured against (``contraction_reference``)."""
     um2 = units.to_internal(1.0, "um") ** 2
-    return {"prior": prior.describe(), "prior_sd_um": units.from_internal(float(np.sqrt(si.prior_var)), "um"),
-            "evaluated_at_um": units.from_internal(si.sigma, "um"), "means": int(len(planner.observations)),
-            "fisher_now_per_um2": si.fisher_now * um2, "contraction_now": si.contraction_now,
-            "target_contraction": SIGMA_CONTRACTION, "max_runs": MAX_RUNS,
-            "method": "Laplace: var_post = 1/(1/var_prior + I), I = 2 sigma^2 tr(C^-2) the Fisher information of "
-                      "the marginal likelihood, C = A Sigma0 A^T + diag(base_var + sigma^2); contraction = "
-                      "1 - var_post/var_prior; a candidate's runs after the first each on its own W-ball placement"}
+    out = {"prior": scale_prior(planner.campaign, "sigma_model", planner.learnt).describe(),
+           "prior_sd_um": units.from_internal(float(np.sqrt(si.prior_var)), "um"),
+           "evaluated_at_um": units.from_internal(si.sigma, "um"), "means": int(len(planner.observations)),
+           "fisher_now_per_um2": si.fisher_now * um2, "contraction_now": si.contraction_now,
+           "target_contraction": SIGMA_CONTRACTION, "max_runs": MAX_RUNS,
+           "method": "Laplace: var_post = 1/(1/var_prior + I), I = 2 sigma^2 tr(C^-2) the Fisher information of "
+                     "the marginal likelihood, C = A Sigma0 A^T + diag(base_var + sigma^2); contraction = "
+                     "1 - var_post/var_prior; a candidate's runs after the first each on its own W-ball placement"}
+    if planner.learnt is not None:
+        out["method"] = out["method"].replace("1 - var_post/var_prior", "1 - var_post/max(var_assumed, var_learnt)")
+    return out | learnt_summary(planner.campaign, planner.learnt)

@@ -2,7 +2,8 @@
 
 :func:`realised_sd` simulates the data of a candidate from the current
 posterior predictive (``sigma_model`` and the parameters drawn from the
-posterior given the measured data), runs the exact inference of
+posterior given the measured data, under σ_model's prior — learnt elsewhere where the planner
+has one), runs the exact inference of
 :class:`~mtmcal_bayes.inference.marginal.MarginalPosterior` on the campaign
 plus the simulated run, and returns the root-mean-square posterior sd of each
 target: what the candidate actually delivers on average, with ``sigma_model``
@@ -15,19 +16,14 @@ import numpy as np
 
 from .. import units
 from ..inference.marginal import MarginalPosterior
-from ..inference.priors import make_prior
 from .design import Planner
 
 
-def _sigma_prior(planner: Planner):
-    """σ_model's prior (frozen scipy distribution, mm) of the planner's campaign."""
-    return make_prior("sigma_model", "sigma_model", "length", planner.campaign.priors).frozen()
-
-
 def current_posterior(planner: Planner) -> MarginalPosterior:
-    """The exact σ-marginal posterior of the planner's campaign today (one scale, σ_model's prior), from which
-    :func:`realised_sd` simulates: one for every candidate checked, so that its grid is factored once."""
-    return MarginalPosterior(planner.A, planner.V - planner.sigma_model**2, planner.prior_var, _sigma_prior(planner))
+    """The exact σ-marginal posterior of the planner's campaign today (one scale, σ_model's prior — learnt elsewhere
+    where the planner has one, :meth:`Planner.sigma_prior`), from which :func:`realised_sd` simulates: one for every
+    candidate checked, so that its grid is factored once."""
+    return MarginalPosterior(planner.A, planner.V - planner.sigma_model**2, planner.prior_var, planner.sigma_prior())
 
 
 def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, seed: int | None = 0,
@@ -51,7 +47,7 @@ def realised_sd(planner: Planner, candidate_index: int, *, n_sim: int = 400, see
     theta, sigma = now.draw(y, n_sim, rng)
     y_c = theta @ A_c.T + rng.normal(size=(n_sim, len(A_c))) * np.sqrt(base_c[None] + sigma ** 2)
     after = MarginalPosterior(np.vstack([planner.A, A_c]), np.concatenate([base_var, base_c]), planner.prior_var,
-                              _sigma_prior(planner))
+                              planner.sigma_prior())
     y_all = np.hstack([np.broadcast_to(y, (n_sim, len(y))), y_c])
     _, sd_after = after.target_moments(y_all, planner.T)
     _, sd_now = now.target_moments(y[None], planner.T)
