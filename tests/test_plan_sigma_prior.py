@@ -178,3 +178,26 @@ def test_the_commands_take_the_prior_and_name_its_source(run_cli, tmp_path):
     assert info["prior"] == "LogNormal(median 1 µm, log sd 0.1)" and info["prior_source"]["from"] == SOURCE
     assert plan["sigma_model_um"] == pytest.approx(_rms_um(1.0, 0.1))
     assert any(SOURCE in n for n in plan["notes"])
+    # the learnt prior meets the contraction before any run: 0 runs needed, in the JSON as in the text
+    assert info["contraction_now"] >= 0.5
+    assert {c["sigma_model_runs_needed"] for c in plan["candidates"] if c["feasible"]} == {0}
+
+
+def test_the_reports_plan_is_made_under_the_posteriors_learnt_prior(thesis, tmp_path, monkeypatch):
+    """The report plans beside its sampling (build._ahead) and again for unidentified quantities (build._planning):
+    both under the learnt prior of the posterior it reports."""
+    from mtmcal_bayes.analysis import analysis_of
+    from mtmcal_bayes.reporting import build
+    from mtmcal_bayes.reporting.drawing import Drawing
+
+    seen = []
+    monkeypatch.setattr(build, "_plan_and_figures",
+                        lambda campaign, directory, targets=None, sigma_prior=None: (seen.append(sigma_prior), None))
+    drawing = Drawing(tmp_path, workers=1)  # drawn here: the job's arguments are seen by this process
+    build._ahead(analysis_of(thesis, sigma_prior=SMALL), drawing, say=lambda text: None)
+    assert seen == [SMALL]
+    monkeypatch.setattr(build, "plan", lambda campaign, targets, sigma_prior=None: seen.append(sigma_prior))
+    post = mb.sample(parse_campaign(variants.without_second_tool_length()), seed=1, sampler="exact",
+                     sigma_model_prior=SMALL)
+    build._planning(post.log_posterior.campaign, post, drawing, batch=0, say=lambda text: None)
+    assert seen == [SMALL, SMALL]

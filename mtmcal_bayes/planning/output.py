@@ -62,10 +62,10 @@ def format_plan(result) -> str:
     return "\n".join(lines)
 
 
-def _runs(value, max_runs: int, met: bool = False) -> str:
-    if met:  # a learnt prior meets the target before any run
-        return "0 (met already)"
-    return f"not within {max_runs}" if pd.isna(value) else str(int(value))
+def _runs(value, max_runs: int) -> str:
+    if pd.isna(value):
+        return f"not within {max_runs}"
+    return "0 (met already)" if value == 0 else str(int(value))  # 0: met before any run (a learnt prior)
 
 
 def sigma_lines(result) -> list[str]:
@@ -91,11 +91,11 @@ def sigma_lines(result) -> list[str]:
              f"  {'#':>3s}  {'candidate (best of its pattern)':34s} {'contraction':>11s}  runs to reach {target:g}"]
     for _, r in ok.drop_duplicates("pattern").head(SIGMA_SHOWN).iterrows():
         lines.append(f"  {int(r['sigma_model_rank']):3d}  {r['name'][:34]:34s} {r['sigma_model_contraction']:11.3f}  "
-                     f"{_runs(r['sigma_model_runs_needed'], cap, met)}")
+                     f"{_runs(r['sigma_model_runs_needed'], cap)}")
     if len(ok):
         best = ok.sort_values("rank").iloc[0]
         lines.append(f"  best for the targets, {best['name']}: {best['sigma_model_contraction']:.3f}, runs to reach "
-                     f"{target:g}: {_runs(best['sigma_model_runs_needed'], cap, met)}")
+                     f"{target:g}: {_runs(best['sigma_model_runs_needed'], cap)}")
     never = ok[ok["sigma_model_runs_needed"].isna()]
     if len(never):
         names = ", ".join(never["name"].head(4)) + (f" and {len(never) - 4} more" if len(never) > 4 else "")

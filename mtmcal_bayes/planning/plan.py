@@ -122,7 +122,9 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
                "eig_bits": float(ev.eig_bits[k]), "informative": bool(ev.informative[k]),
                "newly_identified": ", ".join(newly), "verdict": _verdict(ok, why, bool(ev.informative[k])),
                "sigma_model_contraction": float(si.contraction[k]),
-               "sigma_model_runs_needed": int(si.runs_needed[k]) or None}
+               # 0: the contraction is reached already (a learnt prior); None: not within MAX_RUNS runs
+               "sigma_model_runs_needed": 0 if si.contraction_now >= SIGMA_CONTRACTION
+               else int(si.runs_needed[k]) or None}
         for i, t in enumerate(ev.targets):
             row[f"{t} sd_before"] = float(ev.sd_before[i])
             row[f"{t} sd_after"] = float(ev.sd_after[k, i])

@@ -252,10 +252,10 @@ PLAN_JOB = "plan"
 PLAN_FIGURES = (("plan_sweep.png", plan_figures.sweep_figure), ("plan_ranking.png", plan_figures.ranking_figure))
 
 
-def _plan_and_figures(campaign, directory: Path, targets=None):
-    """A drawing job: the plan (:func:`~mtmcal_bayes.planning.plan.plan`) and its figures written into
-    ``directory``; returns ``(None, plan)``."""
-    planned = plan(campaign, targets)
+def _plan_and_figures(campaign, directory: Path, targets=None, sigma_prior=None):
+    """A drawing job: the plan (:func:`~mtmcal_bayes.planning.plan.plan`, under the posterior's learnt σ_model
+    prior ``sigma_prior`` if any) and its figures written into ``directory``; returns ``(None, plan)``."""
+    planned = plan(campaign, targets, sigma_prior=sigma_prior)
     for name, make in PLAN_FIGURES:
         save_png(make(planned), directory / name)
     return None, planned
@@ -270,7 +270,8 @@ def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
     campaign = analysis.campaign
     ahead = {}
     say("planning the next measurement (beside the sampling)")
-    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory))])
+    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory,
+                                                                         sigma_prior=analysis.sigma_prior))])
     if campaign.has_probe_readings() and campaign.ballbar.runs and campaign.probe_gap() is None:
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
@@ -584,7 +585,7 @@ def _planning(campaign, rep, drawing: Drawing, *, batch: int, say) -> tuple[Plan
         return drawing.wait(batch)[PLAN_JOB], True
     drawing.cancel(batch)
     say("planning the next measurement for the quantities the data do not identify")
-    return plan(campaign, targets), False
+    return plan(campaign, targets, sigma_prior=rep.log_posterior.sigma_prior), False
 
 
 def _page(c: ReportContent, tmp: Path) -> Page:
