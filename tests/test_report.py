@@ -135,17 +135,7 @@ def test_report_on_both_instruments_draws_the_ball_bar_posteriors_eccentricity_p
     assert set(intervals["data"]) == {"ball bar only", "probe only", "fused"}
 
 
-def test_report_without_probe_data_says_so(run_cli, tmp_path):
-    src = tmp_path / "no_probe.toml"
-    src.write_text(variants.without_probe(), encoding="utf-8")
-    code, out, err = run_cli("report", src, "-o", tmp_path / "rep", *QUICK)
-    assert code == 0, err
-    html = (tmp_path / "rep" / "index.html").read_text(encoding="utf-8")
-    assert "No touch-probe data in this campaign" in html
-    assert "No touch-probe data in this campaign" in out
-    s = pd.read_csv(tmp_path / "rep" / "summary.csv", index_col="quantity")
-    assert s["probe_reported"].isna().all() and s["probe_recomputed"].isna().all()
-    assert not (tmp_path / "rep" / "identification_probe.csv").exists()
+# a report of a campaign without touch-probe data: tests/test_formats.py (the first simulate's campaign of the corpus)
 
 
 def test_report_without_second_tool_length_says_what_is_missing(run_cli, tmp_path):
