@@ -6,6 +6,8 @@ posteriors mark.  The marks as ``sample``, ``report`` and ``compensate`` show th
 test_report.py, test_compensation.py.
 """
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -53,6 +55,10 @@ def test_the_record_is_saved_back_and_read_alike(thesis, tmp_path):
     save_campaign(plain, tmp_path / "plain.toml")
     assert "alternative" not in (tmp_path / "plain.toml").read_text(encoding="utf-8")
     assert plain.alternative_reading() is None
+    fewer = copy.deepcopy(thesis)  # the runs read by choice removed (a machine's set-ups kept): the reason goes too
+    fewer.ballbar.runs = [r for r in fewer.ballbar.runs if not r.alternative_convention]
+    save_campaign(fewer, tmp_path / "fewer.toml")
+    assert load_campaign(tmp_path / "fewer.toml").ballbar.alternative_reason == ""
 
 
 @pytest.mark.parametrize("edit, key, fragment", [
