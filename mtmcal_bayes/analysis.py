@@ -144,6 +144,32 @@ class CampaignAnalysis:
         """The exact σ-marginal posterior of the (linearised) model, a :class:`~.inference.marginal.MarginalPosterior`."""
         return self.approximation.marginal
 
+    def alternative_reading(self) -> CampaignAnalysis | None:
+        """This analysis (same model, data, dx_BT assumption and scales) of the campaign read the other way where its
+        reading was a choice (:meth:`~mtmcal_bayes.campaign.Campaign.alternative_reading`); None when it records no
+        choice.  The alternative campaign's analyses form one family, built once for every variant of this one."""
+        root = self._shared("alternative reading", lambda: _alternative_root(self.campaign))
+        if root is None:
+            return None
+        return root.variant(model=self.model, data=self.data, fix_dx_BT=self.fix_dx_BT, sigma_model=self.sigma_model,
+                            sigma_prior=self.sigma_prior)
+
+    def reading_choice(self, names):
+        """Where the campaign's reading of some ball-bar runs was a choice: per quantity of ``names`` its estimate under
+        the alternative reading, the shift in sd and whether it rests on the choice
+        (:func:`~mtmcal_bayes.inference.reading_choice.choice_columns`: the exact σ-marginal posteriors of this
+        analysis and of :meth:`alternative_reading`), a DataFrame indexed by quantity; None without a choice or when
+        the data are the touch probe's alone (the ball-bar reading plays no part)."""
+        if self.data == "probe":
+            return None
+        other = self.alternative_reading()
+        if other is None:
+            return None
+        from .inference.reading_choice import choice_columns
+
+        names = list(names)
+        return choice_columns(self.approximation.moments(names), other.approximation.moments(names))
+
     @property
     def identification(self) -> IdentificationResult:
         """The thesis' deterministic identification of the campaign (shared by every variant)."""
@@ -171,3 +197,9 @@ def analysis_of(campaign, *, model: str | None = None, data: str | None = None, 
     return CampaignAnalysis(campaign, model=model or "linear", data=data or "ballbar", fix_dx_BT=bool(fix_dx_BT),
                             sigma_model=None if sigma_model == "same" else sigma_model,
                             sigma_prior=None if sigma_prior == "same" else sigma_prior)
+
+
+def _alternative_root(campaign) -> CampaignAnalysis | None:
+    """The default analysis of ``campaign``'s alternative reading (its family's root), or None without a choice."""
+    other = campaign.alternative_reading()
+    return None if other is None else CampaignAnalysis(other)

@@ -8,6 +8,7 @@ Python is used the same way.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import math
 from dataclasses import dataclass, field
@@ -64,6 +65,7 @@ class Run:
     trace_csv: list[str] | None = None  # trace files as written in the campaign, one repeat each
     trace_rms: list[dict[str, float]] | None = None  # fit rms per file and direction, mm
     convention: str | None = None  # how its offsets were read (conventions.py); None: the campaign's
+    alternative_convention: str | None = None  # the best reading rejected for it, where its reading was a choice
 
     def mean(self, component: str) -> float:
         """Mean of the repeats of ``component``, mm."""
@@ -117,6 +119,11 @@ class Ballbar:
     cr_geometry: str = "RC-LB"  # T ball of CR at radius R_C − L_B (Table 2.3) or R_C + L_B (Fig 2.6)
     convention: str = "thesis"  # how the runs' offsets were read (conventions.py), unless a run says otherwise
     planned: list[PlannedRun] = field(default_factory=list)  # runs without data yet, in measuring order
+    alternative_reason: str = ""  # one line: why the runs' conventions were preferred to their alternative_convention
+
+    def reading_choices(self) -> list[Run]:
+        """The measured runs whose reading was a choice (they name an ``alternative_convention``), in file order."""
+        return [run for run in self.runs if run.alternative_convention]
 
 
 @dataclass
@@ -364,6 +371,17 @@ class Campaign:
     def probe_gap(self) -> Gap | None:
         """The first gap that keeps the touch-probe likelihood from running on this campaign, or None."""
         return next(iter(self.probe.gaps()), None) if self.probe is not None else None
+
+    def alternative_reading(self) -> Campaign | None:
+        """The campaign read the other way where its reading was a choice: a copy whose runs with an
+        ``alternative_convention`` are read in it (and record no choice), everything else shared with this one; None
+        when no measured run names an alternative (docs/campaign-format.md, "Readings chosen over another")."""
+        bb = self.ballbar
+        if not bb.reading_choices():
+            return None
+        runs = [dataclasses.replace(run, convention=run.alternative_convention, alternative_convention=None)
+                if run.alternative_convention else run for run in bb.runs]
+        return dataclasses.replace(self, ballbar=dataclasses.replace(bb, runs=runs, alternative_reason=""))
 
     def has_probe_readings(self) -> bool:
         """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""

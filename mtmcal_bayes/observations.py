@@ -111,12 +111,16 @@ def with_observations(campaign, values: np.ndarray):
 
 def with_run_values(campaign, keys, values):
     """A copy of ``campaign`` whose runs carry ``values`` (one ``(r,)`` array of machine-frame repeats, mm, per key
-    of ``keys``) instead of their measured repeats, as each run's convention reports them; traces and published
-    results are dropped."""
+    of ``keys``) instead of their measured repeats, as each run's convention reports them; traces, published
+    results and a choice of reading (``alternative_convention``: the values are written in the reading the run
+    names, nothing was chosen) are dropped."""
     import copy
 
     out = copy.deepcopy(campaign)
     out.reported = {}
+    out.ballbar.alternative_reason = ""
+    for run in out.ballbar.runs:
+        run.alternative_convention = None
     per_run: dict[int, dict[str, np.ndarray]] = {}
     for key, v in zip(keys, values):
         per_run.setdefault(key.run, {})[key.component] = np.asarray(v, dtype=float).copy()

@@ -73,6 +73,39 @@ def test_compensating_fig_4_30a_keeps_b_c_and_other_blocks(run_cli, tmp_path):
     assert data["residual_um"]["p95_max"] > data["residual_um"]["mean_max"] > 0
 
 
+def test_compensate_names_the_deviations_resting_on_the_choice_of_reading(thesis):
+    """The built-in campaign's B runs were read by choice.  The deviations compensate marks are those it uses whose
+    estimate moves by more than its sd between its posterior (the closed form, σ_model 2 µm) and the same posterior
+    of the campaign read in its recorded alternative (exact draws of both, built from the file's text); the
+    compensated program is the one of the campaign without the record."""
+    import mtmcal_bayes as mb
+    from mtmcal_bayes.compensation import compensate
+
+    from . import variants
+
+    res = compensate(thesis, read_program(FIG))
+    chosen, alt = (mb.sample(mb.parse_campaign(t), sampler="exact", seed=1, sigma_model_um=2).summary
+                   for t in (variants.without_reading_choice(), variants.alternative_reading()))
+    used = [n for n in res.info["deviations"] if n in chosen.index]
+    moved = {n for n in used if abs(alt.loc[n, "mean"] - chosen.loc[n, "mean"]) > chosen.loc[n, "sd"]}
+    choice = res.reading_choice
+    assert set(choice["rests_on_choice"]) == moved and {"alpha_XB", "alpha_BT"} <= moved
+    text = res.to_text()
+    summary = next(ln for ln in text.splitlines() if "rests on the campaign's choice of reading (†): " in ln)
+    for n in moved:
+        d = choice["deviations"][n]
+        assert d["alternative"] == pytest.approx(alt.loc[n, "mean"], abs=0.05 * chosen.loc[n, "sd"])
+        assert f"{n} {d['value']:.2f}" in summary and f"† {d['alternative']:.2f}" in summary
+    tilted = {r["name"] for r in res.not_compensable}
+    for ln in text.splitlines():
+        name = ln.split()[0] if ln.startswith("    ") else None
+        if name in tilted:
+            assert ln.split()[1].startswith("†") == (name in moved), ln
+    assert "B0=+X,B90=-Z" in text and json.dumps(res.to_json())
+    plain = compensate(mb.parse_campaign(variants.without_reading_choice()), read_program(FIG))
+    assert plain.text == res.text and plain.reading_choice is None and "†" not in plain.to_text()
+
+
 def test_exact_compensation_removes_the_eccentricities(thesis):
     """Thesis deviations, htm-thesis: BY, CR and CA re-simulated after compensation are below 0.5 µm."""
     table = resimulate(thesis, ballbar_values(thesis), model="htm-thesis", method="exact", point="tcp")

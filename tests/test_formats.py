@@ -116,6 +116,8 @@ def _reports_without_probe_data(out: str, tmp_path: Path) -> None:
     s = pd.read_csv(tmp_path / "report" / "summary.csv", index_col="quantity")
     assert s["probe_reported"].isna().all() and s["probe_recomputed"].isna().all()
     assert not (tmp_path / "report" / "identification_probe.csv").exists()
+    # and no record of a choice of reading: nothing is marked
+    assert "†" not in html + out and "rejected reading" not in html and "rests_on_reading" not in s.columns
 
 
 #: what a successful command must also show on a file, by ``(file, command)``

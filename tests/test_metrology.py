@@ -11,10 +11,12 @@ import pytest
 import mtmcal_bayes as mb
 from mtmcal_bayes.arviz_import import az
 from mtmcal_bayes.campaign import Tolerance
+from mtmcal_bayes.inference import reading_choice
 from mtmcal_bayes.inference.gum import K_GAUSSIAN, gum_statement, numerical_tolerance
 from mtmcal_bayes.iso import ISO_SYMBOL
 from mtmcal_bayes.posterior.conformity import conformity_table
 
+from . import variants
 from .test_report import QUICK
 
 EIGHT = ["alpha_CZ", "beta_CZ", "alpha_XB", "beta_XB", "gamma_XB", "alpha_BT", "dx_CZ_minus_dx_BT", "dy_CZ"]
@@ -178,6 +180,48 @@ def test_console_shows_iso_symbols_and_statement(thesis_posterior):
         if name in ISO_SYMBOL:
             assert ISO_SYMBOL[name] in row
     assert "Uncertainty statement (GUM-S1" in text
+
+
+def test_marks_are_the_quantities_that_move_more_than_their_sd(thesis_posterior):
+    """The built-in campaign's B runs were read by choice (docs/thesis-notes.md).  The quantities marked are those
+    whose estimate moves by more than its sd between this posterior and the posterior of the campaign read in its
+    recorded alternative (exact draws, the alternative built from the file's text), each with that estimate; on
+    the console, in the GUM table and in the JSON."""
+    alt = mb.sample(mb.parse_campaign(variants.alternative_reading()), seed=1, sampler="exact").summary
+    s = thesis_posterior.summary
+    moved = {n for n in alt.index if abs(alt.loc[n, "mean"] - s.loc[n, "mean"]) > s.loc[n, "sd"]}
+    assert set(reading_choice.marked(s)) == moved and {"alpha_XB", "alpha_BT"} <= moved
+    for n in moved:
+        assert s.loc[n, "reading_alternative"] == pytest.approx(alt.loc[n, "mean"], abs=0.05 * s.loc[n, "sd"])
+    text = thesis_posterior.to_text()
+    for n in s.index:
+        rows = [ln for ln in text.splitlines() if ln.startswith(n + " ")][:2]  # results table, GUM table
+        assert len(rows) == 2 and all(ln.endswith(f"† {s.loc[n, 'reading_alternative']:.2f}") == (n in moved)
+                                      for ln in rows), rows
+    assert thesis_posterior.reading_choice_note in text and "BX@RB1/B read B0=+X,B90=-Z" in text
+    j = thesis_posterior.to_json()
+    assert set(j["reading_choice"]["rests_on_choice"]) == moved
+    assert {n for n, e in j["summary"].items() if e["reading_choice"]["rests_on_choice"]} == moved
+
+
+def test_without_the_record_of_the_choice_nothing_is_marked_and_no_number_moves(thesis_posterior):
+    plain = mb.sample(mb.parse_campaign(variants.without_reading_choice()), seed=1)
+    assert not reading_choice.has_choice(plain.summary) and plain.reading_choice_note == ""
+    assert "†" not in plain.to_text() and "reading_choice" not in json.dumps(plain.to_json())
+    pd.testing.assert_frame_equal(plain.summary, thesis_posterior.summary[plain.summary.columns])
+
+
+def test_compensating_with_a_sampled_posterior_names_what_rests_on_the_choice(thesis_posterior, thesis, tmp_path):
+    """From the NetCDF file (its attributes say which posterior it is): the deviations the posterior marks."""
+    from mtmcal_bayes.compensation import compensate
+    from mtmcal_bayes.datasets import data_path
+    from mtmcal_bayes.io.gcode import read_program
+
+    thesis_posterior.save(tmp_path / "post.nc")
+    res = compensate(thesis, read_program(data_path("fig4_30a_bx_original.nc")), posterior=tmp_path / "post.nc")
+    used = set(res.info["deviations"])
+    assert set(res.reading_choice["rests_on_choice"]) == used & set(reading_choice.marked(thesis_posterior.summary))
+    assert {"alpha_XB", "alpha_BT"} <= set(res.reading_choice["rests_on_choice"])
 
 
 def test_compensation_warns_about_prior_only_values(run_cli, tmp_path):

@@ -133,6 +133,10 @@ def test_report_on_both_instruments_draws_the_ball_bar_posteriors_eccentricity_p
         assert (tmp_path / "rep" / name).stat().st_size > 10_000
     intervals = pd.read_csv(tmp_path / "rep" / "instruments.csv")
     assert set(intervals["data"]) == {"ball bar only", "probe only", "fused"}
+    # the fused posterior's marks of the B runs' choice of reading: α_XB and γ_XB trade places, dy_CZ follows ez_BY
+    s = pd.read_csv(tmp_path / "rep" / "summary.csv", index_col="quantity")
+    assert {"alpha_XB", "gamma_XB", "dy_CZ"} <= set(s.index[s["rests_on_reading"]])
+    assert (s["rests_on_reading"] == (abs(s["reading_shift_sd"]) > 1)).all()
 
 
 # a report of a campaign without touch-probe data: tests/test_formats.py (the first simulate's campaign of the corpus)
@@ -210,6 +214,33 @@ def test_report_json(thesis_report_run):
     assert set(data["summary"]["beta_XB"]) >= {"mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk",
                                                "ess_tail", "unit"}
     assert data["summary"]["beta_XB"]["unit"] == "arcsec" and data["missing"] == []
+
+
+def test_the_marks_of_the_choice_of_reading_render(thesis_report_run):
+    """The built-in campaign's B runs were read by choice: the results table and the uncertainty statement of
+    index.html mark exactly the quantities summary.csv and the JSON say rest on it, each with its value under the
+    best rejected reading, and say in one line what the mark means."""
+    import json
+
+    out, stdout = thesis_report_run
+    s = pd.read_csv(out / "summary.csv", index_col="quantity")
+    marked = set(s.index[s["rests_on_reading"]])
+    assert {"alpha_XB", "alpha_BT"} <= marked and (s["rests_on_reading"] == (abs(s["reading_shift_sd"]) > 1)).all()
+    assert set(json.loads(stdout)["reading_choice"]["rests_on_choice"]) == marked
+    html = unescape((out / "index.html").read_text(encoding="utf-8"))
+    for section in ("results", "statement"):
+        part = html[html.index(f'id="{section}"'):]
+        table = part[part.index("<table>"): part.index("</table>")]
+        heads = re.findall(r"<th>(.*?)</th>", table[: table.index("</thead>")])
+        col = heads.index("rejected reading")
+        cells = {r[0]: r[col] for r in (re.findall(r"<td[^>]*>(.*?)</td>", row)
+                                         for row in table.split("<tr>")[2:])}
+        assert {n for n, c in cells.items() if c} == marked
+        for n in marked:
+            assert cells[n] == f"† {s.loc[n, 'reading_alternative']:.2f}"
+    assert "† rests on the reading chosen for BX@RB1/B, BY@RB1/B: under the best rejected reading" in html
+    certificate = html[html.index("(alpha_XB) = "):].split("</li>")[0]
+    assert "† Under the best rejected reading of the ball-bar runs the estimate would be" in certificate
 
 
 def test_the_weighing_begun_before_the_sampling_is_dropped_when_nothing_needs_explaining(thesis, thesis_report,

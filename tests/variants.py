@@ -25,7 +25,30 @@ def without_probe() -> str:
 
 def thesis_reading() -> str:
     """The thesis campaign as the thesis reads it: every run in the thesis' convention, the stylus length known to
-    10 µm (the built-in campaign before the touch probe's evidence changed both, docs/thesis-notes.md)."""
-    lines = [ln for ln in thesis_text().splitlines(keepends=True)
+    10 µm (the built-in campaign before the touch probe's evidence changed both, docs/thesis-notes.md); no choice of
+    reading recorded."""
+    lines = [ln for ln in without_reading_choice().splitlines(keepends=True)
              if not ln.startswith('convention = "B0=') and not ln.startswith("dRS = {")]
     return "".join(lines)
+
+
+def without_reading_choice(text: str | None = None) -> str:
+    """The thesis campaign (or ``text``) read as it is, without the record of its choice of reading (no
+    ``alternative_convention``, no ``alternative_reason``)."""
+    return "".join(ln for ln in (text or thesis_text()).splitlines(keepends=True)
+                   if not ln.startswith(("alternative_convention", "alternative_reason")))
+
+
+def alternative_reading() -> str:
+    """The thesis campaign read in its recorded alternative reading: each run's ``alternative_convention`` as its
+    ``convention`` (built from the text, not from :meth:`Campaign.alternative_reading`)."""
+    out = []
+    for ln in thesis_text().splitlines(keepends=True):
+        if ln.startswith("alternative_reason"):
+            continue
+        if ln.startswith("alternative_convention"):
+            assert out[-1].startswith("convention = "), out[-1]  # it follows its run's convention
+            out[-1] = ln.replace("alternative_convention", "convention", 1)
+            continue
+        out.append(ln)
+    return "".join(out)

@@ -31,6 +31,7 @@ from .kinematics import (
     tool_axis_tilt,
     tool_point,
 )
+from .reading_choice import deviation_marks
 from .thesis_method import compensate_thesis
 from .values import SIGMA_MODEL_UM, VALUES, ballbar_values, posterior_draws
 
@@ -52,6 +53,7 @@ class CompensationResult:
     info: dict = field(default_factory=dict)
     output: str | None = None  # where :meth:`save` wrote the compensated program
     warnings: list[str] = field(default_factory=list)  # values the data identify only through priors
+    reading_choice: dict | None = None  # deviations resting on the campaign's choice of reading (.reading_choice)
 
     def save(self, path) -> None:
         """Write the compensated program to ``path`` (atomically)."""
@@ -82,6 +84,7 @@ class CompensationResult:
                             "per_block_p95": [float(v) for v in self.residual_p95_um]},
             "not_compensable": self.not_compensable,
             "warnings": self.warnings,
+            **({"reading_choice": self.reading_choice} if self.reading_choice is not None else {}),
         }
 
 
@@ -158,7 +161,8 @@ def compensate(campaign, program: Program, *, method: str = "exact", model: str 
     warnings = prior_only_values(campaign, theta, posterior) if values == "posterior" else []
     return CompensationResult(rewrite(program, xyz_c), program.source, xyz, xyz_c, resid.mean(axis=0),
                               np.quantile(resid, 0.95, axis=0), before,
-                              not_compensable(theta, geo, xyz_model, bc, model=model), info, warnings=warnings)
+                              not_compensable(theta, geo, xyz_model, bc, model=model), info, warnings=warnings,
+                              reading_choice=deviation_marks(campaign, theta, posterior=posterior, values=values))
 
 
 def prior_only_values(campaign, theta: np.ndarray, posterior=None) -> list[str]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .. import units
 from .kinematics import OFF_TOOL_MM
 
 
@@ -18,6 +19,25 @@ def format_compensation(result) -> str:
     lines.append(f"  not compensable by X/Y/Z (tool-axis tilt; error {OFF_TOOL_MM:g} mm along the tool from the "
                  "compensated point):")
     off = f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um"
+    choice = j.get("reading_choice")
+    resting = set(choice["rests_on_choice"]) if choice else set()
     for r in j["not_compensable"]:
-        lines.append(f"    {r['name']:14s} {r['tool_tilt_arcsec']:7.2f} ″  {r[off]:6.2f} µm")
+        name = r["name"] + (f" {choice['mark']}" if r["name"] in resting else "")
+        lines.append(f"    {name:14s} {r['tool_tilt_arcsec']:7.2f} ″  {r[off]:6.2f} µm")
+    if choice:
+        lines += choice_lines(choice)
     return "\n".join(lines)
+
+
+def choice_lines(choice: dict) -> list[str]:
+    """The summary's lines on the deviations that rest on the campaign's choice of reading (each with its value and,
+    marked, its value under the best rejected reading), and what the mark means."""
+    if not choice["rests_on_choice"]:
+        return ["  no deviation used rests on the campaign's choice of reading (none moves by more than its sd under "
+                "the best rejected reading)"]
+    shown = []
+    for name in choice["rests_on_choice"]:
+        d = choice["deviations"][name]
+        sym = units.SYMBOL[d["unit"]]
+        shown.append(f"{name} {d['value']:.2f} {sym} ({choice['mark']} {d['alternative']:.2f} {sym})")
+    return [f"  rests on the campaign's choice of reading ({choice['mark']}): " + ", ".join(shown), f"  {choice['note']}"]

@@ -24,6 +24,7 @@ from scipy.stats import norm
 from .. import units
 from ..arviz_import import az
 from ..parameters import quantity_unit
+from .reading_choice import alternative_clause
 
 #: coverage probability of the stated intervals
 COVERAGE = 0.95
@@ -88,7 +89,9 @@ def _decimals(u: float, digits: int) -> int:
 def certificate_sentence(name: str, row, symbol: str | None = None) -> str:
     """One sentence in the form of a calibration certificate, from a summary row with the GUM columns.
 
-    Values are rounded to the last digit of ``u`` at the significant digits the run supports (at most two).
+    Values are rounded to the last digit of ``u`` at the significant digits the run supports (at most two).  A
+    quantity that rests on the campaign's choice of reading (:mod:`.reading_choice`) gets a last sentence with its
+    value under the alternative reading, marked †.
     """
     unit = units.SYMBOL[row["unit"]]
     d = _decimals(row["u"], min(int(row["significant_digits"]), DIGITS))
@@ -111,4 +114,4 @@ def certificate_sentence(name: str, row, symbol: str | None = None) -> str:
     elif digits < 1:
         text += (", not yet enough for GUM-S1 to state even one significant digit of u (a larger --target-ess "
                  "gives more)")
-    return text + "."
+    return text + "." + alternative_clause(row, d)  # a value resting on a choice of reading says so

@@ -120,6 +120,8 @@ def _with_attrs(idata, result, thin: int):
         "seed": -1 if result.settings.seed is None else int(result.settings.seed),
         "units": "arc seconds for angles, micrometres for lengths",
     })
+    if post.fixed_sigma is not None:  # the discrepancy scales were fixed, not sampled (compensate reads it back)
+        idata.posterior.attrs["sigma_model_fixed_um"] = float(units.from_internal(post.fixed_sigma, "um"))
     return idata
 
 

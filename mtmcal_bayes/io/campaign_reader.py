@@ -10,6 +10,7 @@ results, optional priors and, for synthetic campaigns, the truth.
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import os
 from pathlib import Path
@@ -33,7 +34,14 @@ from ..campaign import (
     Stylus,
     Truth,
 )
-from ..conventions import CONVENTIONS, ConventionError, check_convention_name, check_run, run_matrix
+from ..conventions import (
+    CONVENTIONS,
+    ConventionError,
+    check_convention_name,
+    check_run,
+    run_convention,
+    run_matrix,
+)
 from ..datasets import builtin_campaign_text, data_path
 from ..errors import InputError, MtmcalError
 from ..parameters import (
@@ -135,7 +143,7 @@ def _date(r: TomlReader, doc: dict) -> datetime.datetime | None:
 def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
     P = "ballbar"
     r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry", "convention",
-                     "setups", "mounts", "runs"}, P)
+                     "alternative_reason", "setups", "mounts", "runs"}, P)
     convention = r.string(t, "convention", P, default="thesis")
     if convention not in CONVENTIONS:
         r.fail(f"{P}.convention", f"unknown convention {convention!r} (expected one of {', '.join(CONVENTIONS)}; "
@@ -173,7 +181,33 @@ def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
             check_run(run, bb) if isinstance(run, Run) else run_matrix(run, bb)
         except ConventionError as err:
             r.fail(f"{P}.runs[{i}].convention" if run.convention else f"{P}.convention", str(err))
+    _reading_choice(r, t, items, bb)
     return bb
+
+
+def _reading_choice(r: TomlReader, t: dict, items: list[Run | PlannedRun], bb: Ballbar) -> None:
+    """Check each run's ``alternative_convention`` as its ``convention`` is checked, and that it reads the run
+    otherwise; set ``bb.alternative_reason`` (one line, only where some run names an alternative)."""
+    P = "ballbar"
+    for i, run in enumerate(items):
+        if not isinstance(run, Run) or run.alternative_convention is None:
+            continue
+        key = f"{P}.runs[{i}].alternative_convention"
+        other = dataclasses.replace(run, convention=run.alternative_convention)
+        try:
+            check_run(other, bb)
+        except ConventionError as err:
+            r.fail(key, str(err))
+        if np.allclose(run_matrix(other, bb), run_matrix(run, bb)):
+            r.fail(key, f"{run.alternative_convention!r} reads run {run.label} as its reading "
+                   f"({run_convention(run, bb)!r}) does: an alternative reads it otherwise")
+    reason = r.string(t, "alternative_reason", P).strip()
+    if "\n" in reason:
+        r.fail(f"{P}.alternative_reason", "expected one line (it is shown beside every number that rests on the choice)")
+    if reason and not bb.reading_choices():
+        r.fail(f"{P}.alternative_reason", "no run names an alternative_convention: there is no choice of reading to "
+               "give a reason for")
+    bb.alternative_reason = reason
 
 
 def _measuring_order(r: TomlReader, planned: list[tuple[int, PlannedRun]], path: str) -> list[PlannedRun]:
@@ -230,7 +264,8 @@ def _distinct_runs(r: TomlReader, runs: list[Run | PlannedRun], path: str) -> No
 
 def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: float,
          cr_geometry: str) -> Run | PlannedRun:
-    r.check_keys(t, {"pattern", "setup", "mount", "convention", "planned", *DATA_KEYS, *PLANNED_KEYS}, path)
+    r.check_keys(t, {"pattern", "setup", "mount", "convention", "alternative_convention", "planned", *DATA_KEYS,
+                     *PLANNED_KEYS}, path)
     planned = t.get("planned", False)
     if not isinstance(planned, bool):
         r.fail(f"{path}.planned", "expected true (a run planned but not yet measured) or false, got "
@@ -254,6 +289,9 @@ def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: fl
     if conflict := mount_conflict(pattern, mount, mounts[mount].R_C):
         r.fail(f"{path}.mount", conflict)
     if planned:
+        if "alternative_convention" in t:
+            r.fail(f"{path}.alternative_convention", "a planned run has no offsets to read another way; give it once "
+                   "the run is measured")
         return _planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount, L_B=L_B)
     repeats = {}
     for c in ("ex", "ey", "ez"):
@@ -290,16 +328,17 @@ def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: fl
     if not repeats:
         r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])} "
                "or trace_csv")
-    return Run(pattern, setup, mount, repeats, traces, rms, _convention_of(r, t, path))
+    return Run(pattern, setup, mount, repeats, traces, rms, _convention_of(r, t, path),
+               _convention_of(r, t, path, "alternative_convention"))
 
 
-def _convention_of(r: TomlReader, t: dict, path: str) -> str | None:
-    convention = r.string(t, "convention", path, default="") or None
+def _convention_of(r: TomlReader, t: dict, path: str, key: str = "convention") -> str | None:
+    convention = r.string(t, key, path, default="") or None
     if convention is not None:
         try:
             check_convention_name(convention)
         except ConventionError as err:
-            r.fail(f"{path}.convention", str(err))
+            r.fail(f"{path}.{key}", str(err))
     return convention
 
 

@@ -39,6 +39,8 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
     if bb.cr_geometry != "RC-LB":
         b["cr_geometry"] = bb.cr_geometry
     b["convention"] = bb.convention
+    if bb.alternative_reason and bb.reading_choices():  # the reason of a choice whose runs are still there
+        b["alternative_reason"] = bb.alternative_reason
     b["setups"] = {s.id: {"R_B_mm": s.R_B, "Z_T_mm": s.Z_T, "X_T_mm": s.X_T} for s in bb.setups.values()}
     b["mounts"] = {m.id: {"Z_C_mm": m.Z_C, "R_C_mm": m.R_C} for m in bb.mounts.values()}
     b["runs"] = []
@@ -46,6 +48,8 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
         d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount}
         if run.convention:
             d["convention"] = run.convention
+        if run.alternative_convention:
+            d["alternative_convention"] = run.alternative_convention
         if run.trace_csv:
             d["trace_csv"] = [_relative(c, f, save_dir) for f in run.trace_csv]
         else:

@@ -20,3 +20,16 @@ def read_posterior(path):
         return az.from_netcdf(path).posterior
     except Exception as exc:  # noqa: BLE001 - any unreadable file is one line for the user
         raise InputError(str(path), None, f"cannot read as an ArviZ posterior NetCDF: {exc}") from None
+
+
+def read_posterior_attrs(path) -> dict:
+    """The attributes of the ``posterior`` group of a posterior NetCDF file (model, data, ...; ``sample -o``),
+    without reading its draws (milliseconds, where :func:`read_posterior` reads every group); an unreadable file is
+    an :class:`InputError` naming it."""
+    try:
+        import h5netcdf
+
+        with h5netcdf.File(path, "r") as f:
+            return dict(f["posterior"].attrs)
+    except Exception:  # noqa: BLE001 - not HDF5 as h5netcdf reads it: the general reader decides
+        return dict(read_posterior(path).attrs)

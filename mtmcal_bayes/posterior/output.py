@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from .. import units
+from ..inference import reading_choice
 from ..inference.budget import sigma_prior_sentence, sigma_prior_sources
 from .checks import thesis_assumption_effect
 
@@ -41,6 +42,10 @@ def quantity_json(name: str, row, conformity=None) -> dict:
     budget = {k.split(":", 1)[1]: float(v) for k, v in row.items() if k.startswith("budget:") and v == v}
     if budget:
         out["budget"] = budget
+    if _num(row.get(reading_choice.ALTERNATIVE)) is not None:  # the campaign's reading of some runs was a choice
+        out["reading_choice"] = {"rests_on_choice": reading_choice.rests(row),
+                                 "alternative_mean": _num(row[reading_choice.ALTERNATIVE]),
+                                 "shift_sd": _num(row[reading_choice.SHIFT])}
     if conformity is not None and name in conformity.index:
         c = conformity.loc[name]
         out.update({"tolerance": {"low": _num(c["tolerance_low"]), "high": _num(c["tolerance_high"])},
@@ -64,7 +69,22 @@ def posterior_json(result) -> dict:
         "comparison": {n: {k: (None if v is None or (isinstance(v, float) and math.isnan(v)) else v)
                            for k, v in row.items()} for n, row in result.comparison.iterrows()},
         "diagnostics": result.diagnostics.to_json(),
+        **choice_json(result.summary, post.campaign),
     }
+
+
+def choice_json(summary, campaign) -> dict:
+    """``{"reading_choice": {...}}`` where the campaign's reading of some ball-bar runs was a choice: the mark, what
+    it means, the runs with their chosen and alternative readings, why, and the quantities that rest on it; ``{}``
+    otherwise."""
+    if not reading_choice.has_choice(summary):
+        return {}
+    bb = campaign.ballbar
+    return {"reading_choice": {
+        "mark": reading_choice.MARK, "note": reading_choice.note(campaign), "reason": bb.alternative_reason or None,
+        "runs": [{"run": r.label, "convention": r.convention or bb.convention, "alternative_convention":
+                  r.alternative_convention} for r in bb.reading_choices()],
+        "rests_on_choice": reading_choice.marked(summary)}}
 
 
 def format_posterior(result) -> str:
@@ -74,8 +94,11 @@ def format_posterior(result) -> str:
     data = {"ballbar": "", "probe": ", touch-probe data", "both": ", ball-bar and touch-probe data"}[result.data]
     lines = [f"Posterior, model {result.model}{data} ({r.chains.shape[0]} ensembles × {r.chains.shape[2]} walkers, "
              f"{r.n_steps} steps, {r.wall_time:.0f} s); 95 % HDI"]
+    choice = reading_choice.has_choice(s)
     hdr = (f"{'quantity':18s} {'ISO 230-7':10s} {'unit':>4s} {'mean':>9s} {'sd':>7s} {'95 % HDI':>20s} {'R-hat':>6s} "
            f"{'ESS':>7s}  ball bar  probe(thesis)")
+    width = len(hdr)
+    hdr += f"  {reading_choice.HEAD:>16s}" if choice else ""
     lines.append(hdr)
     c = result.comparison
     for name, row in s.iterrows():
@@ -88,8 +111,12 @@ def format_posterior(result) -> str:
             line += f"  {bb:8.2f}{'' if ref['ballbar_in_hdi'] else '*'}" if bb is not None and bb == bb else "         —"
             pr = ref["probe_reported"]
             line += f"  {pr:8.2f}{'' if ref['probe_reported_in_hdi'] else '*'}" if pr is not None and pr == pr else "        —"
+        if choice and reading_choice.rests(row):
+            line = f"{line:{width}s}  {reading_choice.mark_cell(row):>16s}"
         lines.append(line)
     lines.append("* = outside the 95 % HDI")
+    if choice:
+        lines.append(result.reading_choice_note)
     lines += ["", gum_block(s), "", budget_block(s, result)]
     if result.conformity is not None and not result.conformity.empty:
         lines += ["", conformity_block(result.conformity, s)]
@@ -109,18 +136,22 @@ def format_posterior(result) -> str:
 def gum_block(s) -> str:
     """The GUM statement of every quantity as a console table (docs/metrology.md)."""
     n = int(s["n_draws"].iloc[0])
+    choice = reading_choice.has_choice(s)
     lines = [f"Uncertainty statement (GUM-S1, {n:,} posterior draws; coverage probability 95 %; U = k·u only where "
              "the posterior is close to Gaussian)",
              f"{'quantity':18s} {'unit':>4s} {'estimate':>9s} {'u':>7s} {'shortest 95 %':>20s} {'symmetric 95 %':>20s} "
-             f"{'U (k)':>13s} {'endpoints ±':>11s}"]
+             f"{'U (k)':>13s} {'endpoints ±':>11s}" + (f"  {reading_choice.HEAD:>16s}" if choice else "")]
     for name, r in s.iterrows():
         U = f"{r['U']:.2f} ({r['k']:.2f})" if isinstance(r["U"], float) and r["U"] == r["U"] else "not stated"
         lines.append(f"{name:18s} {units.SYMBOL[r['unit']]:>4s} {r['mean']:9.2f} {r['u']:7.2f} "
                      f"[{r['ci95_shortest_low']:8.2f}, {r['ci95_shortest_high']:8.2f}] "
                      f"[{r['ci95_symmetric_low']:8.2f}, {r['ci95_symmetric_high']:8.2f}] {U:>13s} "
-                     f"{r['endpoint_tolerance']:11.2g}")
+                     f"{r['endpoint_tolerance']:11.2g}" + (f"  {reading_choice.mark_cell(r):>16s}"
+                                                            if choice and reading_choice.rests(r) else ""))
     lines.append(("U not stated: y ± 1.96u differs from the symmetric interval by more than the numerical "
                   "tolerance (JSON: U_note); " if s["U"].isna().any() else "") + "endpoints ± = 2 Monte-Carlo standard errors")
+    if choice:
+        lines.append(reading_choice.short_note())
     return "\n".join(lines)
 
 

@@ -9,6 +9,7 @@ import pandas as pd
 
 from .. import units
 from ..analysis import analysis_of
+from ..inference import reading_choice
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import (
     diagnostics_warnings,
@@ -76,7 +77,9 @@ class PosteriorResult:
         posterior (display units: ″, µm), prior, posterior predictive, observed data, sample stats.
     summary : pandas.DataFrame
         one row per quantity: mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit, prior sd,
-        identified (:func:`~mtmcal_bayes.inference.results.summarize`).
+        identified (:func:`~mtmcal_bayes.inference.results.summarize`); where the campaign's reading of some
+        ball-bar runs was a choice, the estimate under the alternative reading and whether the quantity rests on the
+        choice (:data:`~mtmcal_bayes.inference.reading_choice.COLUMNS`).
     comparison : pandas.DataFrame
         each quantity's posterior beside the ball-bar and touch-probe values.
     sampling : SamplingResult
@@ -118,6 +121,12 @@ class PosteriorResult:
         if post.fixed_sigma is not None:
             return {n: units.from_internal(post.fixed_sigma, "um") for n in post.scales}
         return {n: float(self.summary.loc[n, "median"]) for n in post.scales}
+
+    @property
+    def reading_choice_note(self) -> str:
+        """One line saying what the mark of a quantity that rests on the campaign's choice of reading means
+        (:mod:`~mtmcal_bayes.inference.reading_choice`); "" when the summary marks nothing of the kind."""
+        return reading_choice.note(self.log_posterior.campaign) if reading_choice.has_choice(self.summary) else ""
 
     @property
     def data(self) -> str:
@@ -186,6 +195,9 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     beside = lean and result.settings.sampler == "exact"  # exact draws whose intervals alone are shown
     idata = to_inference_data(result, seed=seed, posterior_only=beside)
     summary = summarize(idata, post, statement=statement, diagnostics=not beside)
+    choice = analysis.reading_choice(summary.index) if statement else None  # a reading chosen over another
+    if choice is not None:
+        summary = summary.join(choice)
     comp = comparison(summary, analysis.identification)
     ref = None if beside else reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + ([] if beside else diagnostics_warnings(summary))

@@ -24,6 +24,7 @@ from ..figure_style import save_png
 from ..html_page import Page
 from ..identification import IdentificationResult
 from ..identification.output import identification_table
+from ..inference import reading_choice
 from ..inference.budget import sigma_prior_sentence
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
 from ..inference.sampling import SamplerSettings
@@ -120,7 +121,8 @@ class ReportContent:
 
 
 def summary_table(rep: PosteriorResult) -> pd.DataFrame:
-    """summary.csv: one row per quantity with the posterior and the deterministic values beside it."""
+    """summary.csv: one row per quantity with the posterior and the deterministic values beside it (and, where the
+    campaign's reading of some ball-bar runs was a choice, the estimate under the alternative reading)."""
     s = rep.summary[SUMMARY_COLUMNS].copy()
     c = rep.comparison.reindex(s.index)
     for col in REFERENCE_COLUMNS:
@@ -129,6 +131,8 @@ def summary_table(rep: PosteriorResult) -> pd.DataFrame:
         conf = rep.conformity.reindex(s.index)
         for col in CONFORMITY_COLUMNS + SUGGESTION_COLUMNS:
             s[col] = conf[col] if col in conf else None
+    for col in reading_choice.COLUMNS if reading_choice.has_choice(rep.summary) else []:
+        s[col] = rep.summary[col]
     s.index.name = "quantity"
     return s
 
@@ -430,6 +434,8 @@ def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
                         "probe (recomputed)": s["probe_recomputed"], "in HDI  ": s["probe_recomputed_in_hdi"],
                         "R-hat": s["r_hat"], "bulk ESS": s["ess_bulk"].round(0).astype(int),
                         "identified by": s["identification"]})
+    if reading_choice.has_choice(s):  # the mark and the value under the best rejected reading
+        out[reading_choice.HEAD] = [reading_choice.mark_cell(r) for _, r in s.iterrows()]
     return out
 
 
@@ -517,6 +523,10 @@ def _compensation_section(page: Page, c: ReportContent) -> None:
                        "warnings.")
     else:
         page.paragraph(base + "This campaign has one instrument: nothing checks its deviations against a second one.")
+    if reading_choice.marked(c.posterior.summary):
+        page.paragraph(f"The deviations marked {reading_choice.MARK} in the results rest on the reading chosen for "
+                       "some ball-bar runs: compensate marks each one it uses and names them in its summary, with "
+                       "its value under the best rejected reading.")
 
 
 def budget_table(summary: pd.DataFrame) -> pd.DataFrame:
@@ -554,6 +564,9 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
                                       for n, r in s.iterrows() if n != "sigma_model"])
     gum = s.rename_axis("quantity")[["iso", "mean", "u", "ci95_shortest_low", "ci95_shortest_high", "ci95_symmetric_low", "ci95_symmetric_high",
              "U", "k", "endpoint_tolerance", "significant_digits"]]
+    if reading_choice.has_choice(s):
+        page.paragraph(reading_choice.short_note() + ".")
+        gum = gum.assign(**{reading_choice.HEAD: [reading_choice.mark_cell(r) for _, r in s.iterrows()]})
     page.table(gum.rename(columns={"iso": "ISO 230-7", "mean": "estimate", "ci95_shortest_low": "shortest low",
                                    "ci95_shortest_high": "shortest high", "ci95_symmetric_low": "symmetric low",
                                    "ci95_symmetric_high": "symmetric high", "endpoint_tolerance": "endpoints ±",
@@ -605,6 +618,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         "the touch-probe values (as printed in Table 5.3 and as recomputed from Table 5.2). 'in HDI' says whether "
         "that value lies inside the 95 % HDI. Angles in arc seconds, lengths in micrometres. Full table: summary.csv.")
     page.table(_results_table(summary), digits={"R-hat": 3})
+    if rep.reading_choice_note:
+        page.paragraph(rep.reading_choice_note)
     _statement_section(page, rep)
 
     _budget_section(page, rep, tmp)
