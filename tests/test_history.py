@@ -40,6 +40,19 @@ def test_state_posterior_is_the_stacked_gaussian(base):
     assert np.allclose(cov[0], cov_bf, rtol=1e-5, atol=1e-14)
 
 
+def test_the_sigma_grid_likelihood_is_the_marginal_likelihood(base):
+    """``log_marginal_grid`` (one eigendecomposition per rate vector, every σ at once) equals ``log_marginal`` (one
+    Cholesky factorisation per pair) at every (rates, σ) pair, to 1e-9 of the log likelihood."""
+    camps = synthetic_history(base, Truth(), DATES[:3], seed=4)
+    hm = HistoryModel(camps)
+    rng = np.random.default_rng(3)
+    q2 = (units.to_internal(10.0, "arcsec") * rng.random((4, hm.d))) ** 2
+    s2 = units.to_internal(np.array([0.01, 0.3, 1.0, 4.0, 30.0]), "um") ** 2
+    grid = hm.log_marginal_grid(q2, s2)
+    pairs = hm.log_marginal(np.repeat(q2, len(s2), axis=0), np.tile(s2, len(q2))).reshape(len(q2), len(s2))
+    assert grid.shape == (4, 5) and np.allclose(grid, pairs, rtol=1e-9, atol=1e-9)
+
+
 def test_step_is_flagged_with_its_date_and_probability(base):
     """Acceptance: beta_CZ steps by 40″ between the 3rd and the 4th campaign, nothing else changes: that
     change, and only it, is flagged, dated at the 4th campaign, with its probability."""

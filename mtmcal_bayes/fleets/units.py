@@ -26,7 +26,7 @@ from .tolerances import display_limits, tolerance_dict, tolerance_tuple
 from .sigma_model import history_log_likelihood
 
 #: the cache entry's format; a change of what a unit returns must change it (or the package version)
-UNIT_FORMAT = "mtmcal-fleet-unit/1"
+UNIT_FORMAT = "mtmcal-fleet-unit/2"
 
 
 @dataclass(frozen=True)
@@ -163,7 +163,7 @@ def history_unit(campaigns: list, seed: int, with_page: bool, model: str = "line
                 files = {p.relative_to(tmp).as_posix(): base64.b64encode(p.read_bytes()).decode("ascii")
                          for p in sorted(Path(tmp).rglob("*")) if p.is_file()}
         typed = bool(campaigns[-1].machine.type)  # only a machine with a type has its σ_model pooled
-        loglik = history_log_likelihood(result.fit.model, result.fit.q2) if typed else None
+        loglik = history_log_likelihood(result.fit.model) if typed else None
         return {"result": _plain({"seed": seed, **doc, "sigma_model_loglik": loglik}), "files": files,
                 "elapsed_s": time.perf_counter() - t0}
     except Exception as exc:  # a unit reports, it does not raise (module docstring)

@@ -100,8 +100,13 @@ class HistoryFit:
     trend: dict  # {deviation: log10 Bayes factor of trend against random walk}; "trended": the deviations kept
 
 
+def drift_scale(deviations) -> np.ndarray:
+    """The half-Cauchy scale of each deviation's drift rate (:data:`DRIFT_SCALE`), internal units per √year, (d,)."""
+    return _internal_scale(DRIFT_SCALE, deviations)
+
+
 def _log_prob_factory(hm: HistoryModel):
-    scale = np.array([units.to_internal(DRIFT_SCALE[quantity_unit(n)], quantity_unit(n)) for n in hm.deviations])
+    scale = drift_scale(hm.deviations)
     sig = PriorSet([hm.sigma_prior])  # plain numpy: scipy's frozen logpdf was a seventh of the fit
 
     def log_prob(z: np.ndarray) -> np.ndarray:

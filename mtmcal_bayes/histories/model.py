@@ -162,6 +162,18 @@ class HistoryModel:
         quad = c - diag[:, M] ** 2
         return -0.5 * (quad + logdet + M * math.log(2 * math.pi))
 
+    def log_marginal_grid(self, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
+        """:meth:`log_marginal` ``(n, G)`` of every drift-rate vector of ``q2`` (n, d) with every σ² of ``s2`` (G,).
+
+        One eigendecomposition per rate vector of the covariance without σ, ``C(q) = V diag(λ) Vᵀ``: adding σ²·I
+        shifts every eigenvalue, so ``log N(r; 0, C(q) + σ² I) = −½ (Σ_k z_k² / (λ_k + σ²) + Σ_k log(λ_k + σ²)
+        + M log 2π)`` with ``z = Vᵀ r``, for the whole σ grid at once (``λ_k ≥`` the least noise variance > 0)."""
+        lam, V = np.linalg.eigh(self.covariance(np.atleast_2d(q2), np.zeros(len(np.atleast_2d(q2)))))
+        z2 = np.einsum("nmk,m->nk", V, self.resid) ** 2  # (n, M)
+        total = lam[:, :, None] + np.asarray(s2, float)[None, None, :]  # (n, M, G)
+        return -0.5 * (np.sum(z2[:, :, None] / total, axis=1) + np.sum(np.log(total), axis=1)
+                       + self.M * math.log(2 * math.pi))
+
     def prior_state_cov(self, q2: np.ndarray) -> np.ndarray:
         """Σ_X (n, T·d, T·d): ``v0_j + q_j²·min(τ_s, τ_t)`` between the states of one deviation, 0 across."""
         tmin = np.minimum.outer(self.tau, self.tau)

@@ -66,13 +66,18 @@ def truth_at(truth: Truth, drifts, when: datetime.datetime) -> dict[str, float]:
     return dev
 
 
-def _fresh_offsets(campaign: Campaign, rng: np.random.Generator) -> tuple[dict, dict]:
-    """Set-up offsets of a new campaign drawn from their priors: per tool setup and per W-ball mount."""
-    def draw(base: str, kind_table) -> float:
-        return float(make_prior(base, base, kind_table[base].kind, campaign.priors).frozen().rvs(random_state=rng))
+def _offset_priors(campaign: Campaign) -> dict:
+    """The frozen prior of each set-up and mount offset (by base name): made once per history, not per draw (a
+    scipy distribution takes longer to make than to draw from)."""
+    return {b: make_prior(b, b, table[b].kind, campaign.priors).frozen()
+            for table in (SETUP_NUISANCE, MOUNT_NUISANCE) for b in table}
 
-    setups = {s: {b: draw(b, SETUP_NUISANCE) for b in SETUP_NUISANCE} for s in campaign.ballbar.setups}
-    mounts = {m: {b: draw(b, MOUNT_NUISANCE) for b in MOUNT_NUISANCE} for m in campaign.ballbar.mounts}
+
+def _fresh_offsets(campaign: Campaign, rng: np.random.Generator, priors: dict) -> tuple[dict, dict]:
+    """Set-up offsets of a new campaign drawn from their priors (:func:`_offset_priors`): per tool setup and per
+    W-ball mount."""
+    setups = {s: {b: float(priors[b].rvs(random_state=rng)) for b in SETUP_NUISANCE} for s in campaign.ballbar.setups}
+    mounts = {m: {b: float(priors[b].rvs(random_state=rng)) for b in MOUNT_NUISANCE} for m in campaign.ballbar.mounts}
     return setups, mounts
 
 
@@ -102,9 +107,10 @@ def synthetic_history(campaign: Campaign, truth: Truth, dates, *, drifts=(), ser
     if thermal and temperatures is None:
         raise ParameterError("thermal", "a thermal sensitivity needs the campaigns' temperatures")
     rng = np.random.default_rng(seed)
+    priors = _offset_priors(campaign)
     out = []
     for i, when in enumerate(dates):
-        setups, mounts = _fresh_offsets(campaign, rng)
+        setups, mounts = _fresh_offsets(campaign, rng, priors)
         dev = truth_at(truth, drifts, when)
         for name, k in thermal:
             dev[name] = dev.get(name, 0.0) + k * (temperatures[i] - REFERENCE_TEMPERATURE_C)
