@@ -121,35 +121,38 @@ def test_checkpoint_resume_gives_the_same_draws(tmp_path, thesis):
     np.testing.assert_array_equal(resumed.chains, full.chains)
 
 
-def test_checkpoint_of_another_run_is_refused(tmp_path, thesis):
-    from mtmcal_bayes.errors import MtmcalError
-
-    settings = SamplerSettings(seed=1, max_steps=50, n_walkers=48)
-    ckpt = tmp_path / "run.h5"
-    run_ensembles(LogPosterior(thesis, "linear"), settings, checkpoint=ckpt)
-    with pytest.raises(MtmcalError, match="checkpoint of another posterior"):
-        run_ensembles(LogPosterior(thesis, "linear", fix_dx_BT=True), settings, checkpoint=ckpt)
+CHECKPOINTED = SamplerSettings(seed=1, max_steps=50, n_walkers=48)
 
 
-@pytest.mark.parametrize("other", ["σ prior", "campaign", "model", "data", "seed"])
-def test_a_checkpoint_resumes_only_its_own_posterior_and_is_left_as_it_was(tmp_path, thesis, other):
-    """A checkpoint stores what it belongs to: under another σ_model prior, campaign content, model, data or seed
-    the run stops with one line naming both, and the file is not touched."""
+@pytest.fixture(scope="module")
+def written_checkpoint(tmp_path_factory, thesis):
+    """A checkpoint of the built-in campaign's default posterior (linear, ball bar, seed 1), written once."""
+    ckpt = tmp_path_factory.mktemp("ckpt") / "run.h5"
+    run_ensembles(LogPosterior(thesis, "linear"), CHECKPOINTED, checkpoint=ckpt)
+    return ckpt
+
+
+@pytest.mark.parametrize("other", ["σ prior", "campaign", "model", "data", "dx_BT fixed", "seed"])
+def test_a_checkpoint_resumes_only_its_own_posterior_and_is_left_as_it_was(tmp_path, thesis, written_checkpoint,
+                                                                            other):
+    """A checkpoint stores what it belongs to: under another σ_model prior, campaign content, model, data, fixed
+    quantity or seed the run stops with one line naming both, and the file is not touched."""
     import hashlib
+    import shutil
 
     from mtmcal_bayes.errors import MtmcalError
     from mtmcal_bayes.sigma_prior import SigmaModelPrior
 
-    settings = SamplerSettings(seed=1, max_steps=50, n_walkers=48)
+    settings = CHECKPOINTED
     ckpt = tmp_path / "run.h5"
-    run_ensembles(LogPosterior(thesis, "linear"), settings, checkpoint=ckpt)
+    shutil.copyfile(written_checkpoint, ckpt)
     before = hashlib.sha256(ckpt.read_bytes()).hexdigest()
     changed = thesis
     if other == "campaign":  # one repeat of one run read 0.1 µm otherwise: another campaign content
         changed = copy.deepcopy(thesis)
         changed.ballbar.runs[0].repeats["ex"] = changed.ballbar.runs[0].repeats["ex"] + 1e-4
     post = LogPosterior(changed, "htm-thesis" if other == "model" else "linear",
-                        data="both" if other == "data" else "ballbar",
+                        data="both" if other == "data" else "ballbar", fix_dx_BT=other == "dx_BT fixed",
                         sigma_prior=SigmaModelPrior({"sigma_model": (1.0, 0.3)}, "fleet X") if other == "σ prior"
                         else None)
     again = replace(settings, seed=2) if other == "seed" else settings
