@@ -172,3 +172,12 @@ def test_a_fleet_of_the_corpus_reports_the_file_it_cannot_use_and_completes_the_
     fleet = json.loads((tmp_path / "fleet" / "fleet.json").read_text())
     m7 = next(m for m in fleet["machines"] if m["serial"] == "M-7")
     assert m7["history"] is not None and len(m7["history"]["dates"]) == 2
+
+
+def test_the_readme_shows_the_line_the_first_published_file_gets(run_cli, tmp_path):
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    shown = next(ln for ln in readme.splitlines() if ln.startswith("mtmcal-bayes instruments: error: first_published"))
+    copy = tmp_path / "first_published.toml"
+    copy.write_text(FIRST.read_text())
+    code, out, err = run_cli("instruments", copy)
+    assert code == 2 and err.strip() == shown.replace("first_published.toml", str(copy))
