@@ -201,3 +201,35 @@ def test_the_reports_plan_is_made_under_the_posteriors_learnt_prior(thesis, tmp_
                      sigma_model_prior=SMALL)
     build._planning(post.log_posterior.campaign, post, drawing, batch=0, say=lambda text: None)
     assert seen == [SMALL, SMALL]
+
+
+def test_a_design_without_runs_is_written_whole_and_replaces_an_earlier_one(run_cli, tmp_path, monkeypatch):
+    """design -o: the thesis campaign's design (one BA run for σ_model) and then, into the same folder, its design
+    under a tight learnt prior (no run): every file written, the earlier run's program gone, the timeline saying
+    why it is empty; a design that fails while writing leaves the folder as it was."""
+    from mtmcal_bayes.planning import design_figures
+    from mtmcal_bayes.planning.design_output import RUN_COLUMNS
+
+    out, prior = tmp_path / "design", tmp_path / "prior.toml"
+    write_sigma_model_prior(prior, SMALL)
+    code, text, err = run_cli("design", "-o", out)
+    assert code == 0, err
+    first = json.loads((out / "design.json").read_text())
+    assert [p.name for p in (out / "programs").iterdir()] == [r["program"].split("/")[-1] for r in first["runs"]]
+    assert first["runs"] and list(first["runs"][0]) == RUN_COLUMNS  # the columns an empty design's table has too
+    code, text, err = run_cli("design", "-o", out, "--sigma-model-prior", prior)
+    assert code == 0, err
+    doc = json.loads((out / "design.json").read_text())
+    assert doc["runs"] == [] and not any((out / "programs").iterdir())
+    assert {"design.json", "campaign.toml", "design.html", "design_timeline.png", "design_sd.png"} <= \
+        {p.name for p in out.iterdir()}
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("simulated failure while drawing")
+
+    monkeypatch.setattr(design_figures, "sd_figure", broken)
+    code, text, err = run_cli("design", "-o", out)
+    assert code == 1 and "simulated failure" in err
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["design", "prior.toml"]  # no temporary folder left

@@ -11,7 +11,6 @@ import base64
 import json
 import os
 import re
-import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -244,8 +243,7 @@ class FleetResult:
         names = ["index.html", "fleet.json", "fleet_summary.csv"] + [t["prior_file"] for t in self.types.values()
                                                                      if t["prior_file"]]
         self.files = [str(out / n) for n in names] + [str(out / m["page"]) for m in self.machines]
-        old = None
-        with atomic_directory(out) as tmp:
+        with atomic_directory(out) as tmp:  # machines/ replaced whole: no page of an earlier run is left beside these
             for m in self.machines:
                 folder = tmp / Path(m["page"]).parent
                 folder.mkdir(parents=True)
@@ -265,10 +263,5 @@ class FleetResult:
                 if t["prior_file"]:
                     write_sigma_model_prior(tmp / t["prior_file"], learnt_prior(t, self.directory))
             (tmp / "fleet.json").write_text(json_text(self.to_json()) + "\n", encoding="utf-8")
-            if (out / "machines").exists():  # a folder is not replaced by os.replace: set the old one aside
-                old = out / f".machines-old-{os.getpid()}"
-                os.replace(out / "machines", old)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
         return self.files
 

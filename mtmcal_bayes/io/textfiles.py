@@ -82,11 +82,14 @@ def atomic_directory(path: str | os.PathLike):
     """Yield a temporary directory beside ``path``; on success its files move into ``path``.
 
     ``path`` is created if needed (its parent must exist); files already in it
-    with other names are kept, files with the same names replaced.  On failure
-    the temporary directory is removed and ``path`` is untouched.
+    with other names are kept, files with the same names replaced, and a folder
+    of the same name replaced whole (a design's ``programs/``, a fleet's
+    ``machines/``: what an earlier run left there is not mixed with this one's).
+    On failure the temporary directory is removed and ``path`` is untouched.
     """
     path = Path(path)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    aside = []
     try:
         yield tmp
         os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp creates 0700
@@ -94,6 +97,12 @@ def atomic_directory(path: str | os.PathLike):
             os.replace(tmp, path)
             return
         for f in sorted(tmp.iterdir()):
-            os.replace(f, path / f.name)
+            target = path / f.name
+            if f.is_dir() and target.is_dir():  # a folder is not replaced by os.replace: the old one set aside
+                aside.append(path / f".{f.name}-old-{os.getpid()}")
+                os.replace(target, aside[-1])
+            os.replace(f, target)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+        for old in aside:
+            shutil.rmtree(old, ignore_errors=True)

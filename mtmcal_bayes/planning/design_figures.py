@@ -37,14 +37,17 @@ def timeline_figure(events, runs):
                     fontsize=8)
     ax.set_yticks([0, 1], ["set-up", "measuring"])
     ax.set_xlabel("machine time, min")
-    end = max((e.start_min + e.minutes for e in events), default=1.0)
-    ax.set_xlim(0, end * 1.01)
+    end = max((e.start_min + e.minutes for e in events), default=0.0)
+    ax.set_xlim(0, max(end, 1.0) * 1.01)  # an empty design still gets an axis
+    if not runs:
+        ax.text(0.5, 0.5, "no run designed (the notes say why)", transform=ax.transAxes, ha="center",
+                va="center", fontsize=10, color="0.3")
     ax.set_ylim(-0.7, 1.7)
     from matplotlib.patches import Patch
 
     ax.legend(handles=[Patch(color=EVENT_COLOURS[k], label=k) for k in kinds], ncol=5, fontsize=8, loc="upper center",
               bbox_to_anchor=(0.5, -0.26), frameon=False)
-    ax.set_title(f"{len(runs)} runs, {end:.0f} machine minutes", fontsize=10)
+    ax.set_title(f"{len(runs)} run{'s' * (len(runs) != 1)}, {end:.0f} machine minutes", fontsize=10)
     return fig
 
 

@@ -31,6 +31,11 @@ def program_name(order: int, pattern: str) -> str:
     return f"programs/{order:02d}_{pattern}.nc"
 
 
+#: the columns of a design's run records, in order (the table of a design without runs has them too)
+RUN_COLUMNS = ["order", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm", "R_C_mm", "Z_C_mm", "length_mm",
+               "repeats", "minutes", "program", "why", "candidate"]
+
+
 def run_records(design: Design, programs: bool = False) -> list[dict]:
     """The ``runs`` of ``design --json``, in measuring order."""
     out = []
@@ -126,28 +131,29 @@ def write_design(design: Design, out_dir, *, program, times: dict | None = None)
     path."""
     from ..io.campaign_writer import save_campaign
     from ..io.json_text import json_text
-    from ..io.textfiles import write_text_atomic
+    from ..io.textfiles import atomic_directory
     from .design_figures import write_design_html
 
     out = Path(out_dir)
-    (out / "programs").mkdir(parents=True, exist_ok=True)
     goal = DesignGoal({t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)},
                       design.goal.contraction, design.goal.budget, dict(times or {}))
     camp = designed_campaign(design, goal)
-    files = []
-    for i, r in enumerate(design.runs, start=1):
-        text = program(r.pattern, camp, r.setup.id, r.mount.id)
-        write_text_atomic(out / program_name(i, r.pattern), text)
-        files.append(program_name(i, r.pattern))
     path = out / "campaign.toml"
-    save_campaign(camp, path, header="designed by mtmcal-bayes design: fill in each planned run once measured "
-                  "(delete planned and repeats, give ex_um/ey_um/ez_um), then run mtmcal-bayes next")
-    files.insert(0, "campaign.toml")
-    doc = design_document(design, str(path), programs=True)
-    write_text_atomic(out / "design.json", json_text(doc) + "\n")
-    files.insert(0, "design.json")
-    runs = pd.DataFrame(run_records(design, programs=True)).set_index("order")
-    files += write_design_html(design, out, doc=doc, runs=runs, expected=expected_table(design))
+    files = []
+    with atomic_directory(out) as tmp:  # all of it or nothing (programs/ replaced whole: no earlier design's left)
+        (tmp / "programs").mkdir()
+        for i, r in enumerate(design.runs, start=1):
+            (tmp / program_name(i, r.pattern)).write_text(program(r.pattern, camp, r.setup.id, r.mount.id),
+                                                          encoding="utf-8")
+            files.append(program_name(i, r.pattern))
+        save_campaign(camp, tmp / "campaign.toml", header="designed by mtmcal-bayes design: fill in each planned run "
+                      "once measured (delete planned and repeats, give ex_um/ey_um/ez_um), then run mtmcal-bayes next")
+        files.insert(0, "campaign.toml")
+        doc = design_document(design, str(path), programs=True)
+        (tmp / "design.json").write_text(json_text(doc) + "\n", encoding="utf-8")
+        files.insert(0, "design.json")
+        runs = pd.DataFrame(run_records(design, programs=True), columns=RUN_COLUMNS).set_index("order")
+        files += write_design_html(design, tmp, doc=doc, runs=runs, expected=expected_table(design))
     return files, str(path)
 
 
