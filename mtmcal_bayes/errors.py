@@ -23,11 +23,15 @@ def _rebuilt(cls: type, args: tuple, state: dict) -> BaseException:
     return exc
 
 
-class MtmcalError(Exception):
-    """Base of all user-facing errors: ``str(err)`` is the one line to show."""
+class _PickledByState(Exception):
+    """An exception pickled as its class, ``args`` and attributes, whatever its constructor takes."""
 
     def __reduce__(self):
         return _rebuilt, (type(self), self.args, dict(self.__dict__))
+
+
+class MtmcalError(_PickledByState):
+    """Base of all user-facing errors: ``str(err)`` is the one line to show."""
 
 
 class InputError(MtmcalError):
@@ -56,7 +60,7 @@ class ParameterError(MtmcalError):
         super().__init__(f"{parameter}: {message}")
 
 
-class StepFailure(Exception):
+class StepFailure(_PickledByState):
     """An unexpected exception raised in another process, with the step it stopped.
 
     ``step`` says what the process was doing (``"drawing corner.png"``), ``kind`` and ``message`` are the
@@ -67,9 +71,6 @@ class StepFailure(Exception):
     def __init__(self, step: str, kind: str, message: str, trace: str = ""):
         self.step, self.kind, self.message, self.trace = step, kind, message, trace
         super().__init__(f"{step}: {kind}: {message}")
-
-    def __reduce__(self):
-        return _rebuilt, (type(self), self.args, dict(self.__dict__))
 
     @classmethod
     def of(cls, step: str, exc: BaseException) -> BaseException:
