@@ -89,7 +89,12 @@ class CampaignAnalysis:
         return LogPosterior(self.campaign, self.model, fix_dx_BT=self.fix_dx_BT, sigma_model=self.sigma_model,
                             data=self.data, sigma_prior=self.sigma_prior, space=self.space,
                             observations=self.ballbar_observations,
-                            probe_layout=self.probe_layout if self.data != "ballbar" else None)
+                            probe_layout=self.probe_layout if self.data != "ballbar" and not self.described else None)
+
+    @property
+    def described(self) -> bool:
+        """Whether the campaign's machine is a described one (SPEC §19), not the thesis machine."""
+        return self.campaign.machine.described
 
     def _shared(self, key, make):
         """What ``make()`` derives from the campaign, made once for every variant of the family (kept under

@@ -18,6 +18,7 @@ import numpy as np
 
 from . import units
 from .errors import InputError
+from .machines import MachineDescription
 from .patterns import B_PATTERNS, C_PATTERNS
 
 
@@ -31,6 +32,12 @@ class Machine:
     travel: dict[str, float] = field(default_factory=dict)  # axis letter -> travel, mm
     serial: str = ""  # the machine's identifier: campaigns with one serial form its history
     type: str = ""  # the machine's type (make and model): machines of one type share a σ_model hyper-distribution
+    description: MachineDescription | None = None  # its kinematic description (SPEC §19); None: the thesis machine
+
+    @property
+    def described(self) -> bool:
+        """Whether the machine is one described by its chain, not the thesis' INTEGREX i-200 (thesis names, models)."""
+        return self.description is not None and not self.description.is_thesis
 
 
 @dataclass
@@ -50,6 +57,7 @@ class Mount:
     id: str
     Z_C: float
     R_C: float
+    position: np.ndarray | None = None  # a described machine's: the W-ball centre (3,) at the home pose, mm
 
 
 @dataclass
@@ -66,6 +74,8 @@ class Run:
     trace_rms: list[dict[str, float]] | None = None  # fit rms per file and direction, mm
     convention: str | None = None  # how its offsets were read (conventions.py); None: the campaign's
     alternative_convention: str | None = None  # the best reading rejected for it, where its reading was a choice
+    arc_deg: np.ndarray | None = None  # a described machine's: the swivelled axis' angles, degrees (None: default)
+    hold_deg: dict[str, float] | None = None  # a described machine's: the other rotary axes' positions, degrees
 
     def mean(self, component: str) -> float:
         """Mean of the repeats of ``component``, mm."""
@@ -207,11 +217,33 @@ class Gap:
 
 
 @dataclass
+class ProbeRun:
+    """A touch-probe run of a described machine (``[[probe.runs]]``, SPEC §19): a fixed sphere probed at indexed
+    positions of one or more rotary axes, the measurement of the controller cycles that calibrate kinematics.
+
+    ``sphere`` (3,) the sphere's nominal centre at the home pose, on the workpiece side, mm; ``angles``
+    {axis letter: (a,)} rad, position i is the i-th entry of each (axes not named are at 0); ``centres``
+    (r, a, 3) the commanded X, Y, Z at which the stylus centre reached the sphere's centre, mm."""
+
+    id: str
+    stylus: str
+    sphere: np.ndarray
+    angles: dict[str, np.ndarray]
+    centres: np.ndarray
+
+    @property
+    def positions(self) -> int:
+        return self.centres.shape[1]
+
+
+@dataclass
 class Probe:
     instrument: str = ""
     repeatability: float | None = None  # mm
     c_axis: CAxisProbe | None = None
     b_axis: BAxisProbe | None = None
+    runs: list[ProbeRun] = field(default_factory=list)  # a described machine's runs
+    styli: dict[str, float] = field(default_factory=dict)  # a described machine's styli: id -> length, mm
 
     #: owner of the C-axis run's own stylus (when it names none of the B-axis run) and of each run's sphere terms
     C_RUN, B_RUN = "c_axis", "b_axis"
@@ -386,7 +418,8 @@ class Campaign:
     def has_probe_readings(self) -> bool:
         """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""
         p = self.probe
-        return p is not None and (p.c_axis is not None or (p.b_axis is not None and bool(p.b_axis.styli)))
+        return p is not None and (p.c_axis is not None or (p.b_axis is not None and bool(p.b_axis.styli))
+                                  or bool(p.runs))
 
     def runs_of(self, pattern: str) -> list[Run]:
         return [r for r in self.ballbar.runs if r.pattern == pattern]

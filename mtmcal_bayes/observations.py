@@ -56,8 +56,10 @@ class Observations:
     def from_campaign(cls, campaign) -> Observations:
         """One entry per component of every run, in the machine frame (each run read in its convention)."""
         keys, mean, sd, n = [], [], [], []
+        described = campaign.machine.described
         for i, run in enumerate(campaign.ballbar.runs):
-            for comp, rep in machine_repeats(run, campaign.ballbar).items():
+            # a described machine's runs are read in its machine frame (no reading conventions yet)
+            for comp, rep in (run.repeats if described else machine_repeats(run, campaign.ballbar)).items():
                 keys.append(ObservationKey(i, run.pattern, run.setup, run.mount, comp))
                 mean.append(float(np.mean(rep)))
                 sd.append(float(np.std(rep, ddof=1)) if len(rep) > 1 else np.nan)
@@ -126,7 +128,7 @@ def with_run_values(campaign, keys, values):
         per_run.setdefault(key.run, {})[key.component] = np.asarray(v, dtype=float).copy()
     for i, machine in per_run.items():
         run = out.ballbar.runs[i]
-        run.repeats = reported_values(run, out.ballbar, machine)
+        run.repeats = machine if out.machine.described else reported_values(run, out.ballbar, machine)
         run.trace_csv = None
     return out
 
@@ -151,6 +153,19 @@ class ProbeKey:
     def label(self) -> str:
         axis = "C" if self.run == "c_axis" else "B"
         return f"{self.component}@{axis}{self.angle_deg:g}/{self.stylus}"
+
+
+@dataclass(frozen=True)
+class DescribedProbeKey(ProbeKey):
+    """A described machine's probe reading: ``run`` is the run's id, ``angle_deg`` the position's number (1, 2, ...)."""
+
+    @property
+    def group(self) -> str:
+        return f"probe {self.run}, stylus {self.stylus}"
+
+    @property
+    def label(self) -> str:
+        return f"{self.component}@{self.run}#{self.angle_deg:g}/{self.stylus}"
 
 
 @dataclass(frozen=True)

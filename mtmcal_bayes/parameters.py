@@ -130,6 +130,8 @@ MOUNT_NUISANCE: dict[str, Quantity] = {
 STYLUS_NUISANCE: dict[str, Quantity] = {
     "xS": Quantity("xS", "length", "stylus-ball centre offset along X of the spindle frame"),
     "yS": Quantity("yS", "length", "stylus-ball centre offset along Y of the spindle frame"),
+    "zS": Quantity("zS", "length", "stylus-ball centre offset along Z (a described machine whose spindle is not "
+                   "along Z)"),
     "dRS": Quantity("dRS", "length", "stylus tool-length error, true minus programmed"),
     "rS": Quantity("rS", "length", "effective stylus-ball radius error (pre-travel): moves a probed sphere "
                    "centre along the stylus axis, towards the spindle"),
@@ -140,6 +142,7 @@ STYLUS_NUISANCE: dict[str, Quantity] = {
 SPHERE_NUISANCE: dict[str, Quantity] = {
     "xP": Quantity("xP", "length", "sphere placement on the C table, radial (C frame, X at C = 0)"),
     "yP": Quantity("yP", "length", "sphere placement on the C table, tangential (C frame, Y at C = 0)"),
+    "zP": Quantity("zP", "length", "sphere placement along Z on the workpiece side (a described machine)"),
     "xD": Quantity("xD", "length", "reading datum along X: sphere position / zero of the reading frame"),
     "yD": Quantity("yD", "length", "reading datum along Y: sphere position / zero of the reading frame"),
     "zD": Quantity("zD", "length", "reading datum along Z: sphere position / zero of the reading frame"),
@@ -153,7 +156,7 @@ NUISANCE_MEANING: dict[str, str] = {
     "xT": "T-ball centring, X", "yT": "T-ball centring, Y", "zT": "T-ball centre along the spindle axis",
     "dRB": "tool-length error, dial gauge", "xW": "W-ball clamping, X", "yW": "W-ball clamping, Y",
     "zW": "W-ball clamping, Z", "xS": "stylus centring, X", "yS": "stylus centring, Y",
-    "dRS": "stylus length", "rS": "stylus-ball radius / pre-travel", "xP": "sphere placement, radial",
+    "zS": "stylus centring, Z", "zP": "sphere placement, Z", "dRS": "stylus length", "rS": "stylus-ball radius / pre-travel", "xP": "sphere placement, radial",
     "yP": "sphere placement, tangential", "xD": "reading datum, X", "yD": "reading datum, Y",
     "zD": "reading datum, Z",
 }
@@ -167,7 +170,18 @@ def quantity_unit(name: str) -> str:
     for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, PROBE_NUISANCE, scales):
         if base in table:
             return table[base].unit
+    kind = iso_kind(base)
+    if kind is not None:
+        return "arcsec" if kind == "angle" else "um"
     raise KeyError(name)
+
+
+def iso_kind(symbol: str) -> str | None:
+    """``"length"`` or ``"angle"`` of an ISO 230-7 location-error symbol (``E_X0C``, ``E_A(0C1)B``), else None:
+    E_X/E_Y/E_Z are positions, E_A/E_B/E_C orientations."""
+    if len(symbol) > 4 and symbol.startswith("E_") and symbol[2] in "XYZABC" and symbol[3] in "0(":
+        return "length" if symbol[2] in "XYZ" else "angle"
+    return None
 
 
 @dataclass(frozen=True)
@@ -202,16 +216,20 @@ class ParameterSpace:
     setups, mounts:
         Ids of the tool setups and W-ball mounts, in campaign order.
     deviations:
-        Names of the deviations to include (default all 13, in Table 2.1 order);
+        Names of the deviations to include (default all of ``table``, in its order);
         forward models hold the others at zero.
+    table:
+        The deviations to choose from, by name (default the thesis' 13, :data:`DEVIATIONS`, in Table 2.1
+        order; a described machine's from :func:`mtmcal_bayes.machines.deviations.quantities`).
     probe:
         Touch-probe nuisance terms as ``(owner, base)`` pairs, in order (e.g. ``("short", "xS")``,
         ``("c_axis", "xP")``); see :data:`PROBE_NUISANCE`.
     """
 
-    def __init__(self, setups, mounts, deviations=None, probe=()):
-        names = list(DEVIATIONS) if deviations is None else [d for d in DEVIATIONS if d in set(deviations)]
-        params = [Parameter(n, n, "deviation", None, DEVIATIONS[n].kind) for n in names]
+    def __init__(self, setups, mounts, deviations=None, probe=(), *, table: dict[str, Quantity] | None = None):
+        table = DEVIATIONS if table is None else table
+        names = list(table) if deviations is None else [d for d in table if d in set(deviations)]
+        params = [Parameter(n, n, "deviation", None, table[n].kind) for n in names]
         for s in setups:
             params += [Parameter(nuisance_name(q.name, s), q.name, "setup", s, q.kind) for q in SETUP_NUISANCE.values()]
         for m in mounts:

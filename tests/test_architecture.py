@@ -21,7 +21,8 @@ PACKAGE = Path(mtmcal_bayes.__file__).parent
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("errors", "units", "progress", "version", "datasets", "arviz_import", "without_dask"),  # foundation: nothing of the package
     ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
-    ("conventions",),                                              # what a ball-bar offset means in machine axes
+    ("conventions", "machines"),                                   # what a ball-bar offset means in machine axes;
+                                                                   # machines described: chains and location errors
     ("campaign", "observations", "machine_time", "sigma_prior"),   # the data of a calibration, its machine time, a
                                                                    # σ_model prior learnt elsewhere
     ("io",),                                                       # files in and out

@@ -141,9 +141,9 @@ def test_fleets_without_drift_learn_their_sigma_model_unbiased():
     assert all(p["drift_scale"]["mean"] < math.log(0.3) for p in pooled), pooled
 
 
-def _plant(root, base, *, sigmas_um, single_type="MTX-200", config=None):
+def _plant(root, base, *, sigmas_um, single_type="MTX-200", travel=None):
     """Machines of type MTX-200, one history of 3 campaigns each with its own simulated σ_model, and one machine
-    with a single campaign (its type ``single_type``, its configuration ``config`` if given)."""
+    with a single campaign (its type ``single_type``, its axis travels ``travel`` if given)."""
     dates = [datetime.datetime(2025, 1, 6) + datetime.timedelta(days=91 * i) for i in range(3)]
     for k, s in enumerate(sigmas_um):
         serial = f"T-{k + 1}"
@@ -155,8 +155,8 @@ def _plant(root, base, *, sigmas_um, single_type="MTX-200", config=None):
     (root / "NEW").mkdir()
     new = synthetic_history(base, Truth(), dates[:1], serial="NEW", seed=60, sigma_model=units.to_internal(1.5, "um"))[0]
     new.machine.type = single_type
-    if config is not None:
-        new.machine.configuration = config
+    if travel is not None:
+        new.machine.travel = travel
     mb.save_campaign(new, root / "NEW" / "2025-01-06.toml")
     return root / "NEW" / "2025-01-06.toml"
 
@@ -166,7 +166,7 @@ def _plant(root, base, *, sigmas_um, single_type="MTX-200", config=None):
 
 def test_a_type_shared_by_machines_of_another_geometry_is_one_line(tmp_path, run_cli):
     base = mb.load_campaign()
-    _plant(tmp_path / "plant", base, sigmas_um=(1.5,), config="another build")
+    _plant(tmp_path / "plant", base, sigmas_um=(1.5,), travel={"X": 700.0, "Y": 250.0, "Z": 1077.0})
     code, out, err = run_cli("fleet", str(tmp_path / "plant"), "-o", str(tmp_path / "out"), "--sampler", "exact")
     assert code == 2 and "machine.type" in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "out").exists()

@@ -7,6 +7,7 @@ priors, nothing of the thesis' deterministic method (the posterior feature,
 
 from .analytic import GaussianPosterior, gaussian_posterior, prior_sensitivity
 from .approximation import IndependenceMove, PosteriorApproximation
+from .identifiability import Combination, Identifiability, identifiability
 from .log_posterior import SAMPLED_DEVIATIONS, LogPosterior
 from .marginal import MarginalPosterior
 from .priors import Prior, PriorSet, make_prior
@@ -27,6 +28,7 @@ from .sampling import (
 )
 
 __all__ = ["GaussianPosterior", "gaussian_posterior", "prior_sensitivity", "IndependenceMove",
-           "PosteriorApproximation", "SAMPLED_DEVIATIONS", "LogPosterior", "MarginalPosterior", "Prior", "PriorSet",
+           "PosteriorApproximation", "Combination", "Identifiability", "identifiability",
+           "SAMPLED_DEVIATIONS", "LogPosterior", "MarginalPosterior", "Prior", "PriorSet",
            "make_prior", "diagnostics_warnings", "display_draws", "not_identified", "summarize", "to_inference_data",
            "SAMPLERS", "SamplerSettings", "SamplingResult", "check_step_budget", "run_ensembles", "run_exact"]

@@ -77,11 +77,15 @@ def gaussian_posterior(post: LogPosterior, sigma_model=0.0, *, theta0: np.ndarra
     var0 = (np.array([q.sd for q in priors]) * (1.0 if prior_scale is None else prior_scale)) ** 2
     A, c = linearisation(post, theta0)
     V = post.likelihood.variance_at(sigma_model)
-    prec = np.diag(1.0 / var0) + A.T @ (A / V[:, None])
-    cov = np.linalg.inv(prec)
-    cov = 0.5 * (cov + cov.T)
-    mean = cov @ (mu0 / var0 + A.T @ ((post.likelihood.y - c) / V))
-    return GaussianPosterior(list(post.space.names), mean, cov)
+    # solved in prior-sd units: in mm and rad the precision's condition number is ~1e11 (lever arms of 400 mm
+    # against 1), in prior-sd units it is that of the data's information against the prior (~1e5), and the
+    # posterior of a weakly determined direction keeps eight more digits
+    s = np.sqrt(var0)
+    Aw = A * s
+    cov_w = np.linalg.inv(np.eye(len(s)) + Aw.T @ (Aw / V[:, None]))
+    cov_w = 0.5 * (cov_w + cov_w.T)
+    mean = mu0 + s * (cov_w @ (Aw.T @ ((post.likelihood.y - c - A @ mu0) / V)))
+    return GaussianPosterior(list(post.space.names), mean, s[:, None] * cov_w * s[None, :])
 
 
 #: widening factor of the priors in :func:`prior_sensitivity`
@@ -95,6 +99,13 @@ REMOVED = 1e4
 NAMED_GROWTH = 1.1
 #: the quantities a posterior summary reports with an identifiability verdict
 REPORTED: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT")
+
+
+def reported(post) -> tuple[str, ...]:
+    """The quantities a posterior reports: the thesis' (:data:`REPORTED`), or a described machine's deviations."""
+    if post.campaign.machine.described:
+        return tuple(p.name for p in post.space.parameters if p.group == "deviation")
+    return REPORTED
 
 
 @dataclass(frozen=True)
@@ -124,7 +135,7 @@ def prior_sensitivity(post: LogPosterior, sigma_model=0.0) -> PriorSensitivity:
     """
     params = post.space.parameters
     base = gaussian_posterior(post, sigma_model, allow_non_normal=True)
-    names = [n for n in REPORTED if weights(n, base.names)]
+    names = [n for n in reported(post) if weights(n, base.names)]
     sd0 = {n: base.linear_combination(weights(n, base.names))[1] for n in names}
 
     def growth(widen) -> dict[str, float]:

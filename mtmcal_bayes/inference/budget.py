@@ -32,7 +32,7 @@ import pandas as pd
 
 from .. import units
 from ..parameters import SCALE_LABEL, quantity_unit, weights
-from .analytic import REPORTED, linearisation
+from .analytic import linearisation, reported
 from .log_posterior import LogPosterior
 
 #: quantiles of sigma_model's posterior the budget is averaged over
@@ -42,8 +42,8 @@ NOISE_SOURCES = ("repeatability", "instrument", "probe readings", "sigma_model",
 #: prior groups of the nuisance parameters, by base name (``prior:<group>`` in the budget)
 PRIOR_GROUP = {"xT": "T-ball centring", "yT": "T-ball centring", "zT": "T-ball centring", "dRB": "dRB",
                "xW": "W-ball clamping", "yW": "W-ball clamping", "zW": "W-ball clamping",
-               "xS": "stylus centring", "yS": "stylus centring", "dRS": "dRS", "rS": "rS",
-               "xP": "sphere placement", "yP": "sphere placement",
+               "xS": "stylus centring", "yS": "stylus centring", "zS": "stylus centring", "dRS": "dRS", "rS": "rS",
+               "xP": "sphere placement", "yP": "sphere placement", "zP": "sphere placement",
                "xD": "reading datum", "yD": "reading datum", "zD": "reading datum"}
 #: what each source is, for sentences ("87 % of the variance comes from …")
 MEANING = {"repeatability": "the repeatability of the measurements (scatter of the repeats)",
@@ -155,7 +155,7 @@ def variance_budget(post: LogPosterior, sigma_draws: np.ndarray | None, names=No
     variance (adds the ``sigma_model_uncertainty`` column); None when the scales are fixed (``post.fixed_sigma``).
     The :data:`N_SIGMA` conditional budgets are computed in one batch.
     """
-    names = [n for n in (names or REPORTED) if weights(n, post.space.names)]
+    names = [n for n in (names or reported(post)) if weights(n, post.space.names)]
     if sigma_draws is None:
         var, _ = conditional_budget(post, float(post.fixed_sigma or 0.0), names, theta0=theta0)
         var["sigma_model_uncertainty"] = 0.0

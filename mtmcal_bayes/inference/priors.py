@@ -34,6 +34,8 @@ DEFAULTS = {
     "zW": ("normal", 35.0, "the W ball shifts 10–60 µm in a random direction when clamped (thesis Sec 2.5.2)"),
     "xS": ("normal", 10.0, "stylus ball centred on the spindle axis to ~10 µm (probe on-centre adjustment)"),
     "yS": ("normal", 10.0, "stylus ball centred on the spindle axis to ~10 µm (probe on-centre adjustment)"),
+    "zS": ("normal", 10.0, "stylus ball centred on the spindle axis to ~10 µm (probe on-centre adjustment)"),
+    "zP": ("normal", 300.0, "sphere placed on the table by hand: a few hundred µm"),
     "dRS": ("normal", 10.0, "stylus length from a tool setter, like the ball bar's dRB"),
     "rS": ("normal", 5.0, "effective radius after calibration on a reference: pre-travel leaves a few µm"),
     "xP": ("normal", 300.0, "sphere placed on the table by hand: a few hundred µm"),

@@ -14,8 +14,8 @@ from .. import units
 from ..arviz_import import az
 from ..iso import iso_symbol
 from ..observations import JointObservations, ProbeObservations
-from ..parameters import DERIVED, NUISANCE_MEANING, combine, quantity_unit, weights
-from .analytic import NOT_IDENTIFIED_GROWTH, REPORTED, WIDEN, prior_sensitivity
+from ..parameters import DERIVED, NUISANCE_MEANING, combine, iso_kind, quantity_unit, weights
+from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity, reported
 from .budget import linearisation_point, variance_budget
 from .gum import gum_table
 
@@ -29,8 +29,9 @@ MAX_DRAWS_PER_CHAIN = 4000
 def display_draws(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
     """Dict of display-unit draws (…,) per name of ``draws`` (…, len(names)), plus the derived quantities."""
     out = {n: units.from_internal(draws[..., i], quantity_unit(n)) for i, n in enumerate(names)}
-    for name in DERIVED:
-        out[name] = combine(name, out)
+    for name, w in DERIVED.items():
+        if all(k in out for k in w):  # a described machine has no dx_CZ, dx_BT
+            out[name] = combine(name, out)
     return out
 
 
@@ -154,7 +155,7 @@ def summarize(idata, post, names=None, *, statement: bool = True, diagnostics: b
     posterior: no chain diagnostics (R-hat, ESS and Monte-Carlo standard errors are NaN: they describe a Markov
     chain, and these draws are not one).
     """
-    names = list(names or (list(REPORTED) + list(post.scales)))
+    names = list(names or (list(reported(post)) + list(post.scales)))
     names = [n for n in names if n in idata.posterior]
     s = az.summary(idata, var_names=names, hdi_prob=HDI_PROB, round_to="none",
                    kind="all" if diagnostics else "stats")
@@ -163,7 +164,7 @@ def summarize(idata, post, names=None, *, statement: bool = True, diagnostics: b
     s = s.rename(columns={"hdi_2.5%": "hdi_low", "hdi_97.5%": "hdi_high"})
     s["median"] = [float(idata.posterior[n].median()) for n in s.index]
     s["unit"] = [quantity_unit(n) for n in s.index]
-    s["iso"] = [iso_symbol(n) for n in s.index]
+    s["iso"] = [iso_symbol(n) or (n if iso_kind(n) else None) for n in s.index]  # a described machine's: its name
     psd = prior_sd(post, s.index)
     s["prior_sd"] = [psd.get(n, np.nan) for n in s.index]
     s["sd_ratio"] = s["sd"] / s["prior_sd"]

@@ -157,6 +157,8 @@ class _GrowingBackend(emcee.backends.Backend):
 
 
 def _gating(post: LogPosterior) -> list[str]:
+    if post.campaign.machine.described:  # its deviations: which are identified is computed, not known
+        return [p.name for p in post.space.parameters if p.group == "deviation"] + list(post.sampled_scales)
     return [n for n in IDENTIFIABLE] + list(post.sampled_scales)
 
 

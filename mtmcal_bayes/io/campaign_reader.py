@@ -53,7 +53,11 @@ from ..parameters import (
 )
 from ..patterns import COMPONENTS, CR_GEOMETRIES, PATTERNS, mount_conflict
 from ..sphere import fit_sphere
+from ..machines.deviations import quantities as deviation_table
+from ..machines.probe_terms import probe_terms
+from .described_campaign import described_ballbar, described_probe
 from .dprnt import read_dprnt
+from .machine_reader import BUILTIN_TYPES, DESCRIPTION_KEYS, parse_description, referenced_description
 from .textfiles import read_user_text
 from .tolerances import parse_tolerances
 from .toml_reader import TomlReader, kind_of, parse_toml
@@ -101,14 +105,25 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     if fmt != FORMAT:
         r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
 
-    machine = _machine(r, r.table(doc, "machine", "", required=False) or {})
-    ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir)
+    machine = _machine(r, doc.get("machine"), base_dir)
     probe_t = r.table(doc, "probe", "", required=False)
-    probe = _probe(r, probe_t, base_dir) if probe_t is not None else None
+    if machine.described:
+        desc = machine.description
+        ballbar = described_ballbar(r, r.table(doc, "ballbar", "", required=False), desc)
+        probe = described_probe(r, probe_t, desc) if probe_t is not None else None
+        if not ballbar.runs and probe is None:
+            r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]]")
+        for key in ("reported", "design", "tolerances"):
+            if key in doc:
+                r.fail(key, "not read for a described machine yet (docs/machines.md)")
+    else:
+        ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir)
+        probe = _probe(r, probe_t, base_dir) if probe_t is not None else None
+    deviations = deviation_quantities(machine)
     reported = _reported(r, r.table(doc, "reported", "", required=False) or {}, text)
-    priors = _priors(r, r.table(doc, "priors", "", required=False) or {})
+    priors = _priors(r, r.table(doc, "priors", "", required=False) or {}, deviations)
     truth_t = r.table(doc, "truth", "", required=False)
-    truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe) if truth_t is not None else None
+    truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe, machine=machine) if truth_t is not None else None
     tolerances = parse_tolerances(r, r.table(doc, "tolerances", "", required=False) or {})
     temperature = r.number(doc, "temperature_C", "", required=False)
     if temperature is not None and not -50.0 <= temperature <= 100.0:
@@ -119,13 +134,45 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
                     _date(r, doc), temperature, design)
 
 
-def _machine(r: TomlReader, t: dict) -> Machine:
-    allowed = {"name", "configuration", "serial", "type"} | {f"travel_{a}_mm" for a in "XYZ"}
+def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:
+    """``[machine]``: the thesis format (name, configuration, travels: the thesis machine), a description (SPEC
+    §19: ``[machine.axes]``, ``[machine.spindle]``, ...) or ``description = "<type or file>"`` beside name, serial and
+    type; or ``machine = "<type or file>"`` alone."""
+    if isinstance(t, str):
+        desc = referenced_description(t, r.source, "machine", base_dir)
+        return Machine(desc.name, desc.configuration, description=desc)
+    if t is None:
+        t = {}
+    if not isinstance(t, dict):
+        r.fail("machine", f"expected a table or a machine type / description file name, got {kind_of(t)}")
+    legacy = {"name", "configuration", "serial", "type"} | {f"travel_{a}_mm" for a in "XYZ"}
+    allowed = legacy | DESCRIPTION_KEYS | {"description"}
     r.check_keys(t, allowed, "machine")
     travel = {a: r.number(t, f"travel_{a}_mm", "machine", positive=True)
               for a in "XYZ" if f"travel_{a}_mm" in t}
-    return Machine(r.string(t, "name", "machine"), r.string(t, "configuration", "machine"), travel,
-                   r.string(t, "serial", "machine").strip(), r.string(t, "type", "machine").strip())
+    serial, mtype = r.string(t, "serial", "machine").strip(), r.string(t, "type", "machine").strip()
+    if "description" in t:
+        extra = sorted(set(t) & (DESCRIPTION_KEYS - {"name"}))
+        if extra:
+            r.fail(f"machine.{extra[0]}", "the machine is described by machine.description; describe it there or "
+                   "here, not both")
+        desc = referenced_description(r.string(t, "description", "machine"), r.source, "machine.description",
+                                      base_dir)
+        return Machine(r.string(t, "name", "machine") or desc.name, desc.configuration, travel, serial, mtype, desc)
+    if set(t) & (DESCRIPTION_KEYS - {"name", "configuration"}):
+        desc = parse_description(t, r.source, "machine", extra_keys=frozenset(legacy))
+        return Machine(desc.name, desc.configuration, travel, serial, mtype, desc)
+    configuration = r.string(t, "configuration", "machine")
+    if configuration and configuration.replace(" ", "") != THESIS_CONFIGURATION:
+        r.fail("machine.configuration", f"{configuration!r} is not the thesis machine's ({THESIS_CONFIGURATION}) and "
+               "nothing describes it: add [machine.axes.<letter>] and [machine.spindle] (docs/machines.md) or name a "
+               f"built-in type with description = \"...\" ({', '.join(BUILTIN_TYPES)})")
+    return Machine(r.string(t, "name", "machine"), configuration, travel, serial, mtype)
+
+
+def deviation_quantities(machine: Machine) -> dict:
+    """The deviations a campaign on ``machine`` can name: the thesis' 13, or the described machine's."""
+    return deviation_table(machine.description) if machine.described else dict(DEVIATIONS)
 
 
 def _date(r: TomlReader, doc: dict) -> datetime.datetime | None:
@@ -499,8 +546,8 @@ def _prior_bounds(r: TomlReader, v: float, key: str, *, unit: str, sd: bool) -> 
                "below the models' floating-point resolution")
 
 
-def _priors(r: TomlReader, t: dict) -> dict[str, dict]:
-    known = {**{k: q.unit for k, q in DEVIATIONS.items()},
+def _priors(r: TomlReader, t: dict, deviations: dict | None = None) -> dict[str, dict]:
+    known = {**{k: q.unit for k, q in (DEVIATIONS if deviations is None else deviations).items()},
              **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE, **PROBE_NUISANCE}.items()},
              "sigma_model": "um"}
     out = {}
@@ -568,19 +615,24 @@ def _design(r: TomlReader, t: dict) -> DesignGoal:
     return goal
 
 
-def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: Probe | None = None) -> Truth:
-    """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``, ``probe.<owner>``) located at ``path``."""
+def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: Probe | None = None,
+                machine: Machine | None = None) -> Truth:
+    """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``, ``probe.<owner>``) located at ``path``;
+    a described ``machine``'s deviations by their ISO symbols (its thesis names on the thesis machine)."""
     r.check_keys(t, {"deviations", "setups", "mounts", "probe"}, path)
     truth = Truth()
+    known = deviation_quantities(machine) if machine is not None else DEVIATIONS
     dev = r.table(t, "deviations", path, required=False) or {}
     for key in dev:
         name, unit = units.split_unit_key(key)
-        q = DEVIATIONS.get(name)
+        q = known.get(name)
         if q is None or unit != q.unit:
             r.fail(f"{path}.deviations.{key}", "unknown deviation: expected <name>_arcsec or <name>_um "
-                   f"with one of {', '.join(DEVIATIONS)}")
+                   f"with one of {', '.join(known)}")
         truth.deviations[name] = units.to_internal(r.number(dev, key, f"{path}.deviations"), unit)
-    probe_owners = {o for o, _ in probe.nuisance_terms()} if probe is not None else set()
+    described = machine is not None and machine.described
+    probe_owners = ({o for o, _ in probe_terms(machine.description, probe)} if described else
+                    {o for o, _ in probe.nuisance_terms()}) if probe is not None else set()
     for group, table, owners in (("setups", SETUP_NUISANCE, ballbar.setups),
                                  ("mounts", MOUNT_NUISANCE, ballbar.mounts),
                                  ("probe", PROBE_NUISANCE, probe_owners)):
@@ -598,6 +650,10 @@ def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: P
 
 
 
+#: the thesis machine's configuration (a [machine] table in the thesis format describes it)
+THESIS_CONFIGURATION = "w-C'bZYXB(C1)-t"
+
+
 def load_truth(path, campaign: Campaign) -> Truth:
     """Read a TRUTH.toml: ``[deviations]``, ``[setups.<id>]``, ``[mounts.<id>]``, ``[probe.<owner>]`` at top level,
     or the same under ``[truth]`` as a campaign writes them (``[truth.deviations]``, docs/campaign-format.md; a
@@ -609,8 +665,9 @@ def load_truth(path, campaign: Campaign) -> Truth:
         if TRUTH_TABLES & set(doc):
             r.fail("truth", f"both [truth.…] and top-level [{'], ['.join(sorted(TRUTH_TABLES & set(doc)))}]: write "
                    "the truth one way")
-        return parse_truth(r, r.table(doc, "truth", ""), "truth", campaign.ballbar, probe=campaign.probe)
-    return parse_truth(r, doc, "", campaign.ballbar, probe=campaign.probe)
+        return parse_truth(r, r.table(doc, "truth", ""), "truth", campaign.ballbar, probe=campaign.probe,
+                           machine=campaign.machine)
+    return parse_truth(r, doc, "", campaign.ballbar, probe=campaign.probe, machine=campaign.machine)
 
 
 #: the tables of a truth

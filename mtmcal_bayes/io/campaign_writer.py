@@ -7,7 +7,9 @@ from pathlib import Path
 
 from .. import units
 from ..campaign import Campaign, DesignGoal, PlannedRun, Probe, Truth
-from ..parameters import DEVIATIONS, QUANTITIES
+from ..parameters import DEVIATIONS, QUANTITIES, quantity_unit
+from .described_writer import described_to_dict
+from .truth_table import truth_to_dict
 from .campaign_reader import FORMAT
 from .textfiles import write_text_atomic
 from .tomlio import Fixed, dumps
@@ -24,6 +26,8 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
         doc["date"] = c.date
     if c.temperature_C is not None:
         doc["temperature_C"] = c.temperature_C
+    if c.machine.described:
+        return described_to_dict(c, doc)
     doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
                       **({"serial": c.machine.serial} if c.machine.serial else {}),
                       **({"type": c.machine.type} if c.machine.type else {}),
@@ -112,17 +116,6 @@ def design_to_dict(g: DesignGoal) -> dict:
         d["targets"] = {f"{n}_{QUANTITIES[n].unit}": float(v) for n, v in g.targets.items()}
     if g.times:
         d["times"] = {k: float(v) for k, v in g.times.items()}
-    return d
-
-
-def truth_to_dict(t: Truth) -> dict:
-    d: dict = {"deviations": {f"{n}_{DEVIATIONS[n].unit}": units.from_internal(v, DEVIATIONS[n].unit)
-                              for n, v in t.deviations.items()}}
-    for group in ("setups", "mounts", "probe"):
-        vals = getattr(t, group)
-        if vals:
-            d[group] = {oid: {f"{k}_um": units.from_internal(v, "um") for k, v in kv.items()}
-                        for oid, kv in vals.items()}
     return d
 
 

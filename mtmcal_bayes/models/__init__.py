@@ -12,7 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
+from ..machines.space import described_space
 from ..parameters import ParameterSpace
+from .chain_thesis import ThesisChainModel
+from .described import ChainBallbarModel, ChainProbeModel, FirstOrderModel
 from .joint import JointModel
 from .kinematic import HTMModel, jacobian
 from .linear import LinearModel, linear_coefficients
@@ -20,8 +23,12 @@ from .probe_model import LinearProbeModel, ProbeModel
 
 #: the kinematic (homogeneous-transform) models, which can also compensate NC programs
 KINEMATIC_MODELS = ("htm-literal", "htm-thesis")
+#: the kinematic chain of any described machine (SPEC §19); on the thesis machine, ``htm-literal``
+CHAIN = "chain"
 #: every forward model, by name: the thesis relations first
-MODELS = ("linear",) + KINEMATIC_MODELS
+MODELS = ("linear",) + KINEMATIC_MODELS + (CHAIN,)
+#: the models of a described machine: its chain and the chain's first order
+DESCRIBED_MODELS = ("linear", CHAIN)
 
 
 def check_model(name: str, allowed=MODELS, parameter: str = "model") -> str:
@@ -40,8 +47,12 @@ def check_data(data: str, campaign=None, parameter: str = "data") -> str:
     if data not in DATA:
         raise ParameterError(parameter, f"unknown data {data!r} (expected one of {', '.join(DATA)})")
     if data != "ballbar" and campaign is not None and not campaign.has_probe_readings():
+        where = "[[probe.runs]]" if campaign.machine.described else "[probe.c_axis] or [probe.b_axis.styli]"
         raise ParameterError(parameter, f"{data!r} needs touch-probe readings, and the campaign {campaign.source} "
-                             "has no [probe.c_axis] or [probe.b_axis.styli]")
+                             f"has no {where}")
+    if data != "probe" and campaign is not None and campaign.machine.described and not campaign.ballbar.runs:
+        raise ParameterError(parameter, f"{data!r} needs ball-bar runs, and the campaign {campaign.source} has no "
+                             "[[ballbar.runs]] (a probe-only campaign: use the probe data)")
     return data
 
 
@@ -51,15 +62,36 @@ def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observ
     its :class:`~.probe_model.ProbeLayout` (the probe's readings), if already made."""
     check_model(name)
     check_data(data, campaign)
+    if campaign.machine.described:
+        return _described_model(name, campaign, space, data=data, observations=observations)
     if space is None:
         space = ParameterSpace.for_campaign(campaign, data=data)
     parts = []
     if data in ("ballbar", "both"):
         parts.append(LinearModel(campaign, space, observations=observations) if name == "linear"
+                     else ThesisChainModel(campaign, space, observations=observations) if name == CHAIN
                      else HTMModel(campaign, name, space, observations=observations))
     if data in ("probe", "both"):
-        parts.append(LinearProbeModel(campaign, space, probe_layout) if name == "linear"
-                     else ProbeModel(campaign, name, space, probe_layout))
+        probe = (LinearProbeModel(campaign, space, probe_layout) if name == "linear"
+                 else ProbeModel(campaign, "htm-literal" if name == CHAIN else name, space, probe_layout))
+        if name == CHAIN:
+            probe.name = CHAIN  # the thesis machine's chain is htm-literal, its probe model too
+        parts.append(probe)
+    return parts[0] if len(parts) == 1 else JointModel(parts)
+
+
+def _described_model(name: str, campaign, space, *, data: str, observations):
+    """The ``chain`` or ``linear`` model of a described machine's campaign."""
+    check_model(name, DESCRIBED_MODELS)
+    if space is None:
+        space = described_space(campaign, data=data)
+    parts = []
+    if data in ("ballbar", "both"):
+        parts.append(ChainBallbarModel(campaign, space, observations=observations))
+    if data in ("probe", "both"):
+        parts.append(ChainProbeModel(campaign, space))
+    if name == "linear":
+        parts = [FirstOrderModel(p) for p in parts]
     return parts[0] if len(parts) == 1 else JointModel(parts)
 
 
@@ -69,11 +101,17 @@ def first_order_gap(campaign, theta: np.ndarray, space=None, *, observations=Non
 
     Above the instrument accuracy, the deviations are too large for the linear model.
     """
+    if campaign.machine.described:  # the chain against its own first order
+        if not campaign.ballbar.runs:
+            return 0.0
+        chain = ChainBallbarModel(campaign, space, observations=observations)
+        return float(np.abs(chain.predict(theta) - FirstOrderModel(chain).predict(theta)).max())
     linear = LinearModel(campaign, space, observations=observations)
     kinematic = HTMModel(campaign, "htm-thesis", linear.space, observations=linear.observations)
     return float(np.abs(kinematic.predict(theta) - linear.predict(theta)).max())
 
 
-__all__ = ["MODELS", "KINEMATIC_MODELS", "DATA", "check_model", "check_data", "make_model", "ProbeModel",
+__all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "DESCRIBED_MODELS", "ThesisChainModel", "ChainBallbarModel",
+           "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "ProbeModel",
            "LinearProbeModel", "JointModel", "first_order_gap", "LinearModel", "HTMModel",
            "jacobian", "linear_coefficients"]

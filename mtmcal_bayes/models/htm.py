@@ -87,8 +87,9 @@ def rotation(rotvec: np.ndarray) -> np.ndarray:
 
     ``R = I + sinc(θ)·K + ½·sinc²(θ/2)·K²`` with ``K = [ε]×`` and ``θ = |ε|``: no cancellation for small θ.
     """
-    v = np.atleast_2d(np.asarray(rotvec, dtype=float))
-    K = np.zeros((len(v), 3, 3))
+    v = np.atleast_2d(np.asarray(rotvec))
+    v = v if np.iscomplexobj(v) else v.astype(float)  # complex: a complex-step derivative goes through
+    K = np.zeros((len(v), 3, 3), dtype=v.dtype)
     K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
     K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
     with np.errstate(invalid="ignore", over="ignore"):  # absurd angles give NaN, which the callers report

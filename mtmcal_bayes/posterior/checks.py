@@ -32,9 +32,11 @@ def linear_model_check(result: SamplingResult) -> list[str]:
     accuracy = post.campaign.ballbar.accuracy
     if gap <= accuracy:
         return []
+    kinematic = "chain" if post.campaign.machine.described else "htm-thesis"
     return [f"the linear model is first order and the deviations found are too large for it: at the posterior "
-            f"mean the kinematic model htm-thesis predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} µm "
-            f"away from it (instrument accuracy {units.from_internal(accuracy, 'um'):g} µm); use the htm-thesis model"]
+            f"mean the kinematic model {kinematic} predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} "
+            f"µm away from it (instrument accuracy {units.from_internal(accuracy, 'um'):g} µm); use the {kinematic} "
+            "model"]
 
 
 def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: float = 0.3,

@@ -70,6 +70,8 @@ def posterior_json(result) -> dict:
                            for k, v in row.items()} for n, row in result.comparison.iterrows()},
         "diagnostics": result.diagnostics.to_json(),
         **choice_json(result.summary, post.campaign),
+        **({"identifiability": result.identifiability.as_dict(), "combinations": result.combinations}
+           if result.identifiability is not None else {}),
     }
 
 
@@ -202,11 +204,25 @@ def conformity_block(conf, s) -> str:
     return "\n".join(lines)
 
 
+def identifiability_block(ident, combinations: list[dict]) -> str:
+    """What the campaign determines (a described machine's, computed from its Jacobian): console lines."""
+    lines = ["What this campaign determines (from its Jacobian, the T ball centred: docs/machines.md)"]
+    lines.append("  one by one:     " + (", ".join(ident.determined) or "none"))
+    for c in combinations:
+        lines.append(f"  in combination: {c['name']} = {c['mean']:.2f} ± {c['sd']:.2f} {units.SYMBOL[c['unit']]} "
+                     f"(95 % HDI {c['hdi_low']:.2f} to {c['hdi_high']:.2f})")
+    lines.append("  not at all:     " + (", ".join(ident.undetermined) or "none") +
+                 ("  (their posterior is their prior)" if ident.undetermined else ""))
+    return "\n".join(lines)
+
+
 def format_sample(result) -> str:
     """What ``sample`` prints: :func:`format_posterior` and, unless imposed, the effect of dx_BT = 0."""
     lines = [format_posterior(result)]
     post = result.log_posterior
-    if not post.fix_dx_BT:
+    if result.identifiability is not None:
+        lines += ["", identifiability_block(result.identifiability, result.combinations)]
+    if not post.fix_dx_BT and not post.campaign.machine.described:
         sigma_um = result.sigma_model_um
         lines += ["", f"The thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = {sigma_um:.2f} µm "
                   f"({'as fixed' if post.fixed_sigma is not None else 'the posterior median'}; fix_dx_BT, on the command "

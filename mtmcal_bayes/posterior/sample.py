@@ -9,6 +9,7 @@ import pandas as pd
 
 from .. import units
 from ..analysis import analysis_of
+from .determined import campaign_identifiability, combination_summaries
 from ..inference import reading_choice
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import (
@@ -99,6 +100,8 @@ class PosteriorResult:
     reference: ReferenceCheck | None = None
     output: str | None = None  # where :meth:`save` wrote the NetCDF
     conformity: pd.DataFrame | None = None  # one row per toleranced quantity (posterior.conformity)
+    identifiability: object | None = None  # a described machine's: what its campaign determines (Identifiability)
+    combinations: list[dict] = field(default_factory=list)  # its named combinations with their posteriors
 
     @property
     def log_posterior(self) -> LogPosterior:
@@ -136,7 +139,9 @@ class PosteriorResult:
     @property
     def diagnostics(self) -> SamplerDiagnostics:
         r = self.sampling
-        eight = self.summary.loc[[n for n in IDENTIFIABLE if n in self.summary.index]]
+        gating = [n for n in IDENTIFIABLE if n in self.summary.index] or [
+            n for n in self.summary.index if n in self.log_posterior.space.names]  # a described machine's deviations
+        eight = self.summary.loc[gating]
         ess = eight["ess_bulk"]
         return SamplerDiagnostics(
             converged=r.converged, n_ensembles=r.chains.shape[0], n_walkers=r.chains.shape[2], n_steps=r.n_steps,
@@ -198,11 +203,16 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     choice = analysis.reading_choice(summary.index) if statement else None  # a reading chosen over another
     if choice is not None:
         summary = summary.join(choice)
-    comp = comparison(summary, analysis.identification)
+    comp = pd.DataFrame() if campaign.machine.described else comparison(summary, analysis.identification)
     ref = None if beside else reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + ([] if beside else diagnostics_warnings(summary))
     warn += reference_warnings(ref, summary)
     warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data
     tol = campaign.tolerances if tolerances is None else tolerances
     conf = conformity_table(idata, summary, tol) if tol and statement else None
-    return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf)
+    ident, combos = None, []
+    if campaign.machine.described:
+        ident = campaign_identifiability(post)
+        combos = combination_summaries(ident, idata)
+    return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf,
+                           identifiability=ident, combinations=combos)

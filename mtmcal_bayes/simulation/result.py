@@ -12,7 +12,7 @@ from ..campaign import Campaign, Truth
 from ..io.campaign_writer import save_campaign
 from ..models import first_order_gap
 from ..observations import Observations
-from ..parameters import ParameterSpace
+from ..parameters import ParameterSpace, quantity_unit
 from .simulate import (
     eccentricity_records,
     planned_as_runs,
@@ -37,6 +37,7 @@ class Simulation:
     seed: int | None = None
     warnings: list[str] = field(default_factory=list)
     output: str | None = None
+    probe_readings: list[dict] | None = None  # a described machine's: predicted probe readings, noise-free
 
     @property
     def eccentricities(self) -> pd.DataFrame:
@@ -63,7 +64,13 @@ class Simulation:
         self.output = str(path)
 
     def to_json(self) -> dict:
-        return {"model": self.model, "eccentricities": eccentricity_records(self.observations, self.predicted)}
+        out = {"model": self.model, "eccentricities": eccentricity_records(self.observations, self.predicted)}
+        if self.campaign.machine.described:
+            out["machine"] = self.campaign.machine.description.builtin or self.campaign.machine.name
+            out["truth"] = {n: units.from_internal(v, quantity_unit(n)) for n, v in self.truth.deviations.items()}
+            if self.probe_readings is not None:
+                out["probe"] = self.probe_readings
+        return out
 
     def to_text(self) -> str:
         if self.output:
@@ -79,6 +86,8 @@ class Simulation:
 def simulate_truth(campaign: Campaign, truth: Truth, *, model: str = "htm-thesis", noise: bool = False,
                    seed: int | None = None, source: str = "<truth>") -> Simulation:
     """Predict every component for ``truth``; warn when the linear model is asked for a truth too large for it."""
+    if campaign.machine.described:
+        return _described_simulation(campaign, truth, model=model, noise=noise, seed=seed, source=source)
     obs, pred = predict_truth(campaign, truth, model, source=source)
     warnings = []
     if model == "linear":  # first order: say so when the truth is too large for it
@@ -89,3 +98,20 @@ def simulate_truth(campaign: Campaign, truth: Truth, *, model: str = "htm-thesis
                             f"predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} µm away (instrument "
                             f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm)")
     return Simulation(campaign, truth, source, model, obs, pred, noise, seed, warnings)
+
+
+def _described_simulation(campaign: Campaign, truth: Truth, *, model: str, noise: bool, seed: int | None,
+                          source: str) -> Simulation:
+    """A described machine's simulation: its ball-bar eccentricities (if it has runs) and probe readings."""
+    if campaign.ballbar.runs:
+        obs, pred = predict_truth(campaign, truth, model, source=source)
+    else:
+        obs, pred = Observations((), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int)), np.zeros(0)
+    readings = None
+    if campaign.has_probe_readings():
+        probe = synthetic_campaign(campaign, truth, model).probe
+        readings = [{"run": r.id, "stylus": r.stylus, "position": i + 1,
+                     **{f"{a}_deg": float(units.from_internal(v[i], "deg")) for a, v in r.angles.items()},
+                     **{f"{x}_mm": float(r.centres[0, i, j]) for j, x in enumerate("XYZ")}}
+                    for r in probe.runs for i in range(r.positions)]
+    return Simulation(campaign, truth, source, model, obs, pred, noise, seed, [], probe_readings=readings)

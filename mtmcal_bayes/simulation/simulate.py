@@ -17,11 +17,15 @@ import numpy as np
 from .. import units
 from ..campaign import Campaign, Run, Truth
 from ..errors import InputError
+from ..machines import selected
+from ..machines.space import described_space
 from ..models import make_model
 from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_run_values
 from ..parameters import ParameterSpace, nuisance_name
 from ..patterns import COMPONENTS
 
+#: repeat scatter of a described machine's probe readings where the campaign states no repeatability, mm
+DEFAULT_PROBE_SD = units.to_internal(1.0, "um")
 #: resolution of the ball-bar readings (thesis Table 4.1)
 RESOLUTION_UM = 0.1
 
@@ -36,6 +40,15 @@ def truth_vector(space: ParameterSpace, truth: Truth, source: str = "<truth>") -
     if missing:
         raise InputError(source, missing[0], "not a parameter of this campaign")
     return space.vector(values)
+
+
+def simulation_space(campaign: Campaign, truth: Truth, data: str) -> ParameterSpace | None:
+    """The space a truth is simulated in: on a described machine its selected deviations and any other the truth
+    gives (every generated one may be simulated); None (the model's default, all 13) on the thesis machine."""
+    if not campaign.machine.described:
+        return None
+    chosen = [d.name for d in selected(campaign.machine.description)]
+    return described_space(campaign, chosen + [d for d in truth.deviations if d not in chosen], data=data)
 
 
 def truth_from_vector(space: ParameterSpace, theta: np.ndarray) -> Truth:
@@ -86,7 +99,7 @@ def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *
     if not campaign.ballbar.runs:
         raise InputError(campaign.source, "ballbar.runs", "nothing to simulate: the campaign has no runs, measured or "
                          "planned; add [[ballbar.runs]] (planned = true, repeats = N for runs not yet measured)")
-    fm = make_model(model, campaign)
+    fm = make_model(model, campaign, simulation_space(campaign, truth, "ballbar"))
     theta = truth_vector(fm.space, truth.ballbar_part(), source)
     with np.errstate(all="ignore"):  # an absurd truth overflows; the check below names it
         pred = fm.predict(theta)
@@ -124,9 +137,14 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
     dropped (they belong to the real measurement).
     """
     campaign = planned_as_runs(campaign)
+    rng = np.random.default_rng(seed) if noise else None
+    if campaign.machine.described and not campaign.ballbar.runs:  # a probe-only campaign
+        out = copy.deepcopy(campaign)
+        out.probe = simulated_probe(campaign, truth, model, noise=noise, rng=rng, repeats=repeats)
+        out.truth = copy.deepcopy(truth)
+        return out
     obs, pred = predict_truth(campaign, truth, model)
     if noise:
-        rng = np.random.default_rng(seed)
         n = np.full(len(obs), repeats) if repeats else obs.n
         if sigma_model > 0:  # drawn only then: a history without discrepancy keeps its random stream
             pred = pred + rng.normal(0.0, sigma_model, len(pred))
@@ -149,12 +167,15 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
     ``noise``: as many repeats as measured (or ``repeats``), each scattered by the probe's repeatability.
     DPRNT file names and fit covariances are dropped: the readings are centres now.
     """
-    if not campaign.has_probe_readings() or campaign.probe.repeatability is None:
+    described = campaign.machine.described
+    if not campaign.has_probe_readings() or (campaign.probe.repeatability is None and not described):
         return copy.deepcopy(campaign.probe) if campaign.probe is not None else None
     if campaign.probe_gap() is not None:  # readings the probe model cannot simulate: none (Simulation.save says so)
         return None
-    fm = make_model(model, campaign, data="probe")
+    fm = make_model(model, campaign, simulation_space(campaign, truth, "probe"), data="probe")
     theta = truth_vector(fm.space, truth.probe_part())
+    if campaign.machine.described:
+        return _described_probe(campaign, fm, theta, noise=noise, rng=rng, repeats=repeats)
     layout = fm.layout
     flat = fm.predict(theta)  # observations: Qᵀ (reading − nominal)
     dev = np.einsum("kij,kj->ki", layout.rotation, flat.reshape(-1, 3))  # back to reading-frame axes
@@ -169,6 +190,23 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
         if noise:
             centres += rng.normal(0.0, campaign.probe.repeatability, size=centres.shape)
         run.centres, run.centre_cov, run.dprnt = centres, None, None
+        start += a
+    return out
+
+
+def _described_probe(campaign: Campaign, fm, theta: np.ndarray, *, noise: bool, rng, repeats: int | None):
+    """A described machine's ``[probe]`` with each run's centres simulated: the chain's readings (nominal plus the
+    model's prediction), scattered by the probe's repeatability with ``noise``."""
+    readings = fm.nominal + fm.predict(theta).reshape(-1, 3)
+    out = copy.deepcopy(campaign.probe)
+    start = 0
+    for run in out.runs:
+        a = run.positions
+        r = (repeats or run.centres.shape[0]) if noise else 1
+        centres = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
+        if noise:
+            centres += rng.normal(0.0, campaign.probe.repeatability or DEFAULT_PROBE_SD, size=centres.shape)
+        run.centres = centres
         start += a
     return out
 

@@ -1,0 +1,175 @@
+"""The ball-bar and touch-probe sections of a campaign on a described machine (SPEC §19, docs/machines.md).
+
+``[ballbar]``: ``length_mm``, ``accuracy_um``; ``[ballbar.setups.<id>] R_B_mm`` (the programmed tool length from
+the spindle's ``point_mm``); ``[ballbar.mounts.<id>] position_mm`` (the W-ball centre at the home pose, on the
+workpiece side); ``[[ballbar.runs]]`` with ``pattern`` (``<axis><R|T|A|X|Y|Z>``), ``setup``, ``mount``, optional
+``arc_deg`` (the swivelled axis' angles: ``[start, end]`` with ``step_deg``, default the axis' own grid) and
+``hold_deg`` (the other rotary axes, degrees), and the pattern's two components as arrays of repeats
+(``ex_um``, ``ey_um`` for a pattern about Z).
+
+``[probe]``: ``[probe.styli.<id>] length_mm`` (spindle point to stylus-ball centre; with ``ball_radius_mm``, to its
+tip); ``[[probe.runs]]`` with ``stylus``, ``sphere_mm`` (its nominal centre at the home pose, workpiece side),
+``angles_deg`` (axis letter -> list, all one length) and ``centres_mm`` (repeats × positions × 3: the commanded
+X, Y, Z at which the stylus centre reached the sphere's centre).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import units
+from ..campaign import Ballbar, Mount, Probe, ProbeRun, Run, Setup
+from ..machines.description import MachineDescription
+from ..machines.patterns import DIRECTIONS, axis_of, components, default_arc_deg
+from .toml_reader import TomlReader, kind_of
+
+#: bar length and accuracy of a campaign without ball-bar data (nothing reads them then)
+NO_BALLBAR = (100.0, units.to_internal(0.5, "um"))
+
+
+def described_ballbar(r: TomlReader, t: dict | None, desc: MachineDescription) -> Ballbar:
+    """``[ballbar]`` of a described machine (absent: a probe-only campaign, no runs)."""
+    P = "ballbar"
+    if t is None:
+        return Ballbar(*NO_BALLBAR)
+    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "setups", "mounts", "runs"}, P)
+    length = r.number(t, "length_mm", P, positive=True)
+    accuracy = units.to_internal(r.number(t, "accuracy_um", P, positive=True), "um")
+    feed = r.number(t, "feed_mm_per_min", P, required=False, positive=True)
+    setups = {sid: Setup(sid, r.number(s, "R_B_mm", path, positive=True), 0.0, 0.0)
+              for sid, path, s in r.subtables(t, "setups", P, allowed={"R_B_mm"}, what="tool setup")}
+    mounts = {}
+    for mid, path, m in r.subtables(t, "mounts", P, allowed={"position_mm"}, what="W-ball mount"):
+        pos = r.array(m, "position_mm", path, (3,))
+        mounts[mid] = Mount(mid, 0.0, 0.0, position=pos)
+    raw = t.get("runs", [])
+    if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
+        r.fail(f"{P}.runs", "expected one or more [[ballbar.runs]] tables")
+    runs = [_run(r, x, f"{P}.runs[{i}]", desc, setups=setups, mounts=mounts) for i, x in enumerate(raw)]
+    seen: dict[tuple, int] = {}
+    for i, run in enumerate(runs):
+        key = (run.pattern, run.setup, run.mount, tuple(np.round(run.arc_deg, 9)),
+               tuple(sorted((run.hold_deg or {}).items())))
+        if key in seen:
+            r.fail(f"{P}.runs[{i}]", f"the same measurement as {P}.runs[{seen[key]}]: put all repeats of one "
+                   "measurement in one run's arrays")
+        seen[key] = i
+    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs)
+
+
+def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups, mounts) -> Run:
+    pattern = r.string(t, "pattern", path, required=True)
+    try:
+        ax = axis_of(desc, pattern)
+    except ValueError as err:
+        r.fail(f"{path}.pattern", str(err))
+    comps = components(desc, pattern)
+    r.check_keys(t, {"pattern", "setup", "mount", "arc_deg", "step_deg", "hold_deg", *(f"{c}_um" for c in comps)},
+                 path)
+    setup, mount = r.string(t, "setup", path, required=True), r.string(t, "mount", path, required=True)
+    if setup not in setups:
+        r.fail(f"{path}.setup", f"no tool setup {setup!r} in [ballbar.setups] (have: {', '.join(setups)})")
+    if mount not in mounts:
+        r.fail(f"{path}.mount", f"no mount {mount!r} in [ballbar.mounts] (have: {', '.join(mounts)})")
+    arc = _arc(r, t, path, ax)
+    hold = _hold(r, t, path, desc, swivelled=pattern[0])
+    repeats = {}
+    for c in comps:
+        v = r.array(t, f"{c}_um", path, (None,))
+        repeats[c] = units.to_internal(v, "um")
+    if len({len(v) for v in repeats.values()}) > 1:
+        r.fail(f"{path}.{comps[1]}_um", f"has {len(repeats[comps[1]])} repeats, {comps[0]}_um "
+               f"{len(repeats[comps[0]])}: give both components of every repeat")
+    return Run(pattern, setup, mount, repeats, arc_deg=arc, hold_deg=hold)
+
+
+def _arc(r: TomlReader, t: dict, path: str, ax) -> np.ndarray:
+    if "arc_deg" not in t:
+        if "step_deg" in t:
+            r.fail(f"{path}.step_deg", "only with arc_deg = [start, end]")
+        return default_arc_deg(ax)
+    lo, hi = r.array(t, "arc_deg", path, (2,))
+    step = r.number(t, "step_deg", path, required=False, positive=True, default=1.0)
+    if hi <= lo:
+        r.fail(f"{path}.arc_deg", f"expected [start, end] with start < end, got [{lo:g}, {hi:g}]")
+    if (hi - lo) / step < 8:
+        r.fail(f"{path}.step_deg", f"{step:g}° gives fewer than 9 angles over [{lo:g}, {hi:g}]°: too few to read "
+               "the eccentricities from")
+    if ax.travel is not None:
+        t_lo, t_hi = np.rad2deg(ax.travel)
+        if lo < t_lo - 1e-9 or hi > t_hi + 1e-9:
+            r.fail(f"{path}.arc_deg", f"[{lo:g}, {hi:g}]° leaves the {ax.letter} travel [{t_lo:g}, {t_hi:g}]°")
+    return np.arange(lo, hi + 1e-9, step)
+
+
+def _hold(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, swivelled: str) -> dict[str, float] | None:
+    if "hold_deg" not in t:
+        return None
+    h = t["hold_deg"]
+    if not isinstance(h, dict):
+        r.fail(f"{path}.hold_deg", f"expected a table such as {{A = 0}}, got {kind_of(h)}")
+    out = {}
+    for letter in h:
+        ax = desc.axes.get(letter)
+        if ax is None or not ax.rotary or letter == swivelled:
+            others = [a.letter for a in desc.rotary_axes if a.letter != swivelled]
+            r.fail(f"{path}.hold_deg.{letter}", f"not a held rotary axis of this pattern (expected one of "
+                   f"{', '.join(others) or 'none'})")
+        out[letter] = r.number(h, letter, f"{path}.hold_deg")
+    return out
+
+
+def described_probe(r: TomlReader, t: dict, desc: MachineDescription) -> Probe:
+    """``[probe]`` of a described machine: styli and ``[[probe.runs]]``."""
+    P = "probe"
+    r.check_keys(t, {"instrument", "repeatability_um", "styli", "runs"}, P)
+    rep = r.number(t, "repeatability_um", P, required=False, positive=True)
+    probe = Probe(r.string(t, "instrument", P), units.to_internal(rep, "um") if rep is not None else None)
+    for sid, path, s in r.subtables(t, "styli", P, allowed={"length_mm", "ball_radius_mm"}, what="stylus"):
+        radius = r.number(s, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0)
+        length = r.number(s, "length_mm", path, positive=True) - radius
+        if length <= 0:
+            r.fail(f"{path}.ball_radius_mm", "longer than the stylus")
+        probe.styli[sid] = length
+    raw = t.get("runs")
+    if not isinstance(raw, list) or not raw or not all(isinstance(x, dict) for x in raw):
+        r.fail(f"{P}.runs", "expected one or more [[probe.runs]] tables")
+    for i, x in enumerate(raw):
+        probe.runs.append(_probe_run(r, x, f"{P}.runs[{i}]", desc, styli=probe.styli, number=i + 1))
+    ids = [run.id for run in probe.runs]
+    for i, rid in enumerate(ids):
+        if rid in ids[:i]:
+            r.fail(f"{P}.runs[{i}].id", f"{rid!r} names another run too")
+    return probe
+
+
+def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, styli: dict,
+               number: int) -> ProbeRun:
+    r.check_keys(t, {"id", "stylus", "sphere_mm", "angles_deg", "centres_mm"}, path)
+    rid = r.string(t, "id", path, default=f"run{number}")
+    stylus = r.string(t, "stylus", path, required=True)
+    if stylus not in styli:
+        r.fail(f"{path}.stylus", f"no stylus {stylus!r} in [probe.styli] (have: {', '.join(styli) or 'none'})")
+    sphere = r.array(t, "sphere_mm", path, (3,))
+    a = t.get("angles_deg")
+    if not isinstance(a, dict) or not a:
+        r.fail(f"{path}.angles_deg", "expected a table of rotary axis -> list of angles, e.g. {A = [0, -30], C = [0, 90]}")
+    angles = {}
+    for letter in a:
+        ax = desc.axes.get(letter)
+        if ax is None or not ax.rotary:
+            r.fail(f"{path}.angles_deg.{letter}", f"not a rotary axis of this machine "
+                   f"({', '.join(x.letter for x in desc.rotary_axes)})")
+        angles[letter] = r.array(a, letter, f"{path}.angles_deg", (None,))
+    sizes = {len(v) for v in angles.values()}
+    if len(sizes) > 1:
+        r.fail(f"{path}.angles_deg", "every axis needs one angle per position: the lists differ in length")
+    n_pos = sizes.pop()
+    if n_pos < 2:
+        r.fail(f"{path}.angles_deg", "needs at least two indexed positions (only differences between positions inform "
+               "the deviations)")
+    centres = r.array(t, "centres_mm", path, (None, n_pos, 3))
+    return ProbeRun(rid, stylus, sphere, {k: units.to_internal(v, "deg") for k, v in angles.items()}, centres)
+
+
+__all__ = ["described_ballbar", "described_probe", "DIRECTIONS"]

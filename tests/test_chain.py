@@ -1,0 +1,215 @@
+"""The kinematic chain of a described machine (SPEC §19): equal to Eq 2.10 as printed on the thesis machine,
+invariant under a relabelling of the frame, its first order checked against finite differences, its patterns
+those of thesis Tables 2.2/2.3 where they are the same bar."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from mtmcal_bayes import units
+from mtmcal_bayes.api import campaign_of
+from mtmcal_bayes.io.campaign_reader import parse_campaign
+from mtmcal_bayes.io.machine_reader import builtin_description
+from mtmcal_bayes.machines.patterns import pattern_commands as described_commands
+from mtmcal_bayes.models import make_model
+from mtmcal_bayes.models.chain_thesis import ThesisChainModel
+from mtmcal_bayes.models.kinematic import HTMModel
+from mtmcal_bayes.parameters import ParameterSpace
+from mtmcal_bayes.patterns import pattern_commands as thesis_commands
+
+
+@pytest.fixture(scope="module")
+def thesis():
+    return campaign_of(None)
+
+
+def test_chain_is_htm_literal_on_the_thesis_machine(thesis):
+    """Every run, setup and mount of the thesis campaign, all 13 deviations and every nuisance term at random sizes
+    up to ~150 µm / 150″: the chain's eccentricities and traces equal htm-literal's to 1e-9 mm."""
+    space = ParameterSpace.for_campaign(thesis)
+    rng = np.random.default_rng(7)
+    theta = rng.normal(size=(32, len(space))) * space.display_scale() * 50
+    literal, chain = HTMModel(thesis, "htm-literal", space), ThesisChainModel(thesis, space)
+    assert np.abs(chain.predict(theta) - literal.predict(theta)).max() < 1e-9
+    for (_, a), (_, b) in zip(literal.traces(theta), chain.traces(theta)):
+        assert np.abs(a - b).max() < 1e-9
+    # and it is not the thesis' own pivots: htm-thesis differs at these sizes
+    assert np.abs(HTMModel(thesis, "htm-thesis", space).predict(theta) - literal.predict(theta)).max() > 1e-4
+
+
+def test_chain_is_a_model_of_every_command(thesis):
+    m = make_model("chain", thesis)
+    assert m.name == "chain" and m.predict(np.zeros(len(m.space))).shape == (len(m.observations),)
+
+
+@pytest.mark.parametrize("pattern", ["BR", "BA", "BX", "BY", "BZ", "CR", "CT", "CA", "CX", "CY", "CZ"])
+def test_described_patterns_are_the_thesis_tables(pattern):
+    """The generalised pattern ``<K><d>`` on the thesis machine's description gives the commands of thesis Tables
+    2.2/2.3 (CR in the Table 2.3 geometry); BT is the exception, its T ball on the other side (docs/machines.md)."""
+    desc = builtin_description("integrex-i200")
+    R_B, Z_C, R_C, L_B = 356.3945, 65.5348, 50.0, 100.0
+    b = pattern[0] == "B"
+    ball = np.array([0.0 if b else R_C, 0.0, Z_C])
+    arc = np.linspace(0.0, 90.0, 91) if b else np.arange(0.0, 360.0, 5.0)
+    ours = described_commands(desc, pattern, length=R_B, ball=ball, bar=L_B, arc_deg=arc)
+    ref = thesis_commands(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B, angles_deg=arc)
+    for axis in "XYZBC":
+        assert np.allclose(ours.q[axis], getattr(ref, axis), atol=1e-9), axis
+    assert np.allclose(np.cos(ours.psi), np.cos(ref.psi)) and np.allclose(np.sin(ours.psi), np.sin(ref.psi))
+
+
+# ---------------------------------------------------------------- a relabelled frame
+#: X -> Y, Y -> Z, Z -> X: a point (x, y, z) has new coordinates (z, x, y); the letters move with the axes
+RELABEL = {"X": "Y", "Y": "Z", "Z": "X", "A": "B", "B": "C", "C": "A"}
+
+
+def _vec(v):
+    return [v[2], v[0], v[1]]
+
+
+def _described_thesis(relabel: bool) -> str:
+    """The thesis machine described (ISO names, motion squareness), ball bar and probe; relabelled if asked."""
+    L = (lambda s: "".join(RELABEL.get(ch, ch) for ch in s.replace("(C1)", "@")).replace("@", "(C1)")) if relabel \
+        else (lambda s: s)  # noqa: E731
+    P = _vec if relabel else (lambda v: v)  # noqa: E731
+    d = (lambda v: {"+X": "+Y", "+Y": "+Z", "+Z": "+X", "-X": "-Y", "-Y": "-Z", "-Z": "-X"}[v]) if relabel else \
+        (lambda v: v)  # noqa: E731
+    c1, c2 = ("ex", "ey") if relabel else ("ez", "ex")  # B's plane (z, x) becomes C's (x, y)
+    k1, k2 = ("ey", "ez") if relabel else ("ex", "ey")  # C's plane (x, y) becomes A's (y, z)
+
+    def run(pattern, setup, mount, comps):
+        a, b = comps
+        if relabel:  # the axis letter moves; R, T, A name directions about it and stay
+            pattern = RELABEL[pattern[0]] + (RELABEL[pattern[1]] if pattern[1] in "XYZ" else pattern[1])
+        return (f'[[ballbar.runs]]\npattern = "{pattern}"\nsetup = "{setup}"\nmount = "{mount}"\n'
+                f"{a}_um = [0.0]\n{b}_um = [0.0]\n")
+    return f'''format = "mtmcal-campaign/1"
+[machine]
+configuration = "{L("w-C'bZYXB(C1)-t")}"
+[machine.axes.{L("C")}]
+direction = "{d("+Z")}"
+[machine.axes.{L("B")}]
+direction = "{d("+Y")}"
+[machine.spindle]
+direction = "{d("-Z")}"
+[ballbar]
+length_mm = 100.0
+accuracy_um = 0.5
+[ballbar.setups.RB1]
+R_B_mm = 356.3945
+[ballbar.setups.RB2]
+R_B_mm = 406.4608
+[ballbar.mounts.B]
+position_mm = {P([0.0, 0.0, 65.5348])}
+[ballbar.mounts.C]
+position_mm = {P([50.0, 0.0, 65.5348])}
+{run("BX", "RB1", "B", (c1, c2))}{run("BY", "RB1", "B", (c1, c2))}{run("CR", "RB1", "C", (k1, k2))}
+{run("CA", "RB1", "C", (k1, k2))}{run("CR", "RB2", "C", (k1, k2))}
+[probe]
+repeatability_um = 1.0
+[probe.styli.S]
+length_mm = 300.0
+[[probe.runs]]
+id = "table"
+stylus = "S"
+sphere_mm = {P([60.0, 0.0, 50.0])}
+angles_deg = {{{L("C")} = [0.0, 90.0, 180.0, 270.0]}}
+centres_mm = [[[0,0,0],[0,0,0],[0,0,0],[0,0,0]]]
+[[probe.runs]]
+id = "head"
+stylus = "S"
+sphere_mm = {P([0.0, 0.0, 150.0])}
+angles_deg = {{{L("B")} = [0.0, 45.0, 90.0]}}
+centres_mm = [[[0,0,0],[0,0,0],[0,0,0]]]
+'''
+
+
+def _mapped(name: str) -> str:
+    """A deviation's or nuisance term's name in the relabelled frame (``E_X0C`` -> ``E_Y0A``, ``xT[RB1]`` ->
+    ``yT[RB1]``)."""
+    if name.startswith("E_"):
+        inner = name.replace("(0C1)", "@")  # the spindle's own name stays
+        return "".join(RELABEL.get(ch, ch) if i > 1 else ch for i, ch in enumerate(inner)).replace("@", "(0C1)")
+    base, owner = name.split("[")
+    return {"x": "y", "y": "z", "z": "x"}.get(base[0], base[0]) + base[1:] + "[" + owner
+
+
+@pytest.fixture(scope="module")
+def relabelled():
+    a = parse_campaign(_described_thesis(False), "original.toml")
+    b = parse_campaign(_described_thesis(True), "relabelled.toml")
+    return a, b
+
+
+def test_relabelling_the_frame_changes_nothing(relabelled):
+    """The same machine in a cyclically relabelled frame: the same ball-bar readings and probe readings (mapped) for
+    the same (mapped) truth, and the same posterior of each mapped deviation (the exact posterior's mean and sd, to
+    1e-9 relative), the same identifiable combinations."""
+    from mtmcal_bayes.inference.analytic import gaussian_posterior
+    from mtmcal_bayes.inference.log_posterior import LogPosterior
+    from mtmcal_bayes.posterior.determined import campaign_identifiability
+
+    a, b = relabelled
+    ma, mb_ = make_model("chain", a, data="both"), make_model("chain", b, data="both")
+    assert sorted(_mapped(n) for n in ma.space.names) == sorted(mb_.space.names)
+    order = [mb_.space.names.index(_mapped(n)) for n in ma.space.names]
+    rng = np.random.default_rng(3)
+    theta = rng.normal(size=(8, len(ma.space))) * ma.space.display_scale() * 30
+    theta_b = np.zeros_like(theta)
+    theta_b[:, order] = theta
+    assert np.allclose(ma.predict(theta), _map_observations(mb_.predict(theta_b), b), atol=1e-9)
+
+    # data from a truth, then the two exact posteriors at a fixed σ
+    y = ma.predict(theta[0])
+    from mtmcal_bayes.observations import with_run_values  # noqa: F401  (the values go in as readings below)
+    pa = LogPosterior(a, "linear", data="both", sigma_model=units.to_internal(0.5, "um"))
+    pb = LogPosterior(b, "linear", data="both", sigma_model=units.to_internal(0.5, "um"))
+    pa.likelihood = pa.likelihood.with_means(y)
+    pb.likelihood = pb.likelihood.with_means(_unmap_observations(y, b))
+    ga, gb = gaussian_posterior(pa, units.to_internal(0.5, "um")), gaussian_posterior(pb, units.to_internal(0.5, "um"))
+    deviations = [p.name for p in pa.space.parameters if p.group == "deviation"]
+    for n in deviations:
+        j = pb.space.names.index(_mapped(n))
+        ma_, sa = ga.linear_combination({n: 1.0})
+        mb2, sb = gb.linear_combination({pb.space.names[j]: 1.0})
+        assert sb == pytest.approx(sa, rel=1e-9), n
+        assert mb2 == pytest.approx(ma_, rel=1e-9, abs=1e-12), n
+    ia, ib = campaign_identifiability(pa), campaign_identifiability(pb)
+    assert sorted(_mapped(n) for n in ia.determined) == sorted(ib.determined)
+    assert sorted(_mapped(n) for n in ia.undetermined) == sorted(ib.undetermined)
+    wa = sorted(tuple(sorted((_mapped(k), round(v, 9)) for k, v in c.weights.items())) for c in ia.combinations)
+    wb = sorted(tuple(sorted((k, round(v, 9)) for k, v in c.weights.items())) for c in ib.combinations)
+    assert wa == wb
+
+
+def _map_observations(y, campaign):
+    """Observations of the relabelled campaign in the original's order and axes (components keep their order; probe
+    readings' X, Y, Z of the relabelled frame are the original's Y, Z, X)."""
+    y = np.array(y, copy=True)
+    m = len(campaign.ballbar.runs) * 2
+    probe = y[..., m:].reshape(y.shape[:-1] + (-1, 3))
+    y[..., m:] = probe[..., [1, 2, 0]].reshape(y.shape[:-1] + (-1,))
+    return y
+
+
+def _unmap_observations(y, campaign):
+    y = np.array(y, copy=True)
+    m = len(campaign.ballbar.runs) * 2
+    probe = y[..., m:].reshape(y.shape[:-1] + (-1, 3))
+    y[..., m:] = probe[..., [2, 0, 1]].reshape(y.shape[:-1] + (-1,))
+    return y
+
+
+def test_first_order_model_is_the_chains_jacobian(relabelled):
+    """``linear`` on a described machine: the chain's Jacobian at zero; it agrees with the chain to second order
+    (a tenfold smaller step leaves a hundredfold smaller gap)."""
+    a, _ = relabelled
+    chain, linear = make_model("chain", a, data="both"), make_model("linear", a, data="both")
+    rng = np.random.default_rng(5)
+    step = rng.normal(size=len(chain.space)) * chain.space.display_scale() * 20
+    gaps = [np.abs(chain.predict(s * step) - linear.predict(s * step)).max() for s in (1.0, 0.1)]
+    assert gaps[1] < gaps[0] / 50
+    assert dataclasses.is_dataclass(a.machine.description)

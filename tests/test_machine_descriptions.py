@@ -1,0 +1,254 @@
+"""Machine descriptions (SPEC §19): the rules of a bad description, each one line naming the file and the key,
+and the built-in types with the deviations generated from them."""
+
+from __future__ import annotations
+
+import tomllib
+
+import numpy as np
+import pytest
+
+from mtmcal_bayes.datasets import data_path
+from mtmcal_bayes.errors import InputError
+from mtmcal_bayes.io.machine_reader import (
+    BUILTIN_TYPES,
+    builtin_description,
+    parse_description,
+    referenced_description,
+)
+from mtmcal_bayes.machines import THESIS_NAMES, generated, redundant, selected
+from mtmcal_bayes.models.chain import Chain
+
+#: a valid turn-mill in a campaign's [machine] table; each bad case below changes one thing of it
+TURN_MILL = """
+[machine]
+configuration = "{configuration}"
+{extra}
+[machine.axes.C]
+direction = {c_direction}
+point_mm = [0.0, 0.0, 0.0]
+[machine.axes.B]
+direction = {b_direction}
+point_mm = {b_point}
+{b_extra}
+[machine.spindle]
+direction = {spindle_direction}
+point_mm = {spindle_point}
+"""
+DEFAULTS = dict(configuration="w-C'bZYXB(C1)-t", extra="", c_direction='"+Z"', b_direction='"+Y"',
+                b_point="[0.0, 0.0, 0.0]", b_extra="", spindle_direction='"-Z"', spindle_point="[0.0, 0.0, 0.0]")
+
+
+def machine_table(**changes) -> dict:
+    """The [machine] table of the turn-mill above with ``changes``."""
+    return tomllib.loads(TURN_MILL.format(**(DEFAULTS | changes)))["machine"]
+
+
+def parse(t: dict, **kw):
+    return parse_description(t, "m.toml", "machine", **kw)
+
+
+def builtin_toml(name: str) -> str:
+    return data_path(f"machines/{name}.toml").read_text(encoding="utf-8")
+
+
+# (id, [machine] table, the key named, a fragment of the message)
+BAD = [
+    # the configuration
+    ("unknown axis letter", machine_table(configuration="w-C'bZYXU(C1)-t"), "configuration", "unknown axis letter 'U'"),
+    ("unknown spindle", machine_table(configuration="w-C'bZYXB(C2)-t"), "configuration", "unknown spindle '(C2)'"),
+    ("no w-", machine_table(configuration="C'bZYXB(C1)-t"), "configuration", "does not parse"),
+    ("no -t", machine_table(configuration="w-C'bZYXB(C1)"), "configuration", "does not parse"),
+    ("no bed", machine_table(configuration="w-C'ZYXB(C1)-t"), "configuration", "the bed 'b' must appear once"),
+    ("bed twice", machine_table(configuration="w-C'bZYbXB(C1)-t"), "configuration", "the bed 'b' must appear once"),
+    ("axis twice", machine_table(configuration="w-C'bZYXBX(C1)-t"), "configuration", "axis X appears twice"),
+    ("primed on the tool side", machine_table(configuration="w-C'bZYX'B(C1)-t"), "configuration",
+     "X' is primed (moves the workpiece) but stands on the tool side"),
+    ("unprimed on the work side", machine_table(configuration="w-CbZYXB(C1)-t"), "configuration",
+     "C stands on the workpiece side of the bed 'b' but is not primed"),
+    ("missing a linear axis", machine_table(configuration="w-C'bZYB(C1)-t"), "configuration", "no X axis"),
+    ("no rotary axis", machine_table(configuration="w-bZYX(C1)-t"), "configuration", "no rotary axis"),
+    ("no spindle", machine_table(configuration="w-C'bZYXB-t"), "configuration", "no spindle"),
+    ("spindle not last", machine_table(configuration="w-C'bZY(C1)XB-t"), "configuration",
+     "the spindle (C1) must be last"),
+    ("linear carried by rotary, work side", machine_table(configuration="w-X'C'bZYB(C1)-t"), "configuration",
+     "linear axis X is carried by rotary axis C"),
+    ("linear carried by rotary, tool side", machine_table(configuration="w-C'bZYBX(C1)-t"), "configuration",
+     "linear axis X is carried by rotary axis B"),
+    ("configuration missing", {"spindle": {"direction": "-Z"}}, "configuration", "missing"),
+    # rotary axes and spindle
+    ("rotary axis without direction",
+     machine_table() | {"axes": {"C": {"direction": "+Z"}, "B": {"point_mm": [0, 0, 0]}}}, "axes.B.direction", "missing: rotary axis B needs its direction"),
+    ("rotary axis not described", machine_table() | {"axes": {"C": {"direction": "+Z"}}},
+     "axes.B.direction", "missing: rotary axis B needs its direction"),
+    ("direction not a direction", machine_table(b_direction='"+W"'), "axes.B.direction", "is not a direction"),
+    ("zero direction", machine_table(b_direction="[0, 0, 0]"), "axes.B.direction", "a zero vector has no direction"),
+    ("non-unit direction", machine_table(b_direction="[0, 2, 0]"), "axes.B.direction",
+     "[0, 2, 0] is not a unit vector (its length is 2)"),
+    ("direction not along a frame axis", machine_table(b_direction="[0, 0.6, 0.8]"), "axes.B.direction",
+     "[0, 0.6, 0.8] does not lie along a frame axis"),
+    ("spindle without direction", machine_table() | {"spindle": {"point_mm": [0, 0, 0]}},
+     "spindle.direction", "missing: the tool's direction"),
+    ("spindle direction not along a frame axis", machine_table(spindle_direction="[0.6, 0, -0.8]"),
+     "spindle.direction", "does not lie along a frame axis"),
+    ("bad point", machine_table(b_point="[0, 0]"), "axes.B.point_mm", "expected three numbers"),
+    ("travel min > max", machine_table(b_extra="travel_deg = [120, -120]"), "axes.B.travel_deg",
+     "expected [min, max] with min < max, got [120, -120]"),
+    # two rotary axes of one side on one line: B' described along +Z through C's point on the workpiece side
+    ("two rotary axes on one line", machine_table(configuration="w-C'B'bZYX(C1)-t", b_direction='"+Z"',
+                                                  b_point="[0.0, 0.0, 250.0]"),
+     "axes.C", "axes B and C turn about one line"),
+    # the tool along the swivel axis B, through B's point: turning B does not move the tool point
+    ("spindle on the line of the axis carrying it", machine_table(spindle_direction='"+Y"',
+                                                                  spindle_point="[0.0, 80.0, 0.0]"),
+     "spindle.direction", "the spindle lies along the B axis that carries it, on its line"),
+    # keys
+    ("unknown key", machine_table(extra='tool_length_mm = 100'), "tool_length_mm", "unknown key"),
+    ("unknown key of a rotary axis", machine_table(b_extra="travel_mm = [-10, 10]"), "axes.B.travel_mm",
+     "unknown key"),
+    ("unknown key of the spindle", machine_table() | {"spindle": {"direction": "-Z", "length_mm": 100}},
+     "spindle.length_mm", "unknown key"),
+    ("axis not in the configuration", machine_table(b_extra="[machine.axes.Q]\ntravel_mm = [0, 1]"), "axes.Q",
+     "no axis Q in the configuration"),
+    ("rotary axis not in the configuration", machine_table(b_extra='[machine.axes.A]\ndirection = "+X"'), "axes.A",
+     "no axis A in the configuration"),
+    # the deviations chosen
+    ("unknown deviation", machine_table(extra='deviations = ["E_X0C", "E_Q0B"]'), "deviations",
+     "'E_Q0B' is not a deviation of this machine"),
+    ("thesis name on a described machine", machine_table(extra='deviations = ["dx_CZ"]'), "deviations",
+     "'dx_CZ' is not a deviation of this machine"),
+    ("no deviations", machine_table(extra="deviations = []"), "deviations", "expected a non-empty list"),
+    ("deviation twice", machine_table(extra='deviations = ["E_X0C", "E_X0C"]'), "deviations",
+     "E_X0C named twice"),
+    # the squareness form
+    ("unknown squareness", machine_table(extra='squareness = "tilted"'), "squareness",
+     "unknown squareness form 'tilted'"),
+    ("rigid squareness, X on the work side", machine_table(configuration="w-C'X'bZYB(C1)-t",
+                                                           extra='squareness = "rigid"'),
+     "squareness", "the rigid form needs the three linear axes next to the bed on the tool side"),
+]
+
+
+@pytest.mark.parametrize("t, key, fragment", [case[1:] for case in BAD], ids=[case[0] for case in BAD])
+def test_a_bad_description_is_one_line_naming_the_file_and_the_key(t, key, fragment):
+    with pytest.raises(InputError) as info:
+        parse(t)
+    err = info.value
+    assert err.source == "m.toml"
+    assert err.key == f"machine.{key}"
+    assert fragment in err.message
+    assert str(err).startswith(f"m.toml: machine.{key}: ")
+    assert "\n" not in str(err)
+    assert "np.float64" not in str(err)
+
+
+def test_a_deviation_named_by_its_thesis_name_and_its_symbol_is_named_twice():
+    t = tomllib.loads(builtin_toml("integrex-i200"))
+    t["deviations"] = ["dx_CZ", "E_X0C"]
+    with pytest.raises(InputError, match=r"machine\.deviations: dx_CZ named twice"):
+        parse(t, builtin="integrex-i200")
+
+
+def test_the_turn_mill_the_bad_cases_start_from_is_valid():
+    desc = parse(machine_table())
+    assert [a.letter for a in desc.work_chain] == ["C"]
+    assert [a.letter for a in desc.tool_chain] == ["Z", "Y", "X", "B"]
+    assert desc.spindle.carrier == "B"
+    # the same two axes as in the coaxial case, on different lines, are allowed
+    desc = parse(machine_table(configuration="w-C'B'bZYX(C1)-t", b_direction='"+Z"', b_point="[100.0, 0.0, 0.0]"))
+    assert [a.letter for a in desc.work_chain] == ["B", "C"]  # from the bed outwards
+    # a spindle along the axis carrying it but off its line is moved by it
+    parse(machine_table(spindle_direction='"+Y"', spindle_point="[0.0, 0.0, 80.0]"))
+
+
+def test_a_spindle_on_the_bed_every_axis_moving_the_workpiece():
+    t = {"configuration": "w-C'Z'Y'X'b(C1)-t", "axes": {"C": {"direction": "+Z"}}, "spindle": {"direction": "-Z"}}
+    desc = parse(t)
+    assert desc.tool_chain == () and desc.spindle.carrier == "b"
+    assert [d.symbol for d in generated(desc)] == ["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C",
+                                                   "E_C0X", "E_B0X", "E_A0Y"]
+    q = {"X": np.array([1.0]), "Y": np.array([2.0]), "Z": np.array([3.0]), "C": np.array([0.0])}
+    tip = Chain(desc, generated(desc)).tool_point(np.zeros((1, 1, 3)), q, {})
+    assert np.allclose(tip, 0.0)  # the tool does not move; the workpiece does (-1, -2, -3)
+    w = Chain(desc, generated(desc)).work_point(np.zeros((1, 1, 3)), q, {})
+    assert np.allclose(w, [[[-1.0, -2.0, -3.0]]])
+
+
+@pytest.mark.parametrize("name", list(BUILTIN_TYPES))
+def test_each_builtin_parses(name):
+    desc = builtin_description(name)
+    assert desc.builtin == name
+    assert desc.is_thesis == (name == "integrex-i200")
+    assert desc.spindle.carrier == desc.tool_chain[-1].letter
+    assert {d.name for d in selected(desc)} <= {d.name for d in generated(desc)}
+
+
+# the ISO symbols generated for each built-in type, and those left out of the default set
+GENERATED = {
+    "integrex-i200": (["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C", "E_X0B", "E_Z0B", "E_A0B", "E_C0B", "E_B0B",
+                       "E_X(0C1)B", "E_Y(0C1)B", "E_A(0C1)B", "E_B(0C1)B", "E_Z(0C1)B", "E_C0X", "E_B0X", "E_A0Y"],
+                      ["E_Y(0C1)B", "E_B(0C1)B", "E_C0X", "E_B0X", "E_A0Y"]),
+    "vertical-turn-mill": (["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C", "E_X0B", "E_Z0B", "E_A0B", "E_C0B", "E_B0B",
+                            "E_Y(0C1)B", "E_Z(0C1)B", "E_B(0C1)B", "E_C(0C1)B", "E_X(0C1)B",
+                            "E_C0X", "E_B0X", "E_A0Y"],
+                           ["E_Y(0C1)B", "E_B(0C1)B", "E_C0X", "E_B0X", "E_A0Y"]),
+    "trunnion": (["E_Y0A", "E_Z0A", "E_B0A", "E_C0A", "E_A0A", "E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C",
+                  "E_C0X", "E_B0X", "E_A0Y"],
+                 ["E_C0X", "E_B0X", "E_A0Y"]),
+    "head-head": (["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C", "E_Y0A", "E_Z0A", "E_B0A", "E_C0A", "E_A0A",
+                   "E_X(0C1)A", "E_Y(0C1)A", "E_A(0C1)A", "E_B(0C1)A", "E_Z(0C1)A", "E_C0X", "E_B0X", "E_A0Y"],
+                  ["E_X(0C1)A", "E_A(0C1)A", "E_C0X", "E_B0X", "E_A0Y"]),
+}
+
+
+@pytest.mark.parametrize("name", list(BUILTIN_TYPES))
+def test_the_deviations_generated_for_each_builtin(name):
+    desc = builtin_description(name)
+    every, left_out = GENERATED[name]
+    gen = generated(desc)
+    assert [d.symbol for d in gen] == every
+    by_symbol = {d.symbol: d.name for d in gen}
+    assert sorted(redundant(desc)) == sorted(by_symbol[s] for s in left_out)
+    if name != "integrex-i200":  # the default set: the generated less the redundant
+        assert [d.symbol for d in selected(desc)] == [s for s in every if s not in left_out]
+        assert all(d.name == d.symbol for d in gen)
+
+
+def test_the_thesis_machine_keeps_the_thesis_names():
+    desc = builtin_description("integrex-i200")
+    names = {d.symbol: d.name for d in generated(desc)}
+    expected = {"E_X0C": "dx_CZ", "E_Y0C": "dy_CZ", "E_A0C": "alpha_CZ", "E_B0C": "beta_CZ",
+                "E_A0B": "alpha_XB", "E_B0B": "beta_XB", "E_C0B": "gamma_XB",
+                "E_X(0C1)B": "dx_BT", "E_A(0C1)B": "alpha_BT", "E_Z(0C1)B": "dz_BT",
+                "E_C0X": "gamma_XY", "E_B0X": "beta_YZ", "E_A0Y": "alpha_YZ"}
+    assert expected == THESIS_NAMES
+    assert all(names[s] == n for s, n in expected.items())
+    # the thesis has no C zero error and no B position error: those keep their ISO symbols and are not selected
+    assert {s for s, n in names.items() if n == s} == {"E_C0C", "E_X0B", "E_Z0B", "E_Y(0C1)B", "E_B(0C1)B"}
+    assert desc.deviations == ("dx_BT", "dz_BT", "alpha_BT", "alpha_XB", "beta_XB", "gamma_XB", "gamma_XY",
+                               "alpha_YZ", "beta_YZ", "dx_CZ", "dy_CZ", "alpha_CZ", "beta_CZ")
+    assert {d.name for d in selected(desc)} == set(expected.values())
+    assert desc.squareness == "rigid"
+
+
+def test_a_description_file_referenced_relative_to_the_campaign(tmp_path):
+    (tmp_path / "machines").mkdir()
+    (tmp_path / "machines" / "mine.toml").write_text(builtin_toml("trunnion"), encoding="utf-8")
+    desc = referenced_description("machines/mine.toml", str(tmp_path / "c.toml"), "machine", tmp_path)
+    assert desc.configuration == "w-C'A'bYXZ(C1)-t" and desc.builtin == "" and not desc.is_thesis
+    assert [d.symbol for d in generated(desc)] == GENERATED["trunnion"][0]
+    # a built-in type by name
+    assert referenced_description("head-head", "c.toml", "machine", tmp_path).builtin == "head-head"
+    # a problem in the file names that file and its own key (no "machine." prefix)
+    bad = builtin_toml("trunnion").replace('direction = "+X"', 'direction = "+W"')
+    (tmp_path / "machines" / "bad.toml").write_text(bad, encoding="utf-8")
+    with pytest.raises(InputError) as info:
+        referenced_description("machines/bad.toml", "c.toml", "machine", tmp_path)
+    assert info.value.source == str(tmp_path / "machines" / "bad.toml") and info.value.key == "axes.A.direction"
+    # a missing file, an unknown type: named where the campaign names them
+    with pytest.raises(InputError, match="file not found"):
+        referenced_description("machines/none.toml", "c.toml", "machine", tmp_path)
+    with pytest.raises(InputError) as info:
+        referenced_description("five-axis", "c.toml", "machine", tmp_path)
+    assert str(info.value).startswith("c.toml: machine: unknown machine type 'five-axis'")
+    assert "integrex-i200" in str(info.value)
