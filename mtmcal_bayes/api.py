@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 from .analysis import CampaignAnalysis
 from .campaign import Campaign
+from .errors import InputError
 from .io.campaign_reader import load_campaign
 from .io.textfiles import check_writable
 from .progress import Progress
@@ -45,18 +46,52 @@ MAX_STEPS = 20_000
 TARGET_ESS = 1000.0
 
 
-def campaign_of(campaign: CampaignLike, *, measured: bool = False) -> Campaign:
+def campaign_of(campaign: CampaignLike, *, measured: bool = False, thesis_only: str | None = None) -> Campaign:
     """A :class:`Campaign` from a campaign, a :class:`~mtmcal_bayes.analysis.CampaignAnalysis` (its campaign), a path
     to a campaign TOML, or None (the built-in thesis campaign).
 
     ``measured``: the command needs data, so a campaign without measured ball-bar runs (only planned ones, or
-    none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``."""
+    none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``.  ``thesis_only``: the
+    command's name, when it serves the thesis machine only (an InputError naming ``machine`` otherwise)."""
     if isinstance(campaign, CampaignAnalysis):
         campaign = campaign.campaign
     c = campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
+    if thesis_only and c.machine.described:
+        raise InputError(c.source, "machine", f"{thesis_only} serves the thesis machine and not yet a described one "
+                         f"({c.machine.description.configuration}); docs/machines.md says what does")
     if measured:
         c.require_measured_runs()
     return c
+
+
+def kinematic_model_of(model: str | None, c: Campaign) -> str:
+    """The model asked for (checked: a described machine has ``chain`` and ``linear``), else the machine's kinematic
+    model: ``htm-thesis`` on the thesis machine, ``chain`` on a described one."""
+    from .models import DESCRIBED_MODELS, check_model
+
+    if model is None:
+        return "chain" if c.machine.described else "htm-thesis"
+    return check_model(model, DESCRIBED_MODELS) if c.machine.described else check_model(model)
+
+
+def data_of(data: str | None, c: Campaign) -> str:
+    """The data of a likelihood: as given, else the ball bar on the thesis machine and every instrument a described
+    machine's campaign has."""
+    if data is not None:
+        return data
+    if not c.machine.described:
+        return "ballbar"
+    return "both" if c.ballbar.runs and c.has_probe_readings() else "probe" if not c.ballbar.runs else "ballbar"
+
+
+def _thesis_only(c: Campaign, **given) -> None:
+    """A :class:`ParameterError` naming the first option given that a described machine's report does not take yet."""
+    from .errors import ParameterError
+
+    for name, value in given.items():
+        if value not in (None, False):
+            raise ParameterError(name, f"not for a described machine yet ({c.machine.description.configuration}; "
+                                 "docs/machines.md)")
 
 
 def tolerances_of(tolerances) -> dict | None:
@@ -119,12 +154,19 @@ def _writable(path, what: str) -> None:
         check_writable(path, what)
 
 
-def identify(campaign: CampaignLike = None) -> IdentificationResult:
+def identify(campaign: CampaignLike = None):
     """The thesis' deterministic identification: ball bar (Eqs 4.10–4.18) and touch probe (Eqs 5.1–5.19),
-    each value beside the published one."""
+    each value beside the published one (an :class:`IdentificationResult`).  On a described machine, which has no
+    thesis formulas: the linearised least-squares identification of what its campaign determines, from every
+    instrument it has (:class:`~mtmcal_bayes.posterior.least_squares.DescribedIdentification`)."""
     from .identification import identify as identify_campaign
 
-    return identify_campaign(campaign_of(campaign, measured=True))
+    c = campaign_of(campaign, measured=True)
+    if c.machine.described:
+        from .posterior.least_squares import identify_described
+
+        return identify_described(c, data_of(None, c))
+    return identify_campaign(c)
 
 
 def probe_fit(path, *, stylus_radius_mm: float | None = None) -> ProbeFit:
@@ -134,7 +176,7 @@ def probe_fit(path, *, stylus_radius_mm: float | None = None) -> ProbeFit:
     return fit(path, stylus_radius_mm=stylus_radius_mm)
 
 
-def simulate(campaign: CampaignLike = None, *, truth, model: str = "htm-thesis", noise: bool = False,
+def simulate(campaign: CampaignLike = None, *, truth, model: str | None = None, noise: bool = False,
              seed: int | None = None, output=None) -> Simulation:
     """Predicted eccentricities of every run for a known ``truth`` (a TRUTH.toml path or a
     :class:`~mtmcal_bayes.campaign.Truth`); with ``output``, also write a synthetic campaign there,
@@ -147,7 +189,7 @@ def simulate(campaign: CampaignLike = None, *, truth, model: str = "htm-thesis",
     from .errors import ParameterError
 
     c = campaign_of(campaign)
-    check_model(model)
+    model = kinematic_model_of(model, c)
     if truth is None:
         raise ParameterError("truth", "required: a TRUTH.toml with [deviations] (or [truth.deviations]) to simulate "
                              "(a simulated history without one takes the campaign's own truth or posterior mean)")
@@ -160,17 +202,18 @@ def simulate(campaign: CampaignLike = None, *, truth, model: str = "htm-thesis",
     return sim
 
 
-def sensitivity(campaign: CampaignLike = None, *, model: str = "htm-thesis") -> SensitivityTable:
-    """Eccentricity of all 12 patterns per ″ / µm of every deviation and mounting offset (thesis Tables 2.4–2.6)."""
-    from .models import check_model
+def sensitivity(campaign: CampaignLike = None, *, model: str | None = None) -> SensitivityTable:
+    """Eccentricity of all 12 patterns per ″ / µm of every deviation and mounting offset (thesis Tables 2.4–2.6); on
+    a described machine every pattern of its rotary axes per ″ / µm of each of its location errors."""
     from .simulation import sensitivity as table
 
-    return table(campaign_of(campaign), model=check_model(model))
+    c = campaign_of(campaign)
+    return table(c, model=kinematic_model_of(model, c))
 
 
 def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | None = None, fix_dx_BT: bool = False,
            target_ess: float = TARGET_ESS, sampler: str = "emcee", max_steps: int = MAX_STEPS, checkpoint=None,
-           output=None, progress: Progress | None = None, data: str = "ballbar", tolerances=None,
+           output=None, progress: Progress | None = None, data: str | None = None, tolerances=None,
            sigma_model_um: float | None = None, sigma_model_prior=None) -> PosteriorResult:
     """The posterior of the deviations and nuisance offsets, summarised beside the ball-bar and touch-probe values.
 
@@ -178,7 +221,8 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     ≤ 1.01 (``sampler="exact"``: independent draws of the exact posterior, linear model only).  ``seed``
     makes the draws reproducible; ``checkpoint`` (HDF5) is written as the run goes and resumed if it
     exists; ``output`` receives the InferenceData as NetCDF.  ``data``: the likelihood's measurements,
-    ``"ballbar"`` (default), ``"probe"`` (touch-probe readings) or ``"both"`` (fused).  ``tolerances``: a
+    ``"ballbar"``, ``"probe"`` (touch-probe readings) or ``"both"`` (fused); default (None) the ball bar, and on a
+    described machine every instrument its campaign has (:func:`data_of`).  ``tolerances``: a
     TOML file with ``[tolerances]`` or ``{name: Tolerance}`` (default the campaign's own ``[tolerances]``):
     each toleranced quantity gets its probability of nonconformance, a verdict and, when undecided, the
     planner's next measurement for it.  ``sigma_model_um`` fixes the model-discrepancy scale (µm) instead of
@@ -193,7 +237,7 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
 
     c = campaign_of(campaign, measured=True)
     check_model(model)
-    check_data(data, c)
+    data = check_data(data_of(data, c), c)
     _writable(output, "posterior")
     _writable(checkpoint, "checkpoint")
     tol = tolerances_of(tolerances)
@@ -220,14 +264,14 @@ def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, f
         raise ParameterError("sigma_model_prior", f"the closed form fixes σ_model (at {sigma_model_um} µm) and has "
                              "no prior of it; a learnt prior is for the sampled posterior")
 
-    return gaussian(campaign_of(campaign, measured=True), sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT,
+    return gaussian(campaign_of(campaign, measured=True, thesis_only="the closed form"), sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT,
                     model=model)
 
 
 def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,
            fix_dx_BT: bool = False, compare_models: bool = False, target_ess: float = TARGET_ESS,
            sampler: str = "emcee", max_steps: int = MAX_STEPS, posterior: PosteriorResult | None = None,
-           progress: Progress | None = None, command: str = "", data: str = "ballbar", tolerances=None,
+           progress: Progress | None = None, command: str = "", data: str | None = None, tolerances=None,
            sigma_model_um: float | None = None, sigma_model_prior=None) -> Report:
     """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
 
@@ -244,13 +288,22 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
     c = campaign_of(campaign, measured=True)
     check_model(model)
-    check_data(data, c)
+    data = check_data(data_of(data, c), c)
     learnt = sigma_model_prior_of(sigma_model_prior, c, sigma_model_um)
     if posterior is not None and learnt is not None and learnt != posterior.log_posterior.sigma_prior:
         from .errors import ParameterError
 
         raise ParameterError("sigma_model_prior", "is not the prior the given posterior was sampled with")
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
+    if c.machine.described:
+        from .analysis import analysis_of
+        from .reporting.described_report import build_described_report
+
+        _thesis_only(c, fix_dx_BT=fix_dx_BT, compare_models=compare_models, posterior=posterior,
+                     tolerances=tolerances, sigma_model_prior=sigma_model_prior)
+        analysis = analysis_of(analysis_or_campaign(campaign, c), model=model, data=data,
+                               sigma_model=sigma_model_of(sigma_model_um))
+        return build_described_report(analysis, output, settings=settings, progress=progress, command=command)
     return build_report(analysis_or_campaign(campaign, c), output, model=model, settings=settings, fix_dx_BT=fix_dx_BT,
                         compare_models=compare_models,
                         posterior=posterior, progress=progress, command=command, data=data,
@@ -260,7 +313,7 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
          sigma_model_um: float | None = None, sweep_pattern: str | None = None, output=None,
-         data: str = "ballbar", sigma_model_prior=None) -> PlanResult:
+         data: str | None = None, sigma_model_prior=None) -> PlanResult:
     """Rank candidate extra measurements — ball-bar runs and touch-probe runs — by how much they would reduce the
     uncertainty of ``targets`` (default the eight identified quantities), given the campaign's ``data``
     (``"ballbar"``, ``"probe"`` or ``"both"``).
@@ -278,9 +331,9 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     from .planning import plan as rank
     from .planning import read_candidates
 
-    c = campaign_of(campaign, measured=True)
+    c = campaign_of(campaign, measured=True, thesis_only="plan")
     check_model(model)
-    check_data(data, c)
+    data = check_data(data_of(data, c), c)
     _writable(output, "plan")
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
         raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a non-negative number")
@@ -305,7 +358,7 @@ def ncgen(pattern: str, *, campaign: CampaignLike = None, R_B_mm: float | None =
     from .io.textfiles import write_text_atomic
 
     if campaign is not None or R_B_mm is None or start is None:
-        campaign = campaign_of(campaign)
+        campaign = campaign_of(campaign, thesis_only="ncgen")
     _writable(output, "program")
     text = measuring_program(pattern, campaign, R_B_mm=R_B_mm, start=start, step_deg=step_deg, feed=feed, n=n,
                              setup=setup, mount=mount)
@@ -347,7 +400,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     from .inference.log_posterior import SAMPLED_DEVIATIONS
     from .io.gcode import read_program
 
-    c = campaign_of(campaign, measured=True)
+    c = campaign_of(campaign, measured=True, thesis_only="compensate")
     parsed = read_program(program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
@@ -369,7 +422,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
 
 def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", sampler: str = "emcee",
         n_ranked: int = 99, max_steps: int = MAX_STEPS, workers: int | None = None, seed: int = 1, output=None,
-        progress: Progress | None = None, data: str = "ballbar", scheduler: str | None = None) -> SBCResult:
+        progress: Progress | None = None, data: str | None = None, scheduler: str | None = None) -> SBCResult:
     """Simulation-based calibration (Talts et al. 2018) of the posterior on the design of the campaign:
     ``n`` truths from the prior, each ranked among ``n_ranked`` posterior draws, the replicates as Dask tasks
     on a local cluster of ``workers`` processes (default the CPU count) or, with ``scheduler`` (``tcp://host:8786``
@@ -384,7 +437,7 @@ def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", s
     if workers is not None and scheduler is not None:
         raise ParameterError("workers", "sets the size of a local cluster; a scheduler's cluster has its own workers")
     c = campaign_of(campaign, measured=True)
-    check_data(data, c)
+    data = check_data(data_of(data, c), c)
     _writable(output, "SBC")
     settings = SBCSettings(n=n, model=model, sampler=sampler, n_ranked=n_ranked, max_steps=max_steps,
                            workers=(os.cpu_count() or 1) if workers is None else workers, seed=seed, data=data,
@@ -413,7 +466,7 @@ def history_campaigns(paths) -> list[Campaign]:
             files += found
         else:
             files.append(item)
-    return [campaign_of(f, measured=True) for f in files]
+    return [campaign_of(f, measured=True, thesis_only="history") for f in files]
 
 
 def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None,
@@ -464,7 +517,7 @@ def simulate_history(campaign: CampaignLike = None, *, truth=None, n: int = 5, e
         raise ParameterError("n", f"{n}: a series of 1 to 200 campaigns")
     dates = history_dates(n, every_days, start)
     drifts = [parse_drift(x, "step", dates) for x in steps] + [parse_drift(x, "ramp", dates) for x in ramps]
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, thesis_only="simulate --history")
     _writable_folder(output, "history")
     t, source = _history_truth(c, truth)
     series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed,
@@ -625,7 +678,7 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     from .planning.design_output import DesignResult, write_design
     from .planning.next_run import planned_candidates
 
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, thesis_only="design")
     check_model(model)
     _writable(output, "design")
     learnt = sigma_model_prior_of(sigma_model_prior, c)
@@ -653,7 +706,7 @@ def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, cont
     from .planning.design_output import NextResult, write_next
     from .planning.next_run import next_step
 
-    c = campaign_of(campaign)
+    c = campaign_of(campaign, thesis_only="next")
     check_model(model)
     _writable(output, "next")
     learnt = sigma_model_prior_of(sigma_model_prior, c)

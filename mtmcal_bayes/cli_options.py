@@ -12,13 +12,15 @@ import datetime
 import os
 
 from . import api
+from .io.machine_reader import BUILTIN_TYPES
 from .models import DATA, MODELS
 from .version import __version__
 
 PROG = "mtmcal-bayes"
 #: API parameters set by something other than the flag of the same name
 FLAG_OF = {"start": "--x0/--y0/--z0", "steps": "--step", "ramps": "--ramp", "n": "--campaigns"}
-DATA_OPTION = dict(choices=DATA, default="ballbar", help="measurements in the likelihood: ball bar (default), probe, or both")
+DATA_OPTION = dict(choices=DATA, default=None, help="measurements in the likelihood: ball bar (the default), probe, or "
+                   "both (the default on a described machine whose campaign has both)")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -31,6 +33,9 @@ def _command(sub, name: str, func, help: str, *, campaign: str | None = "campaig
     s = sub.add_parser(name, help=help)
     if campaign:
         s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help=campaign)
+        s.add_argument("--machine", choices=list(BUILTIN_TYPES), default=None, metavar="TYPE",
+                       help="instead of CAMPAIGN, the demo campaign of a built-in machine type: "
+                            + ", ".join(BUILTIN_TYPES) + " (docs/machines.md)")
     if json_help:
         s.add_argument("--json", action="store_true", help=json_help)
     s.set_defaults(func=func, parser=s)
@@ -45,7 +50,11 @@ def _floats(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"{text!r}: expected numbers separated by commas") from None
 
 
-def _model(s, default: str, choices=MODELS, help: str | None = None) -> None:
+#: help of a --model whose default is the machine's kinematic model
+KINEMATIC_DEFAULT = "forward model (default htm-thesis; on a described machine chain)"
+
+
+def _model(s, default: str | None, choices=MODELS, help: str | None = None) -> None:
     s.add_argument("--model", choices=choices, default=default, help=help or f"forward model (default {default})")
 
 
@@ -114,7 +123,7 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--truth", metavar="TRUTH.toml", help="[deviations] <name>_arcsec/_um (or [truth.deviations]), "
                    "[setups.<id>] xT_um.., [mounts.<id>] xW_um..; missing = 0.  Required, except with --history "
                    "(default there: the campaign's [truth], else its posterior mean)")
-    _model(s, "htm-thesis")
+    _model(s, None, help=KINEMATIC_DEFAULT)
     s.add_argument("-o", "--output", metavar="FILE", help="write a synthetic campaign TOML with the truth recorded")
     s.add_argument("--noise", action="store_true", help="with -o: scatter like a real measurement (repeats, instrument accuracy)")
     s.add_argument("--seed", type=int, default=None, help="random seed for --noise (and --history)")
@@ -147,7 +156,7 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
 
     s = _command(sub, "sensitivity", handlers["sensitivity"], "eccentricity of every pattern per unit deviation and mounting offset",
                  campaign="campaign whose geometry to use (default: thesis)", json_help=None)
-    _model(s, "htm-thesis")
+    _model(s, None, help=KINEMATIC_DEFAULT)
     g = s.add_mutually_exclusive_group()
     g.add_argument("--json", action="store_true", help="print JSON")
     g.add_argument("--markdown", action="store_true", help="print a Markdown table")

@@ -148,6 +148,9 @@ def discover(directory: str | os.PathLike, skip=()) -> Discovery:
     for path in campaign_paths(root, skip):
         try:
             c = load_campaign(path)
+            if c.machine.described:  # fleets of described machines are the next step: say so, never guess
+                raise InputError(str(path), "machine", "a fleet serves the thesis machine and not yet a described one "
+                                 f"({c.machine.description.configuration}); docs/machines.md says what does")
             c.require_measured_runs()  # a campaign designed but not yet measured has nothing to analyse
             loaded.append(CampaignFile(str(path), c, content_digest(path, c)))
         except MtmcalError as exc:

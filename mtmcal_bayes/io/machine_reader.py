@@ -158,3 +158,11 @@ def description_of(machine) -> MachineDescription:
     """The description of a campaign's machine: its own, or the thesis machine's (``integrex-i200``) for a campaign
     in the thesis format."""
     return machine.description if machine.description is not None else builtin_description(THESIS_TYPE)
+
+
+def demo_campaign(name: str):
+    """The demo campaign of a built-in machine type, as a path for :func:`~mtmcal_bayes.io.load_campaign` (None: the
+    thesis machine's is the built-in thesis campaign)."""
+    if name == THESIS_TYPE:
+        return None
+    return str(data_path(f"machines/{name}-demo.toml"))

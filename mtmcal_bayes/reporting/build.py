@@ -30,7 +30,7 @@ from ..inference.gum import GUM_COLUMNS, certificate_sentence
 from ..inference.sampling import SamplerSettings
 from ..io.netcdf import write_netcdf_atomic
 from ..io.textfiles import atomic_directory
-from ..models import MODELS
+from ..models import KINEMATIC_MODELS
 from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
@@ -248,6 +248,9 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     return Report(out_dir, files, content.summary, console, elapsed, rep, content.missing)
 
 
+#: the models ``--compare-models`` sets side by side: the thesis relations and the two readings of its chain (``chain``
+#: is ``htm-literal`` on the thesis machine)
+COMPARED_MODELS = ("linear",) + KINEMATIC_MODELS
 #: the job that weighs the explanations of the instruments' conflict beside the figures (no file of its own)
 CONFLICT_JOB = "explanations"
 #: the job that makes the plan of the next measurement beside the sampling, and draws its figures
@@ -351,12 +354,12 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
     if compare_models:
-        for other in MODELS:
+        for other in COMPARED_MODELS:
             if other != model:
                 say(f"sampling the posterior ({other}) for the model comparison")
                 reports[other] = sample_posterior(analysis.variant(model=other, data="ballbar"), settings=settings,
                                                   progress=progress)
-        reports = {m: reports[m] for m in MODELS}
+        reports = {m: reports[m] for m in COMPARED_MODELS}
     draw([])  # a figure of an earlier batch already failed: stop before planning
     planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say)
     figures = [] if drawn else [(name, lambda make=make: make(planned)) for name, make in PLAN_FIGURES]

@@ -162,8 +162,9 @@ def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
                 axes[i, c].axhline(v[i], color=st["color"], ls=st["ls"], lw=1.3)
                 if v[c] is not None and ranges[c][0] <= v[c] <= ranges[c][1]:
                     axes[i, c].plot(v[c], v[i], marker=st["marker"], color=st["color"], ms=6, mec="white")
-    handles = [Line2D([], [], color=COLOURS["posterior"], lw=6, alpha=0.5, label="posterior (68 % / 95 % contours)"),
-               Line2D([], [], color=COLOURS["ballbar"], lw=1.5, label=REFERENCE_LABELS["ballbar"])]
+    handles = [Line2D([], [], color=COLOURS["posterior"], lw=6, alpha=0.5, label="posterior (68 % / 95 % contours)")]
+    if len(comparison):  # a described machine has no thesis values to mark
+        handles.append(Line2D([], [], color=COLOURS["ballbar"], lw=1.5, label=REFERENCE_LABELS["ballbar"]))
     for key, st in styles.items():
         if any(v is not None for v in refs[key]):
             handles.append(Line2D([], [], color=st["color"], ls=st["ls"], marker=st["marker"], lw=1.3,

@@ -100,7 +100,61 @@ class SensitivityTable:
             self.table.to_string(float_format=lambda v: "." if v == 0 else f"{v:.3f}")])
 
 
+def described_sensitivity_table(campaign: Campaign, model: str = "chain") -> pd.DataFrame:
+    """A described machine's table (SPEC §19, the generalised Tables 2.4–2.6): every pattern ``<K><d>`` of the
+    machine, each on the campaign's first tool setup and, per swivelled axis, the mount and held positions of the
+    campaign's first run of that axis (else its first mount, the other axes at 0); columns every generated
+    deviation and the setup and mount nuisance bases.  A pattern the geometry does not allow (its ball on the
+    swivelled axis' line) is left out and named in ``attrs["skipped"]``."""
+    from ..machines import generated
+    from ..machines.patterns import axis_of, components, patterns_of, pattern_commands
+    from ..machines.space import described_space
+    from ..models.described import complex_step_jacobian
+
+    desc = campaign.machine.description
+    bb = campaign.ballbar
+    setup = next(iter(bb.setups))
+    runs, skipped = [], []
+    for pattern in patterns_of(desc):
+        first = next((r for r in bb.runs if r.pattern[0] == pattern[0]), None)
+        mount = first.mount if first is not None else next(iter(bb.mounts))
+        hold = first.hold_deg if first is not None else None
+        try:
+            pattern_commands(desc, pattern, length=bb.setups[setup].R_B, ball=bb.mounts[mount].position,
+                             bar=bb.length, hold_deg=hold)
+        except ValueError as err:
+            skipped.append(f"{pattern}: {err}")
+            continue
+        from ..machines.patterns import default_arc_deg
+
+        runs.append(Run(pattern, setup, mount, {c: np.zeros(1) for c in components(desc, pattern)},
+                        arc_deg=default_arc_deg(axis_of(desc, pattern)), hold_deg=hold))
+    c = copy.deepcopy(campaign)
+    c.ballbar.runs, c.probe = runs, None
+    space = described_space(c, [d.name for d in generated(desc)], data="ballbar")
+    fm = make_model(model, c, space)
+    J = units.from_internal(complex_step_jacobian(fm) * space.display_scale(), "um")
+    cols = [d.name for d in generated(desc)] + list(SETUP_NUISANCE) + list(MOUNT_NUISANCE)
+    rows = {}
+    for i, key in enumerate(fm.observations.keys):
+        row = dict.fromkeys(cols, 0.0)
+        for j, p in enumerate(space.parameters):
+            if p.owner in (None, key.setup, key.mount):
+                row[p.base] = J[i, j]
+        rows[f"{key.pattern} {key.component}"] = row
+    df = pd.DataFrame.from_dict(rows, orient="index")[cols]
+    df[np.abs(df) < 5e-7] = 0.0
+    df.attrs["geometry"] = (f"{desc.configuration}; tool setup {setup} (R_B = {bb.setups[setup].R_B:g} mm), "
+                            f"L_B = {bb.length:g} mm; mounts and held axes of the campaign's runs")
+    df.attrs["skipped"] = skipped
+    return df
+
+
 def sensitivity(campaign: Campaign, *, model: str = "htm-thesis") -> SensitivityTable:
-    """:func:`sensitivity_table` as a result with its text, Markdown and JSON forms."""
+    """:func:`sensitivity_table` (a described machine's: :func:`described_sensitivity_table`, model ``chain`` or
+    ``linear``, the same numbers) as a result with its text, Markdown and JSON forms."""
+    if campaign.machine.described:
+        df = described_sensitivity_table(campaign, "linear" if model == "linear" else "chain")
+        return SensitivityTable(df, df.attrs.get("model", "chain"), df.attrs["geometry"])
     df = sensitivity_table(campaign, model)
     return SensitivityTable(df, model, df.attrs["geometry"])
