@@ -428,6 +428,9 @@ def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", s
     on a local cluster of ``workers`` processes (default the CPU count) or, with ``scheduler`` (``tcp://host:8786``
     or a scheduler file), on a running cluster; the same result either way.  ``output`` receives the JSON, CSV
     files and figures; ``data`` the measurements simulated and fitted (``"ballbar"``, ``"probe"``, ``"both"``).
+    On a described machine the ranked quantities are the deviations its campaign determines one by one and its
+    identifiable combinations (undetermined deviations are not ranked: their posterior is their prior), then the
+    discrepancy scales (``docs/validation.md``).
     The local workers are forked where the platform forks (Linux, macOS); on Windows, where they are spawned
     and import the calling script, call it under ``if __name__ == "__main__":``."""
     from .errors import ParameterError

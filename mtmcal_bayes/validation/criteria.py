@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
+import numpy as np
+
 from ..parameters import IDENTIFIABLE
 
 #: ranked quantities: the eight of Table 4.5, then the other sampled deviations and sigma_model (with touch-probe
@@ -9,10 +13,53 @@ from ..parameters import IDENTIFIABLE
 SBC_QUANTITIES: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT", "sigma_model")
 
 
+@dataclass(frozen=True)
+class Checked:
+    """The quantities ranked for one posterior and how each is read from parameter draws.
+
+    ``names``: in ranking order; ``identified``: those the verdict is over (the thesis machine: the eight of
+    Table 4.5; a described machine: the deviations its campaign determines one by one and its identifiable
+    combinations); ``weights``: a described machine's combinations, name -> {deviation: weight per display
+    unit}, their values Σ w·θ in display units; ``identifiability``: a described machine's
+    :class:`~mtmcal_bayes.inference.identifiability.Identifiability` (None on the thesis machine).
+    """
+
+    names: tuple[str, ...]
+    identified: tuple[str, ...]
+    weights: dict[str, dict[str, float]] = field(default_factory=dict)
+    identifiability: object | None = None
+
+    def values(self, post, theta: np.ndarray) -> np.ndarray:
+        """The ranked quantities ``(n, Q)`` (display units) of parameter draws ``(n, q)`` (internal units)."""
+        from ..inference.results import display_draws
+
+        d = display_draws(post.names, theta)
+        for name, w in self.weights.items():
+            d[name] = sum(v * d[n] for n, v in w.items())
+        return np.column_stack([d[q] for q in self.names])
+
+
+def checked_quantities(post) -> Checked:
+    """What SBC ranks for ``post``.  The thesis machine: the deviations of :data:`SBC_QUANTITIES`, then the
+    discrepancy scales.  A described machine (SPEC §19): the deviations its campaign determines one by one, its
+    identifiable combinations (both from :func:`~mtmcal_bayes.posterior.determined.campaign_identifiability`),
+    then the discrepancy scales; the deviations it does not determine are not ranked (their posterior is their
+    prior)."""
+    if not post.campaign.machine.described:
+        return Checked(SBC_QUANTITIES[:-1] + tuple(post.scales), IDENTIFIABLE)
+    from ..posterior.determined import campaign_identifiability
+
+    ident = campaign_identifiability(post)
+    combos = {c.name: dict(c.weights) for c in ident.combinations}
+    identified = tuple(ident.determined) + tuple(combos)
+    return Checked(identified + tuple(post.scales), identified, combos, ident)
+
+
 def sbc_quantities(post) -> tuple[str, ...]:
-    """The quantities ranked for a posterior: the deviations of :data:`SBC_QUANTITIES`, then its discrepancy
-    scales."""
-    return SBC_QUANTITIES[:-1] + tuple(post.scales)
+    """The quantities ranked for a posterior (:func:`checked_quantities`)."""
+    return checked_quantities(post).names
+
+
 #: probabilities of the highest-density intervals whose coverage is counted
 INTERVALS: tuple[float, ...] = (0.5, 0.9, 0.95)
 #: a quantity fails when its uniformity p-value is below this

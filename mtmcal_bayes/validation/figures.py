@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -12,6 +13,18 @@ from ..figure_style import COLOURS, new_figure, symbol
 from .criteria import P_MIN
 
 NCOLS = 4
+#: an ISO 230-7 symbol in a described machine's quantity (``E_X(0C1)B``, also inside a combination's name)
+ISO_SYMBOL = re.compile(r"\bE_([A-Z0-9()]+)")
+#: a panel title longer than this (characters of the quantity's name) puts its p-value on a second line
+TITLE_CHARS = 20
+
+
+def _title(q: str, p: float) -> str:
+    """A panel's title: the quantity's symbol (a described machine's ISO symbols as ``$E_{X0C}$``, a combination
+    with its weights) and the p-value of its ranks."""
+    if ISO_SYMBOL.search(q):
+        return ISO_SYMBOL.sub(r"$E_{\1}$", q) + ("\n" if len(q) > TITLE_CHARS else "   ") + f"p = {p:.3f}"
+    return f"{symbol(q)}   p = {p:.3f}"
 
 
 def _grid(n: int, title: str):
@@ -41,7 +54,7 @@ def rank_histograms(result):
         ax.axhspan(lo, hi, color=COLOURS["prior"], alpha=0.3, lw=0)
         ax.axhline(N / B, color=COLOURS["prior"], lw=1)
         ax.bar(np.arange(B), c, width=0.9, color=COLOURS["posterior"])
-        ax.set_title(f"{symbol(q)}   p = {s.loc[q, 'p_uniform']:.3f}", fontsize=10)
+        ax.set_title(_title(q, s.loc[q, "p_uniform"]), fontsize=10)
         _flag(ax, s.loc[q, "p_uniform"])
         ax.set_xticks([0, B - 1], ["low", "high"])
         ax.set_ylim(0, max(hi, c.max()) * 1.15)
@@ -70,7 +83,7 @@ def ecdf_differences(result):
                          plot_kwargs={"color": COLOURS["posterior"]}, fill_kwargs={"color": COLOURS["prior"],
                                                                                    "alpha": 0.3})
         ax.axhline(0, color="k", lw=0.6)
-        ax.set_title(f"{symbol(q)}   p = {s.loc[q, 'p_uniform']:.3f}", fontsize=10)
+        ax.set_title(_title(q, s.loc[q, "p_uniform"]), fontsize=10)
         _flag(ax, s.loc[q, "p_uniform"])
         ax.set_xlim(0, L1 - 1)
         ax.tick_params(labelsize=8)

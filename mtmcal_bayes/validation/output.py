@@ -7,7 +7,6 @@ from pathlib import Path
 
 from ..figure_style import save_png
 from ..io.textfiles import atomic_directory
-from ..parameters import IDENTIFIABLE
 from .criteria import INTERVALS, P_MIN
 from .figures import ecdf_differences, rank_histograms
 
@@ -23,22 +22,52 @@ def format_sbc(result) -> str:
     if st.sampler == "emcee":
         lines.append(f"  production sampler, step budget {st.max_steps} per ensemble; {j['replicates_not_converged']} "
                      f"of {j['n']} replicates stopped at the budget before the ESS and R-hat targets")
-    head = (f"{'quantity':18s} {'p_uniform':>9s} " + " ".join(f"{f'cov{round(100 * p)}':>6s}" for p in INTERVALS)
+    width = max([18] + [len(q) for q in result.quantities])  # a described machine's combinations are longer
+    head = (f"{'quantity':{width}s} {'p_uniform':>9s} " + " ".join(f"{f'cov{round(100 * p)}':>6s}" for p in INTERVALS)
             + f" {'z mean':>7s} {'z sd':>5s} {'contraction':>11s}  verdict")
     lines += ["", head]
     for q, r in s.iterrows():
         cov = " ".join(f"{100 * r[f'coverage_{round(100 * p)}']:5.1f}%" for p in INTERVALS)
         verdict = "ok" if r["ok"] else "FAIL"
-        lines.append(f"{q:18s} {r['p_uniform']:9.3f} {cov} {r['z_mean']:7.2f} {r['z_sd']:5.2f} "
+        lines.append(f"{q:{width}s} {r['p_uniform']:9.3f} {cov} {r['z_mean']:7.2f} {r['z_sd']:5.2f} "
                      f"{r['contraction']:11.3f}  {verdict}")
     lines += ["", (f"A quantity passes when its ranks pass the χ² uniformity test (p > {P_MIN}) and its 90 % HDI "
               f"covers the truth in {100 * lo:.1f}–{100 * hi:.1f} % of the replicates (99 % binomial range for "
               f"N = {j['n']})."),
-              ("The first eight are the quantities of thesis Table 4.5; the rest are the other sampled deviations "
-              "and sigma_model."),
-              "Verdict: " + ("the posterior of the eight quantities is calibrated." if j["all_ok"] else
-                             "MISCALIBRATED: " + ", ".join(q for q in IDENTIFIABLE if not s.loc[q, "ok"]) + ".")]
+              *_checked_lines(result),
+              "Verdict: " + (f"the posterior of the {_count(result)} quantities is calibrated." if j["all_ok"] else
+                             "MISCALIBRATED: " + ", ".join(q for q in result.identified if not s.loc[q, "ok"]) + ".")]
     return "\n".join(lines)
+
+
+def _count(result) -> str:
+    """"eight" on the thesis machine (its Table 4.5), "n identified" on a described one."""
+    if result.identifiability is None:
+        return "eight"
+    return f"{len(result.identified)} identified"
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+def _checked_lines(result) -> list[str]:
+    """What the rows are, and on a described machine what is not checked."""
+    if result.identifiability is None:
+        return [("The first eight are the quantities of thesis Table 4.5; the rest are the other sampled deviations "
+                 "and sigma_model.")]
+    ident = result.identifiability
+    what = f"the {_plural(len(ident.determined), 'deviation')} this campaign determines one by one"
+    if ident.combinations:
+        what += (f" and its {_plural(len(ident.combinations), 'identifiable combination')} (Σ w·θ, display "
+                 "units)")
+    scales = [q for q in result.quantities if q not in result.identified]
+    lines = [f"Checked: {what}, as its Jacobian says (the T ball centred: docs/machines.md); the verdict is over "
+             f"these {len(result.identified)}" + (f", {' and '.join(scales)} shown beside them." if scales else ".")]
+    if ident.undetermined:
+        lines.append(f"Not checked: {', '.join(ident.undetermined)} — the campaign does not determine them: their "
+                     "posterior is their prior.")
+    return lines
 
 
 def write_sbc(result, out_dir) -> list[str]:

@@ -6,8 +6,11 @@ repeat means from the likelihood, ``ỹ ~ N(f(θ̃), s²/n + u_inst² + σ̃²)`
 the campaign's own repeat counts, repeat sds and instrument accuracy — exactly
 the data-generating process the likelihood assumes; draw from the posterior
 given ỹ; rank θ̃ among ``L`` near-independent posterior draws, for every
-quantity.  If the inference is right, each rank is uniform on {0, …, L}
-whatever the prior and the design, and the truth lies inside the posterior's
+quantity (:func:`~.criteria.checked_quantities`: on the thesis machine the
+eight of Table 4.5, dx_CZ, dx_BT, dz_BT; on a described machine the deviations
+its campaign determines one by one and its identifiable combinations Σ w·θ;
+then the discrepancy scales).  If the inference is right, each rank is uniform
+on {0, …, L} whatever the prior and the design, and the truth lies inside the posterior's
 x % highest-density interval in x % of the replicates.
 
 The replicates are independent: they run as Dask tasks
@@ -29,13 +32,20 @@ from scipy import stats
 from ..arviz_import import az
 from ..cluster import dask_client, default_workers, remembered_interrupt
 from ..errors import ParameterError, StepFailure
+from ..inference.identifiability import Identifiability
 from ..inference.log_posterior import LogPosterior
-from ..inference.results import display_draws
 from ..inference.sampling import SamplerSettings
 from ..models import check_data, check_model
 from ..parameters import IDENTIFIABLE
 from ..progress import Progress, ProgressEvent, emit
-from .criteria import INTERVALS, P_MIN, SBC_QUANTITIES, sbc_quantities  # noqa: F401  (re-exported)
+from .criteria import (  # noqa: F401  (re-exported)
+    INTERVALS,
+    P_MIN,
+    SBC_QUANTITIES,
+    Checked,
+    checked_quantities,
+    sbc_quantities,
+)
 from .samplers import make_sampler
 
 
@@ -91,6 +101,10 @@ class SBCResult:
     wall_time: float
     output: str | None = None  # directory written by :meth:`write`
     files: list[str] = field(default_factory=list)
+    #: the quantities the verdict is over (:attr:`Checked.identified`; the thesis machine: the eight of Table 4.5)
+    identified: tuple[str, ...] = IDENTIFIABLE
+    #: a described machine's: what its campaign determines (undetermined deviations are not ranked)
+    identifiability: Identifiability | None = None
 
     @property
     def n_bins(self) -> int:
@@ -166,7 +180,9 @@ class SBCResult:
             "p_min": P_MIN, "coverage_90_band_99pct": [lo, hi],
             "quantities": {q: {k: (bool(v) if k == "ok" else float(v)) for k, v in s.loc[q].items()}
                            for q in self.quantities},
-            "all_ok": bool(s.loc[list(IDENTIFIABLE), "ok"].all()),
+            "all_ok": bool(s.loc[list(self.identified), "ok"].all()),
+            **({} if self.identifiability is None else {"identifiability": self.identifiability.as_dict(),
+                                                         "not_checked": list(self.identifiability.undetermined)}),
         }
 
     def replicates(self) -> pd.DataFrame:
@@ -179,10 +195,10 @@ class SBCResult:
         return pd.DataFrame(cols)
 
 
-def quantity_values(post: LogPosterior, theta: np.ndarray) -> np.ndarray:
-    """The ranked quantities ``(n, Q)`` (display units) of parameter draws ``(n, q)`` (internal units)."""
-    d = display_draws(post.names, theta)
-    return np.column_stack([d[q] for q in sbc_quantities(post)])
+def quantity_values(post: LogPosterior, theta: np.ndarray, checked: Checked | None = None) -> np.ndarray:
+    """The ranked quantities ``(n, Q)`` (display units) of parameter draws ``(n, q)`` (internal units);
+    ``checked``: what is ranked (default :func:`checked_quantities` of ``post``)."""
+    return (checked or checked_quantities(post)).values(post, theta)
 
 
 def simulate_data(post: LogPosterior, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -192,14 +208,16 @@ def simulate_data(post: LogPosterior, rng: np.random.Generator) -> tuple[np.ndar
     return theta[0], post.likelihood.replicate(pred, post.sigma(theta), rng)[0]
 
 
-def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.SeedSequence) -> dict:
+def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.SeedSequence,
+                  checked: Checked | None = None) -> dict:
     """Simulate, sample and rank one replicate (see module docstring)."""
+    checked = checked or checked_quantities(post)
     rng = np.random.default_rng(seed)
     theta, y = simulate_data(post, rng)
     t0 = time.perf_counter()
     draws = sampler(post.with_means(y), n_ranked, rng)
-    truth = quantity_values(post, theta[None])[0]
-    ranked, full = quantity_values(post, draws.ranked), quantity_values(post, draws.all)
+    truth = checked.values(post, theta[None])[0]
+    ranked, full = checked.values(post, draws.ranked), checked.values(post, draws.all)
     covered = np.empty((len(INTERVALS), len(truth)), dtype=bool)
     for k, prob in enumerate(INTERVALS):
         for j in range(len(truth)):
@@ -212,10 +230,11 @@ def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.Se
 
 class _Replicates:
     """What every task needs, sent once to each worker (``Client.scatter``): the recipe of the posterior, the
-    sampler and L.  The posterior is built on first use in each worker process and never sent."""
+    sampler, L and the ranked quantities (computed once, by the caller).  The posterior is built on first use in
+    each worker process and never sent."""
 
-    def __init__(self, campaign, s: SBCSettings, sampler):
-        self.campaign, self.sampler = campaign, sampler
+    def __init__(self, campaign, s: SBCSettings, sampler, checked: Checked):
+        self.campaign, self.sampler, self.checked = campaign, sampler, checked
         self.model, self.data, self.n_ranked = s.model, s.data, s.n_ranked
         self._post: LogPosterior | None = None
 
@@ -230,7 +249,7 @@ class _Replicates:
             out = []
             for seed in seeds:
                 step = f"replicate {seed.spawn_key[-1] + 1} of the simulation-based calibration ({self.model})"
-                out.append(one_replicate(self._post, self.sampler, self.n_ranked, seed))
+                out.append(one_replicate(self._post, self.sampler, self.n_ranked, seed, self.checked))
         except Exception as exc:  # the package's errors as themselves (e.g. too few draws for L), the rest named
             raise StepFailure.of(step, exc) from None
         return out
@@ -249,8 +268,8 @@ TASK_S = 0.25
 WORKER_TIMEOUT_S = 60
 
 
-def _on_dask(campaign, s: SBCSettings, sampler, seeds: list, *, progress: Progress | None,
-             t0: float) -> tuple[list[dict], int]:
+def _on_dask(campaign, s: SBCSettings, sampler, seeds: list, *, progress: Progress | None, t0: float,
+             checked: Checked) -> tuple[list[dict], int]:
     """Run the replicates of ``seeds`` as Dask tasks; their results in replicate order and the number of workers.
 
     First one replicate per task, two tasks per worker thread; when the first task returns, its time sizes the
@@ -263,7 +282,7 @@ def _on_dask(campaign, s: SBCSettings, sampler, seeds: list, *, progress: Progre
     n, out = len(seeds), [None] * len(seeds)
     with dask_client(s.scheduler, None if s.scheduler else min(s.workers, n)) as client:
         workers = _wait_for_workers(client, s.scheduler)
-        shared = client.scatter(_Replicates(campaign, s, sampler), broadcast=True, hash=False)
+        shared = client.scatter(_Replicates(campaign, s, sampler, checked), broadcast=True, hash=False)
         first: dict = {}  # future -> index of its first replicate
 
         def submit(i: int, size: int):
@@ -330,15 +349,17 @@ def run_sbc(campaign, settings: SBCSettings | None = None, progress: Progress | 
     post = LogPosterior(campaign, s.model, data=s.data)
     sampler = sampler or make_sampler(s.sampler, s.max_steps)
     sampler.check(post)
+    checked = checked_quantities(post)
     *seeds, prior_seed = np.random.SeedSequence(s.seed).spawn(s.n + 1)  # one per replicate, one for the prior sd
     t0 = time.perf_counter()
-    out, workers = _on_dask(campaign, s, sampler, seeds, progress=progress, t0=t0)
+    out, workers = _on_dask(campaign, s, sampler, seeds, progress=progress, t0=t0, checked=checked)
     if s.scheduler:
         s = replace(s, workers=workers)
     stack = lambda key: np.array([r[key] for r in out])
     prior_theta = post.priors.rvs(20_000, np.random.default_rng(prior_seed))
     return SBCResult(
-        settings=s, campaign=campaign.source, quantities=sbc_quantities(post), ranks=stack("rank"), truth=stack("truth"),
-        post_mean=stack("mean"), post_sd=stack("sd"), prior_sd=quantity_values(post, prior_theta).std(axis=0),
+        settings=s, campaign=campaign.source, quantities=checked.names, ranks=stack("rank"), truth=stack("truth"),
+        post_mean=stack("mean"), post_sd=stack("sd"), prior_sd=checked.values(post, prior_theta).std(axis=0),
         covered=stack("covered"), converged=stack("converged"), n_steps=stack("n_steps"), tau_max=stack("tau_max"),
-        seconds=stack("seconds"), wall_time=time.perf_counter() - t0)
+        seconds=stack("seconds"), wall_time=time.perf_counter() - t0, identified=checked.identified,
+        identifiability=checked.identifiability)
