@@ -21,6 +21,7 @@ from .analysis import CampaignAnalysis
 from .campaign import Campaign
 from .errors import InputError
 from .io.campaign_reader import load_campaign
+from .io.machine_reader import demo_campaign  # noqa: F401  (the CLI's --machine TYPE)
 from .io.textfiles import check_writable
 from .progress import Progress
 
@@ -521,6 +522,7 @@ def simulate_history(campaign: CampaignLike = None, *, truth=None, n: int = 5, e
     dates = history_dates(n, every_days, start)
     drifts = [parse_drift(x, "step", dates) for x in steps] + [parse_drift(x, "ramp", dates) for x in ramps]
     c = campaign_of(campaign, thesis_only="simulate --history")
+    model = kinematic_model_of(model, c)
     _writable_folder(output, "history")
     t, source = _history_truth(c, truth)
     series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed,

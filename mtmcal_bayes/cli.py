@@ -22,7 +22,6 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 from . import api, cli_options  # noqa: E402 - after the BLAS threads are chosen
-from .io.machine_reader import demo_campaign
 from .cli_options import PROG, flag_of
 from .errors import MtmcalError, ParameterError, StepFailure
 from .io.json_text import json_text
@@ -231,7 +230,7 @@ def _run(args, *, process: bool) -> int:
     if getattr(args, "machine", None):
         if args.campaign:
             args.parser.error("give a CAMPAIGN or --machine, not both")
-        args.campaign = demo_campaign(args.machine)
+        args.campaign = api.demo_campaign(args.machine)
     try:
         return args.func(args)
     except ParameterError as exc:

@@ -150,7 +150,7 @@ def test_relabelling_the_frame_changes_nothing(relabelled):
     1e-9 relative), the same identifiable combinations."""
     from mtmcal_bayes.inference.analytic import gaussian_posterior
     from mtmcal_bayes.inference.log_posterior import LogPosterior
-    from mtmcal_bayes.posterior.determined import campaign_identifiability
+    from mtmcal_bayes.inference.identifiability import campaign_identifiability
 
     a, b = relabelled
     ma, mb_ = make_model("chain", a, data="both"), make_model("chain", b, data="both")

@@ -25,7 +25,7 @@ from mtmcal_bayes.inference.analytic import gaussian_posterior
 from mtmcal_bayes.inference.identifiability import identifiability
 from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.models import jacobian
-from mtmcal_bayes.posterior.determined import CENTRED, campaign_identifiability
+from mtmcal_bayes.inference.identifiability import CENTRED, campaign_identifiability
 
 DATA = Path(__file__).parent / "data" / "controller_cycles"
 #: a calibrated stylus: its centring across the spindle and its length known

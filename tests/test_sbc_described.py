@@ -13,7 +13,7 @@ from mtmcal_bayes.cluster import dask_client
 from mtmcal_bayes.datasets import data_path
 from mtmcal_bayes.inference import LogPosterior
 from mtmcal_bayes.inference.results import display_draws
-from mtmcal_bayes.posterior.determined import campaign_identifiability
+from mtmcal_bayes.inference.identifiability import campaign_identifiability
 from mtmcal_bayes.validation import SBCSettings, run_sbc
 from mtmcal_bayes.validation.criteria import checked_quantities
 

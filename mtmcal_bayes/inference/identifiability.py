@@ -25,7 +25,10 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from .. import units
+from ..arviz_import import az
 from ..errors import ParameterError
+from ..models import jacobian
+from .results import HDI_PROB
 
 #: a unit vector whose component in (or out of) a subspace is below this is taken as orthogonal to (or in) it;
 #: also the relative size below which a weight is dropped.  The null basis carries the Jacobian's relative error
@@ -199,3 +202,29 @@ def _named(weights: dict[str, float], space) -> Combination:
         text += f" {'−' if w < 0 else '+'} {factor}{n}"
     return Combination(text, weights, unit_of[lead])
 
+
+
+# ---------------------------------------------------------------- of a campaign's posterior
+#: nuisance terms the set-up fixes: the T ball is centred before the runs (thesis Sec 4.2.2)
+CENTRED = ("xT", "yT", "zT")
+
+
+def campaign_identifiability(post) -> Identifiability:
+    """What the campaign and data of the log posterior ``post`` determine: :func:`identifiability` of its forward
+    model's Jacobian at zero, the T ball taken as centred (:data:`CENTRED`), as the thesis does."""
+    space = post.space
+    known = [b for b in CENTRED if any(p.base == b for p in space.parameters)]
+    return identifiability(jacobian(post.forward), space, known=known)
+
+
+def combination_summaries(ident: Identifiability, idata) -> list[dict]:
+    """Each combination with its posterior from the draws of ``idata``: ``{"name", "weights", "mean", "sd",
+    "hdi_low", "hdi_high", "unit"}`` (display units; weights per display unit)."""
+    out = []
+    for c in ident.combinations:
+        draws = sum(w * np.asarray(idata.posterior[n]) for n, w in c.weights.items())
+        flat = np.ravel(draws)
+        low, high = az.hdi(flat, hdi_prob=HDI_PROB)
+        out.append({"name": c.name, "weights": dict(c.weights), "mean": float(flat.mean()),
+                    "sd": float(flat.std(ddof=1)), "hdi_low": float(low), "hdi_high": float(high), "unit": c.unit})
+    return out

@@ -4,7 +4,7 @@ The thesis machine keeps the thesis' formulas (``identify``); a described machin
 calibration engineer would compute: the least-squares solution of the chain's first order at the home pose, the
 nuisance terms held to their set-up knowledge (their priors act as pseudo-observations), the deviations free (no
 prior), at a fixed σ_model.  Only what the campaign determines is stated — each deviation determined one by one
-and each identifiable combination (:func:`~mtmcal_bayes.posterior.determined.campaign_identifiability`), all of
+and each identifiable combination (:func:`~mtmcal_bayes.inference.identifiability.campaign_identifiability`), all of
 them estimable functions, whose estimate and covariance do not depend on the generalised inverse chosen.
 """
 
@@ -89,7 +89,7 @@ class DescribedIdentification:
 def identify_described(campaign, data: str) -> DescribedIdentification:
     """The least-squares identification of a described machine's campaign from its ``data``."""
     from ..inference.log_posterior import LogPosterior
-    from .determined import campaign_identifiability
+    from ..inference.identifiability import campaign_identifiability
 
     post = LogPosterior(campaign, "linear", data=data, sigma_model=0.0)
     ident = campaign_identifiability(post)

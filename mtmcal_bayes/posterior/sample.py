@@ -9,7 +9,7 @@ import pandas as pd
 
 from .. import units
 from ..analysis import analysis_of
-from .determined import campaign_identifiability, combination_summaries
+from ..inference.identifiability import campaign_identifiability, combination_summaries
 from ..inference import reading_choice
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import (

@@ -101,7 +101,7 @@ def build_described_report(analysis, out_dir, *, settings, progress=None, comman
         for name, (df, index) in tables.items():
             df.to_csv(tmp / name, index=index, float_format="%.6g")
             files.append(name)
-        page = _page(rep, ls, tables, campaign, tmp)
+        page = _page(rep, ls, tables, campaign=campaign, tmp=tmp)
         elapsed = time.perf_counter() - t0
         files = ["index.html"] + files + ["posterior.nc"]
         page.write(tmp / "index.html", _meta(campaign, model, rep.sampling.settings.seed, command=command,
@@ -149,7 +149,7 @@ def truth_table(rep, ls: LeastSquares, truth) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _page(rep, ls: LeastSquares, tables, campaign, tmp: Path) -> Page:
+def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path) -> Page:
     desc = campaign.machine.description
     post = rep.log_posterior
     ident = rep.identifiability

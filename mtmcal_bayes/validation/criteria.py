@@ -42,12 +42,12 @@ class Checked:
 def checked_quantities(post) -> Checked:
     """What SBC ranks for ``post``.  The thesis machine: the deviations of :data:`SBC_QUANTITIES`, then the
     discrepancy scales.  A described machine (SPEC §19): the deviations its campaign determines one by one, its
-    identifiable combinations (both from :func:`~mtmcal_bayes.posterior.determined.campaign_identifiability`),
+    identifiable combinations (both from :func:`~mtmcal_bayes.inference.identifiability.campaign_identifiability`),
     then the discrepancy scales; the deviations it does not determine are not ranked (their posterior is their
     prior)."""
     if not post.campaign.machine.described:
         return Checked(SBC_QUANTITIES[:-1] + tuple(post.scales), IDENTIFIABLE)
-    from ..posterior.determined import campaign_identifiability
+    from ..inference.identifiability import campaign_identifiability
 
     ident = campaign_identifiability(post)
     combos = {c.name: dict(c.weights) for c in ident.combinations}

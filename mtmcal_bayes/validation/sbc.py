@@ -208,7 +208,7 @@ def simulate_data(post: LogPosterior, rng: np.random.Generator) -> tuple[np.ndar
     return theta[0], post.likelihood.replicate(pred, post.sigma(theta), rng)[0]
 
 
-def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.SeedSequence,
+def one_replicate(post: LogPosterior, sampler, n_ranked: int, seed: np.random.SeedSequence, *,
                   checked: Checked | None = None) -> dict:
     """Simulate, sample and rank one replicate (see module docstring)."""
     checked = checked or checked_quantities(post)
@@ -249,7 +249,7 @@ class _Replicates:
             out = []
             for seed in seeds:
                 step = f"replicate {seed.spawn_key[-1] + 1} of the simulation-based calibration ({self.model})"
-                out.append(one_replicate(self._post, self.sampler, self.n_ranked, seed, self.checked))
+                out.append(one_replicate(self._post, self.sampler, self.n_ranked, seed, checked=self.checked))
         except Exception as exc:  # the package's errors as themselves (e.g. too few draws for L), the rest named
             raise StepFailure.of(step, exc) from None
         return out
