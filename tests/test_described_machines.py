@@ -167,3 +167,15 @@ def test_what_serves_the_thesis_machine_alone_says_so(tmp_path, run_cli, argv):
     assert code == 2 and len(err.strip().splitlines()) == 1, err
     assert ": machine: " in err and "not yet a described one" in err
     assert not (tmp_path / "out.nc").exists()
+
+
+def test_a_probe_run_may_give_its_stylus_length_alone():
+    from mtmcal_bayes.io.campaign_reader import parse_campaign
+
+    text = ('format = "mtmcal-campaign/1"\nmachine = "trunnion"\n[probe]\n[[probe.runs]]\nid = "s"\nR_B_mm = 150.0\n'
+            'sphere_mm = [0.0, 60.0, 30.0]\nangles_deg = {A = [0.0, -30.0], C = [0.0, 90.0]}\n'
+            'centres_mm = [[[0, 60, -220], [0, 60, -220]]]\n')
+    c = parse_campaign(text, "c.toml")
+    assert c.probe.styli == {"s": 150.0} and c.probe.runs[0].stylus == "s" and c.ballbar.runs == []
+    with pytest.raises(mb.InputError, match="probe.runs.0..R_B_mm: give the stylus or its length"):
+        parse_campaign(text.replace('R_B_mm = 150.0', 'R_B_mm = 150.0\nstylus = "S1"'), "c.toml")

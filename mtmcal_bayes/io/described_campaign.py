@@ -8,7 +8,7 @@ workpiece side); ``[[ballbar.runs]]`` with ``pattern`` (``<axis><R|T|A|X|Y|Z>``)
 (``ex_um``, ``ey_um`` for a pattern about Z).
 
 ``[probe]``: ``[probe.styli.<id>] length_mm`` (spindle point to stylus-ball centre; with ``ball_radius_mm``, to its
-tip); ``[[probe.runs]]`` with ``stylus``, ``sphere_mm`` (its nominal centre at the home pose, workpiece side),
+tip); ``[[probe.runs]]`` with ``stylus`` (or its length ``R_B_mm``: a stylus of the run's own), ``sphere_mm`` (its nominal centre at the home pose, workpiece side),
 ``angles_deg`` (axis letter -> list, all one length) and ``centres_mm`` (repeats × positions × 3: the commanded
 X, Y, Z at which the stylus centre reached the sphere's centre).
 """
@@ -125,7 +125,8 @@ def described_probe(r: TomlReader, t: dict, desc: MachineDescription) -> Probe:
     r.check_keys(t, {"instrument", "repeatability_um", "styli", "runs"}, P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
     probe = Probe(r.string(t, "instrument", P), units.to_internal(rep, "um") if rep is not None else None)
-    for sid, path, s in r.subtables(t, "styli", P, allowed={"length_mm", "ball_radius_mm"}, what="stylus"):
+    for sid, path, s in (r.subtables(t, "styli", P, allowed={"length_mm", "ball_radius_mm"}, what="stylus")
+                         if "styli" in t else ()):
         radius = r.number(s, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0)
         length = r.number(s, "length_mm", path, positive=True) - radius
         if length <= 0:
@@ -145,9 +146,17 @@ def described_probe(r: TomlReader, t: dict, desc: MachineDescription) -> Probe:
 
 def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, styli: dict,
                number: int) -> ProbeRun:
-    r.check_keys(t, {"id", "stylus", "sphere_mm", "angles_deg", "centres_mm"}, path)
+    r.check_keys(t, {"id", "stylus", "R_B_mm", "sphere_mm", "angles_deg", "centres_mm"}, path)
     rid = r.string(t, "id", path, default=f"run{number}")
-    stylus = r.string(t, "stylus", path, required=True)
+    if "R_B_mm" in t:  # the stylus given by its length alone: a stylus of the run's own, named after it
+        if "stylus" in t:
+            r.fail(f"{path}.R_B_mm", "give the stylus or its length R_B_mm, not both")
+        if rid in styli:
+            r.fail(f"{path}.id", f"{rid!r} names a stylus of [probe.styli] too; a run with R_B_mm names its own")
+        styli[rid] = r.number(t, "R_B_mm", path, positive=True)
+        stylus = rid
+    else:
+        stylus = r.string(t, "stylus", path, required=True)
     if stylus not in styli:
         r.fail(f"{path}.stylus", f"no stylus {stylus!r} in [probe.styli] (have: {', '.join(styli) or 'none'})")
     sphere = r.array(t, "sphere_mm", path, (3,))
