@@ -301,3 +301,31 @@ def test_each_built_in_type_relabelled_is_the_same_machine(machine):
     assert sorted(map(_mapped, ia.undetermined)) == sorted(ib.undetermined)
     wa = sorted(tuple(sorted((_mapped(k), round(v, 9)) for k, v in c.weights.items())) for c in ia.combinations)
     assert wa == sorted(tuple(sorted((k, round(v, 9)) for k, v in c.weights.items())) for c in ib.combinations)
+
+
+def test_chain_is_htm_literal_for_all_twelve_patterns(thesis):
+    """All 12 patterns of thesis Tables 2.2/2.3 (the sensitivity table's campaign), with each tool setup: the chain
+    equals htm-literal to 1e-9 mm at random deviations and nuisance terms."""
+    from mtmcal_bayes.simulation.sensitivity import _all_patterns_campaign
+
+    for setup in thesis.ballbar.setups:
+        c = _all_patterns_campaign(thesis)
+        for run in c.ballbar.runs:
+            run.setup = setup
+        space = ParameterSpace.for_campaign(c)
+        theta = np.random.default_rng(11).normal(size=(16, len(space))) * space.display_scale() * 50
+        diff = ThesisChainModel(c, space).predict(theta) - HTMModel(c, "htm-literal", space).predict(theta)
+        assert np.abs(diff).max() < 1e-9, setup
+
+
+def test_complex_step_first_order_against_finite_differences(relabelled):
+    """The ``linear`` model of a described machine is the complex-step Jacobian of the chain; central finite
+    differences (1 µm, 1″ steps) agree with it to their own truncation error, 1e-6 of the largest entry."""
+    from mtmcal_bayes.models.described import complex_step_jacobian
+    from mtmcal_bayes.models.kinematic import jacobian
+
+    a, _ = relabelled
+    for data in ("ballbar", "probe"):
+        m = make_model("chain", a, data=data)
+        J, F = complex_step_jacobian(m), jacobian(m)
+        assert np.abs(J - F).max() <= 1e-6 * np.abs(J).max(), data

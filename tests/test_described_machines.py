@@ -179,3 +179,18 @@ def test_a_probe_run_may_give_its_stylus_length_alone():
     assert c.probe.styli == {"s": 150.0} and c.probe.runs[0].stylus == "s" and c.ballbar.runs == []
     with pytest.raises(mb.InputError, match="probe.runs.0..R_B_mm: give the stylus or its length"):
         parse_campaign(text.replace('R_B_mm = 150.0', 'R_B_mm = 150.0\nstylus = "S1"'), "c.toml")
+
+
+def test_emcee_and_the_instruments_on_a_described_machine(run_cli):
+    """The sampler ``sample`` uses by default (emcee) on one instrument's data matches the exact posterior within
+    its Monte-Carlo error (0.1 posterior sd: the check the package runs on every emcee posterior), and
+    ``instruments`` weighs a described machine's two instruments (the demo's data agree: simulated from one truth)."""
+    code, out, err = run_cli("sample", "--machine", "trunnion", "--data", "ballbar", "--seed", "3", "--json",
+                             "--quiet")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["diagnostics"]["sampler"] == "emcee" and d["diagnostics"]["converged"]
+    ref = d["diagnostics"]["reference"]
+    assert ref["exact"] and ref["max_mean_diff_sd"] < 0.1, ref
+    code, out, err = run_cli("instruments", "--machine", "trunnion", "--json")
+    assert code == 0 and json.loads(out)["agree"] is True, err

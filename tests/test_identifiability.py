@@ -234,3 +234,17 @@ def test_one_tool_length(thesis, cases, model, lever):
     assert comb.name == f"dy_CZ − {arm_um_per_arcsec:.4g} µm/″·alpha_BT"
     assert {"alpha_XB", "gamma_XB", "alpha_CZ", "beta_CZ"} <= set(result.determined)
     _check_consistent(result, jac, space, CENTRED)
+
+
+@pytest.mark.parametrize("model", ["htm-literal", "linear", "chain"])
+def test_without_bx_the_thesis_combination_is_rediscovered(thesis, model):
+    """Without the BX run (the only one whose ez carries dx_BT, Table 2.6 — the term the thesis' Eq 4.2 drops), the
+    campaign determines the C axis' X position only relative to the spindle: exactly the thesis' eighth quantity
+    dx_CZ − dx_BT, found from the Jacobian with no thesis-specific code; the other seven one by one."""
+    bb = thesis.ballbar
+    c = dataclasses.replace(thesis, ballbar=dataclasses.replace(bb, runs=[r for r in bb.runs if r.pattern != "BX"]))
+    m = make_model(model, c, ParameterSpace.for_campaign(c, SAMPLED_DEVIATIONS))
+    result = identifiability(jacobian(m), m.space, known=CENTRED)
+    (comb,) = result.combinations
+    assert comb.name == "dx_CZ − dx_BT" and comb.weights == pytest.approx({"dx_CZ": 1.0, "dx_BT": -1.0})
+    assert set(result.determined) == THESIS_NINE - {"dx_CZ", "dx_BT"} and result.undetermined == ("dz_BT",)

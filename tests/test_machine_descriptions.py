@@ -252,3 +252,22 @@ def test_a_description_file_referenced_relative_to_the_campaign(tmp_path):
         referenced_description("five-axis", "c.toml", "machine", tmp_path)
     assert str(info.value).startswith("c.toml: machine: unknown machine type 'five-axis'")
     assert "integrex-i200" in str(info.value)
+
+
+@pytest.mark.parametrize("case", [c for c in BAD if "configuration" in c[1] or c[0] == "configuration missing"],
+                         ids=lambda c: c[0])
+def test_every_rule_through_the_command_line(tmp_path, run_cli, case):
+    """Each rule as a user meets it: the description in a campaign's [machine], ``report -o``: one line naming the
+    file and the key, exit status 2, nothing written."""
+    from mtmcal_bayes.io.tomlio import dumps
+
+    _, table, key, words = case
+    doc = tomllib.loads(data_path("machines/trunnion-demo.toml").read_text(encoding="utf-8"))
+    doc["machine"] = table
+    path = tmp_path / "c.toml"
+    path.write_text(dumps(doc), encoding="utf-8")
+    out = tmp_path / "rep"
+    code, _, err = run_cli("report", str(path), "-o", str(out))
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert f"{path}: machine.{key}" in err and words in err, err
+    assert not out.exists()

@@ -103,7 +103,7 @@ class PosteriorApproximation:
         out = {}
         rows, kept = [], []
         for name in names:
-            if name in QUANTITIES:
+            if name in QUANTITIES or name in space:  # the thesis' quantities, or a described machine's deviations
                 w = weights(name, space)
                 if not w:
                     continue

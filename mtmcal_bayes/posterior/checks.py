@@ -104,7 +104,8 @@ def reference_check(result: SamplingResult, summary) -> ReferenceCheck | None:
     ref = {n: v for n, v in approx.moments(list(summary.index)).items()
            if all(map(math.isfinite, v)) and v[1] > 0}
     names = [n for n in summary.index if n in ref]
-    eight = [n for n in IDENTIFIABLE if n in names]
+    eight = [n for n in IDENTIFIABLE if n in names] or [  # a described machine: its deviations
+        n for n in names if n in result.posterior.space.names]
     if not eight:
         return None
     mean = {n: float((summary.loc[n, "mean"] - ref[n][0]) / ref[n][1]) for n in names}
