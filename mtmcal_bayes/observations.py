@@ -26,10 +26,11 @@ class ObservationKey:
     setup: str
     mount: str
     component: str  # "ex", "ey" or "ez"
+    held: str = ""  # a described machine's run with other rotary axes held off zero: "A-45"
 
     @property
     def label(self) -> str:
-        return f"{self.component}_{self.pattern}@{self.setup}/{self.mount}"
+        return f"{self.component}_{self.pattern}{f'({self.held})' if self.held else ''}@{self.setup}/{self.mount}"
 
 
 @dataclass(frozen=True)
@@ -59,8 +60,9 @@ class Observations:
         described = campaign.machine.described
         for i, run in enumerate(campaign.ballbar.runs):
             # a described machine's runs are read in its machine frame (no reading conventions yet)
+            held = ",".join(f"{a}{v:g}" for a, v in (run.hold_deg or {}).items() if v != 0)
             for comp, rep in (run.repeats if described else machine_repeats(run, campaign.ballbar)).items():
-                keys.append(ObservationKey(i, run.pattern, run.setup, run.mount, comp))
+                keys.append(ObservationKey(i, run.pattern, run.setup, run.mount, comp, held))
                 mean.append(float(np.mean(rep)))
                 sd.append(float(np.std(rep, ddof=1)) if len(rep) > 1 else np.nan)
                 n.append(len(rep))

@@ -43,7 +43,8 @@ def test_report_of_a_demo(tmp_path, run_cli):
     code, text, err = run_cli("report", "--machine", "trunnion", "--sampler", "exact", "-o", str(out), "--quiet")
     assert code == 0, err
     for name in ("index.html", "machine.png", "deviations.png", "corner.png", "truth.csv", "least_squares.csv",
-                 "identifiability.csv", "combinations.csv", "summary.csv", "posterior.nc"):
+                 "identifiability.csv", "combinations.csv", "summary.csv", "ppc.png", "ppc.csv", "loo.csv",
+                 "posterior.nc"):
         assert (out / name).stat().st_size > 0, name
     assert not (out / "identification_ballbar.csv").exists()
     import pandas as pd

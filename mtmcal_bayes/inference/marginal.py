@@ -390,19 +390,10 @@ class MarginalPosterior:
         return mean, np.sqrt(np.maximum(second - mean**2, 0.0))
 
     def sigma_moments(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Posterior mean and sd of each scale, each ``(s,)`` mm, for one data vector ``y`` (m,): of the distribution
-        :meth:`draw` samples, σ uniform within each cell (a cell's second moment is its midpoint's square plus its
-        width² / 12; with few cells per scale, two scales, the midpoints alone understate the sd by several %)."""
+        """Posterior mean and sd of each scale, each ``(s,)`` mm, for one data vector ``y`` (m,)."""
         w = self.weights(y[None])[:, 0]
         mean = w @ self.sigma
-        second = w @ (self.sigma**2 + self._cell_widths() ** 2 / 12.0)
-        return mean, np.sqrt(np.maximum(second - mean**2, 0.0))
-
-    def _cell_widths(self) -> np.ndarray:
-        """Each cell's width per scale ``(G, s)``, mm (zero for scales known)."""
-        if self.fixed:
-            return np.zeros_like(self.sigma)
-        return np.stack([w.ravel() for w in np.meshgrid(*[np.diff(e) for e in self.edges], indexing="ij")], axis=-1)
+        return mean, np.sqrt(np.maximum(w @ self.sigma**2 - mean**2, 0.0))
 
     def draw(self, y: np.ndarray, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """``n`` draws ``(theta (n, P), sigma (n, s))`` from the posterior given data ``y`` (m,): a cell by its weight,

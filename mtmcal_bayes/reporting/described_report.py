@@ -25,7 +25,8 @@ from ..posterior.least_squares import LeastSquares, least_squares
 from ..posterior.output import format_posterior, identifiability_block
 from ..posterior.sample import sample_posterior
 from ..progress import ProgressEvent, emit
-from . import budget_plot, corner_plot, forest, machine_figure, mcmc_plots
+from ..posterior.loo import loo_check
+from . import budget_plot, corner_plot, forest, loo_plot, machine_figure, mcmc_plots, ppc
 from .build import (
     Report,
     _budget_section,
@@ -43,7 +44,7 @@ from .drawing import Drawing
 NOT_MADE = [
     "the thesis' deterministic identification (Tables 4.5, 5.3): the thesis machine's formulas; here the "
     "least-squares identification of the chain's first order stands beside the posterior",
-    "the plan of the next measurement, the compensation of NC programs and the eccentricity plots: not yet for "
+    "the plan of the next measurement, the compensation of NC programs and the polar ΔL trajectories: not yet for "
     "a described machine (the next issue: the whole workflow on any machine)",
     "the three posteriors of the instruments side by side and their consistency check: the fused posterior is "
     "shown; sample --data ballbar / probe gives each alone",
@@ -92,16 +93,26 @@ def build_described_report(analysis, out_dir, *, settings, progress=None, comman
                            ("sigma_model.png", lambda: budget_plot.sigma_figure(rep, names=shown)),
                            ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc"))])
             ls = least_squares(rep.log_posterior, rep.identifiability, units.to_internal(rep.sigma_model_um, "um"))
+            loo = loo_check(rep.idata)
+            jobs = [("loo.png", lambda: loo_plot.loo_figure(loo))]
+            ppc_df = None
+            if campaign.ballbar.runs and data != "probe":  # the eccentricities the posterior saw
+                ppc_df = ppc.ppc_table(rep.idata, campaign, analysis.ballbar_observations)
+                jobs.append(("ppc.png", lambda: ppc.ppc_figure({model: ppc_df}, campaign)))
+            drawing.start(jobs)
             tables = _tables(rep, ls, campaign)
+            tables["loo.csv"] = (loo.table, True)
+            if ppc_df is not None:
+                tables["ppc.csv"] = (ppc_df, True)
             drawing.finish()
         finally:
             drawing.stop()
-        files = [n for n in ("machine.png", "deviations.png", "corner.png", "forest.png", "budget.png",
-                             "sigma_model.png", "rank.png", "trace.png") if (tmp / n).exists()]
+        files = [n for n in ("machine.png", "deviations.png", "corner.png", "forest.png", "ppc.png", "loo.png",
+                             "budget.png", "sigma_model.png", "rank.png", "trace.png") if (tmp / n).exists()]
         for name, (df, index) in tables.items():
             df.to_csv(tmp / name, index=index, float_format="%.6g")
             files.append(name)
-        page = _page(rep, ls, tables, campaign=campaign, tmp=tmp)
+        page = _page(rep, ls, tables, campaign=campaign, tmp=tmp, loo=loo)
         elapsed = time.perf_counter() - t0
         files = ["index.html"] + files + ["posterior.nc"]
         page.write(tmp / "index.html", _meta(campaign, model, rep.sampling.settings.seed, command=command,
@@ -149,7 +160,7 @@ def truth_table(rep, ls: LeastSquares, truth) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path) -> Page:
+def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path, loo) -> Page:
     desc = campaign.machine.description
     post = rep.log_posterior
     ident = rep.identifiability
@@ -212,6 +223,17 @@ def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path) -> Page:
     page.figure(tmp / "corner.png", CORNER_CAPTION, "corner plot")
     page.figure(tmp / "forest.png", "95 % HDI of every deviation (an undetermined one spans its prior).",
                 "forest plot")
+    if "ppc.csv" in tables:
+        ppc_df = tables["ppc.csv"][0]
+        page.section("ppc", "Posterior predictive check")
+        page.figure(tmp / "ppc.png", ppc.CAPTION, "posterior predictive check")
+        page.paragraph(f"{int((~ppc_df['inside_95']).sum())} of {len(ppc_df)} observed ball-bar means fall outside "
+                       "their 95 % predictive interval. ppc.csv.")
+    page.section("loo", "Leave-one-out consistency")
+    page.paragraph("Does each measurement agree with what all the others predict for it? " + loo.power_sentence()
+                   + " loo.csv.")
+    page.box("warn", "Leave-one-out: measurements the others do not predict", loo.outlier_sentences())
+    page.figure(tmp / "loo.png", loo_plot.CAPTION, "leave-one-out elpd and Pareto k per observation")
     page.section("priors", "Priors")
     page.table(priors_table(post))
     page.section("diagnostics", "Sampler diagnostics")
