@@ -85,21 +85,22 @@ def build_described_report(analysis, out_dir, *, settings, progress=None, comman
             determined = list(rep.identifiability.determined) + [
                 n for c in rep.identifiability.combinations for n in c.weights if n not in rep.identifiability.determined]
             shown = [n for n in deviations if n in set(determined)] or deviations
-            drawing.start([("corner.png", lambda: corner_plot.corner_figure(rep.idata, rep.comparison, names=shown)),
-                           ("forest.png", lambda: forest.forest_figure({model: rep.summary}, None, names=deviations)),
-                           ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling, names=shown)),
-                           ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata, names=shown)),
-                           ("budget.png", lambda: budget_plot.budget_figure(rep.summary)),
-                           ("sigma_model.png", lambda: budget_plot.sigma_figure(rep, names=shown)),
-                           ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc"))])
-            ls = least_squares(rep.log_posterior, rep.identifiability, units.to_internal(rep.sigma_model_um, "um"))
             loo = loo_check(rep.idata)
-            jobs = [("loo.png", lambda: loo_plot.loo_figure(loo))]
             ppc_df = None
             if campaign.ballbar.runs and data != "probe":  # the eccentricities the posterior saw
                 ppc_df = ppc.ppc_table(rep.idata, campaign, analysis.ballbar_observations)
-                jobs.append(("ppc.png", lambda: ppc.ppc_figure({model: ppc_df}, campaign)))
-            drawing.start(jobs)
+            # one batch, the longest first: its two processes end together
+            drawing.start([("corner.png", lambda: corner_plot.corner_figure(rep.idata, rep.comparison, names=shown)),
+                           ("sigma_model.png", lambda: budget_plot.sigma_figure(rep, names=shown)),
+                           ("forest.png", lambda: forest.forest_figure({model: rep.summary}, None, names=deviations)),
+                           *([("ppc.png", lambda: ppc.ppc_figure({model: ppc_df}, campaign))] if ppc_df is not None
+                             else []),
+                           ("loo.png", lambda: loo_plot.loo_figure(loo)),
+                           ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling, names=shown)),
+                           ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata, names=shown)),
+                           ("budget.png", lambda: budget_plot.budget_figure(rep.summary)),
+                           ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc"))])
+            ls = least_squares(rep.log_posterior, rep.identifiability, units.to_internal(rep.sigma_model_um, "um"))
             tables = _tables(rep, ls, campaign)
             tables["loo.csv"] = (loo.table, True)
             if ppc_df is not None:
