@@ -379,6 +379,25 @@ def instruments(campaign: CampaignLike = None, *, explain: bool = True) -> Instr
     return check_instruments(analysis_or_campaign(campaign, c), explain=explain)
 
 
+def axis_lines(campaign: CampaignLike = None, *, data: str | None = None, seed: int | None = 1, csv=None):
+    """The identified axis lines of any machine (its description's, the thesis machine's included): direction and
+    point of each rotary axis and of the spindle at the home pose, and the pivot distances, each from the draws of
+    the exact posterior of ``data`` (default: every instrument a described machine's campaign has; the ball bar on
+    the thesis machine), with a flag where the data do not determine it (:mod:`~mtmcal_bayes.posterior.axis_lines`);
+    ``csv`` receives the table."""
+    from .io.textfiles import write_text_atomic
+    from .models import check_data
+    from .posterior.axis_lines import axis_lines as lines
+
+    c = campaign_of(campaign, measured=True)
+    data = check_data(data_of(data, c), c)
+    _writable(csv, "axis lines")
+    result = lines(sample(c, sampler="exact", seed=seed, data=data))
+    if csv is not None:
+        write_text_atomic(csv, result.to_csv())
+    return result
+
+
 def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",
                model: str = "htm-thesis", values: str = "posterior", posterior=None, point: str = "tcp",
                setup: str | None = None, mount: str | None = None, integer_unit: str | None = None,

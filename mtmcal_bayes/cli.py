@@ -150,6 +150,10 @@ def cmd_instruments(args) -> int:
     return _show(api.instruments(args.campaign), args)
 
 
+def cmd_axes(args) -> int:
+    return _show(api.axis_lines(args.campaign, data=args.data, seed=args.seed, csv=args.csv), args)
+
+
 def cmd_compensate(args) -> int:
     result = api.compensate(args.program, campaign=args.campaign, output=args.output, method=args.method,
                             model=args.model, values=args.values, posterior=args.posterior, point=args.point,
@@ -184,7 +188,7 @@ def build_parser():
     """The argument parser, each command run by its ``cmd_*`` function (:mod:`mtmcal_bayes.cli_options`)."""
     return cli_options.build_parser({
         "identify": cmd_identify, "probe-fit": cmd_probe_fit, "simulate": cmd_simulate, "sensitivity": cmd_sensitivity,
-        "sample": cmd_sample, "history": cmd_history, "report": cmd_report, "plan": cmd_plan, "design": cmd_design, "next": cmd_next, "ncgen": cmd_ncgen, "compensate": cmd_compensate, "instruments": cmd_instruments,
+        "sample": cmd_sample, "history": cmd_history, "report": cmd_report, "plan": cmd_plan, "design": cmd_design, "next": cmd_next, "ncgen": cmd_ncgen, "compensate": cmd_compensate, "instruments": cmd_instruments, "axes": cmd_axes,
         "sbc": cmd_validate_sbc, "fleet": cmd_fleet})
 
 

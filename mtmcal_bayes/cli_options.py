@@ -225,6 +225,11 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     _command(sub, "instruments", handlers["instruments"], "do the ball bar and the touch probe agree? consistency, each "
              "instrument's σ_model, disputed deviations, explanations weighed by the data (docs/probe.md)",
              json_help="print JSON: agree, scales_um, disputed, consistency, explanations")
+    s = _command(sub, "axes", handlers["axes"], "the identified axis lines: direction and point of each rotary axis and "
+                 "the spindle, pivot distances, each with its uncertainty (a controller's kinematic description)")
+    s.add_argument("--csv", metavar="FILE", default=None, help="write the table as CSV")
+    s.add_argument("--data", **DATA_OPTION)
+    s.add_argument("--seed", type=int, default=1, help="seed of the posterior draws (default 1)")
 
     s = _command(sub, "compensate", handlers["compensate"], "rewrite X/Y/Z of an NC program for the identified deviations, "
                  "with uncertainty", json_help="print JSON: corrections, residuals, what is not compensable")

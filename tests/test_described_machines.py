@@ -195,3 +195,34 @@ def test_emcee_and_the_instruments_on_a_described_machine(run_cli):
     assert ref["exact"] and ref["max_mean_diff_sd"] < 0.1, ref
     code, out, err = run_cli("instruments", "--machine", "trunnion", "--json")
     assert code == 0 and json.loads(out)["agree"] is True, err
+
+
+@pytest.mark.parametrize("machine", ["trunnion", "head-head"])
+def test_axis_lines_against_the_truth(machine, tmp_path, run_cli):
+    """``axes``: the identified lines of the demo against those of its stated truth, through the same chain: every
+    number the data determine within Z_MAX posterior sd of the truth; a number resting on an undetermined
+    deviation is flagged, never shown as measured (the trunnion's A line along Z rests on E_Z0A)."""
+    from mtmcal_bayes.io.machine_reader import description_of
+    from mtmcal_bayes.machines import generated
+    from mtmcal_bayes.models.chain import Chain
+    from mtmcal_bayes.posterior.axis_lines import _lines, _quantities
+
+    out = tmp_path / "axes.csv"
+    code, text, err = run_cli("axes", "--machine", machine, "--json", "--csv", str(out))
+    assert code == 0, err
+    rows = json.loads(text)["lines"]
+    assert out.read_text(encoding="utf-8").startswith("element,quantity,unit,nominal,mean")
+    c = mb.load_campaign(demo_campaign(machine))
+    desc = description_of(c.machine)
+    truth = _quantities(desc, _lines(Chain(desc, generated(desc)), desc,
+                                     {k: np.array([v]) for k, v in c.truth.deviations.items()}, 1))
+    checked = 0
+    for r in rows:
+        t = truth[r["element"], r["quantity"]][0][0]
+        if r["determined"] and r["sd"] > 1e-12:
+            assert abs(r["mean"] - t) <= Z_MAX * r["sd"], r
+            checked += 1
+    assert checked >= 6
+    flagged = {(r["element"], r["quantity"]) for r in rows if not r["determined"]}
+    if machine == "trunnion":
+        assert ("A", "point_z") in flagged and ("C", "point_y") not in flagged

@@ -19,7 +19,7 @@ Nothing here knows a machine: the names come from the parameter space.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
@@ -60,6 +60,19 @@ class Identifiability:
     determined: tuple[str, ...]
     combinations: tuple[Combination, ...]
     undetermined: tuple[str, ...]
+    #: the classified deviations, and an orthonormal basis ``(d, r)`` (display units) of the directions of them the
+    #: data do not see (:meth:`estimable`)
+    deviations: tuple[str, ...] = field(default=(), compare=False)
+    unseen: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    def estimable(self, weights: dict[str, float], tol: float = 1e-6) -> bool:
+        """Whether the data determine ``Σ w·θ`` (``weights`` per display unit; deviations not classified, e.g. held
+        at zero, count as known): it has no part along a direction the data do not see."""
+        c = np.array([weights.get(n, 0.0) for n in self.deviations])
+        norm = float(np.linalg.norm(c))
+        if norm == 0.0 or self.unseen is None or self.unseen.shape[1] == 0:
+            return True
+        return float(np.linalg.norm(self.unseen.T @ c)) <= tol * norm
 
     def as_dict(self) -> dict:
         """JSON-ready: ``{"determined": [...], "combinations": [{"name", "weights", "unit"}],
@@ -130,7 +143,7 @@ def classify(null_dev: np.ndarray, deviations: list[str], space) -> Identifiabil
     """Classify ``deviations`` given ``null_dev`` ``(d, k)``: the deviation parts (display units) of the directions
     the data leave undetermined."""
     if not deviations:
-        return Identifiability((), (), ())
+        return Identifiability((), (), (), (), np.zeros((0, 0)))
     u, sd, _ = np.linalg.svd(null_dev, full_matrices=False)
     basis = u[:, sd > SUBSPACE_TOL]                   # (d, r): orthonormal basis of S
     proj = basis @ basis.T                            # (d, d): projection onto S, whatever the basis
@@ -150,7 +163,7 @@ def classify(null_dev: np.ndarray, deviations: list[str], space) -> Identifiabil
             determined += block_names
         else:
             combinations += _combinations(estimable, block_names, space)
-    return Identifiability(tuple(determined), tuple(combinations), tuple(undetermined))
+    return Identifiability(tuple(determined), tuple(combinations), tuple(undetermined), tuple(deviations), basis)
 
 
 def _complement(rows: np.ndarray) -> np.ndarray:

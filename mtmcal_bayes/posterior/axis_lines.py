@@ -1,0 +1,148 @@
+"""The identified axis lines of a machine (issue 37, item 4): what a controller's kinematic description needs.
+
+For each rotary axis and the spindle: the direction (unit vector) and a point of its actual average line at the
+home pose, in the machine frame — the nominal line displaced by the axis' own location errors and by those of
+every axis below it in the chain (:class:`~mtmcal_bayes.models.chain.Chain`, commands all 0); the point is the
+foot of the perpendicular from the description's ``point_mm`` (so a point's offset is the line's position error
+there, as ISO 230-7 states it).  And the distance between the lines of successive rotary axes of one side (and
+between the spindle and the axis carrying it): the pivot distances of a kinematic description.
+
+Each number is a function of the deviations; its posterior comes from the draws.  A number the data do not
+determine — its first-order change with the deviations has a part along a direction the measurements cannot see
+(:meth:`~mtmcal_bayes.inference.identifiability.Identifiability.estimable`) — is marked ``determined = False``:
+its interval is the prior's, not a measurement.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from .. import units
+from ..arviz_import import az
+from ..inference.results import HDI_PROB
+from ..machines.description import SPINDLE, MachineDescription
+from ..machines.deviations import generated
+from ..models.chain import Chain
+
+#: columns of the table, per row
+COLUMNS = ["element", "quantity", "unit", "nominal", "mean", "sd", "hdi_low", "hdi_high", "determined"]
+
+
+def _lines(chain: Chain, desc: MachineDescription, dev: dict[str, np.ndarray], n: int) -> dict[str, tuple]:
+    """Per element (rotary axis letter, ``"C1"``): ``(point (n, 3) mm, direction (n, 3))`` of its actual line."""
+    out = {}
+    for side in (desc.work_chain, desc.tool_chain):
+        for i, ax in enumerate(side):
+            if ax.rotary:
+                out[ax.letter] = _carried(chain, side[: i + 1], ax.letter, point=ax.point, direction=ax.direction,
+                                          dev=dev, n=n)
+    if desc.spindle.carrier != "b":
+        out[SPINDLE] = _carried(chain, desc.tool_chain, SPINDLE, point=desc.spindle.point,
+                                direction=desc.spindle.direction, dev=dev, n=n)
+    return out
+
+
+def _carried(chain: Chain, below, body: str, *, point, direction, dev, n: int):
+    """The line through ``point`` along ``direction`` displaced by ``body``'s errors, then by those of the axes
+    ``below`` (bed outwards; the body's own axis last of them when it is an axis) at the home pose."""
+    v = np.broadcast_to(np.stack([point, point + direction]), (n, 2, 3)).copy()
+    v = chain.bodies[body].displace(v, dev)
+    for ax in reversed([a for a in below if a.letter != body]):
+        v = chain.bodies[ax.letter].displace(v, dev)
+    d = v[:, 1] - v[:, 0]
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    rel = point - v[:, 0]
+    foot = v[:, 0] + np.einsum("ni,ni->n", rel, d)[:, None] * d  # the line's point nearest the nominal point
+    return foot, d
+
+
+def _distance(p1, d1, p2, d2) -> np.ndarray:
+    """Distance (n,) between two lines: along their common perpendicular, or between parallel lines."""
+    cross = np.cross(d1, d2)
+    norm = np.linalg.norm(cross, axis=1)
+    gap = p2 - p1
+    skew = np.abs(np.einsum("ni,ni->n", gap, cross)) / np.where(norm > 1e-12, norm, 1.0)
+    parallel = np.linalg.norm(np.cross(gap, d1), axis=1)
+    return np.where(norm > 1e-9, skew, parallel)
+
+
+def _quantities(desc: MachineDescription, lines: dict) -> dict[tuple[str, str], tuple[np.ndarray, str]]:
+    """Every reported number ``(element, quantity) -> (values (n,), unit)``, internal units (mm, or 1 for a
+    direction's components)."""
+    out = {}
+    for name, (p, d) in lines.items():
+        for i, a in enumerate("xyz"):
+            out[name, f"point_{a}"] = (p[:, i], "mm")
+        for i, a in enumerate("xyz"):
+            out[name, f"direction_{a}"] = (d[:, i], "1")
+    pairs = []
+    for side in (desc.work_chain, desc.tool_chain):
+        rot = [a.letter for a in side if a.rotary]
+        pairs += list(zip(rot, rot[1:]))
+    if SPINDLE in lines and desc.spindle.carrier in lines:
+        pairs.append((desc.spindle.carrier, SPINDLE))
+    for a, b in pairs:
+        out[f"{a}-{b}", "pivot_distance"] = (_distance(*lines[a], *lines[b]), "mm")
+    return out
+
+
+@dataclass
+class AxisLines:
+    """The identified axis lines: ``table`` (:data:`COLUMNS`; lengths in mm, direction components unitless),
+    ``machine`` its configuration."""
+
+    table: pd.DataFrame
+    machine: str
+
+    def to_json(self) -> dict:
+        rows = self.table.to_dict(orient="records")
+        return {"machine": self.machine, "hdi_prob": HDI_PROB, "lines": rows}
+
+    def to_csv(self) -> str:
+        return self.table.to_csv(index=False, float_format="%.9g")
+
+    def to_text(self) -> str:
+        lines = [f"Identified axis lines of {self.machine} at the home pose (machine frame; point: the line's point "
+                 "nearest the described point_mm; mean ± sd, 95 % HDI)"]
+        for _, r in self.table.iterrows():
+            mark = "" if r["determined"] else "   not determined: the prior's, not a measurement"
+            lines.append(f"  {r['element']:6s} {r['quantity']:15s} {r['mean']:14.6f} ± {r['sd']:.6f} "
+                         f"{r['unit']:2s} [{r['hdi_low']:.6f}, {r['hdi_high']:.6f}]{mark}")
+        return "\n".join(lines)
+
+
+def axis_lines(result) -> AxisLines:
+    """The axis lines of a posterior (:class:`~mtmcal_bayes.posterior.sample.PosteriorResult` of a campaign on any
+    machine, the thesis one included), from its draws."""
+    from ..inference.identifiability import campaign_identifiability
+    from ..io.machine_reader import description_of
+
+    post = result.log_posterior
+    desc = description_of(post.campaign.machine)
+    chain = Chain(desc, generated(desc))
+    devs = [p for p in post.space.parameters if p.group == "deviation"]
+    draws = {p.name: units.to_internal(np.ravel(np.asarray(result.idata.posterior[p.name])), p.unit) for p in devs}
+    n = len(next(iter(draws.values())))
+    values = _quantities(desc, _lines(chain, desc, draws, n))
+    nominal = _quantities(desc, _lines(chain, desc, {}, 1))
+    # first-order change of every number per display unit of each deviation: what the data must see of it
+    ident = result.identifiability or campaign_identifiability(post)
+    grads = {}
+    for p in devs:
+        h = units.to_internal(1.0, p.unit)
+        up = _quantities(desc, _lines(chain, desc, {p.name: np.array([h])}, 1))
+        down = _quantities(desc, _lines(chain, desc, {p.name: np.array([-h])}, 1))
+        for key in values:
+            grads.setdefault(key, {})[p.name] = float((up[key][0][0] - down[key][0][0]) / 2.0)
+    rows = []
+    for (element, quantity), (v, unit) in values.items():
+        low, high = az.hdi(v, hdi_prob=HDI_PROB)
+        g = {k: w for k, w in grads[element, quantity].items() if abs(w) > 1e-15}
+        rows.append({"element": element, "quantity": quantity, "unit": unit,
+                     "nominal": float(nominal[element, quantity][0][0]), "mean": float(v.mean()),
+                     "sd": float(v.std(ddof=1)), "hdi_low": float(low), "hdi_high": float(high),
+                     "determined": bool(ident.estimable(g))})
+    return AxisLines(pd.DataFrame(rows, columns=COLUMNS), desc.configuration)
