@@ -398,6 +398,24 @@ def axis_lines(campaign: CampaignLike = None, *, data: str | None = None, seed: 
     return result
 
 
+def isg_csv(campaign: CampaignLike = None, *, data: str | None = None, seed: int | None = 1, output=None) -> str:
+    """The identified position errors in the ISG CSV format (ISG kernel / Beckhoff TF5280 volumetric compensation,
+    :mod:`~mtmcal_bayes.io.isg_csv`): the posterior means, mm and rad, of the deviations the data determine one by
+    one; each one left out is named in a ``//`` comment with why.  ``output`` receives the text."""
+    from .io.isg_csv import isg_csv as text_of
+    from .io.textfiles import write_text_atomic
+    from .models import check_data
+    from .posterior.axis_lines import isg_position_errors
+
+    c = campaign_of(campaign, measured=True)
+    data = check_data(data_of(data, c), c)
+    _writable(output, "ISG CSV file")
+    text = text_of(*isg_position_errors(sample(c, sampler="exact", seed=seed, data=data)))
+    if output is not None:
+        write_text_atomic(output, text)
+    return text
+
+
 def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",
                model: str = "htm-thesis", values: str = "posterior", posterior=None, point: str = "tcp",
                setup: str | None = None, mount: str | None = None, integer_unit: str | None = None,

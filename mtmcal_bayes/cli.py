@@ -151,6 +151,11 @@ def cmd_instruments(args) -> int:
 
 
 def cmd_axes(args) -> int:
+    if args.format == "isg-csv":
+        text = api.isg_csv(args.campaign, data=args.data, seed=args.seed, output=args.output)
+        print(text if args.output is None else f"wrote {args.output}: position errors in the ISG CSV format", end=""
+              if args.output is None else "\n")
+        return 0
     return _show(api.axis_lines(args.campaign, data=args.data, seed=args.seed, csv=args.csv), args)
 
 

@@ -228,6 +228,9 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s = _command(sub, "axes", handlers["axes"], "the identified axis lines: direction and point of each rotary axis and "
                  "the spindle, pivot distances, each with its uncertainty (a controller's kinematic description)")
     s.add_argument("--csv", metavar="FILE", default=None, help="write the table as CSV")
+    s.add_argument("--format", choices=("table", "isg-csv"), default="table", help="isg-csv: the identified position "
+                   "errors in the ISG CSV format of the ISG kernel / Beckhoff TF5280 volumetric compensation")
+    s.add_argument("-o", "--output", metavar="FILE", default=None, help="with --format isg-csv: write it to FILE")
     s.add_argument("--data", **DATA_OPTION)
     s.add_argument("--seed", type=int, default=1, help="seed of the posterior draws (default 1)")
 

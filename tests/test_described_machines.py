@@ -226,3 +226,31 @@ def test_axis_lines_against_the_truth(machine, tmp_path, run_cli):
     flagged = {(r["element"], r["quantity"]) for r in rows if not r["determined"]}
     if machine == "trunnion":
         assert ("A", "point_z") in flagged and ("C", "point_y") not in flagged
+
+
+def test_the_isg_csv_writer_against_its_published_example():
+    """The ISG kernel / TF5280 documentation's example of machine position errors (TF5280, "ISG CSV format"):
+    header ``Y0A Z0A X0B``, one record ``0.1 0.2 0.11``, ``//`` comments; a name the format lacks is refused."""
+    from mtmcal_bayes.io.isg_csv import isg_csv, isg_name
+
+    text = isg_csv({"Y0A": 0.1, "Z0A": 0.2, "X0B": 0.11}, ["The header only contains position errors."])
+    assert text == "// The header only contains position errors.\nY0A Z0A X0B\n0.1 0.2 0.11\n"
+    assert isg_name("E_Y0A") == "Y0A" and isg_name("E_X(0C1)B") is None
+    with pytest.raises(ValueError, match="EXX"):
+        isg_csv({"EXX": 0.0})
+
+
+def test_axes_writes_what_the_data_identified_in_the_isg_format(tmp_path, run_cli):
+    """``axes --format isg-csv``: the trunnion demo's determined position errors (mm, rad), each left-out one named
+    in a comment with why; no prior-only number is written."""
+    out = tmp_path / "errors.csv"
+    code, _, err = run_cli("axes", "--machine", "trunnion", "--format", "isg-csv", "-o", str(out))
+    assert code == 0, err
+    lines = out.read_text(encoding="utf-8").splitlines()
+    header, record = [ln for ln in lines if not ln.startswith("//")]
+    values = dict(zip(header.split(), map(float, record.split())))
+    assert set(values) == {"Y0A", "B0A", "C0A", "X0C", "B0C"}
+    assert values["Y0A"] == pytest.approx(0.015, abs=3 * 0.0008)  # truth 15 µm, sd 0.8 µm
+    assert values["C0A"] == pytest.approx(mb.units.to_internal(-12.0, "arcsec"), abs=mb.units.to_internal(4, "arcsec"))
+    comments = "\n".join(ln for ln in lines if ln.startswith("//"))
+    assert "Z0A: not determined" in comments and "A0C: determined only in combination (E_A0C + E_A0A)" in comments

@@ -146,3 +146,42 @@ def axis_lines(result) -> AxisLines:
                      "sd": float(v.std(ddof=1)), "hdi_low": float(low), "hdi_high": float(high),
                      "determined": bool(ident.estimable(g))})
     return AxisLines(pd.DataFrame(rows, columns=COLUMNS), desc.configuration)
+
+
+def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
+    """The posterior means of the position errors the data determine, by ISG name, in mm and rad
+    (:mod:`mtmcal_bayes.io.isg_csv`), and the comments saying what is left out and why: a deviation the data do not
+    determine (its value would be the prior's), one determined only in combination (which combination), one the
+    format has no name for."""
+    from ..inference.identifiability import campaign_identifiability
+    from ..io.isg_csv import isg_name
+
+    post = result.log_posterior
+    ident = result.identifiability or campaign_identifiability(post)
+    in_combination: dict[str, list[str]] = {}
+    for c in result.combinations:
+        for n in c["weights"]:
+            in_combination.setdefault(n, []).append(c["name"])
+    values, comments = {}, [f"position errors identified by mtmcal-bayes from {post.campaign.source} "
+                            f"({post.model_name} model, posterior means; mm and rad)"]
+    for p in post.space.parameters:
+        if p.group != "deviation":
+            continue
+        symbol = p.name if p.name.startswith("E_") else _symbol(p.name)
+        name = isg_name(symbol) if symbol else None
+        if name is None:
+            comments.append(f"{p.name}: no position error of this format names it; left out")
+        elif p.name in ident.undetermined:
+            comments.append(f"{name}: not determined by this campaign (its value would be the prior's); left out")
+        elif p.name not in ident.determined:
+            comments.append(f"{name}: determined only in combination ({'; '.join(in_combination.get(p.name, []))}); "
+                            "left out")
+        else:
+            values[name] = float(units.to_internal(result.summary.loc[p.name, "mean"], p.unit))
+    return values, comments
+
+
+def _symbol(thesis_name: str) -> str | None:
+    from ..iso import iso_symbol
+
+    return iso_symbol(thesis_name)
