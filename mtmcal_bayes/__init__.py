@@ -41,7 +41,7 @@ from .version import __version__
 _HOME = {
     **dict.fromkeys(("identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan",
                      "ncgen", "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design",
-                     "next_run"), "api"),
+                     "next_run", "axis_lines", "isg_csv"), "api"),
     "CampaignAnalysis": "analysis", "Campaign": "campaign", "Truth": "campaign",
     "InputError": "errors", "MtmcalError": "errors", "ParameterError": "errors",
     "identify_ballbar": "identification", "identify_probe": "identification",
@@ -69,7 +69,8 @@ def __dir__():
 
 __all__ = [
     "identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan", "ncgen",
-    "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design", "next_run",
+    "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design", "next_run", "axis_lines",
+    "isg_csv",
     "Campaign", "CampaignAnalysis", "Truth", "load_campaign", "parse_campaign", "save_campaign", "read_dprnt",
     "SigmaModelPrior", "read_sigma_model_prior", "write_sigma_model_prior",
     "InputError", "MtmcalError", "ParameterError", "ProgressEvent",
