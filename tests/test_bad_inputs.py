@@ -63,6 +63,7 @@ COMMANDS_READING_CAMPAIGNS = (
     ("compensate", "{campaign}", "{program}", "-o", "{out}"),
     ("instruments", "{campaign}"),
     ("validate", "sbc", "{campaign}", "-o", "{out}", "--quiet"),
+    ("axes", "{campaign}", "--csv", "{out}"),
 )
 COMMANDS_READING_PROGRAMS = (
     ("compensate", "{program}", "-o", "{out}"),
