@@ -27,7 +27,7 @@ from scipy.sparse.csgraph import connected_components
 from .. import units
 from ..arviz_import import az
 from ..errors import ParameterError
-from ..models import jacobian
+from .analytic import linearisation
 from .results import HDI_PROB
 
 #: a unit vector whose component in (or out of) a subspace is below this is taken as orthogonal to (or in) it;
@@ -224,10 +224,11 @@ CENTRED = ("xT", "yT", "zT")
 
 def campaign_identifiability(post) -> Identifiability:
     """What the campaign and data of the log posterior ``post`` determine: :func:`identifiability` of its forward
-    model's Jacobian at zero, the T ball taken as centred (:data:`CENTRED`), as the thesis does."""
+    model's Jacobian at zero (the ``linear`` model's design itself), the T ball taken as centred (:data:`CENTRED`), as
+    the thesis does."""
     space = post.space
     known = [b for b in CENTRED if any(p.base == b for p in space.parameters)]
-    return identifiability(jacobian(post.forward), space, known=known)
+    return identifiability(linearisation(post)[0], space, known=known)
 
 
 def combination_summaries(ident: Identifiability, idata) -> list[dict]:

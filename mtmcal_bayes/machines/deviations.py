@@ -58,28 +58,30 @@ def _perpendicular(k: int) -> list[int]:
     return [i for i in range(3) if i != k]
 
 
+def _across(tail: str, body: str, k: int, *, line: str, axis: str, relative: str = ""
+            ) -> list[tuple[str, str, str, str, int, str]]:
+    """The four errors of a line along frame axis ``k`` across it: its position along, then its orientation about,
+    the two perpendicular frame axes (symbols ``E_<letter><tail>``; meanings "position of <line> along X<relative>",
+    "orientation of <axis> about X<relative>")."""
+    return ([(f"E_{FRAME[i]}{tail}", "length", body, "position", i, f"position of {line} along {FRAME[i]}{relative}")
+             for i in _perpendicular(k)] +
+            [(f"E_{ROTARY_ABOUT[FRAME[i]]}{tail}", "angle", body, "orientation", i,
+              f"orientation of {axis} about {FRAME[i]}{relative}") for i in _perpendicular(k)])
+
+
 def generated(desc: MachineDescription) -> list[Deviation]:
     """Every location error the description has, in chain order (work side, tool side, spindle, squareness)."""
     out: list[tuple[str, str, str, str, int, str]] = []
     for ax in desc.rotary_axes:
         K, k = ax.letter, ax.frame_axis
-        for i in _perpendicular(k):
-            out.append((f"E_{FRAME[i]}0{K}", "length", K, "position", i,
-                        f"position of the {K} axis line along {FRAME[i]}"))
-        for i in _perpendicular(k):
-            out.append((f"E_{ROTARY_ABOUT[FRAME[i]]}0{K}", "angle", K, "orientation", i,
-                        f"orientation of the {K} axis about {FRAME[i]}"))
+        out += _across(f"0{K}", K, k, line=f"the {K} axis line", axis=f"the {K} axis")
         out.append((f"E_{ROTARY_ABOUT[FRAME[k]]}0{K}", "angle", K, "orientation", k,
                     f"zero position of the {K} axis"))
     carrier = desc.axes.get(desc.spindle.carrier)
     if carrier is not None and carrier.rotary:
         K, s = carrier.letter, desc.spindle.frame_axis
-        for i in _perpendicular(s):
-            out.append((f"E_{FRAME[i]}(0{SPINDLE}){K}", "length", SPINDLE, "position", i,
-                        f"position of the spindle axis along {FRAME[i]} relative to the {K} axis"))
-        for i in _perpendicular(s):
-            out.append((f"E_{ROTARY_ABOUT[FRAME[i]]}(0{SPINDLE}){K}", "angle", SPINDLE, "orientation", i,
-                        f"orientation of the spindle axis about {FRAME[i]} relative to the {K} axis"))
+        out += _across(f"(0{SPINDLE}){K}", SPINDLE, s, line="the spindle axis", axis="the spindle axis",
+                       relative=f" relative to the {K} axis")
         out.append((f"E_{FRAME[s]}(0{SPINDLE}){K}", "length", SPINDLE, "position", s,
                     f"offset of the spindle along its own axis ({FRAME[s]}), signed along +{FRAME[s]}"))
     for sym, (about, tilted, ref) in SQUARENESS_ERRORS.items():

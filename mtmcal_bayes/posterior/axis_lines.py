@@ -23,6 +23,7 @@ import pandas as pd
 from .. import units
 from ..arviz_import import az
 from ..inference.results import HDI_PROB
+from ..iso import iso_symbol
 from ..machines.description import SPINDLE, MachineDescription
 from ..machines.deviations import generated
 from ..models.chain import Chain
@@ -167,7 +168,7 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
     for p in post.space.parameters:
         if p.group != "deviation":
             continue
-        symbol = p.name if p.name.startswith("E_") else _symbol(p.name)
+        symbol = p.name if p.name.startswith("E_") else iso_symbol(p.name)
         name = isg_name(symbol) if symbol else None
         if name is None:
             comments.append(f"{p.name}: no position error of this format names it; left out")
@@ -180,8 +181,3 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
             values[name] = float(units.to_internal(result.summary.loc[p.name, "mean"], p.unit))
     return values, comments
 
-
-def _symbol(thesis_name: str) -> str | None:
-    from ..iso import iso_symbol
-
-    return iso_symbol(thesis_name)
