@@ -79,7 +79,9 @@ def gaussian_posterior(post: LogPosterior, sigma_model=0.0, *, theta0: np.ndarra
     V = post.likelihood.variance_at(sigma_model)
     # solved in prior-sd units: in mm and rad the precision's condition number is ~1e11 (lever arms of 400 mm
     # against 1), in prior-sd units it is that of the data's information against the prior (~1e5), and the
-    # posterior of a weakly determined direction keeps eight more digits
+    # posterior of a weakly determined direction keeps eight more digits.  The same posterior: with S = diag(s),
+    # Σ0⁻¹ + AᵀV⁻¹A = S⁻¹(I + (AS)ᵀV⁻¹(AS))S⁻¹, so Σ = S (I + …)⁻¹ S; and Σ(Σ0⁻¹μ0 + AᵀV⁻¹(y − c)) =
+    # μ0 + ΣAᵀV⁻¹(y − c − Aμ0), since Σ(Σ0⁻¹ + AᵀV⁻¹A)μ0 = μ0
     s = np.sqrt(var0)
     Aw = A * s
     cov_w = np.linalg.inv(np.eye(len(s)) + Aw.T @ (Aw / V[:, None]))
