@@ -328,12 +328,15 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     import math
 
     from .errors import ParameterError
-    from .models import check_data, check_model
+    from .models import DESCRIBED_MODELS, MODELS, check_data, check_model
     from .planning import plan as rank
     from .planning import read_candidates
 
-    c = campaign_of(campaign, measured=True, thesis_only="plan")
-    check_model(model)
+    c = campaign_of(campaign, measured=True)
+    check_model(model, DESCRIBED_MODELS if c.machine.described else MODELS)
+    if c.machine.described and candidates is not None:
+        raise ParameterError("candidates", "a candidates file serves the thesis machine; on a described machine the "
+                             "catalogue is generated from its description (docs/design.md)")
     data = check_data(data_of(data, c), c)
     _writable(output, "plan")
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
@@ -685,10 +688,28 @@ def _time_items(c: Campaign, times) -> dict:
     return items
 
 
-def _program(pattern: str, campaign, setup: str, mount: str) -> str:
+def _program(campaign, planned) -> str:
+    """The measuring program of a planned run of ``campaign`` (a designed one)."""
+    if campaign.machine.described:
+        from .io.described_ncgen import ballbar_program
+
+        return ballbar_program(campaign, planned, feed=campaign.ballbar.feed_mm_per_min)
     from .compensation import measuring_program
 
-    return measuring_program(pattern, campaign, setup=setup, mount=mount, feed=campaign.ballbar.feed_mm_per_min)
+    return measuring_program(planned.pattern, campaign, setup=planned.setup, mount=planned.mount,
+                             feed=campaign.ballbar.feed_mm_per_min)
+
+
+def _check_planning_model(model: str, c: Campaign, candidates) -> None:
+    """The model checked for ``c``'s machine; a candidates file refused on a described machine (its catalogue is
+    generated from the description)."""
+    from .errors import ParameterError
+    from .models import DESCRIBED_MODELS, MODELS, check_model
+
+    check_model(model, DESCRIBED_MODELS if c.machine.described else MODELS)
+    if c.machine.described and candidates is not None:
+        raise ParameterError("candidates", "a candidates file serves the thesis machine; on a described machine the "
+                             "catalogue is generated from its description (docs/design.md)")
 
 
 def _user_candidates(candidates, c: Campaign) -> list:
@@ -720,8 +741,8 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     from .planning.design_output import DesignResult, write_design
     from .planning.next_run import planned_candidates
 
-    c = campaign_of(campaign, thesis_only="design")
-    check_model(model)
+    c = campaign_of(campaign)
+    _check_planning_model(model, c, candidates)
     _writable(output, "design")
     learnt = sigma_model_prior_of(sigma_model_prior, c)
     items = _time_items(c, times)
@@ -748,8 +769,8 @@ def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, cont
     from .planning.design_output import NextResult, write_next
     from .planning.next_run import next_step
 
-    c = campaign_of(campaign, thesis_only="next")
-    check_model(model)
+    c = campaign_of(campaign)
+    _check_planning_model(model, c, candidates)
     _writable(output, "next")
     learnt = sigma_model_prior_of(sigma_model_prior, c)
     items = _time_items(c, times)

@@ -102,6 +102,8 @@ class PlannedRun:
     why: str = ""
     order: int | None = None
     length: float | None = None  # bar length, mm, when not the campaign's [ballbar] length_mm
+    arc_deg: np.ndarray | None = None  # a described machine's: the swivelled axis' angles, degrees (None: default)
+    hold_deg: dict[str, float] | None = None  # a described machine's: the other rotary axes' positions, degrees
 
     @property
     def label(self) -> str:

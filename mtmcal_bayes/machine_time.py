@@ -23,7 +23,13 @@ rotary_deg_per_min     360      the slowest a pattern's rotary axis turns: one C
                                 (estimate), which bounds a run whose relative path is short (CR
                                 with R_C = L_B: the T ball on the C axis, the table turning under it)
 directions             2        each run measured clockwise and counter-clockwise (ISO 230-4)
+index_rotary_min       0.5      a described machine's run with other rotary axes held off 0: index
+                                them to the held position and clamp before the arc (estimate)
 =====================  =======  ===================================================================
+
+A described machine's run (docs/design.md) is timed alike, ``path`` the length of its linear-axis commands over
+its arc and ``span`` the arc, plus ``index_rotary_min`` when it holds another rotary axis off 0
+(:class:`mtmcal_bayes.planning.design_timing.DescribedClock`).
 
 The measuring motion of a run takes ``repeats × directions × max(path / feed, span / rotary)``; ``span``
 is the pattern's rotary range (90° for B, 360° for C patterns); ``path`` is the length of
@@ -73,6 +79,7 @@ class TimeModel:
     feed_mm_per_min: float | None = None
     rotary_deg_per_min: float = 360.0
     directions: int = 2
+    index_rotary_min: float = 0.5
 
     def __post_init__(self):
         for key, value, why in self.problems():
@@ -168,6 +175,10 @@ class MachineClock:
         one = max(path / self.feed_mm_per_min, span / self.model.rotary_deg_per_min)
         return self.model.dwell_min + repeats * self.model.directions * one
 
+    def run_minutes(self, run) -> float:
+        """Minutes of one run of a schedule (:meth:`measure_minutes` of its pattern, set-up, mount, repeats)."""
+        return self.measure_minutes(run.pattern, run.setup, run.mount, run.repeats)
+
     def schedule(self, runs, start=(False, None, None)) -> Schedule:
         """The runs measured in the given order from ``start`` (module docstring)."""
         mounted, setup, mount = start
@@ -183,7 +194,7 @@ class MachineClock:
                 steps.append(("re-clamp W ball", m.reclamp_w_ball_min))
             if mounted and sid == setup and mid == mount:
                 steps.append(("pattern change", m.pattern_change_min))
-            steps.append(("measure", self.measure_minutes(r.pattern, r.setup, r.mount, r.repeats)))
+            steps.append(("measure", self.run_minutes(r)))
             for kind, minutes in steps:
                 events.append(Event(kind, i, t, minutes, f"{r.pattern}@{sid}/{mid}"))
                 t += minutes

@@ -56,6 +56,8 @@ from ..sphere import fit_sphere
 from ..machines.deviations import quantities as deviation_table
 from ..machines.probe_terms import probe_terms
 from .described_campaign import described_ballbar, described_probe
+from .planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
+from .planned_runs import planned_in_order, planned_run
 from .dprnt import read_dprnt
 from .machine_reader import BUILTIN_TYPES, DESCRIPTION_KEYS, parse_description, referenced_description
 from .textfiles import read_user_text
@@ -72,12 +74,10 @@ PRIOR_LIMIT = {"arcsec": (3600.0, "1°"), "um": (10_000.0, "10 mm")}
 #: narrowest prior sd (or uniform width), in its unit: below it the parameter is fixed beneath the models'
 #: floating-point resolution (an sd of 1e-300 gives NaN)
 PRIOR_RESOLUTION = 1e-3
-#: most repeats a planned run may ask for
-MAX_PLANNED_REPEATS = 10_000
 #: the keys of a run's data: a planned run has none of them
 DATA_KEYS = ("ex_um", "ey_um", "ez_um", "trace_csv")
 #: the keys only a planned run (``planned = true``) has
-PLANNED_KEYS = ("repeats", "minutes", "why", "order", "length_mm")
+PLANNED_KEYS = (*PLANNED_RUN_KEYS, "length_mm")
 
 
 # --------------------------------------------------------------------------- loading
@@ -111,9 +111,10 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
         desc = machine.description
         ballbar = described_ballbar(r, r.table(doc, "ballbar", "", required=False), desc)
         probe = described_probe(r, probe_t, desc) if probe_t is not None else None
-        if not ballbar.runs and probe is None:
-            r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]]")
-        for key in ("reported", "design", "tolerances"):
+        if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
+            r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]] (or, for a machine to design "
+                   "a campaign for, its [ballbar.setups] and [ballbar.mounts])")
+        for key in ("reported", "tolerances"):
             if key in doc:
                 r.fail(key, "not read for a described machine yet (docs/machines.md)")
     else:
@@ -129,7 +130,7 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     if temperature is not None and not -50.0 <= temperature <= 100.0:
         r.fail("temperature_C", f"{temperature:g} °C is not a workshop temperature (−50 to 100 °C)")
     design_t = r.table(doc, "design", "", required=False)
-    design = _design(r, design_t) if design_t is not None else None
+    design = _design(r, design_t, deviations if machine.described else None) if design_t is not None else None
     return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances,
                     _date(r, doc), temperature, design)
 
@@ -220,7 +221,7 @@ def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
                   cr_geometry=cr_geometry) for i, x in enumerate(raw_runs)]
     _distinct_runs(r, items, P)
     runs = [x for x in items if isinstance(x, Run)]
-    planned = _measuring_order(r, [(i, x) for i, x in enumerate(items) if isinstance(x, PlannedRun)], P)
+    planned = planned_in_order(r, [(i, x) for i, x in enumerate(items) if isinstance(x, PlannedRun)], P)
     bb = Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry, convention,
                  planned)
     for i, run in enumerate(items):
@@ -255,25 +256,6 @@ def _reading_choice(r: TomlReader, t: dict, items: list[Run | PlannedRun], bb: B
         r.fail(f"{P}.alternative_reason", "no run names an alternative_convention: there is no choice of reading to "
                "give a reason for")
     bb.alternative_reason = reason
-
-
-def _measuring_order(r: TomlReader, planned: list[tuple[int, PlannedRun]], path: str) -> list[PlannedRun]:
-    """The planned runs in measuring order: as in the file, or sorted by ``order`` when they give one (then all
-    must, each a different number)."""
-    given = [(i, x) for i, x in planned if x.order is not None]
-    if not given:
-        return [x for _, x in planned]
-    if len(given) < len(planned):
-        i = next(i for i, x in planned if x.order is None)
-        r.fail(f"{path}.runs[{i}]", "planned without order while other planned runs give one: give every planned "
-               "run its order, or none (then the file's order is the measuring order)")
-    seen: dict[int, int] = {}
-    for i, x in given:
-        j = seen.setdefault(x.order, i)
-        if j != i:
-            r.fail(f"{path}.runs[{i}].order", f"{x.order} is also the order of {path}.runs[{j}]: each planned run "
-                   "has its own place in the measuring order")
-    return [x for _, x in sorted(given, key=lambda ix: ix[1].order)]
 
 
 def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]]) -> None:
@@ -391,37 +373,17 @@ def _convention_of(r: TomlReader, t: dict, path: str, key: str = "convention") -
 
 def _planned_run(r: TomlReader, t: dict, path: str, *, pattern: str, setup: str, mount: str,
                  L_B: float) -> PlannedRun:
-    """A run with ``planned = true``: how many repeats, and optionally minutes, why, order, length_mm; no data."""
+    """A run with ``planned = true``: :func:`.planned_runs.planned_run`, with its reading convention and a bar length
+    other than the campaign's."""
     data = [k for k in DATA_KEYS if k in t]
     if data:
         r.fail(f"{path}.planned", f"planned = true but the run has data ({', '.join(data)}): once it is measured, "
                "delete planned and repeats")
-    repeats = _whole(r, t, "repeats", path, low=1, high=MAX_PLANNED_REPEATS, required=True,
-                     what="the number of repeats to measure")
-    order = _whole(r, t, "order", path, low=1, high=None, required=False, what="the place in the measuring order")
+    run = planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount)
     length = r.number(t, "length_mm", path, required=False, positive=True)
-    return PlannedRun(pattern, setup, mount, repeats, convention=_convention_of(r, t, path),
-                      minutes=r.number(t, "minutes", path, required=False, nonnegative=True),
-                      why=r.string(t, "why", path), order=order, length=None if length == L_B else length)
-
-
-def _whole(r: TomlReader, t: dict, key: str, path: str, *, low: int, high: int | None, required: bool,
-           what: str) -> int | None:
-    """A whole number ``low`` ≤ n (≤ ``high``) at ``path.key``."""
-    full = f"{path}.{key}"
-    if key not in t:
-        if required:
-            r.fail(full, f"missing: {what} (a whole number)")
-        return None
-    v = t[key]
-    if isinstance(v, float) and v.is_integer():
-        v = int(v)
-    if isinstance(v, bool) or not isinstance(v, int):
-        r.fail(full, f"expected a whole number ({what}), got {kind_of(v) if not isinstance(v, float) else f'{v:g}'}")
-    if v < low or (high is not None and v > high):
-        r.fail(full, f"{v} is not {what}: expected a whole number from {low}" + (f" to {high}" if high else " up"))
-    return v
-
+    run.convention = _convention_of(r, t, path)
+    run.length = None if length == L_B else length
+    return run
 
 def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
     P = "probe"
@@ -584,7 +546,7 @@ def _priors(r: TomlReader, t: dict, deviations: dict | None = None) -> dict[str,
     return out
 
 
-def _design(r: TomlReader, t: dict) -> DesignGoal:
+def _design(r: TomlReader, t: dict, table: dict | None) -> DesignGoal:
     """``[design]``: ``targets`` (quantity -> standard uncertainty, ″ or µm), ``contraction`` (0 < c < 1),
     ``budget_min`` (> 0) and ``times`` (machine-time overrides, minutes; their names are the planner's)."""
     P = "design"
@@ -593,9 +555,10 @@ def _design(r: TomlReader, t: dict) -> DesignGoal:
     for key in r.table(t, "targets", P, required=False) or {}:
         full = f"{P}.targets.{key}"
         name, unit = units.split_unit_key(key)
-        q = QUANTITIES.get(name)
+        known = QUANTITIES if table is None else table  # a described machine's deviations by name
+        q = known.get(name)
         if q is None or unit not in (None, q.unit):
-            r.fail(full, "unknown quantity: expected a canonical name (" + ", ".join(QUANTITIES) + "), with or "
+            r.fail(full, "unknown quantity: expected a canonical name (" + ", ".join(known) + "), with or "
                    "without its unit (alpha_BT_arcsec for an angle, dy_CZ_um for a length)")
         if name in goal.targets:
             r.fail(full, f"a second target for {name}: give it once")

@@ -105,7 +105,7 @@ def planned_run_dict(run: PlannedRun) -> dict:
     return d
 
 
-def design_to_dict(g: DesignGoal) -> dict:
+def design_to_dict(g: DesignGoal, quantities: dict | None = None) -> dict:
     """The ``[design]`` table: targets with their unit (``alpha_BT_arcsec``), contraction, budget, time overrides."""
     d: dict = {}
     if g.contraction is not None:
@@ -113,7 +113,8 @@ def design_to_dict(g: DesignGoal) -> dict:
     if g.budget_min is not None:
         d["budget_min"] = g.budget_min
     if g.targets:
-        d["targets"] = {f"{n}_{QUANTITIES[n].unit}": float(v) for n, v in g.targets.items()}
+        table = QUANTITIES if quantities is None else quantities  # a described machine's deviations
+        d["targets"] = {f"{n}_{table[n].unit}": float(v) for n, v in g.targets.items()}
     if g.times:
         d["times"] = {k: float(v) for k, v in g.times.items()}
     return d

@@ -5,7 +5,8 @@ the spindle's ``point_mm``); ``[ballbar.mounts.<id>] position_mm`` (the W-ball c
 workpiece side); ``[[ballbar.runs]]`` with ``pattern`` (``<axis><R|T|A|X|Y|Z>``), ``setup``, ``mount``, optional
 ``arc_deg`` (the swivelled axis' angles: ``[start, end]`` with ``step_deg``, default the axis' own grid) and
 ``hold_deg`` (the other rotary axes, degrees), and the pattern's two components as arrays of repeats
-(``ex_um``, ``ey_um`` for a pattern about Z).
+(``ex_um``, ``ey_um`` for a pattern about Z) — or, for a run planned but not yet measured, ``planned = true`` with
+``repeats`` (and optionally ``minutes``, ``why``, ``order``), as ``design`` writes them.
 
 ``[probe]``: ``[probe.styli.<id>] length_mm`` (spindle point to stylus-ball centre; with ``ball_radius_mm``, to its
 tip); ``[[probe.runs]]`` with ``stylus`` (or its length ``R_B_mm``: a stylus of the run's own), ``sphere_mm`` (its nominal centre at the home pose, workpiece side),
@@ -18,9 +19,10 @@ from __future__ import annotations
 import numpy as np
 
 from .. import units
-from ..campaign import Ballbar, Mount, Probe, ProbeRun, Run, Setup
+from ..campaign import Ballbar, Mount, PlannedRun, Probe, ProbeRun, Run, Setup
 from ..machines.description import MachineDescription
 from ..machines.patterns import DIRECTIONS, axis_of, components, default_arc_deg
+from .planned_runs import PLANNED_KEYS, planned_in_order, planned_run
 from .toml_reader import TomlReader, kind_of
 
 #: bar length and accuracy of a campaign without ball-bar data (nothing reads them then)
@@ -45,27 +47,33 @@ def described_ballbar(r: TomlReader, t: dict | None, desc: MachineDescription) -
     raw = t.get("runs", [])
     if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
         r.fail(f"{P}.runs", "expected one or more [[ballbar.runs]] tables")
-    runs = [_run(r, x, f"{P}.runs[{i}]", desc, setups=setups, mounts=mounts) for i, x in enumerate(raw)]
+    items = [_run(r, x, f"{P}.runs[{i}]", desc, setups=setups, mounts=mounts) for i, x in enumerate(raw)]
     seen: dict[tuple, int] = {}
-    for i, run in enumerate(runs):
+    for i, run in enumerate(items):
         key = (run.pattern, run.setup, run.mount, tuple(np.round(run.arc_deg, 9)),
                tuple(sorted((run.hold_deg or {}).items())))
         if key in seen:
-            r.fail(f"{P}.runs[{i}]", f"the same measurement as {P}.runs[{seen[key]}]: put all repeats of one "
-                   "measurement in one run's arrays")
+            both = "plan one run with all its repeats (repeats = N)" if isinstance(run, PlannedRun) else \
+                "put all repeats of one measurement in one run's arrays"
+            r.fail(f"{P}.runs[{i}]", f"the same measurement as {P}.runs[{seen[key]}]: {both}")
         seen[key] = i
-    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs)
+    runs = [x for x in items if isinstance(x, Run)]
+    planned = planned_in_order(r, [(i, x) for i, x in enumerate(items) if isinstance(x, PlannedRun)], P)
+    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, planned=planned)
 
 
-def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups, mounts) -> Run:
+def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups, mounts) -> Run | PlannedRun:
     pattern = r.string(t, "pattern", path, required=True)
     try:
         ax = axis_of(desc, pattern)
     except ValueError as err:
         r.fail(f"{path}.pattern", str(err))
     comps = components(desc, pattern)
-    r.check_keys(t, {"pattern", "setup", "mount", "arc_deg", "step_deg", "hold_deg", *(f"{c}_um" for c in comps)},
-                 path)
+    r.check_keys(t, {"pattern", "setup", "mount", "arc_deg", "step_deg", "hold_deg", "planned", *PLANNED_KEYS,
+                     *(f"{c}_um" for c in comps)}, path)
+    planned = t.get("planned", False)
+    if not isinstance(planned, bool):
+        r.fail(f"{path}.planned", f"expected true (a run planned but not yet measured) or false, got {kind_of(planned)}")
     setup, mount = r.string(t, "setup", path, required=True), r.string(t, "mount", path, required=True)
     if setup not in setups:
         r.fail(f"{path}.setup", f"no tool setup {setup!r} in [ballbar.setups] (have: {', '.join(setups)})")
@@ -73,6 +81,20 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
         r.fail(f"{path}.mount", f"no mount {mount!r} in [ballbar.mounts] (have: {', '.join(mounts)})")
     arc = _arc(r, t, path, ax)
     hold = _hold(r, t, path, desc, swivelled=pattern[0])
+    if planned:
+        data = [f"{c}_um" for c in comps if f"{c}_um" in t]
+        if data:
+            r.fail(f"{path}.planned", f"planned = true but the run has data ({', '.join(data)}): once it is "
+                   "measured, delete planned and repeats")
+        if "length_mm" in t:
+            r.fail(f"{path}.length_mm", "a described machine's campaign has one bar length ([ballbar] length_mm)")
+        run = planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount)
+        run.arc_deg, run.hold_deg = arc, hold
+        return run
+    for key in PLANNED_KEYS:
+        if key in t:
+            r.fail(f"{path}.{key}", "only a planned run (planned = true) has this key; a measured run gives its "
+                   "repeats as arrays")
     repeats = {}
     for c in comps:
         v = r.array(t, f"{c}_um", path, (None,))

@@ -7,6 +7,7 @@ import numpy as np
 from .. import units
 from ..campaign import Campaign
 from ..machines.description import FRAME, MachineDescription
+from ..machines.deviations import quantities as deviation_table
 from ..parameters import quantity_unit
 from .truth_table import truth_to_dict
 
@@ -59,14 +60,16 @@ def described_to_dict(c: Campaign, doc: dict) -> dict:
         b["mounts"] = {mt.id: {"position_mm": [float(x) for x in mt.position]} for mt in bb.mounts.values()}
         b["runs"] = []
         for run in bb.runs:
-            d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount}
-            arc = np.asarray(run.arc_deg, dtype=float)
-            d["arc_deg"] = [float(arc[0]), float(arc[-1])]
-            d["step_deg"] = float(arc[1] - arc[0])
-            if run.hold_deg:
-                d["hold_deg"] = {k: float(v) for k, v in run.hold_deg.items()}
+            d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run)}
             d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
             b["runs"].append(d)
+        for run in bb.planned:  # after the measured runs, in measuring order
+            d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
+                 "planned": True, "repeats": int(run.repeats)}
+            d.update({k: v for k, v in (("minutes", run.minutes), ("order", run.order), ("why", run.why)) if v})
+            b["runs"].append(d)
+        if not b["runs"]:
+            del b["runs"]  # a machine with set-ups and mounts only
         doc["ballbar"] = b
     p = c.probe
     if p is not None:
@@ -86,4 +89,20 @@ def described_to_dict(c: Campaign, doc: dict) -> dict:
                                                             for k, v in spec.items() if k != "dist"}}
     if c.truth is not None:
         doc["truth"] = truth_to_dict(c.truth)
+    if c.design is not None:
+        from .campaign_writer import design_to_dict
+
+        doc["design"] = design_to_dict(c.design, quantities=deviation_table(m.description))
     return doc
+
+
+def _arc_hold(run) -> dict:
+    """``arc_deg``, ``step_deg`` and ``hold_deg`` of a run (measured or planned)."""
+    d: dict = {}
+    if run.arc_deg is not None:
+        arc = np.asarray(run.arc_deg, dtype=float)
+        d["arc_deg"] = [float(arc[0]), float(arc[-1])]
+        d["step_deg"] = float(arc[1] - arc[0])
+    if run.hold_deg:
+        d["hold_deg"] = {k: float(v) for k, v in run.hold_deg.items()}
+    return d

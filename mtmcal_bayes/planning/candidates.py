@@ -43,7 +43,8 @@ class Candidate:
     ``setup``/``mount`` carry the geometry (mm); their ids name the nuisance
     parameters, so a candidate at an existing setup shares its offsets.
     ``repeat_of`` is the index of the campaign run it repeats (``None`` for a
-    new run); ``extension`` the tool-length difference to the primary setup, mm.
+    new run); ``extension`` the tool-length difference to the primary setup, mm; ``arc_deg``, ``hold_deg``
+    a described machine's arc and held axes (:mod:`.described_candidates`).
     """
 
     name: str
@@ -55,6 +56,10 @@ class Candidate:
     repeats: int = DEFAULT_REPEATS
     repeat_of: int | None = None
     extension: float | None = None
+    #: a described machine's run: the swivelled axis' arc ``(start, end, step)`` degrees (None: the axis' default
+    #: grid) and the held rotary axes ``((letter, degrees), ...)``
+    arc_deg: tuple[float, float, float] | None = None
+    hold_deg: tuple[tuple[str, float], ...] = ()
 
 
 def candidate_mount(campaign: Campaign, pattern: str) -> Mount:

@@ -204,20 +204,53 @@ class Planner:
             A.append(probe.design if model == "linear" else self._jacobian(probe))
             V.append(probe.observations.noise_variance() + self.sigma_probe**2)
         self.A, self.V = np.vstack(A), np.concatenate(V)
-        self.T = np.zeros((len(self.targets), len(self.space)))
+        self.T = self.target_matrix(self.space)
+        self.target_units = [QUANTITIES[t].unit for t in self.targets]
+
+    def retarget(self, targets: list[str]) -> None:
+        """Value ``targets`` instead (names checked as at construction; the rows are kept)."""
+        self.targets = self._checked(targets)
+        self.T = self.target_matrix(self.space)
+        self.target_units = [self._unit(t) for t in self.targets]
+
+    def _checked(self, targets) -> list[str]:
+        return check_targets(targets)
+
+    def _unit(self, target: str) -> str:
+        return QUANTITIES[target].unit
+
+    # ------------------------------------------------------------------ what depends on the machine
+    def target_matrix(self, space: ParameterSpace) -> np.ndarray:
+        """``T`` (t, P): each target's deviation weights over ``space``."""
+        T = np.zeros((len(self.targets), len(space)))
         for i, t in enumerate(self.targets):
             for name, w in weights(t).items():
-                self.T[i, self.space.index(name)] = w
-        self.target_units = [QUANTITIES[t].unit for t in self.targets]
+                T[i, space.index(name)] = w
+        return T
+
+    def space_for(self, campaign) -> ParameterSpace:
+        """The ball-bar parameter space of ``campaign`` (its set-ups and mounts, the sampled deviations)."""
+        bb = campaign.ballbar
+        return ParameterSpace(list(bb.setups), list(bb.mounts), SAMPLED_DEVIATIONS)
+
+    def rows_for(self, campaign, space: ParameterSpace) -> np.ndarray:
+        """Rows ``(m, P)`` of ``campaign``'s ball-bar runs over ``space``: the linear model, or a kinematic model
+        linearised at zero."""
+        if self.model == "linear":
+            return LinearModel(campaign, space).design
+        from ..models.kinematic import HTMModel
+
+        return self._jacobian(HTMModel(campaign, self.model, space))
+
+    def as_run(self, candidate: Candidate) -> Run:
+        """A new-run candidate as a campaign run (zero readings, ``repeats`` each: rows do not depend on them)."""
+        return Run(candidate.pattern, candidate.setup.id, candidate.mount.id,
+                   {comp: np.zeros(candidate.repeats) for comp in COMPONENTS[candidate.pattern]})
 
     # ------------------------------------------------------------------ rows
     def _design(self, campaign) -> np.ndarray:
-        """Design matrix ``(m, P)`` of ``campaign``'s runs: the linear model, or a kinematic model linearised at zero."""
-        if self.model == "linear":
-            return LinearModel(campaign, self.space).design
-        from ..models.kinematic import HTMModel
-
-        return self._jacobian(HTMModel(campaign, self.model, self.space))
+        """Design matrix ``(m, P)`` of ``campaign``'s runs over the planner's space (:meth:`rows_for`)."""
+        return self.rows_for(campaign, self.space)
 
     @staticmethod
     def _jacobian(model) -> np.ndarray:
@@ -262,9 +295,7 @@ class Planner:
         bb.length = length
         bb.setups, bb.mounts = self._setups, self._mounts
         m0 = len(bb.runs)
-        bb.runs = list(bb.runs) + [Run(c.pattern, c.setup.id, c.mount.id,
-                                       {comp: np.zeros(c.repeats) for comp in COMPONENTS[c.pattern]})
-                                   for c in candidates]
+        bb.runs = list(bb.runs) + [self.as_run(c) for c in candidates]
         aug.ballbar = bb
         design = self._design(aug)
         keys = Observations.from_campaign(aug).keys

@@ -11,7 +11,8 @@ prior learnt elsewhere, drawn from and inferred with that prior, and measured ag
 and the learnt prior's variance, :meth:`.design.Planner.contraction_reference`).
 
 For a kinematic model the rows are its Jacobian at zero deviations (the model linearised), as in the
-planner.
+planner; the space, rows and targets are the planner's (:meth:`.design.Planner.rows_for`: on a described machine,
+its chain's first order).
 """
 
 from __future__ import annotations
@@ -21,12 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import units
-from ..inference.log_posterior import SAMPLED_DEVIATIONS
 from ..inference.marginal import MarginalPosterior
 from ..inference.priors import make_prior
-from ..models.linear import LinearModel
 from ..observations import Observations
-from ..parameters import ParameterSpace, weights
 from .design import Planner
 from .design_runs import DesignedRun, with_runs
 
@@ -68,35 +66,23 @@ class Preposterior:
         return float(np.mean(np.all(self.sd <= tg, axis=1)))
 
 
-def _rows(planner: Planner, campaign, space: ParameterSpace) -> np.ndarray:
-    if planner.model == "linear":
-        return LinearModel(campaign, space).design
-    from ..models.kinematic import HTMModel, jacobian
-
-    return jacobian(HTMModel(campaign, planner.model, space))
-
-
 def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SIM, seed: int | None = 0) -> Preposterior:
     """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring)."""
     rng = np.random.default_rng(seed)
     campaign = planner.campaign
-    aug = with_runs(campaign, runs)
-    bb = aug.ballbar
-    space = ParameterSpace(list(bb.setups), list(bb.mounts), SAMPLED_DEVIATIONS)
+    aug = with_runs(campaign, runs, planner.as_run)
+    space = planner.space_for(aug)
     priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in space.parameters]
     prior_var = np.array([p.sd for p in priors]) ** 2
     prior_mean = np.array([p.mean for p in priors])
-    A = _rows(planner, aug, space)
+    A = planner.rows_for(aug, space)
     keys = Observations.from_campaign(aug).keys
     m0 = len(campaign.ballbar.runs)
     new = np.array([k.run >= m0 for k in keys])
     sigma0 = planner.sigma_model
     base_now = planner.V - sigma0**2
     base_new = np.array([planner.noise_var(runs[k.run - m0].repeats) - sigma0**2 for k in keys if k.run >= m0])
-    T = np.zeros((len(planner.targets), len(space)))
-    for i, t in enumerate(planner.targets):
-        for name, w in weights(t).items():
-            T[i, space.index(name)] = w
+    T = planner.target_matrix(space)
     sigma_prior = planner.sigma_prior()
     # the grid of the simulated campaigns' posteriors: the prior's range, widened to where the measured data put σ
     lo, hi = float(sigma_prior.ppf(1e-5)), float(sigma_prior.ppf(0.99999))

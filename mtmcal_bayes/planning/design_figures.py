@@ -114,7 +114,8 @@ def write_design_html(design, out_dir, *, doc: dict, runs: pd.DataFrame, expecte
     ])
     page.section("schedule", "Schedule")
     page.figure(out / "design_timeline.png", TIMELINE_CAPTION, "time line of the designed campaign")
-    page.table(runs[["pattern", "setup", "mount", "R_B_mm", "R_C_mm", "repeats", "minutes", "program", "why"]],
+    where = ["R_C_mm"] if "R_C_mm" in runs else ["position_mm", "arc_deg", "hold_deg"]  # a described machine's
+    page.table(runs[["pattern", "setup", "mount", "R_B_mm", *where, "repeats", "minutes", "program", "why"]],
                digits={"R_B_mm": 1, "R_C_mm": 0, "minutes": 1})
     page.section("expected", "Expected uncertainty")
     page.figure(out / "design_sd.png", SD_CAPTION, "sd before and after the design")

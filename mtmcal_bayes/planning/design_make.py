@@ -23,7 +23,9 @@ from ..errors import InputError, ParameterError
 from ..iso import thesis_name
 from ..machine_time import TimeModel
 from ..parameters import IDENTIFIABLE
-from .candidates import Candidate, catalogue, feasibility_check
+from .candidates import Candidate
+from .described_candidates import catalogue_of, feasibility_of
+from .described_planner import described_targets, planner_for
 from .design import Planner, check_targets
 from .design_check import Preposterior, preposterior
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
@@ -73,12 +75,16 @@ class Design:
         return self.timing.total(self.runs, self.start)
 
 
-def parse_targets(targets: dict | None) -> dict[str, float]:
-    """``{quantity: sd}`` (display units; ISO symbols allowed) checked: known names, positive finite sds."""
+def parse_targets(targets: dict | None, desc=None) -> dict[str, float]:
+    """``{quantity: sd}`` (display units; ISO symbols allowed) checked: known names, positive finite sds; ``desc`` a
+    described machine's description (its deviations' names), None the thesis machine's."""
     out = {}
     for name, sd in (targets or {}).items():
-        q = thesis_name(str(name))
-        check_targets([q])
+        if desc is None:
+            q = thesis_name(str(name))
+            check_targets([q])
+        else:
+            q = described_targets([str(name)], desc)[0]
         try:
             v = float(sd)
         except (TypeError, ValueError):
@@ -125,7 +131,7 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
     campaign's bar length) and the catalogue's new ball-bar runs within the travels, one candidate per pattern,
     set-up, mount and repeats (the first given)."""
     out = []
-    fits = feasibility_check(campaign)
+    fits = feasibility_of(campaign)
     for i, c in enumerate(extra or []):
         ok, why = fits(c)
         where = f"candidate[{i}]" if c.kind == "user" else f"planned run {c.name}"
@@ -135,12 +141,12 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
             raise InputError(source, f"{where}.length_mm", f"{c.length:g} mm: a campaign has one bar length "
                              f"({campaign.ballbar.length:g} mm); design another bar length as a campaign of its own")
         out.append(c)
-    for c in catalogue(campaign):
+    for c in catalogue_of(campaign):
         if c.repeat_of is None and c.kind != "bar length" and fits(c)[0]:
             out.append(c)
     seen, unique = set(), []
     for c in out:
-        key = (c.pattern, c.setup.id, c.mount.id, c.repeats)
+        key = (c.pattern, c.setup.id, c.mount.id, c.repeats, c.arc_deg, c.hold_deg)
         if key not in seen:
             seen.add(key)
             unique.append(c)
@@ -220,13 +226,21 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         raise ParameterError("contraction", f"must lie between 0 and 1, got {contraction!r}")
     if budget_min is not None and not (math.isfinite(budget_min) and budget_min > 0):
         raise ParameterError("budget_min", f"must be a positive number of minutes, got {budget_min!r}")
-    want = parse_targets(targets)
+    described = campaign.machine.described
+    want = parse_targets(targets, campaign.machine.description if described else None)
     cands = design_candidates(campaign, candidates, candidates_source)
     taken = set(campaign.ballbar.mounts) | {c.mount.id for c in cands}
     if not cands:
         raise ParameterError("candidates", "no candidate run fits the machine's travels")
-    names = list(dict.fromkeys(list(want) + [q for q in (tolerances or {}) if q in IDENTIFIABLE] + list(IDENTIFIABLE)))
-    planner = Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
+    if described:  # the deviations the catalogue determines one by one, and the wanted ones
+        planner = planner_for(campaign, cands, None, model=model, sigma_prior=sigma_prior)
+        known = set(planner.targets) | set(want)
+        names = list(dict.fromkeys(list(want) + [q for q in (tolerances or {}) if q in known] + planner.targets))
+        planner.retarget(names)
+    else:
+        names = list(dict.fromkeys(list(want) + [q for q in (tolerances or {}) if q in IDENTIFIABLE]
+                                   + list(IDENTIFIABLE)))
+        planner = Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
     if tolerances:
         for q, sd in targets_from_tolerances(planner, tolerances).items():
             want.setdefault(q, sd)
@@ -237,7 +251,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     timing = Timing(campaign, time_model or TimeModel())
     start = start or (False, None, None)
     goal = Goal(_goal_vector(planner, want), contraction, budget_min)
-    minutes = lambda counts: timing.total(designed_runs(cands, counts, taken), start)  # noqa: E731
+    minutes = lambda counts: timing.total_of_counts(cands, counts, start)  # noqa: E731
     search = Search(problem, goal, minutes)
     _check_budget(search, goal)
     if goal.has_targets:

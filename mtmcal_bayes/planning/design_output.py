@@ -13,6 +13,7 @@ from .. import units
 from ..campaign import DesignGoal, PlannedRun
 from .design_make import Design
 from .design_problem import PROMISE
+from .described_candidates import arc_of
 from .design_runs import geometry_of
 from .next_run import NextStep
 
@@ -36,8 +37,19 @@ RUN_COLUMNS = ["order", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm
                "repeats", "minutes", "program", "why", "candidate"]
 
 
+#: ... on a described machine: the W ball's position, the arc and the held axes instead of the thesis' lever arms
+DESCRIBED_RUN_COLUMNS = ["order", "pattern", "setup", "mount", "R_B_mm", "position_mm", "arc_deg", "hold_deg",
+                         "length_mm", "repeats", "minutes", "program", "why", "candidate"]
+
+
+def run_columns(design: Design) -> list[str]:
+    return DESCRIBED_RUN_COLUMNS if design.campaign.machine.described else RUN_COLUMNS
+
+
 def run_records(design: Design, programs: bool = False) -> list[dict]:
     """The ``runs`` of ``design --json``, in measuring order."""
+    if design.campaign.machine.described:
+        return _described_records(design, programs)
     out = []
     for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1):
         out.append({"order": i, "pattern": r.pattern, "setup": r.setup.id, "mount": r.mount.id,
@@ -46,6 +58,31 @@ def run_records(design: Design, programs: bool = False) -> list[dict]:
                     "program": program_name(i, r.pattern) if programs else None, "why": why,
                     "candidate": r.candidate.name})
     return out
+
+
+def _described_records(design: Design, programs: bool) -> list[dict]:
+    out = []
+    for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1):
+        arc = arc_of(r.candidate, design.campaign.machine.description)
+        out.append({"order": i, "pattern": r.pattern, "setup": r.setup.id, "mount": r.mount.id,
+                    "R_B_mm": _mm(r.setup.R_B), "position_mm": [_mm(x) for x in r.mount.position],
+                    "arc_deg": [float(arc[0]), float(arc[-1]), float(arc[1] - arc[0])],
+                    "hold_deg": {a: float(v) for a, v in r.candidate.hold_deg}, "length_mm": _mm(r.length),
+                    "repeats": r.repeats, "minutes": round(m, 2),
+                    "program": program_name(i, r.pattern) if programs else None, "why": why,
+                    "candidate": r.candidate.name})
+    return out
+
+
+def _where(rec: dict) -> str:
+    """The geometry of a run record, for the text: the thesis' lever arms, or a described machine's W ball, arc and
+    held axes."""
+    if "position_mm" not in rec:
+        return f"R_B {rec['R_B_mm']:.1f} mm, R_C {rec['R_C_mm']:.0f} mm"
+    x, y, z = rec["position_mm"]
+    lo, hi, _ = rec["arc_deg"]
+    held = "".join(f", {a} at {v:g}°" for a, v in rec["hold_deg"].items())
+    return f"R_B {rec['R_B_mm']:.1f} mm, W ({x:g}, {y:g}, {z:g}) mm, {lo:g}…{hi:g}°{held}"
 
 
 def expected(design: Design) -> dict:
@@ -84,7 +121,7 @@ def design_text(design: Design) -> str:
              f"(set-up changes included)", ""]
     for rec in run_records(design):
         lines.append(f"{rec['order']:>3}. {rec['pattern']:<3} setup {rec['setup']:<10} mount {rec['mount']:<12} "
-                     f"R_B {rec['R_B_mm']:.1f} mm, R_C {rec['R_C_mm']:.0f} mm, {rec['repeats']}× "
+                     f"{_where(rec)}, {rec['repeats']}× "
                      f"{rec['minutes']:6.1f} min  {rec['why']}")
     lines += ["", f"{'quantity':<18} {'sd now':>9} {'after':>9} {'10–90 %':>17} {'target':>8} {'met in':>7}"]
     for t, e in expected(design).items():
@@ -119,6 +156,10 @@ def designed_campaign(design: Design, goal: DesignGoal | None = None):
     bb.setups, bb.mounts = geometry_of(base, design.runs)
     bb.planned = [PlannedRun(r.pattern, r.setup.id, r.mount.id, r.repeats, minutes=round(m, 1), why=why, order=i)
                   for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)]
+    if base.machine.described:  # each planned run with its arc and held axes
+        desc = base.machine.description
+        for p, r in zip(bb.planned, design.runs):
+            p.arc_deg, p.hold_deg = arc_of(r.candidate, desc), dict(r.candidate.hold_deg) or None
     out.ballbar = bb
     targets = {t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)}
     out.design = goal or DesignGoal(targets, design.goal.contraction, design.goal.budget, {})
@@ -127,8 +168,7 @@ def designed_campaign(design: Design, goal: DesignGoal | None = None):
 
 def write_design(design: Design, out_dir, *, program, times: dict | None = None) -> tuple[list[str], str]:
     """Write design.json, campaign.toml, programs/NN_<pattern>.nc and design.html into ``out_dir``; ``program``
-    (pattern, campaign, setup id, mount id) -> NC text.  Returns the files written (relative) and the campaign's
-    path."""
+    (campaign, planned run) -> NC text.  Returns the files written (relative) and the campaign's path."""
     from ..io.campaign_writer import save_campaign
     from ..io.json_text import json_text
     from ..io.textfiles import atomic_directory
@@ -142,9 +182,8 @@ def write_design(design: Design, out_dir, *, program, times: dict | None = None)
     files = []
     with atomic_directory(out) as tmp:  # all of it or nothing (programs/ replaced whole: no earlier design's left)
         (tmp / "programs").mkdir()
-        for i, r in enumerate(design.runs, start=1):
-            (tmp / program_name(i, r.pattern)).write_text(program(r.pattern, camp, r.setup.id, r.mount.id),
-                                                          encoding="utf-8")
+        for i, (r, p) in enumerate(zip(design.runs, camp.ballbar.planned), start=1):
+            (tmp / program_name(i, r.pattern)).write_text(program(camp, p), encoding="utf-8")
             files.append(program_name(i, r.pattern))
         save_campaign(camp, tmp / "campaign.toml", header="designed by mtmcal-bayes design: fill in each planned run "
                       "once measured (delete planned and repeats, give ex_um/ey_um/ez_um), then run mtmcal-bayes next")
@@ -152,7 +191,7 @@ def write_design(design: Design, out_dir, *, program, times: dict | None = None)
         doc = design_document(design, str(path), programs=True)
         (tmp / "design.json").write_text(json_text(doc) + "\n", encoding="utf-8")
         files.insert(0, "design.json")
-        runs = pd.DataFrame(run_records(design, programs=True), columns=RUN_COLUMNS).set_index("order")
+        runs = pd.DataFrame(run_records(design, programs=True), columns=run_columns(design)).set_index("order")
         files += write_design_html(design, tmp, doc=doc, runs=runs, expected=expected_table(design))
     return files, str(path)
 
@@ -190,9 +229,10 @@ def next_text(step: NextStep) -> str:
             lines.append(f"planned runs not needed: {', '.join(step.planned_left)}")
     else:
         r = run_records(step.design)[0]
-        lines.append(f"measure next: {r['pattern']} at setup {r['setup']} (R_B {r['R_B_mm']:.1f} mm), mount "
-                     f"{r['mount']} (R_C {r['R_C_mm']:.0f} mm), {r['repeats']} repeats, ~{r['minutes']:.0f} min — "
-                     f"{r['why']}")
+        where = (f"{r['setup']} (R_B {r['R_B_mm']:.1f} mm), mount {r['mount']} (R_C {r['R_C_mm']:.0f} mm)"
+                 if "R_C_mm" in r else f"{r['setup']}, mount {r['mount']} ({_where(r)})")
+        lines.append(f"measure next: {r['pattern']} at setup {where}, {r['repeats']} repeats, "
+                     f"~{r['minutes']:.0f} min — {r['why']}")
         lines.append(f"time left: {step.minutes_left:.0f} min for {len(step.design.runs)} run(s); every target met "
                      f"at the end in {step.probability_targets_met:.0%} of simulated machines")
         if step.dropped:
@@ -264,4 +304,4 @@ def write_next(step: NextStep, out_dir, *, program, times: dict | None = None) -
 
 
 __all__ = ["DesignResult", "NextResult", "write_next", "design_document", "design_text", "designed_campaign", "write_design", "next_document", "next_text",
-           "run_records", "expected", "expected_table", "program_name"]
+           "run_records", "run_columns", "expected", "expected_table", "program_name"]

@@ -57,7 +57,7 @@ def designed_runs(candidates: list[Candidate], counts: np.ndarray, taken=()) -> 
             if i > 1:
                 while f"{c.mount.id}#{n}" in used:
                     n += 1
-                mount = Mount(f"{c.mount.id}#{n}", c.mount.Z_C, c.mount.R_C)
+                mount = Mount(f"{c.mount.id}#{n}", c.mount.Z_C, c.mount.R_C, position=c.mount.position)
                 used.add(mount.id)
             out.append(DesignedRun(c, i, c.setup, mount))
     return out
@@ -72,14 +72,24 @@ def geometry_of(campaign: Campaign, runs: list[DesignedRun]) -> tuple[dict[str, 
     return setups, mounts
 
 
-def with_runs(campaign: Campaign, runs: list[DesignedRun]) -> Campaign:
+def with_runs(campaign: Campaign, runs: list[DesignedRun], as_run=None) -> Campaign:
     """A copy of ``campaign`` with ``runs`` appended as runs of zero eccentricities (``repeats`` each): the rows
-    of the forward models for them, after the measured runs' rows."""
+    of the forward models for them, after the measured runs' rows.  ``as_run(candidate) -> Run`` makes a candidate a
+    run (:meth:`.design.Planner.as_run`: a described machine's carries its arc and held axes); the run is placed at
+    its designed mount."""
     aug = copy.copy(campaign)
     bb = copy.copy(campaign.ballbar)
     bb.setups, bb.mounts = geometry_of(campaign, runs)
-    bb.runs = list(bb.runs) + [Run(r.pattern, r.setup.id, r.mount.id,
-                                   {comp: np.zeros(r.repeats) for comp in COMPONENTS[r.pattern]}) for r in runs]
+    made = []
+    for r in runs:
+        if as_run is None:
+            made.append(Run(r.pattern, r.setup.id, r.mount.id,
+                            {comp: np.zeros(r.repeats) for comp in COMPONENTS[r.pattern]}))
+        else:
+            run = as_run(r.candidate)
+            run.setup, run.mount = r.setup.id, r.mount.id
+            made.append(run)
+    bb.runs = list(bb.runs) + made
     aug.ballbar = bb
     return aug
 

@@ -2,7 +2,39 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..machine_time import MachineClock, TimeModel, canonical_order
+from ..machines.patterns import pattern_commands
+from .described_candidates import arc_of
+
+
+class DescribedClock(MachineClock):
+    """The time model on a described machine: a run's ``path`` is the length of its linear-axis commands (X, Y, Z)
+    over its arc, ``span`` the arc in degrees, and a run holding another rotary axis off 0 adds
+    ``index_rotary_min`` (:mod:`mtmcal_bayes.machine_time`).  Runs are designed runs (``.candidate``)."""
+
+    def __init__(self, model: TimeModel, campaign):
+        bb = campaign.ballbar
+        super().__init__(model, L_B=bb.length, feed=bb.feed_mm_per_min)
+        self.desc = campaign.machine.description
+        self._cache: dict[int, float] = {}
+
+    def run_minutes(self, run) -> float:
+        c = run.candidate
+        key = id(c)
+        if key not in self._cache:
+            arc = arc_of(c, self.desc)
+            cmd = pattern_commands(self.desc, c.pattern, length=c.setup.R_B, ball=c.mount.position, bar=c.length,
+                                   arc_deg=arc, hold_deg=dict(c.hold_deg) or None)
+            xyz = np.stack([cmd.q[a] for a in "XYZ"], axis=-1)
+            path = float(np.sum(np.linalg.norm(np.diff(xyz, axis=0), axis=1)))
+            span = float(arc[-1] - arc[0])
+            m = self.model
+            one = max(path / self.feed_mm_per_min, span / m.rotary_deg_per_min)
+            index = m.index_rotary_min if any(v != 0 for _, v in c.hold_deg) else 0.0
+            self._cache[key] = m.dwell_min + index + c.repeats * m.directions * one
+        return self._cache[key]
 
 
 class Timing:
@@ -15,7 +47,8 @@ class Timing:
     def __init__(self, campaign, model: TimeModel):
         bb = campaign.ballbar
         self.model = model
-        self.clock = MachineClock(model, L_B=bb.length, cr_geometry=bb.cr_geometry, feed=bb.feed_mm_per_min)
+        self.clock = DescribedClock(model, campaign) if campaign.machine.described else \
+            MachineClock(model, L_B=bb.length, cr_geometry=bb.cr_geometry, feed=bb.feed_mm_per_min)
 
     def order(self, runs, start) -> list[int]:
         return canonical_order(runs, start[1], start[2])
@@ -32,3 +65,50 @@ class Timing:
     def events(self, runs, start):
         """The schedule's events of the ordered ``runs``."""
         return self.clock.schedule(runs, start).events
+
+    def total_of_counts(self, candidates, counts, start) -> float:
+        """:meth:`total` of the runs of ``counts`` (K,) of ``candidates`` (as :func:`.design_runs.designed_runs`
+        makes them: a candidate's further runs each on a placement of its own) without making them: the same
+        schedule walked over (set-up, placement) keys, its minutes added in the same order (the same float)."""
+        seq = []  # (setup id, placement key, candidate index) in designed order
+        for k in np.flatnonzero(counts):
+            c = candidates[k]
+            seq += [(c.setup.id, c.mount.id if i == 0 else ("again", int(k), i), int(k)) for i in range(int(counts[k]))]
+        setups = list(dict.fromkeys(s for s, _, _ in seq))
+        if start[1] in setups:
+            setups.remove(start[1])
+            setups.insert(0, start[1])
+        m, clock = self.model, self.clock
+        mounted, setup, mount = start
+        t = 0.0
+        for s in setups:
+            here = [x for x in seq if x[0] == s]
+            mounts = list(dict.fromkeys(x[1] for x in here))
+            if s == start[1] and start[2] in mounts:
+                mounts.remove(start[2])
+                mounts.insert(0, start[2])
+            for mt in mounts:
+                for _, _, k in (x for x in here if x[1] == mt):
+                    if not mounted:
+                        t += m.mount_ballbar_min
+                    if s != setup:
+                        t += m.tool_change_min
+                    if mt != mount:
+                        t += m.reclamp_w_ball_min
+                    if mounted and s == setup and mt == mount:
+                        t += m.pattern_change_min
+                    t += self._measure(candidates[k])
+                    mounted, setup, mount = True, s, mt
+        return t
+
+    def _measure(self, c) -> float:
+        """Measuring minutes of one run of candidate ``c`` (every run of it alike)."""
+        return self.clock.run_minutes(_AsRun(c))
+
+
+class _AsRun:
+    """A candidate seen as a run of a schedule (pattern, set-up, mount, repeats, candidate)."""
+
+    def __init__(self, c):
+        self.candidate, self.pattern, self.setup, self.mount, self.repeats = c, c.pattern, c.setup, c.mount, c.repeats
+

@@ -22,6 +22,7 @@ from ..errors import ParameterError
 from ..machine_time import TimeModel
 from ..parameters import IDENTIFIABLE
 from .candidates import Candidate
+from .described_planner import planner_for
 from .design import Planner
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets
 from .design_problem import current_posterior
@@ -64,8 +65,11 @@ def planned_candidates(campaign) -> list[Candidate]:
     out = []
     for p in bb.planned:
         s, m = bb.setups[p.setup], bb.mounts[p.mount]
+        arc = None if p.arc_deg is None or len(p.arc_deg) < 2 else \
+            (float(p.arc_deg[0]), float(p.arc_deg[-1]), float(p.arc_deg[1] - p.arc_deg[0]))
         out.append(Candidate(f"{p.label} (planned)", "planned", p.pattern, s, m, bb.length, p.repeats,
-                             extension=s.R_B - campaign.primary_setup().R_B))
+                             extension=s.R_B - campaign.primary_setup().R_B, arc_deg=arc,
+                             hold_deg=tuple((p.hold_deg or {}).items())))
     return out
 
 
@@ -89,15 +93,21 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     default to the campaign's ``[design]``; ``sigma_prior`` a σ_model prior learnt elsewhere, as for
     :func:`.design_make.make_design` (a campaign does not record the prior it was designed under: give it again)."""
     goal = campaign.design
-    want = parse_targets(targets if targets is not None else (goal.targets if goal else {}))
+    described = campaign.machine.described
+    want = parse_targets(targets if targets is not None else (goal.targets if goal else {}),
+                         campaign.machine.description if described else None)
     if contraction is None:
         contraction = goal.contraction if goal and goal.contraction is not None else CONTRACTION
     if budget_min is None and goal is not None:
         budget_min = goal.budget_min
     bb = campaign.ballbar
     cands = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []))
-    names = list(dict.fromkeys(list(want) + list(IDENTIFIABLE)))
-    planner = Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
+    if described:  # the wanted deviations and those the catalogue determines one by one
+        planner = planner_for(campaign, cands, None, model=model, sigma_prior=sigma_prior)
+        planner.retarget(list(dict.fromkeys(list(want) + planner.targets)))
+    else:
+        planner = Planner(campaign, cands, list(dict.fromkeys(list(want) + list(IDENTIFIABLE))), model=model,
+                          sigma_prior=sigma_prior)
     tg = np.array([want.get(t, np.nan) for t in planner.targets])
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     if bb.runs:

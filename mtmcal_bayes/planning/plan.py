@@ -15,6 +15,8 @@ from .candidates import (
     extended_setup,
     feasibility_check,
 )
+from .described_candidates import catalogue_of, feasibility_of, sweep_candidates
+from .described_planner import planner_for
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
 from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility, probe_skipped
@@ -108,13 +110,16 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
     ev = planner.evaluate(candidates, rows=made)
     si = planner.sigma_information(candidates, rows=made)
     rows = []
-    fits = feasibility_check(campaign)
+    fits = feasibility_of(campaign)
+    described = campaign.machine.described
     for k, c in enumerate(candidates):
         probe = isinstance(c, ProbeCandidate)
         ok, why = probe_feasibility(c, campaign) if probe else fits(c)
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
         where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
                   "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else
+                 {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": np.nan, "mount": c.mount.id,
+                  "R_C_mm": np.nan} if described else
                  {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "mount": c.mount.id,
                   "R_C_mm": c.mount.R_C})
         row = {"name": c.name, "kind": c.kind, "pattern": c.pattern, **where, "L_B_mm": c.length,
@@ -146,17 +151,22 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
 
 def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP_MM) -> pd.DataFrame:
     """Expected target sds for ``pattern`` at the primary setup plus each extension (mm)."""
-    base, mount = campaign.primary_setup(), candidate_mount(campaign, pattern)
-    cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
-                       mount, campaign.ballbar.length, extension=float(e)) for e in extensions]
-    sub = Planner(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
-                  data=planner.data, sigma_prior=planner.learnt)
+    described = campaign.machine.described
+    if described:
+        cands = sweep_candidates(campaign, pattern, extensions)
+    else:
+        base, mount = campaign.primary_setup(), candidate_mount(campaign, pattern)
+        cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
+                           mount, campaign.ballbar.length, extension=float(e)) for e in extensions]
+    sub = planner_for(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
+                      data=planner.data, sigma_prior=planner.learnt)
     ev = sub.evaluate()
     rows = []
-    fits = feasibility_check(campaign)
+    fits = feasibility_of(campaign)
     for k, (c, e) in enumerate(zip(cands, extensions)):
         ok, why = fits(c)
-        row = {"extension_mm": float(e), "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "feasible": ok,
+        row = {"extension_mm": float(e), "R_B_mm": c.setup.R_B, "Z_T_mm": np.nan if described else c.setup.Z_T,
+               "feasible": ok,
                "eig_bits": float(ev.eig_bits[k]),
                "verdict": _verdict(ok, why, bool(ev.informative[k]))}
         for i, t in enumerate(ev.targets):
@@ -212,14 +222,17 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere (None: the assumed priors): the closed form's
     σ_model (unless ``sigma_model_um``) and the probe's scale are the rms of its priors, and the σ_model information
     and the Monte-Carlo check use it (:class:`.design.Planner`)."""
-    ballbar = [c for c in catalogue(campaign) if data != "probe" or c.repeat_of is None]
-    candidates = ballbar + probe_catalogue(campaign) + list(extra or [])
+    described = campaign.machine.described
+    ballbar = [c for c in catalogue_of(campaign) if data != "probe" or c.repeat_of is None]
+    candidates = ballbar + ([] if described else probe_catalogue(campaign)) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
-    planner = Planner(campaign, candidates, targets, sigma_model=sigma, model=model, data=data, sigma_prior=sigma_prior)
+    planner = planner_for(campaign, candidates, targets, sigma_model=sigma, model=model, data=data,
+                          sigma_prior=sigma_prior)
     table, si = _tables(planner, candidates, campaign)
     if sweep_pattern is None:
         best = table[table["kind"] == "tool length"]
-        sweep_pattern = str(best.iloc[0]["pattern"]) if len(best) else "CR"
+        sweep_pattern = str(best.iloc[0]["pattern"]) if len(best) else (str(table["pattern"].iloc[0]) if described
+                                                                          else "CR")
     sweep = tool_length_sweep(planner, campaign, sweep_pattern)
     check = monte_carlo_check(planner, table)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"
@@ -229,14 +242,20 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
              f"{candidates[0].repeats if candidates else 3} times with repeat sd "
              f"{units.from_internal(planner.pooled_sd, 'um'):.2f} µm (pooled from the campaign) and instrument "
              f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm",
-             "feasible = the span of each linear-axis command fits the axis travel of [machine] (the campaign "
-             "does not give where the C axis sits within the travels)",
-             (f"touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its own "
+             ("feasible = every command of every point (the arc, the held axes, the linear axes) lies within the "
+              "travels of the machine's description" if described else
+              "feasible = the span of each linear-axis command fits the axis travel of [machine] (the campaign "
+              "does not give where the C axis sits within the travels)"),
+             ("touch-probe runs are not yet candidates on a described machine (docs/design.md)" if described else
+              f"touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its own "
               f"stylus and datum terms, readings with the probe's repeatability and sigma_model_probe = "
               f"{units.from_internal(planner.sigma_probe, 'um'):.2f} µm (rms of its prior); a B-axis run at 45° "
               "separates alpha_XB and gamma_XB, which a B = 90° reading sees only as their sum"
               if any(isinstance(c, ProbeCandidate) for c in candidates) else
               "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus")]
+    if described and planner.not_targeted and not targets:
+        notes.append(f"not targeted: {', '.join(planner.not_targeted)} — no run of the catalogue determines them one "
+                     "by one (identifiability of the campaign and every candidate together, the T ball centred)")
     notes += probe_skipped(campaign)
     if data != "ballbar":
         notes.append(f"the current posterior rests on {'both instruments' if data == 'both' else 'the probe'}: the "

@@ -1,0 +1,191 @@
+"""Candidate ball-bar runs of a described machine, generated from its description (SPEC §19, docs/design.md).
+
+The catalogue of :func:`described_catalogue`, for the campaign's primary set-up ``T`` and first mount ``W``:
+
+* every pattern ``<K><d>`` of every rotary axis K (:func:`~mtmcal_bayes.machines.patterns.patterns_of`) over K's
+  default arc (a turn by 5°, or 90° by 1° for a tilting axis), the other rotary axes at 0;
+* the same with the other rotary axes **held** at :data:`HOLD_DEG` (the first of them within the axis' travel):
+  the pattern measured in another pose of the axes above and below K;
+* tool lengths ``R_B + e`` for ``e`` in :data:`EXTENSIONS_MM` (a new set-up with its own T-ball offsets) and the
+  campaign's unmeasured set-ups;
+* the W ball at other **placements** (:data:`PLACEMENTS_MM` added to W's position: its own W-ball offsets);
+* bar lengths :data:`OTHER_L_B_MM` (for ``plan``; a design keeps the campaign's bar) and more repeats of the
+  measured runs.
+
+Every candidate is checked against the described travels (:func:`described_feasibility_check`): the arc and the
+held positions against each rotary axis' travel, every linear command of every point against each linear axis'
+travel.  A pattern whose bar has no direction (the ball on the swivelled axis' line) is no measurement and is left
+out.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..campaign import Mount, Run, Setup
+from ..machines.patterns import axis_of, components, default_arc_deg, pattern_commands, patterns_of
+from .candidates import DEFAULT_REPEATS, Candidate
+
+#: tool-length extensions of the catalogue, mm
+EXTENSIONS_MM = (50.0, 100.0, 150.0)
+#: held positions tried for the other rotary axes, degrees (the first within the axis' travel is taken)
+HOLD_DEG = (90.0, -90.0, 45.0, -45.0, 30.0, -30.0)
+#: other W-ball placements of the catalogue: offsets from the first mount's position, mm
+PLACEMENTS_MM = ((50.0, 0.0, 0.0), (0.0, 50.0, 0.0), (0.0, 0.0, 100.0))
+#: other bar lengths of the catalogue (``plan`` only), mm
+OTHER_L_B_MM = (150.0,)
+
+
+def arc_of(candidate: Candidate, desc) -> np.ndarray:
+    """The swivelled axis' angles of ``candidate`` (k,), degrees."""
+    if candidate.arc_deg is None:
+        return default_arc_deg(axis_of(desc, candidate.pattern))
+    lo, hi, step = candidate.arc_deg
+    return np.arange(lo, hi + 1e-9, step)
+
+
+def run_of(candidate: Candidate, desc) -> Run:
+    """The candidate as a campaign run (zero readings, ``repeats`` each: the rows do not depend on them)."""
+    return Run(candidate.pattern, candidate.setup.id, candidate.mount.id,
+               {c: np.zeros(candidate.repeats) for c in components(desc, candidate.pattern)},
+               arc_deg=arc_of(candidate, desc), hold_deg=dict(candidate.hold_deg) or None)
+
+
+def _hold_for(desc, letter: str) -> tuple[tuple[str, float], ...] | None:
+    """The other rotary axes of a pattern of axis ``letter`` held at the first of :data:`HOLD_DEG` each allows;
+    None when no other rotary axis has such a position."""
+    held = []
+    for ax in desc.rotary_axes:
+        if ax.letter == letter:
+            continue
+        lo, hi = (-np.inf, np.inf) if ax.travel is None else np.rad2deg(ax.travel)
+        pick = next((h for h in HOLD_DEG if lo - 1e-9 <= h <= hi + 1e-9), None)
+        if pick is not None:
+            held.append((ax.letter, pick))
+    return tuple(held) or None
+
+
+def _label(pattern: str, setup: Setup, mount: Mount, hold, length: float | None = None) -> str:
+    where = f"{pattern} @ {setup.id}/{mount.id}"
+    if hold:
+        where += ", " + ", ".join(f"{a} held at {v:g}°" for a, v in hold)
+    if length is not None:
+        where += f", L_B {length:g} mm"
+    return where
+
+
+def described_catalogue(campaign) -> list[Candidate]:
+    """The candidate runs of a described machine's campaign (module docstring), feasible or not."""
+    desc = campaign.machine.description
+    bb = campaign.ballbar
+    base = campaign.primary_setup()
+    mount = next(iter(bb.mounts.values()))
+    L = bb.length
+    pats = patterns_of(desc)
+    out: list[Candidate] = []
+
+    def add(name, kind, pattern, setup, m, *, length=L, hold=(), repeat_of=None, arc=None):
+        out.append(Candidate(name, kind, pattern, setup, m, length, DEFAULT_REPEATS, repeat_of,
+                             setup.R_B - base.R_B, arc, tuple(hold or ())))
+
+    measured = {(r.pattern, r.setup, r.mount, tuple(sorted((r.hold_deg or {}).items()))) for r in bb.runs}
+    for p in pats:
+        if (p, base.id, mount.id, ()) not in measured:
+            add(_label(p, base, mount, ()), "other pattern", p, base, mount)
+        hold = _hold_for(desc, p[0])
+        if hold and (p, base.id, mount.id, tuple(sorted(hold))) not in measured:
+            add(_label(p, base, mount, hold), "held axes", p, base, mount, hold=hold)
+    for e in EXTENSIONS_MM:
+        s = Setup(f"{base.id}+{e:g}", base.R_B + e, 0.0, 0.0)
+        for p in pats:
+            add(f"{p} @ R_B+{e:g} mm", "tool length", p, s, mount)
+    for s in bb.setups.values():
+        if s.id != base.id:
+            for p in pats:
+                if (p, s.id, mount.id, ()) not in measured:
+                    add(_label(p, s, mount, ()) + " (existing setup)", "existing setup", p, s, mount)
+    for k, off in enumerate(PLACEMENTS_MM):
+        m = Mount(f"{mount.id}@{k + 1}", 0.0, 0.0, position=np.asarray(mount.position, float) + off)
+        shift = ", ".join(f"{a}{v:+g}" for a, v in zip("XYZ", off) if v)
+        for p in pats:
+            add(f"{p} @ {base.id}, W ball {shift} mm", "other placement", p, base, m)
+    for i, run in enumerate(bb.runs):
+        add(f"repeat {run.label} (+{DEFAULT_REPEATS})", "repeats", run.pattern, bb.setups[run.setup],
+            bb.mounts[run.mount], hold=tuple((run.hold_deg or {}).items()), repeat_of=i,
+            arc=(float(run.arc_deg[0]), float(run.arc_deg[-1]), float(np.diff(run.arc_deg[:2])[0]))
+            if run.arc_deg is not None and len(run.arc_deg) > 1 else None)
+    for L_B in OTHER_L_B_MM:
+        if L_B != L:
+            for p in pats:
+                add(_label(p, base, mount, (), L_B), "bar length", p, base, mount, length=L_B)
+    return [c for c in out if _measurable(c, desc)]
+
+
+def _measurable(c: Candidate, desc) -> bool:
+    """Whether the pattern has a bar direction at all (not the ball on the swivelled axis' line): a geometry that is
+    no measurement, left out of the catalogue rather than listed as infeasible."""
+    try:
+        pattern_commands(desc, c.pattern, length=c.setup.R_B, ball=c.mount.position, bar=c.length,
+                         arc_deg=arc_of(c, desc)[:1], hold_deg=dict(c.hold_deg) or None)
+    except ValueError:
+        return False
+    return True
+
+
+def described_feasibility_check(campaign):
+    """``check(candidate) -> (feasible, why)`` against the described travels (module docstring)."""
+    desc = campaign.machine.description
+
+    def check(c: Candidate) -> tuple[bool, str]:
+        try:
+            cmd = pattern_commands(desc, c.pattern, length=c.setup.R_B, ball=c.mount.position, bar=c.length,
+                                   arc_deg=arc_of(c, desc), hold_deg=dict(c.hold_deg) or None)
+        except ValueError as err:
+            return False, str(err)
+        return travel_problems(desc, cmd.q)
+
+    return check
+
+
+def travel_problems(desc, q: dict) -> tuple[bool, str]:
+    """Whether commands ``q`` {letter: (k,) mm or rad} stay within every described travel, and why not."""
+    over = []
+    for letter, v in q.items():
+        ax = desc.axes.get(letter)
+        if ax is None or ax.travel is None:
+            continue
+        lo, hi = ax.travel
+        v = np.asarray(v, float)
+        if v.min() < lo - 1e-9 or v.max() > hi + 1e-9:
+            if ax.rotary:
+                over.append(f"{letter} {np.rad2deg(v.min()):.0f}…{np.rad2deg(v.max()):.0f}° beyond its travel "
+                            f"[{np.rad2deg(lo):g}, {np.rad2deg(hi):g}]°")
+            else:
+                over.append(f"{letter} {v.min():.0f}…{v.max():.0f} mm beyond its travel [{lo:g}, {hi:g}] mm")
+    return (not over), ("; ".join(over) if over else "within the axis travels")
+
+
+__all__ = ["described_catalogue", "sweep_candidates", "catalogue_of", "feasibility_of", "described_feasibility_check", "run_of", "arc_of", "travel_problems",
+           "EXTENSIONS_MM", "HOLD_DEG", "PLACEMENTS_MM"]
+
+
+def sweep_candidates(campaign, pattern: str, extensions) -> list[Candidate]:
+    """``pattern`` at the primary set-up plus each extension (mm), at the first mount: the tool-length sweep."""
+    base = campaign.primary_setup()
+    mount = next(iter(campaign.ballbar.mounts.values()))
+    return [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, Setup(f"{base.id}+{e:g}", base.R_B + e, 0.0, 0.0),
+                      mount, campaign.ballbar.length, extension=float(e)) for e in extensions]
+
+
+def catalogue_of(campaign) -> list[Candidate]:
+    """The candidate catalogue of ``campaign``'s machine: :func:`described_catalogue` or the thesis machine's."""
+    from .candidates import catalogue
+
+    return described_catalogue(campaign) if campaign.machine.described else catalogue(campaign)
+
+
+def feasibility_of(campaign):
+    """``check(candidate) -> (feasible, why)`` for ``campaign``'s machine."""
+    from .candidates import feasibility_check
+
+    return described_feasibility_check(campaign) if campaign.machine.described else feasibility_check(campaign)

@@ -1,0 +1,184 @@
+"""The closed-form planner on a described machine (SPEC §19): :class:`~.design.Planner`'s algebra over the rows
+of the machine's chain linearised at zero deviations.
+
+Everything the planner, the design search and the exact preposterior check compute — candidate rows, expected
+sds, the σ_model information — rests on four things that depend on the machine: the parameter space, the rows of
+a campaign, the target matrix and the candidate runs as campaign runs.  Here they are the described machine's:
+its selected deviations (ISO 230-7 names) with the nuisance terms of every set-up and mount, the first order of
+:class:`~mtmcal_bayes.models.described.ChainBallbarModel` (complex-step Jacobian, exact to rounding; the `linear`
+and `chain` models share it), each target one deviation, and :func:`.described_candidates.run_of`.
+
+Default targets: the selected deviations the campaign plus every feasible candidate determines one by one
+(:func:`~mtmcal_bayes.inference.identifiability.identifiability` of their stacked rows, the T ball centred as in
+``axes`` and the report): those no measurement of the catalogue separates are named in
+:attr:`DescribedPlanner.not_targeted`, never given a planned sd.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..inference.identifiability import CENTRED, identifiability
+from ..inference.likelihood import GaussianMeanLikelihood
+from ..inference.priors import make_prior
+from ..machines.deviations import quantities, selected
+from ..models import DESCRIBED_MODELS, check_data, check_model
+from ..models.described import ChainBallbarModel, ChainProbeModel, FirstOrderModel
+from ..observations import Observations
+from ..parameters import ParameterSpace
+from .candidates import Candidate
+from .described_candidates import run_of
+from .design import Planner
+from .scale_priors import default_sigma_model
+
+
+def described_targets(targets, desc) -> list[str]:
+    """``targets`` checked against the machine's selected deviations (ISO symbols or names); ParameterError names
+    an unknown one."""
+    chosen = selected(desc)
+    by = {d.name: d.name for d in chosen} | {d.symbol: d.name for d in chosen}
+    out = []
+    for t in targets:
+        if t not in by:
+            raise ParameterError("targets", f"unknown quantity {t!r} for this machine (expected one of: "
+                                 f"{', '.join(d.name for d in chosen)})")
+        out.append(by[t])
+    return list(dict.fromkeys(out))
+
+
+class DescribedPlanner(Planner):
+    """:class:`~.design.Planner` on a described machine's campaign (module docstring; same attributes)."""
+
+    def __init__(self, campaign, candidates: list, targets=None, *, sigma_model: float | None = None,
+                 model: str = "linear", data: str = "ballbar", sigma_prior=None):
+        check_model(model, DESCRIBED_MODELS)
+        self.campaign = campaign
+        self.desc = campaign.machine.description
+        self.table = quantities(self.desc)
+        self.model = model
+        # a new machine (set-ups and mounts only) is planned for ball-bar data still to come
+        self.data = check_data(data, campaign) if campaign.ballbar.runs or data != "ballbar" else data
+        self.candidates = list(candidates)
+        self.learnt = sigma_prior
+        self.sigma_model = default_sigma_model(campaign, learnt=sigma_prior) if sigma_model is None \
+            else float(sigma_model)
+        self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe", sigma_prior)
+        bb = campaign.ballbar
+        self._setups, self._mounts = dict(bb.setups), dict(bb.mounts)
+        for c in self.candidates:
+            self._setups.setdefault(c.setup.id, c.setup)
+            self._mounts.setdefault(c.mount.id, c.mount)
+        self.deviations = [d.name for d in selected(self.desc)]
+        probe = self._probe_terms() if data != "ballbar" else ()
+        self.space = ParameterSpace(list(self._setups), list(self._mounts), self.deviations, probe, table=self.table)
+        priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
+        self.prior_var = np.array([p.sd for p in priors]) ** 2
+        self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
+        obs = Observations.from_campaign(campaign)
+        self.observations = obs
+        self.pooled_sd = obs.pooled_sd()
+        A, V = [np.zeros((0, len(self.space)))], [np.zeros(0)]
+        if data != "probe" and len(obs):
+            A.append(self.rows_for(campaign, self.space))
+            V.append(GaussianMeanLikelihood(obs, bb.accuracy).base_var + self.sigma_model**2)
+        if data != "ballbar":
+            probe_model = FirstOrderModel(ChainProbeModel(campaign, self.space))
+            A.append(probe_model.design)
+            V.append(probe_model.observations.noise_variance() + self.sigma_probe**2)
+        self.A, self.V = np.vstack(A), np.concatenate(V)
+        self._rows_cache: tuple[list, list] | None = None
+        self.not_targeted: list[str] = []
+        self.targets = described_targets(targets, self.desc) if targets else self._determinable()
+        self.T = self.target_matrix(self.space)
+        self.target_units = [self.table[t].unit for t in self.targets]
+
+    def _probe_terms(self):
+        from ..machines.probe_terms import probe_terms
+
+        return probe_terms(self.desc, self.campaign.probe)
+
+    def _checked(self, targets) -> list[str]:
+        return described_targets(targets, self.desc)
+
+    def _unit(self, target: str) -> str:
+        return self.table[target].unit
+
+    # ------------------------------------------------------------------ what depends on the machine
+    def target_matrix(self, space: ParameterSpace) -> np.ndarray:
+        """``T`` (t, P) over ``space``: each target one deviation."""
+        T = np.zeros((len(self.targets), len(space)))
+        for i, t in enumerate(self.targets):
+            T[i, space.index(t)] = 1.0
+        return T
+
+    def space_for(self, campaign) -> ParameterSpace:
+        """The ball-bar parameter space of ``campaign`` (this machine's; the planner's deviations)."""
+        bb = campaign.ballbar
+        return ParameterSpace(list(bb.setups), list(bb.mounts), self.deviations, table=self.table)
+
+    def rows_for(self, campaign, space: ParameterSpace) -> np.ndarray:
+        """Rows ``(m, P)`` of ``campaign``'s ball-bar runs over ``space``: the chain's first order (both models)."""
+        if not campaign.ballbar.runs:
+            return np.zeros((0, len(space)))
+        return FirstOrderModel(ChainBallbarModel(campaign, space)).design
+
+    def as_run(self, candidate: Candidate):
+        return run_of(candidate, self.desc)
+
+    def _design(self, campaign) -> np.ndarray:
+        return self.rows_for(campaign, self.space)
+
+    # ------------------------------------------------------------------ rows
+    def candidate_rows(self, candidates: list[Candidate] | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """For each candidate, its rows ``(k, P)`` and precision weights ``(k,)`` (1/mm²); the planner's own
+        candidates' rows made once."""
+        if candidates is None or candidates is self.candidates:
+            if self._rows_cache is None:
+                self._rows_cache = super().candidate_rows(self.candidates)
+            return self._rows_cache
+        return super().candidate_rows(candidates)
+
+    def _new_run_rows(self, candidates: list[Candidate], length: float):
+        """Rows of new runs from the chain's first order over the campaign plus the runs (bar ``length``)."""
+        aug = copy.copy(self.campaign)
+        bb = copy.copy(self.campaign.ballbar)
+        bb.length = length
+        bb.setups, bb.mounts = self._setups, self._mounts
+        m0 = len(bb.runs)
+        bb.runs = list(bb.runs) + [self.as_run(c) for c in candidates]
+        aug.ballbar = bb
+        design = self.rows_for(aug, self.space)
+        keys = Observations.from_campaign(aug).keys
+        out = []
+        for j, c in enumerate(candidates):
+            rows = [i for i, k in enumerate(keys) if k.run == m0 + j]
+            out.append((design[rows], np.full(len(rows), 1.0 / self.noise_var(c.repeats))))
+        return out
+
+    def _determinable(self) -> list[str]:
+        """The selected deviations the campaign and every candidate together determine one by one (the rest in
+        :attr:`not_targeted`)."""
+        rows = [A for A, _ in self.candidate_rows()] if self.candidates else []
+        J = np.vstack([self.A] + rows) if rows or len(self.A) else np.zeros((0, len(self.space)))
+        if not len(J):
+            self.not_targeted = list(self.deviations)
+            return []
+        known = [b for b in CENTRED if any(p.base == b for p in self.space.parameters)]
+        ident = identifiability(J, self.space, known=known)
+        determined = [d for d in self.deviations if d in set(ident.determined)]
+        self.not_targeted = [d for d in self.deviations if d not in set(determined)]
+        return determined
+
+
+
+
+
+def planner_for(campaign, candidates: list, targets=None, **kw) -> Planner:
+    """The planner of ``campaign``: :class:`DescribedPlanner` on a described machine, else the thesis machine's
+    :class:`~.design.Planner` (keywords as theirs)."""
+    cls = DescribedPlanner if campaign.machine.described else Planner
+    return cls(campaign, candidates, targets, **kw)
+__all__ = ["DescribedPlanner", "described_targets", "planner_for"]
