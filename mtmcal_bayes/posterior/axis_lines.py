@@ -10,7 +10,8 @@ between the spindle and the axis carrying it): the pivot distances of a kinemati
 Each number is a function of the deviations; its posterior comes from the draws.  A number the data do not
 determine — its first-order change with the deviations has a part along a direction the measurements cannot see
 (:meth:`~mtmcal_bayes.inference.identifiability.Identifiability.estimable`) — is marked ``determined = False``:
-its interval is the prior's, not a measurement.
+its interval is the prior's, not a measurement.  A pivot distance whose nominal is 0 (intersecting lines) has no
+first order there; it is determined when every component of the gap between the lines is (:func:`_gap_parts`).
 """
 
 from __future__ import annotations
@@ -70,6 +71,33 @@ def _distance(p1, d1, p2, d2) -> np.ndarray:
     return np.where(norm > 1e-9, skew, parallel)
 
 
+def _gap_parts(p1, d1, p2, d2) -> np.ndarray:
+    """Smooth components (n, k) of the gap between two lines whose norm is their distance: along the common
+    normal (k = 1), or, for parallel lines, the gap's two components across them (k = 2).  The distance is not
+    differentiable where it is 0; these are, and say what the data must see of it there."""
+    cross = np.cross(d1, d2)
+    norm = np.linalg.norm(cross, axis=1)
+    gap = p2 - p1
+    if np.all(norm > 1e-9):
+        return (np.einsum("ni,ni->n", gap, cross) / norm)[:, None]
+    e = np.eye(3)[np.argmin(np.abs(d1[0]))]  # a fixed axis across the lines
+    u = np.cross(d1, e)
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    v = np.cross(d1, u)
+    return np.stack([np.einsum("ni,ni->n", gap, u), np.einsum("ni,ni->n", gap, v)], axis=1)
+
+
+def _pairs(desc: MachineDescription, lines: dict) -> list[tuple[str, str]]:
+    """The successive rotary axes of each side, and the spindle with its carrier: the pivot distances' lines."""
+    pairs = []
+    for side in (desc.work_chain, desc.tool_chain):
+        rot = [a.letter for a in side if a.rotary]
+        pairs += list(zip(rot, rot[1:]))
+    if SPINDLE in lines and desc.spindle.carrier in lines:
+        pairs.append((desc.spindle.carrier, SPINDLE))
+    return pairs
+
+
 def _quantities(desc: MachineDescription, lines: dict) -> dict[tuple[str, str], tuple[np.ndarray, str]]:
     """Every reported number ``(element, quantity) -> (values (n,), unit)``, internal units (mm, or 1 for a
     direction's components)."""
@@ -79,15 +107,14 @@ def _quantities(desc: MachineDescription, lines: dict) -> dict[tuple[str, str], 
             out[name, f"point_{a}"] = (p[:, i], "mm")
         for i, a in enumerate("xyz"):
             out[name, f"direction_{a}"] = (d[:, i], "1")
-    pairs = []
-    for side in (desc.work_chain, desc.tool_chain):
-        rot = [a.letter for a in side if a.rotary]
-        pairs += list(zip(rot, rot[1:]))
-    if SPINDLE in lines and desc.spindle.carrier in lines:
-        pairs.append((desc.spindle.carrier, SPINDLE))
-    for a, b in pairs:
+    for a, b in _pairs(desc, lines):
         out[f"{a}-{b}", "pivot_distance"] = (_distance(*lines[a], *lines[b]), "mm")
     return out
+
+
+def _distance_parts(desc: MachineDescription, lines: dict) -> dict[str, np.ndarray]:
+    """:func:`_gap_parts` of every pivot distance, by element (``"B-C1"``), each (n, k)."""
+    return {f"{a}-{b}": _gap_parts(*lines[a], *lines[b]) for a, b in _pairs(desc, lines)}
 
 
 @dataclass
@@ -131,21 +158,31 @@ def axis_lines(result) -> AxisLines:
     nominal = _quantities(desc, _lines(chain, desc, {}, 1))
     # first-order change of every number per display unit of each deviation: what the data must see of it
     ident = result.identifiability or campaign_identifiability(post)
-    grads = {}
+    grads, part_grads = {}, {}
     for p in devs:
         h = units.to_internal(1.0, p.unit)
-        up = _quantities(desc, _lines(chain, desc, {p.name: np.array([h])}, 1))
-        down = _quantities(desc, _lines(chain, desc, {p.name: np.array([-h])}, 1))
+        up_lines = _lines(chain, desc, {p.name: np.array([h])}, 1)
+        down_lines = _lines(chain, desc, {p.name: np.array([-h])}, 1)
+        up, down = _quantities(desc, up_lines), _quantities(desc, down_lines)
         for key in values:
             grads.setdefault(key, {})[p.name] = float((up[key][0][0] - down[key][0][0]) / 2.0)
+        for (element, u), d in zip(_distance_parts(desc, up_lines).items(), _distance_parts(desc, down_lines).values()):
+            part_grads.setdefault(element, []).append((p.name, (u[0] - d[0]) / 2.0))
+    nominal_gap = _distance_parts(desc, _lines(chain, desc, {}, 1))
     rows = []
     for (element, quantity), (v, unit) in values.items():
         low, high = az.hdi(v, hdi_prob=HDI_PROB)
         g = {k: w for k, w in grads[element, quantity].items() if abs(w) > 1e-15}
+        determined = ident.estimable(g)
+        if quantity == "pivot_distance" and np.linalg.norm(nominal_gap[element][0]) < 1e-9:
+            # |gap| at 0 has no first order: determined only if every component of the gap is
+            parts = part_grads[element]
+            determined = all(ident.estimable({k: float(w[j]) for k, w in parts if abs(w[j]) > 1e-15})
+                             for j in range(len(parts[0][1])))
         rows.append({"element": element, "quantity": quantity, "unit": unit,
                      "nominal": float(nominal[element, quantity][0][0]), "mean": float(v.mean()),
                      "sd": float(v.std(ddof=1)), "hdi_low": float(low), "hdi_high": float(high),
-                     "determined": bool(ident.estimable(g))})
+                     "determined": bool(determined)})
     return AxisLines(pd.DataFrame(rows, columns=COLUMNS), desc.configuration)
 
 
