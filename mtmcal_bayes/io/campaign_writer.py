@@ -6,9 +6,10 @@ import os
 from pathlib import Path
 
 from .. import units
-from ..campaign import Campaign, DesignGoal, PlannedRun, Probe, Truth
+from ..campaign import Campaign, PlannedRun, Probe, Truth
 from ..parameters import DEVIATIONS, QUANTITIES, quantity_unit
 from .described_writer import described_to_dict
+from .design_table import design_to_dict
 from .truth_table import truth_to_dict
 from .campaign_reader import FORMAT
 from .textfiles import write_text_atomic
@@ -102,21 +103,6 @@ def planned_run_dict(run: PlannedRun) -> dict:
         d["order"] = int(run.order)
     if run.why:
         d["why"] = run.why
-    return d
-
-
-def design_to_dict(g: DesignGoal, quantities: dict | None = None) -> dict:
-    """The ``[design]`` table: targets with their unit (``alpha_BT_arcsec``), contraction, budget, time overrides."""
-    d: dict = {}
-    if g.contraction is not None:
-        d["contraction"] = g.contraction
-    if g.budget_min is not None:
-        d["budget_min"] = g.budget_min
-    if g.targets:
-        table = QUANTITIES if quantities is None else quantities  # a described machine's deviations
-        d["targets"] = {f"{n}_{table[n].unit}": float(v) for n, v in g.targets.items()}
-    if g.times:
-        d["times"] = {k: float(v) for k, v in g.times.items()}
     return d
 
 

@@ -9,6 +9,7 @@ from ..campaign import Campaign
 from ..machines.description import FRAME, MachineDescription
 from ..machines.deviations import quantities as deviation_table
 from ..parameters import quantity_unit
+from .design_table import design_to_dict
 from .truth_table import truth_to_dict
 
 
@@ -90,8 +91,6 @@ def described_to_dict(c: Campaign, doc: dict) -> dict:
     if c.truth is not None:
         doc["truth"] = truth_to_dict(c.truth)
     if c.design is not None:
-        from .campaign_writer import design_to_dict
-
         doc["design"] = design_to_dict(c.design, quantities=deviation_table(m.description))
     return doc
 
