@@ -350,22 +350,42 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     return result
 
 
-def ncgen(pattern: str, *, campaign: CampaignLike = None, R_B_mm: float | None = None, start=None,
-          step_deg: float = 2.5, feed: float | None = None, n: int | None = None, setup: str | None = None,
-          mount: str | None = None, output=None) -> str:
+def ncgen(pattern: str | None = None, *, campaign: CampaignLike = None, R_B_mm: float | None = None, start=None,
+          step_deg: float | None = None, feed: float | None = None, n: int | None = None, setup: str | None = None,
+          mount: str | None = None, run: int | None = None, probe: str | None = None, arc_deg=None,
+          hold_deg: dict | None = None, output=None) -> str:
     """The measuring NC program of ``pattern`` (thesis Fig 4.30(a) for BX), as text; ``output`` receives it.
 
     ``start`` = (x0, y0, z0) mm places the first block, else the setup's NC origin is used.  Without a
     campaign but with both ``R_B_mm`` and ``start`` the program needs none (bar 100 mm, R_C = Z_C = 0).
+    ``step_deg`` default 2.5.
+
+    On a described machine (:mod:`~mtmcal_bayes.io.described_ncgen`): the program of ``pattern`` at ``setup`` and
+    ``mount`` over ``arc_deg`` = (start, end) degrees by ``step_deg`` with the other rotary axes at ``hold_deg``
+    {letter: degrees}; of the campaign's ``run``-th ball-bar run (1-based); or of its probe run ``probe``.
     """
     from .compensation import measuring_program
+    from .errors import ParameterError
+    from .io.described_ncgen import described_program
     from .io.textfiles import write_text_atomic
 
-    if campaign is not None or R_B_mm is None or start is None:
-        campaign = campaign_of(campaign, thesis_only="ncgen")
+    c = campaign_of(campaign) if campaign is not None or R_B_mm is None or start is None else None
     _writable(output, "program")
-    text = measuring_program(pattern, campaign, R_B_mm=R_B_mm, start=start, step_deg=step_deg, feed=feed, n=n,
-                             setup=setup, mount=mount)
+    if c is not None and c.machine.described:
+        given = next((k for k, v in (("R_B_mm", R_B_mm), ("start", start), ("n", n)) if v is not None), None)
+        if given:
+            raise ParameterError(given, "for the thesis machine only: a described machine's program commands its "
+                                 "description's axis positions")
+        text = described_program(c, pattern=pattern, run=run, probe=probe, setup=setup, mount=mount,
+                                 arc_deg=arc_deg, step_deg=step_deg, hold_deg=hold_deg, feed=feed)
+    else:
+        given = next((k for k, v in (("run", run), ("probe", probe), ("arc_deg", arc_deg), ("hold_deg", hold_deg))
+                      if v is not None), None)
+        if given:
+            raise ParameterError(given, "for a described machine's campaign only; the thesis machine's "
+                                 "programs are of a pattern and its step")
+        text = measuring_program(pattern, c, R_B_mm=R_B_mm, start=start, step_deg=2.5 if step_deg is None else
+                                 step_deg, feed=feed, n=n, setup=setup, mount=mount)
     if output is not None:
         write_text_atomic(output, text)
     return text

@@ -50,6 +50,17 @@ def _floats(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"{text!r}: expected numbers separated by commas") from None
 
 
+def _hold(text: str) -> tuple[str, float]:
+    """``"A=-45"`` -> ``("A", -45.0)`` (argparse type)."""
+    letter, sep, value = text.partition("=")
+    try:
+        if not sep or not letter.strip():
+            raise ValueError
+        return letter.strip().upper(), float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected AXIS=DEGREES, e.g. A=-45") from None
+
+
 #: help of a --model whose default is the machine's kinematic model
 KINEMATIC_DEFAULT = "forward model (default htm-thesis; on a described machine chain)"
 
@@ -207,19 +218,32 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     _design_goal(s, contraction_default=None)
     s.add_argument("-o", "--output", metavar="DIR", help="write the re-planned campaign.toml and programs to DIR")
 
-    s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern (e.g. thesis Fig 4.30(a))",
-                 campaign=None, json_help=None)
-    s.add_argument("pattern", metavar="PATTERN", help="one of BR BT BA BX BY BZ CR CT CA CX CY CZ")
+    s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern (e.g. thesis Fig 4.30(a)), "
+                 "or of a described machine's ball-bar or probe run", campaign=None, json_help=None)
+    s.add_argument("pattern", nargs="?", metavar="PATTERN", help="thesis machine: one of BR BT BA BX BY BZ CR CT CA CX "
+                   "CY CZ; a described machine: <rotary axis><R|T|A|X|Y|Z>, e.g. AR (with --run/--probe: the campaign)")
     s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign whose setup geometry to use (default: thesis)")
+    s.add_argument("--machine", choices=list(BUILTIN_TYPES), default=None, metavar="TYPE",
+                   help="instead of CAMPAIGN, the demo campaign of a built-in machine type: " + ", ".join(BUILTIN_TYPES))
     s.add_argument("--R-B-mm", dest="R_B_mm", type=float, default=None, help="tool length R_B, mm (default: the setup's)")
     s.add_argument("--x0", type=float, default=None, help="NC X of the first block, mm (with --z0)")
     s.add_argument("--y0", type=float, default=0.0, help="NC Y of the first block, mm (default 0)")
     s.add_argument("--z0", type=float, default=None, help="NC Z of the first block, mm (with --x0)")
-    s.add_argument("--step-deg", type=float, default=2.5, help="B or C step, degrees (default 2.5)")
-    s.add_argument("--feed", type=float, default=None, help="feed word F (default none)")
+    s.add_argument("--step-deg", type=float, default=None, help="B or C step, degrees (default 2.5; a described "
+                   "machine: the run's, or 1 with --arc-deg)")
+    s.add_argument("--feed", type=float, default=None, help="feed word F (default none; a described machine: the "
+                   "campaign's feed_mm_per_min, the probing moves F100)")
     s.add_argument("-n", type=int, default=None, help="number of blocks (default: 0–90° for B, one turn for C)")
-    s.add_argument("--setup", default=None, help="campaign setup for R_B and the NC origin (default: that of BX)")
-    s.add_argument("--mount", default=None, help="campaign mount for Z_C, R_C")
+    s.add_argument("--setup", default=None, help="campaign setup for R_B and the NC origin (default: that of BX; "
+                   "a described machine: that of the pattern's first run)")
+    s.add_argument("--mount", default=None, help="campaign mount for Z_C, R_C (a described machine: the W ball's)")
+    s.add_argument("--run", type=int, default=None, metavar="N", help="a described machine: the campaign's N-th "
+                   "ball-bar run (from 1)")
+    s.add_argument("--probe", default=None, metavar="ID", help="a described machine: the probe run ID (or its number)")
+    s.add_argument("--arc-deg", type=float, nargs=2, default=None, metavar=("START", "END"),
+                   help="a described machine: the swivelled axis' arc, degrees (default: the axis' grid)")
+    s.add_argument("--hold", dest="hold_deg", type=_hold, action="append", default=None, metavar="AXIS=DEG",
+                   help="a described machine: a held rotary axis' position, e.g. A=-45 (repeatable; default 0)")
     s.add_argument("-o", "--output", metavar="FILE.nc", help="write the program to FILE (default: print)")
 
     _command(sub, "instruments", handlers["instruments"], "do the ball bar and the touch probe agree? consistency, each "

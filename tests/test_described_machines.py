@@ -152,7 +152,7 @@ def test_a_bad_described_measurement_is_one_line(tmp_path, run_cli, old, new, ke
 
 
 @pytest.mark.parametrize("argv", [["plan"], ["design"], ["next"], ["sample", "--closed-form"],
-                                  ["compensate", "PROGRAM", "-o", "OUT"], ["ncgen", "CR"]])
+                                  ["compensate", "PROGRAM", "-o", "OUT"]])
 def test_what_serves_the_thesis_machine_alone_says_so(tmp_path, run_cli, argv):
     """Planning, programs and compensation of a described machine are the next step: until then each says so in
     one line naming the file and ``machine`` (exit 2, nothing written), never a wrong number."""

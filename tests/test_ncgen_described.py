@@ -1,0 +1,147 @@
+"""Measuring programs of a described machine (``ncgen``, :mod:`mtmcal_bayes.io.described_ncgen`).
+
+Each program is read back and its commanded positions are put through the nominal chain (models/chain.py, no
+deviations), an implementation independent of the pattern code that wrote them: a ball-bar program holds the bar
+length at every block of its arc, a probe program indexes the run's angles and probes the sphere from five
+directions at the stated distances.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mtmcal_bayes as mb
+from mtmcal_bayes.campaign import ProbeRun, Run
+from mtmcal_bayes.io.described_ncgen import ballbar_program, probe_program
+from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, demo_campaign
+from mtmcal_bayes.io.nc_axes import axis_letters, read_axis_blocks
+from mtmcal_bayes.machines.patterns import placement_commands, tool_home
+from mtmcal_bayes.models.chain import Chain
+
+DESCRIBED = [t for t in BUILTIN_TYPES if t != "integrex-i200"]
+#: decimals of the programs checked to 1e-9 mm (the default 4 rounds each word to 0.05 µm)
+EXACT = 10
+
+
+def _campaign(machine):
+    return mb.load_campaign(demo_campaign(machine))
+
+
+def _commands(blocks, letters) -> dict:
+    """{letter: (k,)} of blocks, mm and rad (the chain's units)."""
+    return {a: np.array([b.position[a] for b in blocks]) * (1.0 if a in "XYZ" else np.pi / 180.0)
+            for a in letters}
+
+
+def _bar_lengths(campaign, run, blocks) -> np.ndarray:
+    """The nominal distance (k,) mm between tool ball and W ball at each block, through the chain with no
+    deviations; the W ball placed where the tool ball is at the placement pose (its mount)."""
+    desc = campaign.machine.description
+    chain = Chain(desc, [])
+    bb = campaign.ballbar
+    tool = tool_home(desc, bb.setups[run.setup].R_B)
+    q = _commands(blocks, axis_letters(desc))
+    q0 = placement_commands(desc, length=bb.setups[run.setup].R_B, ball=bb.mounts[run.mount].position)
+    w0 = chain.work_frame(chain.tool_point(tool[None, None, :], q0, {}), q0, {})
+    T = chain.tool_point(np.broadcast_to(tool, (1, len(blocks), 3)), q, {})
+    W = chain.work_point(np.broadcast_to(w0, (1, len(blocks), 3)), q, {})
+    return np.linalg.norm(T - W, axis=-1)[0]
+
+
+@pytest.mark.parametrize("machine", DESCRIBED)
+def test_each_ballbar_program_holds_the_bar_length_over_the_runs_arc(machine):
+    c = _campaign(machine)
+    desc = c.machine.description
+    letters = axis_letters(desc)
+    for run in c.ballbar.runs:
+        blocks = read_axis_blocks(ballbar_program(c, run, decimals=EXACT), letters)
+        arc = [b for b in blocks if b.motion == "G01"]
+        assert len(arc) == len(run.arc_deg)
+        assert np.max(np.abs(_bar_lengths(c, run, arc) - c.ballbar.length)) < 1e-9, run.label
+        K = run.pattern[0]
+        assert np.array_equal(np.round([b.position[K] for b in arc], 9), run.arc_deg)
+        for a in set(letters[3:]) - {K}:  # the held axes: positioned before the arc, still through it
+            held = (run.hold_deg or {}).get(a, 0.0)
+            assert blocks[0].position[a] == held and all(b.position[a] == held for b in arc)
+        assert blocks[0].position[K] == run.arc_deg[0] and blocks[1].position == arc[0].position  # start point
+        # as written (4 decimals): each linear word rounded by <= 0.05 µm, the angles exact
+        printed = [b for b in read_axis_blocks(ballbar_program(c, run), letters) if b.motion == "G01"]
+        assert np.max(np.abs(_bar_lengths(c, run, printed) - c.ballbar.length)) <= np.sqrt(3) * 0.5e-4
+
+
+@pytest.mark.parametrize("machine", DESCRIBED)
+def test_each_probe_program_indexes_the_runs_angles_and_probes_the_sphere(machine):
+    c = _campaign(machine)
+    desc = c.machine.description
+    letters = axis_letters(desc)
+    chain = Chain(desc, [])
+    touch, clearance, overtravel = 12.0, 4.0, 1.5
+    for run in c.probe.runs:
+        text = probe_program(c, run, touch_radius_mm=touch, clearance_mm=clearance, overtravel_mm=overtravel,
+                             decimals=EXACT)
+        blocks = read_axis_blocks(text, letters)
+        index = [b for b in blocks if set(b.words) <= set(letters[3:])]
+        assert len(index) == run.positions
+        for a in letters[3:]:
+            want = np.degrees(run.angles.get(a, np.zeros(run.positions)))
+            assert np.allclose([b.position[a] for b in index], want, atol=1e-9, rtol=0)
+        stylus = tool_home(desc, c.probe.styli[run.stylus])
+        q = _commands(blocks, letters)
+        gap = (chain.tool_point(np.broadcast_to(stylus, (1, len(blocks), 3)), q, {})
+               - chain.work_point(np.broadcast_to(run.sphere, (1, len(blocks), 3)), q, {}))[0]
+        probes = [i for i, b in enumerate(blocks) if b.motion == "G31"]
+        assert len(probes) == 5 * run.positions
+        for i in probes:
+            assert abs(np.linalg.norm(gap[i]) - (touch - overtravel)) < 1e-9
+            assert abs(np.linalg.norm(gap[i - 1]) - (touch + clearance)) < 1e-9
+            assert np.linalg.norm(np.cross(gap[i], gap[i - 1])) < 1e-9  # the skip move heads for the centre
+        for p in range(run.positions):  # five directions that fix a sphere's centre: they span space
+            dirs = gap[probes[5 * p:5 * p + 5]]
+            assert np.linalg.matrix_rank(dirs, tol=1e-6) == 3
+
+
+def test_a_planned_run_gets_its_program_without_readings():
+    c = _campaign("trunnion")
+    text = ballbar_program(c, Run("CT", "T2", "W1", hold_deg={"A": -30.0}), feed=800)
+    arc = [b for b in read_axis_blocks(text, ("X", "Y", "Z", "A", "C")) if b.motion == "G01"]
+    assert len(arc) == 72 and all(b.position["A"] == -30.0 for b in arc) and "F800" in text
+    run = c.probe.runs[0]
+    planned = ProbeRun("p", run.stylus, run.sphere, run.angles, np.zeros((0, run.positions, 3)))
+    assert probe_program(c, planned) == probe_program(c, run).replace("touch-probe run sphere", "touch-probe run p")
+
+
+def test_the_cli_writes_a_described_program(run_cli, tmp_path):
+    out = tmp_path / "ar.nc"
+    code, _, err = run_cli("ncgen", "AR", "--machine", "trunnion", "--arc-deg", "-30", "30", "--step-deg", "5",
+                           "--hold", "C=90", "--feed", "500", "-o", out)
+    assert code == 0, err
+    arc = [b for b in read_axis_blocks(out.read_text(), "XYZAC") if b.motion == "G01"]
+    assert [b.position["A"] for b in arc] == list(np.arange(-30.0, 31.0, 5.0))
+    assert {b.position["C"] for b in arc} == {90.0}
+    code, text, err = run_cli("ncgen", "--run", "7", "--machine", "trunnion")
+    assert code == 0 and "held: A -45 deg" in text, err
+    code, text, err = run_cli("ncgen", "--probe", "sphere", "--machine", "head-head")
+    assert code == 0 and text.count("\nG31 ") == 5 * 9, err
+
+
+@pytest.mark.parametrize("argv, key", [
+    (["AQ"], "PATTERN: 'AQ' is not a pattern"),
+    (["BR"], "PATTERN: 'BR': B is not a rotary axis of this machine"),
+    (["AR", "--arc-deg", "-150", "0"], "--arc-deg: A reaches -150..0 deg, beyond its travel [-120, 30]"),
+    (["CR", "--hold", "A=50"], "--hold: A at 50 deg, beyond its travel"),
+    (["AR", "--hold", "B=3"], "--hold: B is not a held rotary axis of AR"),
+    (["--run", "9"], "--run: the campaign has 8 ball-bar runs"),
+    (["--probe", "x"], "--probe: no probe run 'x'"),
+    (["AR", "--x0", "1", "--z0", "2"], "--x0/--y0/--z0: for the thesis machine only"),
+])
+def test_bad_described_input_is_one_line_and_writes_nothing(run_cli, tmp_path, argv, key):
+    out = tmp_path / "out.nc"
+    code, text, err = run_cli("ncgen", *argv, "--machine", "trunnion", "-o", out)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and key in err, err
+    assert not out.exists() and text == ""
+
+
+def test_the_thesis_machine_refuses_the_described_options(run_cli):
+    code, _, err = run_cli("ncgen", "BX", "--arc-deg", "0", "90")
+    assert code == 2 and "--arc-deg: for a described machine's campaign only" in err, err
