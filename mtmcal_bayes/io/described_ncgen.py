@@ -28,16 +28,17 @@ pose (docs/machines.md, Conventions).  Words in ISO order, ``X Y Z`` then the ro
 
 from __future__ import annotations
 
+from numbers import Real
 from pathlib import Path
 
 import numpy as np
 
 from .. import units
 from ..campaign import Run
-from ..units import fixed
 from ..errors import ParameterError
 from ..machines.description import FRAME
 from ..machines.patterns import axis_of, default_arc_deg, nominal_down, pattern_commands, placement_commands, tool_home
+from ..units import fixed
 from .nc_axes import DECIMALS, axis_block, axis_letters, comment
 
 #: how far the tool backs off along its axis before the rotary axes move, mm
@@ -163,8 +164,8 @@ def _checked_run(campaign, desc, run, step_deg):
             others = [a.letter for a in desc.rotary_axes if a.letter != ax.letter]
             raise ParameterError("hold_deg", f"{letter} is not a held rotary axis of {run.pattern} (expected one of "
                                  f"{', '.join(others) or 'none'})")
-        if not np.isfinite(value):
-            raise ParameterError("hold_deg", f"{letter} = {value}: not a number")
+        if isinstance(value, bool) or not isinstance(value, Real) or not np.isfinite(value):
+            raise ParameterError("hold_deg", f"{letter} = {value!r}: not a number of degrees")
         _rotary_travel(other, value, "hold_deg")
         held[letter] = float(value)
     return ax, bb.setups[run.setup], bb.mounts[run.mount], arc, held
@@ -175,6 +176,10 @@ def ballbar_commands(campaign, run, *, step_deg: float | None = None):
     its program commands them: ``pattern_commands`` of its setup's tool length, mount, bar length, arc and holds."""
     desc = _description(campaign)
     _, setup, mount, arc, held = _checked_run(campaign, desc, run, step_deg)
+    return _pattern_commands(campaign, desc, run, setup=setup, mount=mount, arc=arc, held=held)
+
+
+def _pattern_commands(campaign, desc, run, *, setup, mount, arc, held):
     try:
         return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.position,
                                 bar=campaign.ballbar.length, arc_deg=arc, hold_deg=held)
@@ -190,7 +195,7 @@ def ballbar_program(campaign, run, *, feed: float | None = None, step_deg: float
     ``step_deg`` re-grids the run's arc from its first to its last angle; ``decimals`` of every axis word."""
     desc = _description(campaign)
     ax, setup, mount, arc, held = _checked_run(campaign, desc, run, step_deg)
-    cmd = ballbar_commands(campaign, run, step_deg=step_deg)
+    cmd = _pattern_commands(campaign, desc, run, setup=setup, mount=mount, arc=arc, held=held)
     bb = campaign.ballbar
     feed = feed if feed is not None else bb.feed_mm_per_min
     if feed is not None and not (np.isfinite(feed) and feed > 0):
