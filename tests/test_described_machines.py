@@ -151,11 +151,10 @@ def test_a_bad_described_measurement_is_one_line(tmp_path, run_cli, old, new, ke
     assert key in err and words in err, err
 
 
-@pytest.mark.parametrize("argv", [["plan"], ["design"], ["next"], ["sample", "--closed-form"],
-                                  ["compensate", "PROGRAM", "-o", "OUT"]])
+@pytest.mark.parametrize("argv", [["sample", "--closed-form"], ["compensate", "PROGRAM", "-o", "OUT"]])
 def test_what_serves_the_thesis_machine_alone_says_so(tmp_path, run_cli, argv):
-    """Planning, programs and compensation of a described machine are the next step: until then each says so in
-    one line naming the file and ``machine`` (exit 2, nothing written), never a wrong number."""
+    """What does not serve a described machine yet says so in one line naming the file and ``machine`` (exit 2,
+    nothing written), never a wrong number."""
     from mtmcal_bayes.datasets import data_path
 
     argv = [str(data_path("fig4_30a_bx_original.nc")) if a == "PROGRAM" else str(tmp_path / "out.nc") if a == "OUT"
