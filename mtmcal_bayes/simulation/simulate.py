@@ -18,6 +18,7 @@ from .. import units
 from ..campaign import Campaign, Run, Truth
 from ..errors import InputError
 from ..machines import selected
+from ..machines.patterns import components
 from ..machines.space import described_space
 from ..models import make_model
 from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_run_values
@@ -80,8 +81,11 @@ def planned_as_runs(campaign: Campaign) -> Campaign:
                              f"L_B = {bb.length:g} mm: simulate it from a campaign whose [ballbar] length_mm is "
                              f"{run.length:g}")
     out = copy.deepcopy(campaign)
-    out.ballbar.runs += [Run(p.pattern, p.setup, p.mount, {c: np.zeros(p.repeats) for c in COMPONENTS[p.pattern]},
-                             convention=p.convention) for p in out.ballbar.planned]
+    desc = campaign.machine.description if campaign.machine.described else None
+    comps = (lambda p: COMPONENTS[p]) if desc is None else (lambda p: components(desc, p))  # noqa: E731
+    out.ballbar.runs += [Run(p.pattern, p.setup, p.mount, {c: np.zeros(p.repeats) for c in comps(p.pattern)},
+                             convention=p.convention, arc_deg=p.arc_deg, hold_deg=p.hold_deg)
+                         for p in out.ballbar.planned]
     out.ballbar.planned = []
     return out
 

@@ -1,0 +1,114 @@
+"""Does a design from nothing keep its promise on a described machine?  (issue 37, validation)
+
+For each described built-in type: the demo campaign's machine with its set-ups and mounts only; ``design`` to
+3″ for every determinable angle and 5 µm for every determinable length (relaxed to what the catalogue can reach
+where it cannot, and said so), σ_model contraction 0.5.  Then ``N`` machines drawn from the priors (every
+deviation and nuisance term from its prior, σ_model from its prior): the designed campaign simulated through the
+nonlinear chain with the repeat scatter, the instrument error and σ_model, and its exact posterior
+(``sample --sampler exact``); per target, the share of machines whose realised posterior sd meets it, against the
+share the design promises (:data:`mtmcal_bayes.planning.design_problem.PROMISE`) and against its own exact check.
+
+Run: ``python bench/design_described.py [N]`` (default 50 machines per type).
+"""
+
+from __future__ import annotations
+
+import copy
+import sys
+import time
+
+import numpy as np
+
+from mtmcal_bayes import api, units
+from mtmcal_bayes.campaign import Truth
+from mtmcal_bayes.errors import ParameterError
+from mtmcal_bayes.inference.priors import make_prior
+from mtmcal_bayes.machines.space import described_space
+from mtmcal_bayes.planning.described_planner import planner_for
+from mtmcal_bayes.planning.design_make import design_candidates, make_design
+from mtmcal_bayes.planning.design_output import designed_campaign
+from mtmcal_bayes.planning.design_problem import PROMISE
+from mtmcal_bayes.planning.scale_priors import scale_prior
+from mtmcal_bayes.simulation.simulate import synthetic_campaign
+
+TYPES = tuple(sys.argv[2:]) or ("vertical-turn-mill", "trunnion", "head-head")
+
+
+def new_machine(kind: str):
+    c = copy.deepcopy(api.campaign_of(api.demo_campaign(kind)))
+    c.ballbar.runs, c.probe, c.truth = [], None, None
+    return c
+
+
+def targets_for(c) -> dict[str, float]:
+    """3″ / 5 µm for every deviation the catalogue determines one by one."""
+    p = planner_for(c, design_candidates(c), None)
+    return {q: (3.0 if p.table[q].unit == "arcsec" else 5.0) for q in p.targets}
+
+
+def design_to(c, targets):
+    """The design, the targets relaxed by 25 % steps where the catalogue cannot reach them."""
+    relaxed = {}
+    for _ in range(12):
+        try:
+            return make_design(c, targets=targets, contraction=0.5, seed=0), relaxed
+        except ParameterError as err:
+            q = next((t for t in targets if str(err).startswith(f"targets: {t} =")), None)
+            if q is None:
+                raise
+            targets = {**targets, q: targets[q] * 1.25}
+            relaxed[q] = targets[q]
+    raise RuntimeError("no reachable targets")
+
+
+def draw_truth(c, rng) -> tuple[Truth, float]:
+    truth = Truth()
+    for p in described_space(c).parameters:
+        v = float(make_prior(p.name, p.base, p.kind, c.priors).frozen().rvs(random_state=rng))
+        if p.group == "deviation":
+            truth.deviations[p.name] = v
+        elif p.group == "setup":
+            truth.setups.setdefault(p.owner, {})[p.base] = v
+        elif p.group == "mount":
+            truth.mounts.setdefault(p.owner, {})[p.base] = v
+    sigma = float(scale_prior(c, "sigma_model", None).frozen().rvs(random_state=rng))
+    return truth, sigma
+
+
+def main(n: int) -> None:
+    for kind in TYPES:
+        t0 = time.perf_counter()
+        c = new_machine(kind)
+        targets = targets_for(c)
+        d, relaxed = design_to(c, targets)
+        planned = designed_campaign(d)
+        measured = copy.deepcopy(planned)
+        rng = np.random.default_rng(1)
+        sds = []
+        for i in range(n):
+            truth, sigma = draw_truth(measured, rng)
+            syn = synthetic_campaign(measured, truth, "chain", noise=True, seed=int(rng.integers(2**31)),
+                                     sigma_model=sigma)
+            r = api.sample(syn, sampler="exact", seed=1)
+            s = r.summary["sd"]
+            sds.append([float(s[q]) for q in d.targets])
+        sds = np.array(sds)
+        goal = d.goal.targets
+        share = np.mean(sds <= np.where(np.isfinite(goal), goal, np.inf), axis=0)
+        print(f"\n{kind}: {len(d.runs)} runs, {d.total_minutes:.0f} min; {n} machines from the priors "
+              f"({time.perf_counter() - t0:.0f} s)")
+        if relaxed:
+            print("  relaxed (the catalogue cannot reach 3″/5 µm): " +
+                  ", ".join(f"{q} → {v:.3g}" for q, v in relaxed.items()))
+        print(f"  {'target':<12} {'goal':>6} {'realised mean sd':>17} {'share met':>10} {'design check':>13}")
+        check = d.check.share_met(goal)
+        for j, q in enumerate(d.targets):
+            if np.isfinite(goal[j]):
+                u = units.SYMBOL[d.target_units[j]]
+                print(f"  {q:<12} {goal[j]:>5.3g}{u} {sds[:, j].mean():>15.3g}{u} {share[j]:>10.0%} "
+                      f"{check[j]:>13.0%}")
+        print(f"  promise: each target met in at least {PROMISE:.0%} of machines")
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 50)
