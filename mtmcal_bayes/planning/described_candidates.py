@@ -65,7 +65,7 @@ def _hold_for(desc, letter: str) -> tuple[tuple[str, float], ...] | None:
     return tuple(held) or None
 
 
-def _label(pattern: str, setup: Setup, mount: Mount, hold, length: float | None = None) -> str:
+def _label(pattern: str, setup: Setup, mount: Mount, *, hold=(), length: float | None = None) -> str:
     where = f"{pattern} @ {setup.id}/{mount.id}"
     if hold:
         where += ", " + ", ".join(f"{a} held at {v:g}°" for a, v in hold)
@@ -84,40 +84,40 @@ def described_catalogue(campaign) -> list[Candidate]:
     pats = patterns_of(desc)
     out: list[Candidate] = []
 
-    def add(name, kind, pattern, setup, m, *, length=L, hold=(), repeat_of=None, arc=None):
+    def add(name, kind, pattern, setup, *, m, length=L, hold=(), repeat_of=None, arc=None):
         out.append(Candidate(name, kind, pattern, setup, m, length, DEFAULT_REPEATS, repeat_of,
                              setup.R_B - base.R_B, arc, tuple(hold or ())))
 
     measured = {(r.pattern, r.setup, r.mount, tuple(sorted((r.hold_deg or {}).items()))) for r in bb.runs}
     for p in pats:
         if (p, base.id, mount.id, ()) not in measured:
-            add(_label(p, base, mount, ()), "other pattern", p, base, mount)
+            add(_label(p, base, mount), "other pattern", p, base, m=mount)
         hold = _hold_for(desc, p[0])
         if hold and (p, base.id, mount.id, tuple(sorted(hold))) not in measured:
-            add(_label(p, base, mount, hold), "held axes", p, base, mount, hold=hold)
+            add(_label(p, base, mount, hold=hold), "held axes", p, base, m=mount, hold=hold)
     for e in EXTENSIONS_MM:
         s = Setup(f"{base.id}+{e:g}", base.R_B + e, 0.0, 0.0)
         for p in pats:
-            add(f"{p} @ R_B+{e:g} mm", "tool length", p, s, mount)
+            add(f"{p} @ R_B+{e:g} mm", "tool length", p, s, m=mount)
     for s in bb.setups.values():
         if s.id != base.id:
             for p in pats:
                 if (p, s.id, mount.id, ()) not in measured:
-                    add(_label(p, s, mount, ()) + " (existing setup)", "existing setup", p, s, mount)
+                    add(_label(p, s, mount) + " (existing setup)", "existing setup", p, s, m=mount)
     for k, off in enumerate(PLACEMENTS_MM):
         m = Mount(f"{mount.id}@{k + 1}", 0.0, 0.0, position=np.asarray(mount.position, float) + off)
         shift = ", ".join(f"{a}{v:+g}" for a, v in zip("XYZ", off) if v)
         for p in pats:
-            add(f"{p} @ {base.id}, W ball {shift} mm", "other placement", p, base, m)
+            add(f"{p} @ {base.id}, W ball {shift} mm", "other placement", p, base, m=m)
     for i, run in enumerate(bb.runs):
         add(f"repeat {run.label} (+{DEFAULT_REPEATS})", "repeats", run.pattern, bb.setups[run.setup],
-            bb.mounts[run.mount], hold=tuple((run.hold_deg or {}).items()), repeat_of=i,
+            m=bb.mounts[run.mount], hold=tuple((run.hold_deg or {}).items()), repeat_of=i,
             arc=(float(run.arc_deg[0]), float(run.arc_deg[-1]), float(np.diff(run.arc_deg[:2])[0]))
             if run.arc_deg is not None and len(run.arc_deg) > 1 else None)
     for L_B in OTHER_L_B_MM:
         if L_B != L:
             for p in pats:
-                add(_label(p, base, mount, (), L_B), "bar length", p, base, mount, length=L_B)
+                add(_label(p, base, mount, length=L_B), "bar length", p, base, m=mount, length=L_B)
     return [c for c in out if _measurable(c, desc)]
 
 
