@@ -120,10 +120,18 @@ class DescribedPlanner(Planner):
         return ParameterSpace(list(bb.setups), list(bb.mounts), self.deviations, table=self.table)
 
     def rows_for(self, campaign, space: ParameterSpace) -> np.ndarray:
-        """Rows ``(m, P)`` of ``campaign``'s ball-bar runs over ``space``: the chain's first order (both models)."""
-        if not campaign.ballbar.runs:
+        """Rows ``(m, P)`` of ``campaign``'s ball-bar runs over ``space``: the chain's first order (both models),
+        differentiated in the columns the runs touch only (the deviations, their set-ups' and mounts' terms; the
+        other columns are zero)."""
+        bb = campaign.ballbar
+        if not bb.runs:
             return np.zeros((0, len(space)))
-        return FirstOrderModel(ChainBallbarModel(campaign, space)).design
+        used = ParameterSpace(list(dict.fromkeys(r.setup for r in bb.runs)),
+                              list(dict.fromkeys(r.mount for r in bb.runs)), self.deviations, table=self.table)
+        own = FirstOrderModel(ChainBallbarModel(campaign, used)).design
+        out = np.zeros((len(own), len(space)))
+        out[:, [space.index(n) for n in used.names]] = own
+        return out
 
     def as_run(self, candidate: Candidate):
         return run_of(candidate, self.desc)
@@ -142,19 +150,22 @@ class DescribedPlanner(Planner):
         return super().candidate_rows(candidates)
 
     def _new_run_rows(self, candidates: list[Candidate], length: float):
-        """Rows of new runs from the chain's first order over the campaign plus the runs (bar ``length``)."""
-        aug = copy.copy(self.campaign)
-        bb = copy.copy(self.campaign.ballbar)
-        bb.length = length
-        bb.setups, bb.mounts = self._setups, self._mounts
-        m0 = len(bb.runs)
-        bb.runs = list(bb.runs) + [self.as_run(c) for c in candidates]
-        aug.ballbar = bb
-        design = self.rows_for(aug, self.space)
-        keys = Observations.from_campaign(aug).keys
+        """Rows of each new run (bar ``length``), each from a campaign of that run alone — after the campaign's first
+        run at its mount, which placed the W ball there (the placement's set-up enters the rows)."""
+        first_at: dict[str, object] = {}
+        for run in self.campaign.ballbar.runs:
+            first_at.setdefault(run.mount, run)
         out = []
-        for j, c in enumerate(candidates):
-            rows = [i for i, k in enumerate(keys) if k.run == m0 + j]
+        for c in candidates:
+            aug = copy.copy(self.campaign)
+            bb = copy.copy(self.campaign.ballbar)
+            bb.length = length
+            bb.setups, bb.mounts = self._setups, self._mounts
+            bb.runs = ([first_at[c.mount.id]] if c.mount.id in first_at else []) + [self.as_run(c)]
+            aug.ballbar = bb
+            design = self.rows_for(aug, self.space)
+            keys = Observations.from_campaign(aug).keys
+            rows = [i for i, k in enumerate(keys) if k.run == len(bb.runs) - 1]
             out.append((design[rows], np.full(len(rows), 1.0 / self.noise_var(c.repeats))))
         return out
 
