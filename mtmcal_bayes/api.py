@@ -440,7 +440,7 @@ def isg_csv(campaign: CampaignLike = None, *, data: str | None = None, seed: int
 
 
 def compensate(program, *, campaign: CampaignLike = None, output=None, method: str = "exact",
-               model: str = "htm-thesis", values: str = "posterior", posterior=None, point: str = "tcp",
+               model: str | None = None, values: str = "posterior", posterior=None, point: str = "tcp",
                setup: str | None = None, mount: str | None = None, integer_unit: str | None = None,
                accept_disagreement: bool = False) -> CompensationResult:
     """Rewrite X/Y/Z of an NC program (a path) so the tool point reaches the programmed points, with the
@@ -455,30 +455,80 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     compensation uses, it is refused (a ``ParameterError`` naming ``accept_disagreement``) unless
     ``accept_disagreement``, which compensates and warns; so is a campaign on which the check cannot run (a gap of
     its probe readings, :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
+
+    On a described machine (docs/compensation.md): the exact method through its chain, the rotary axes by their
+    letters, ``model`` the chain (default), the values the posterior (default the exact posterior of every instrument
+    the campaign has), ``setup`` the ball-bar set-up whose tool length is the tool's; deviations the data do not
+    determine are left at zero and named.
     """
     from .compensation import compensate as rewrite_program
     from .errors import ParameterError
     from .inference.log_posterior import SAMPLED_DEVIATIONS
-    from .io.gcode import read_program
+    from .io.gcode import LINEAR, read_program
 
-    c = campaign_of(campaign, measured=True, thesis_only="compensate")
-    parsed = read_program(program, integer_unit=integer_unit)
+    c = campaign_of(campaign, measured=True)
+    if c.machine.described:
+        used = _described_compensation_options(c, method=method, model=model, values=values, mount=mount)
+        rotary = tuple(a.letter for a in c.machine.description.rotary_axes)
+        parsed = read_program(program, integer_unit=integer_unit, rotary=rotary, required=LINEAR + rotary)
+    else:
+        model = "htm-thesis" if model is None else model
+        used = SAMPLED_DEVIATIONS
+        parsed = read_program(program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
     if c.has_probe_readings() and c.ballbar.runs and (gap := c.probe_gap()) is not None:
         refusal = (f"whether the instruments of {c.source} agree on the deviations it uses cannot be checked: "
                    f"{gap.reason()}")
     elif c.has_probe_readings() and c.ballbar.runs:
-        refusal = instruments(c, explain=False).refusal(SAMPLED_DEVIATIONS)
+        refusal = instruments(c, explain=False).refusal(used)
     if refusal and not accept_disagreement:
         raise ParameterError("accept_disagreement", f"not given, and {refusal}")
-    result = rewrite_program(c, parsed, method=method, model=model, values=values, posterior=posterior, point=point,
-                             setup=setup, mount=mount)
+    if c.machine.described:
+        from .compensation.described import compensate_described
+
+        label = None
+        if posterior is None:
+            posterior = sample(c, sampler="exact", seed=1)
+            label = f"exact posterior of the linear model ({posterior.log_posterior.data} data)"
+        result = compensate_described(c, parsed, posterior, setup=setup, point=point, label=label)
+    else:
+        result = rewrite_program(c, parsed, method=method, model=model, values=values, posterior=posterior,
+                                 point=point, setup=setup, mount=mount)
     if refusal:
         result.warnings.append(f"compensated although {refusal} (accepted)")
     if output is not None:
         result.save(output)
     return result
+
+
+def _described_compensation_options(c: Campaign, *, method: str, model: str | None, values: str,
+                                    mount: str | None) -> list[str]:
+    """The options of ``compensate`` a described machine takes (a :class:`ParameterError` naming the first it does
+    not: the thesis method, the ball-bar values and a mount are the thesis machine's), and its selected deviations."""
+    from .compensation import METHODS, VALUES
+    from .errors import ParameterError
+    from .machines import selected
+
+    desc = c.machine.description
+    where = f"{desc.name}, {desc.configuration}"
+    if method not in METHODS:
+        raise ParameterError("method", f"{method!r} (expected {' or '.join(METHODS)})")
+    if method != "exact":
+        raise ParameterError("method", f"{method}: thesis Eqs 3.4–3.13 are the thesis machine's; a described machine "
+                             f"({where}) is compensated exactly through its chain")
+    if values not in VALUES:
+        raise ParameterError("values", f"{values!r} (expected {' or '.join(VALUES)})")
+    if values != "posterior":
+        raise ParameterError("values", f"{values}: the deterministic ball-bar values are thesis Table 4.5's; a "
+                             f"described machine ({where}) is compensated with its posterior")
+    if model not in (None, "chain"):
+        raise ParameterError("model", f"{model}: a described machine ({where}) is compensated through its chain "
+                             "(chain, the default)")
+    if mount is not None:
+        raise ParameterError("mount", f"not used on a described machine ({where}): its workpiece frame is the "
+                             "description's")
+    return [d.name for d in selected(desc)]
 
 
 def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", sampler: str = "emcee",

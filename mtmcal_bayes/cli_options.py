@@ -264,13 +264,15 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", required=True, metavar="OUT.nc", help="compensated program")
     s.add_argument("--method", choices=("exact", "thesis"), default="exact",
                    help="exact inversion (default) or thesis Eqs 3.4–3.13 as printed (double correction)")
-    _model(s, "htm-thesis", help="kinematic model (default htm-thesis; linear cannot compensate)")
+    _model(s, None, help="kinematic model (default htm-thesis; on a described machine its chain; linear cannot "
+           "compensate)")
     s.add_argument("--values", choices=("posterior", "ballbar"), default="posterior",
                    help="compensate with the posterior mean (default) or the deterministic ball-bar values")
     s.add_argument("--posterior", metavar="post.nc", help="posterior draws (from sample -o); default: closed form")
     s.add_argument("--point", choices=("tcp", "nose"), default="tcp",
                    help="compensate the tool centre point (default) or the spindle nose as the thesis does")
-    s.add_argument("--setup", default=None, help="campaign setup of the tool (R_B, NC origin; default: that of BX)")
+    s.add_argument("--setup", default=None, help="campaign setup of the tool (R_B, NC origin; default: that of BX; on a "
+                   "described machine the first setup)")
     s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
     s.add_argument("--integer-unit", choices=("um", "mm"), default=None, help="how to read X/Y/Z/B/C words "
                    "without a decimal point (X100): increments of 1 µm / 0.001°, or mm / ° (default: refuse them)")

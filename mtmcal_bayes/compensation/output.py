@@ -16,6 +16,9 @@ def format_compensation(result) -> str:
                  f"tool-point error before {j['error_before_um']['max']:.1f} µm")
     lines.append(f"  residual tool-point error ({j['uncertainty_from']}): mean ≤ {j['residual_um']['mean_max']:.1f} µm, "
                  f"95 % ≤ {j['residual_um']['p95_max']:.1f} µm per block")
+    if "residual_determined_um" in j:
+        lines.append(f"    with the deviations left at zero taken as zero: 95 % ≤ {j['residual_determined_um']['p95_max']:.1f} µm "
+                     "(what the data vouch for; the rest is their prior spread)")
     lines.append(f"  not compensable by X/Y/Z (tool-axis tilt; error {OFF_TOOL_MM:g} mm along the tool from the "
                  "compensated point):")
     off = f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um"
@@ -26,7 +29,20 @@ def format_compensation(result) -> str:
         lines.append(f"    {name:14s} {r['tool_tilt_arcsec']:7.2f} ″  {r[off]:6.2f} µm")
     if choice:
         lines += choice_lines(choice)
+    if "not_measured" in j:
+        lines += not_measured_lines(j["not_measured"])
     return "\n".join(lines)
+
+
+def not_measured_lines(notes: list[dict]) -> list[str]:
+    """A described machine's deviations not compensated with a measured value, those sharing a reason on one line."""
+    if not notes:
+        return ["  every deviation of the machine is compensated with a value the data determine"]
+    by_why: dict[str, list[str]] = {}
+    for d in notes:
+        by_why.setdefault(d["why"], []).append(d["name"])
+    return ["  not compensated with a measured value:"] + [f"    {', '.join(names)}: {why}"
+                                                         for why, names in by_why.items()]
 
 
 def choice_lines(choice: dict) -> list[str]:

@@ -97,14 +97,17 @@ class Program:
     blocks: list[Block]
     source: str
     newline: str = "\n"
+    axes: tuple[str, ...] = AXES  # the letters of each block's position, in order
+
 
     @property
     def motion(self) -> list[Block]:
         return [b for b in self.blocks if b.is_motion]
 
     def positions(self) -> np.ndarray:
-        """(k, 5) X, Y, Z (mm), B, C (deg) of the motion blocks (modal values filled in)."""
-        return np.array([b.position for b in self.motion], dtype=float).reshape(-1, 5)
+        """(k, a) positions of the motion blocks in the order of :attr:`axes` (default X, Y, Z mm, B, C deg; modal
+        values filled in)."""
+        return np.array([b.position for b in self.motion], dtype=float).reshape(-1, len(self.axes))
 
 
 def _stray(code: str, start: int, end: int, *, number: int, source: str) -> None:
@@ -154,13 +157,13 @@ def _words(line: str, number: int, source: str) -> list[Word]:
 
 
 def _integer_words(words: list[Word], line: str, integer_unit: str | None, *, number: int,
-                   source: str) -> list[Word]:
+                   source: str, axes: tuple[str, ...] = AXES) -> list[Word]:
     """The words of a motion block with each nonzero X Y Z B C written without a decimal point read in
     ``integer_unit`` (mm, degrees; see the module docstring); without ``integer_unit`` such a word is an error."""
     out = []
     for w in words:
         text = line[w.start:w.end]
-        if w.letter in AXES and "." not in text and w.value != 0:
+        if w.letter in axes and "." not in text and w.value != 0:
             if integer_unit is None:
                 unit, step = (" mm", "1 µm") if w.letter in LINEAR else ("°", "0.001°")
                 small = w.value / INTEGER_UNITS["um"]  # the value at 1/1000 of the unit per count
@@ -174,12 +177,19 @@ def _integer_words(words: list[Word], line: str, integer_unit: str | None, *, nu
     return out
 
 
-def parse_program(text: str, source: str = "<program>", *, integer_unit: str | None = None) -> Program:
+def parse_program(text: str, source: str = "<program>", *, integer_unit: str | None = None,
+                  rotary: tuple[str, ...] = ("B", "C"), required: tuple[str, ...] = LINEAR) -> Program:
     """Parse G-code text; malformed blocks raise :class:`InputError` naming the line.
 
     ``integer_unit``: how X Y Z B C words without a decimal point are read — ``"um"`` (counts of 1 µm /
-    0.001°), ``"mm"`` (mm / degrees) or ``None`` (an error; see the module docstring).
+    0.001°), ``"mm"`` (mm / degrees) or ``None`` (an error; see the module docstring).  ``rotary``: the rotary
+    axis letters of the machine (default the thesis machine's B, C; a described machine's, e.g. ``("A", "C")``);
+    ``required``: the axes whose position every motion block must know (default X, Y, Z; a rotary axis not yet
+    programmed is 0 otherwise).
     """
+    axes = LINEAR + tuple(rotary)
+    motion_words = (MOTION_WORDS - set(AXES)) | set(axes)
+    other_axes = tuple(a for a in OTHER_AXES + AXES if a not in axes)
     if integer_unit is not None and integer_unit not in INTEGER_UNITS:
         raise ParameterError("integer_unit", f"expected one of {', '.join(map(repr, INTEGER_UNITS))} or None "
                              f"(refuse axis words without a decimal point), got {integer_unit!r}")
@@ -190,7 +200,7 @@ def parse_program(text: str, source: str = "<program>", *, integer_unit: str | N
     if lines and lines[-1] == "":
         lines = lines[:-1]
     modal_motion = False
-    state: dict[str, float | None] = dict.fromkeys(AXES)
+    state: dict[str, float | None] = dict.fromkeys(axes)
     blocks = []
     for i, line in enumerate(lines, start=1):
         stripped = line.strip()
@@ -206,8 +216,8 @@ def parse_program(text: str, source: str = "<program>", *, integer_unit: str | N
         if frame := [v for v in g if v in _FRAME_G]:
             raise InputError(source, f"line {i}", f"G{frame[0]:g} sets offsets or shifts the coordinate system "
                              "inside the program: the positions after it cannot be compensated")
-        seen = [w.letter for w in words if w.letter in AXES]
-        if twice := next((a for a in AXES if seen.count(a) > 1), None):
+        seen = [w.letter for w in words if w.letter in axes]
+        if twice := next((a for a in axes if seen.count(a) > 1), None):
             raise InputError(source, f"line {i}", f"axis {twice} is programmed twice in one block")
         if any(v in _PASS_G for v in g):
             blocks.append(Block(i, line, words))
@@ -221,34 +231,36 @@ def parse_program(text: str, source: str = "<program>", *, integer_unit: str | N
             modal_motion = True
         elif any(v in (2, 3) for v in g):
             raise InputError(source, f"line {i}", "circular interpolation (G02/G03) is not supported")
-        has_axis = any(w.letter in AXES for w in words)
-        other = next((w for w in words if w.letter not in MOTION_WORDS), None)
-        if modal_motion and other is not None and (has_axis or other.letter in OTHER_AXES):
-            hint = (f"axis {other.letter} is not one of {' '.join(AXES)}; U/W are incremental X/Z on lathe controls"
-                    if other.letter in OTHER_AXES else "a letter typed for a digit?")
+        has_axis = any(w.letter in axes for w in words)
+        other = next((w for w in words if w.letter not in motion_words), None)
+        if modal_motion and other is not None and (has_axis or other.letter in other_axes):
+            hint = (f"axis {other.letter} is not one of {' '.join(axes)}; U/W are incremental X/Z on lathe controls"
+                    if other.letter in other_axes else "a letter typed for a digit?")
             raise InputError(source, f"line {i}", f"word {other.letter}{line[other.start:other.end]} is not "
                              f"expected in a G00/G01 block ({hint})")
         if modal_motion and has_axis:
-            words = _integer_words(words, line, integer_unit, number=i, source=source)
+            words = _integer_words(words, line, integer_unit, number=i, source=source, axes=axes)
             for w in words:
-                if w.letter in AXES:
+                if w.letter in axes:
                     state[w.letter] = w.value
-            missing = [a for a in LINEAR if state[a] is None]
+            missing = [a for a in axes if a in required and state[a] is None]
             if missing:
                 raise InputError(source, f"line {i}", f"position of axis {', '.join(missing)} not known yet "
                                  "(no earlier value in the program)")
-            pos = tuple(state[a] if state[a] is not None else 0.0 for a in AXES)
+            pos = tuple(state[a] if state[a] is not None else 0.0 for a in axes)
             blocks.append(Block(i, line, words, pos))
         else:
             blocks.append(Block(i, line, words))
     if not any(b.is_motion for b in blocks):
         raise InputError(source, None, "no G00/G01 motion block with X, Y, Z words")
-    return Program(blocks, source, newline)
+    return Program(blocks, source, newline, axes)
 
 
-def read_program(path, *, integer_unit: str | None = None) -> Program:
-    """The NC program at ``path`` (see :func:`parse_program` for ``integer_unit``)."""
-    return parse_program(read_user_text(path, "NC program"), str(path), integer_unit=integer_unit)
+def read_program(path, *, integer_unit: str | None = None, rotary: tuple[str, ...] = ("B", "C"),
+                 required: tuple[str, ...] = LINEAR) -> Program:
+    """The NC program at ``path`` (see :func:`parse_program` for ``integer_unit``, ``rotary`` and ``required``)."""
+    return parse_program(read_user_text(path, "NC program"), str(path), integer_unit=integer_unit, rotary=rotary,
+                         required=required)
 
 
 def rewrite(program: Program, xyz: np.ndarray, default_decimals: int = 4) -> str:
