@@ -471,6 +471,9 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
         used = _described_compensation_options(c, method=method, model=model, values=values, mount=mount)
         rotary = tuple(a.letter for a in c.machine.description.rotary_axes)
         parsed = read_program(program, integer_unit=integer_unit, rotary=rotary, required=LINEAR + rotary)
+        from .compensation.described import program_commands
+
+        program_commands(c, parsed)  # every block within the described travels, before any work
     else:
         model = "htm-thesis" if model is None else model
         used = SAMPLED_DEVIATIONS

@@ -151,7 +151,7 @@ def test_a_bad_described_measurement_is_one_line(tmp_path, run_cli, old, new, ke
     assert key in err and words in err, err
 
 
-@pytest.mark.parametrize("argv", [["sample", "--closed-form"], ["compensate", "PROGRAM", "-o", "OUT"]])
+@pytest.mark.parametrize("argv", [["sample", "--closed-form"]])
 def test_what_serves_the_thesis_machine_alone_says_so(tmp_path, run_cli, argv):
     """What does not serve a described machine yet says so in one line naming the file and ``machine`` (exit 2,
     nothing written), never a wrong number."""

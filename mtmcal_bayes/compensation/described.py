@@ -177,7 +177,8 @@ def compensate_described(campaign, program: Program, posterior, *, setup: str | 
                            for nm, v in values.items() if v != 0.0},
             "not_measured": notes,
             "residual_determined_um": {"mean_max": float(resid_seen.mean(axis=0).max()),
-                                       "p95_max": float(np.quantile(resid_seen, 0.95, axis=0).max())}}
+                                       "p95_max": float(np.quantile(resid_seen, 0.95, axis=0).max()),
+                                       "per_block_p95": np.quantile(resid_seen, 0.95, axis=0).tolist()}}
     warnings = [f"left at zero, not determined by this campaign (their posterior is their prior): {', '.join(left)}"
                 ] if left else []
     return CompensationResult(rewrite(program, xyz_c), program.source, xyz, xyz_c, resid.mean(axis=0),
