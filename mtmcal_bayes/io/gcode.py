@@ -14,7 +14,9 @@ after them).  What compensation cannot interpret is an error naming the line:
 ``G91``, ``G20``, ``G02``/``G03``, ``G10``/``G52``/``G92``, an axis programmed
 twice in a block, a word other than ``G N X Y Z B C F M S T H D`` in a motion
 block (an ``A``/``U``/``V``/``W`` axis, ``O`` typed for a zero), and any text
-that is not an address word or a comment (decimal commas, macros).
+that is not an address word or a comment (decimal commas, macros).  A described
+machine's program is read with its own rotary letters (``rotary=("A", "C")`` on a
+trunnion: there ``B`` is the word refused) and every axis required in every block.
 
 Axis words without a decimal point (``X100``, ``B90``) mean different things on
 different controls: with decimal-point programming (Fanuc and alike) ``X100`` is
