@@ -32,7 +32,6 @@ from ..parameters import ParameterSpace
 from .candidates import Candidate
 from .described_candidates import run_of
 from .design import Planner
-from .scale_priors import default_sigma_model
 
 
 def described_targets(targets, desc) -> list[str]:
@@ -62,10 +61,7 @@ class DescribedPlanner(Planner):
         # a new machine (set-ups and mounts only) is planned for ball-bar data still to come
         self.data = check_data(data, campaign) if campaign.ballbar.runs or data != "ballbar" else data
         self.candidates = list(candidates)
-        self.learnt = sigma_prior
-        self.sigma_model = default_sigma_model(campaign, learnt=sigma_prior) if sigma_model is None \
-            else float(sigma_model)
-        self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe", sigma_prior)
+        self._scales(campaign, sigma_model, sigma_prior)
         bb = campaign.ballbar
         self._setups, self._mounts = dict(bb.setups), dict(bb.mounts)
         for c in self.candidates:

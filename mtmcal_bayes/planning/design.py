@@ -172,10 +172,7 @@ class Planner:
         self.data = check_data(data, campaign)
         self.candidates = list(candidates)
         self.targets = check_targets(targets)
-        self.learnt = sigma_prior
-        self.sigma_model = default_sigma_model(campaign, learnt=sigma_prior) if sigma_model is None \
-            else float(sigma_model)
-        self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe", sigma_prior)
+        self._scales(campaign, sigma_model, sigma_prior)
         bb = campaign.ballbar
         setups = dict(bb.setups)
         mounts = dict(bb.mounts)
@@ -206,6 +203,13 @@ class Planner:
         self.A, self.V = np.vstack(A), np.concatenate(V)
         self.T = self.target_matrix(self.space)
         self.target_units = [QUANTITIES[t].unit for t in self.targets]
+
+    def _scales(self, campaign, sigma_model: float | None, sigma_prior) -> None:
+        """The learnt prior kept, the ball bar's fixed σ_model (default the rms of its prior) and the probe's."""
+        self.learnt = sigma_prior
+        self.sigma_model = default_sigma_model(campaign, learnt=sigma_prior) if sigma_model is None \
+            else float(sigma_model)
+        self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe", sigma_prior)
 
     def retarget(self, targets: list[str]) -> None:
         """Value ``targets`` instead (names checked as at construction; the rows are kept)."""
