@@ -102,8 +102,11 @@ class Timing:
         return t
 
     def _measure(self, c) -> float:
-        """Measuring minutes of one run of candidate ``c`` (every run of it alike)."""
-        return self.clock.run_minutes(_AsRun(c))
+        """Measuring minutes of one run of candidate ``c`` (every run of it alike), each candidate's once."""
+        cache = self.__dict__.setdefault("_measured", {})
+        if id(c) not in cache:
+            cache[id(c)] = (c, self.clock.run_minutes(_AsRun(c)))  # c kept: its id stays its own
+        return cache[id(c)][1]
 
 
 class _AsRun:
