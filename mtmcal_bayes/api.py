@@ -583,7 +583,7 @@ def history_campaigns(paths) -> list[Campaign]:
             files += found
         else:
             files.append(item)
-    return [campaign_of(f, measured=True, thesis_only="history") for f in files]
+    return [campaign_of(f, measured=True) for f in files]
 
 
 def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None,
@@ -595,16 +595,17 @@ def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None,
     ``campaigns``: a directory of campaign files, a list of files, or Campaigns (each with its ``date``, one
     ``[machine] serial``); ``tolerances`` as for :func:`sample` (default: the latest campaign's); ``output``
     receives history.json, CSV files, trend.png and index.html.  ``model``: ``linear``, or a kinematic model
-    linearised per campaign at the history's estimate (the linearisation checked and stated); ``trend``:
+    linearised per campaign at the history's estimate (the linearisation checked and stated; ``chain`` on a described
+    machine, whose history tracks its own deviations that the campaigns determine, docs/history.md); ``trend``:
     ``"auto"`` (chosen per deviation by Bayes factor) or ``"off"`` (random walks only).
     """
     from .histories import fit_history
-    from .models import check_model
 
-    check_model(model)
     _writable(output, "history")
-    result = fit_history(history_campaigns(campaigns), model=model, seed=seed, tolerances=tolerances_of(tolerances),
-                         trend=trend)
+    found = history_campaigns(campaigns)
+    if found:
+        kinematic_model_of(model, found[-1])  # checked: a described machine has linear and chain
+    result = fit_history(found, model=model, seed=seed, tolerances=tolerances_of(tolerances), trend=trend)
     if output is not None:
         result.write(output)
     return result
@@ -628,18 +629,20 @@ def simulate_history(campaign: CampaignLike = None, *, truth=None, n: int = 5, e
     from pathlib import Path
 
     from .errors import ParameterError
-    from .simulation.history import SimulatedHistory, history_dates, parse_drift, parse_thermal, synthetic_history
+    from .simulation.history import (SimulatedHistory, deviation_names, history_dates, parse_drift, parse_thermal,
+                                     synthetic_history)
 
     if not (isinstance(n, int) and 1 <= n <= 200):
         raise ParameterError("n", f"{n}: a series of 1 to 200 campaigns")
     dates = history_dates(n, every_days, start)
-    drifts = [parse_drift(x, "step", dates) for x in steps] + [parse_drift(x, "ramp", dates) for x in ramps]
-    c = campaign_of(campaign, thesis_only="simulate --history")
+    c = campaign_of(campaign)
+    names = deviation_names(c)
+    drifts = [parse_drift(x, "step", dates, names) for x in steps] + [parse_drift(x, "ramp", dates, names) for x in ramps]
     model = kinematic_model_of(model, c)
     _writable_folder(output, "history")
     t, source = _history_truth(c, truth)
     series = synthetic_history(c, t, dates, drifts=drifts, serial=serial, model=model, seed=seed,
-                               temperatures=_temperatures(temperatures, n), thermal=[parse_thermal(x) for x in thermal])
+                               temperatures=_temperatures(temperatures, n), thermal=[parse_thermal(x, names) for x in thermal])
     if machine_type is not None:
         for x in series:
             x.machine.type = machine_type

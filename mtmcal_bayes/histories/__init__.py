@@ -12,10 +12,12 @@ import math
 
 from .. import units
 from ..campaign import tolerance_text
-from ..parameters import IDENTIFIABLE, quantity_unit
+from ..errors import MtmcalError
+from ..parameters import quantity_unit
 from .fit import PRACTICAL_MINIMUM, changes, check_history, check_temperatures, fit, recalibrate_by
 from .kinematic import linearised_history
 from .model import HistoryModel
+from .quantities import history_quantities
 from .result import HistoryResult, summary_frame
 
 __all__ = ["HistoryModel", "HistoryResult", "fit_history"]
@@ -39,8 +41,9 @@ def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: 
         hm, hf, check = HistoryModel(campaigns, model), None, None
     else:
         hm, hf, check = linearised_history(campaigns, model, seed=seed, trend=trend)
+    names, left = tracked(campaigns, hm)
     if hf is None:
-        hf = fit(hm, seed=seed, quantities=IDENTIFIABLE, trend=trend)
+        hf = fit(hm, seed=seed, quantities=names, trend=trend)
     dates = [c.date for c in campaigns]
     tol = campaigns[-1].tolerances if tolerances is None else tolerances
     limits = {}
@@ -60,4 +63,24 @@ def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: 
     return HistoryResult(campaigns[-1].machine.serial, dates, [c.source for c in campaigns], summary_frame(hf, dates),
                          found, forecast, hf, limits, model=model, linearisation=check,
                          temperatures=[c.temperature_C for c in campaigns] if hm.thermal else None,
-                         summary_20C=summary_frame(hf, dates, at_20C=True) if hm.thermal else None)
+                         summary_20C=summary_frame(hf, dates, at_20C=True) if hm.thermal else None,
+                         machine=machine_of(campaigns[-1]), not_determined=left)
+
+
+def tracked(campaigns, hm: HistoryModel) -> tuple[list[str], list[dict]]:
+    """:func:`~.quantities.history_quantities` of ``hm``; none determined is an error naming the latest campaign."""
+    names, left = history_quantities(campaigns, hm.posts, hm.deviations)
+    if not names:
+        raise MtmcalError(f"{campaigns[-1].source}: the ball bar of these campaigns determines none of the machine's "
+                          "deviations one by one; a history needs at least one")
+    return names, left
+
+
+def machine_of(c) -> dict:
+    """What a history says of its machine: ``{"type", "configuration", "description"}`` (``description``: the
+    built-in type's name, "thesis" for the thesis machine, else "described")."""
+    m = c.machine
+    desc = m.description
+    kind = "thesis" if not m.described else (desc.builtin or "described")
+    return {"type": m.type, "configuration": desc.configuration if m.described else m.configuration,
+            "description": kind}

@@ -289,6 +289,14 @@ def check_history(campaigns) -> None:
     if len(serials) > 1:
         raise MtmcalError(f"the campaigns are of {len(serials)} machines ([machine] serial: {', '.join(map(repr, serials))});"
                           " a history is one machine's")
+    from ..io.machine_identity import description_key
+
+    keys = {}
+    for c in campaigns:
+        keys.setdefault(description_key(c.machine), c.source)
+    if len(keys) > 1:
+        raise MtmcalError(f"the campaigns of machine {serials[0]!r} describe {len(keys)} different machines "
+                          f"({', '.join(keys.values())}); a history is one machine's, on one description")
     dates = [c.date for c in campaigns]
     if len(set(dates)) < len(dates):
         raise MtmcalError("two campaigns of the history have the same date")

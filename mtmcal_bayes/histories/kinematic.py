@@ -68,10 +68,13 @@ def expansion_gap(hm: HistoryModel, points, sds, seed: int = 0) -> float:
 def linearised_history(campaigns, model: str, *, seed: int, trend: str) -> tuple[HistoryModel, HistoryFit, dict]:
     """The history on ``model`` linearised at its own estimate (module docstring); returns the model, the fit and
     the check ``{"model", "points", "max_gap_um", "accuracy_um", "ok"}``."""
+    from .quantities import history_quantities
+
     first = HistoryModel(campaigns, model)
-    points, _ = estimate_points(first, fit(first, seed=seed, trend=trend))
+    names, _ = history_quantities(campaigns, first.posts, first.deviations)
+    points, _ = estimate_points(first, fit(first, seed=seed, trend=trend, quantities=names))
     hm = HistoryModel(campaigns, model, points=points)
-    hf = fit(hm, seed=seed, trend=trend)
+    hf = fit(hm, seed=seed, trend=trend, quantities=names)
     points, sds = estimate_points(hm, hf)
     gap = expansion_gap(hm, points, sds, seed=seed)
     accuracy = min(c.ballbar.accuracy for c in campaigns)

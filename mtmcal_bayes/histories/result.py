@@ -48,6 +48,9 @@ class HistoryResult:
     linearisation: dict | None = None  # a kinematic model's check of its expansion (.kinematic)
     temperatures: list[float] | None = None  # °C per campaign, when the thermal sensitivities were modelled
     summary_20C: pd.DataFrame | None = None  # as ``summary``, at 20 °C (when the temperatures were modelled)
+    machine: dict = field(default_factory=dict)  # {"type", "configuration", "description"} of the latest campaign
+    #: a described machine's deviations the campaigns do not determine one by one: ``[{"quantity", "why"}]``
+    not_determined: list[dict] = field(default_factory=list)
 
     @property
     def summary_at_20C(self) -> pd.DataFrame:
@@ -107,10 +110,10 @@ class HistoryResult:
             extra = {"summary_20C": nested(self.summary_20C),
                      "temperatures_C": self.temperatures}
         return {
-            "serial": self.serial, "dates": [_iso(d) for d in self.dates], "files": self.files,
+            "serial": self.serial, "machine": self.machine, "dates": [_iso(d) for d in self.dates], "files": self.files,
             "summary": nested(self.summary), **extra, "model": self.model,
             "trend": self.trend(), "thermal": self.thermal(), "sigma_model": self.sigma_model(),
-            "linearisation": self.linearisation,
+            "linearisation": self.linearisation, "not_determined": self.not_determined,
             "changes": [{"quantity": c["quantity"], "date": _iso(c["date"]), "probability": c["probability"],
                          "delta": c["delta"], "threshold": c["threshold"]} for c in self.flagged],
             "forecast": [{"quantity": f["quantity"], "recalibrate_by": f["recalibrate_by"] and _iso(f["recalibrate_by"]),
@@ -133,14 +136,18 @@ class HistoryResult:
                          f"to {c['max_gap_um']:.3f} µm (instrument accuracy {c['accuracy_um']:g} µm)"
                          + ("" if c["ok"] else ": WARNING, more than the accuracy — the deviations are large for a "
                             "linearised history"))
+        if self.machine.get("description") not in (None, "thesis"):
+            lines.append(f"Machine type {self.machine.get('type') or '(none)'}, {self.machine.get('configuration')} "
+                         f"({self.machine.get('description')}); its own deviations (ISO 230-7)")
         last = self.dates[-1]
         where = " (at 20 °C)" if self.temperatures is not None else ""
         lines.append(f"{'quantity':18s} {'ISO':10s} {'unit':>4s} {'first' + where:>16s} {'last' + where:>16s}")
         table = self.summary_at_20C
         for q in self.fit.quantities:
             a, b = table.loc[(_iso(self.dates[0]), q)], table.loc[(_iso(last), q)]
-            lines.append(f"{q:18s} {iso_symbol(q) or '—':10s} {units.SYMBOL[quantity_unit(q)]:>4s} "
+            lines.append(f"{q:18s} {iso_symbol(q) or (q if q.startswith('E_') else '—'):10s} {units.SYMBOL[quantity_unit(q)]:>4s} "
                          f"{a['mean']:8.2f} ± {a['sd']:5.2f} {b['mean']:8.2f} ± {b['sd']:5.2f}")
+        lines += [f"{n['quantity']:18s} not shown as measured: {n['why']}" for n in self.not_determined]
         level = self.changes[0]["level"] if self.changes else 1.0
         lines += ["", f"Changes flagged (P(|Δ| > threshold) > {level:.4f}: family-wise false-alarm rate ≤ "
                   f"{100 * ALPHA:g} % over {len(self.changes)} quantity × interval pairs):"]
@@ -202,6 +209,11 @@ class HistoryResult:
         page.figure(tmp / "trend.png", "Trend of each quantity with 95 % bands and the forecast.", "trends")
         wide = self.summary_at_20C.reset_index().pivot(index="date", columns="quantity", values="mean")
         page.table(wide[[q for q in self.fit.quantities if q in wide.columns]], digits=2)
+        if self.not_determined:
+            page.paragraph(f"Machine configuration {self.machine.get('configuration')}: deviations its campaigns do not "
+                           "determine one by one are in the model (integrated with their priors) but not shown as "
+                           "measured:")
+            page.table(pd.DataFrame(self.not_determined), index=False)
         page.section("drift", "Drift: random walk or trend")
         page.paragraph(f"Each deviation drifts as a random walk; a drift rate is added where the Bayes factor of "
                        f"\"random walk + trend\" against the random walk alone reaches {TREND_BAYES_FACTOR:g} (the "

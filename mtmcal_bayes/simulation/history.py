@@ -29,7 +29,8 @@ DAYS_PER_YEAR = 365.25
 @dataclass(frozen=True)
 class Drift:
     """A change of one deviation over time, internal units: ``"step"`` adds ``size`` from ``start`` on;
-    ``"ramp"`` adds ``size`` per year of time after ``start``."""
+    ``"ramp"`` adds ``size`` per year of time after ``start``.  ``quantity``: a deviation of the machine (checked
+    by :func:`drift_from_display` against the machine's names)."""
 
     quantity: str
     kind: str
@@ -37,8 +38,6 @@ class Drift:
     start: datetime.datetime
 
     def __post_init__(self):
-        if self.quantity not in DEVIATIONS:
-            raise ParameterError("drift", f"{self.quantity!r} is not a deviation (one of {', '.join(DEVIATIONS)})")
         if self.kind not in DRIFT_KINDS:
             raise ParameterError("drift", f"{self.kind!r} (expected {' or '.join(DRIFT_KINDS)})")
 
@@ -51,11 +50,27 @@ class Drift:
         return self.size * (when - self.start).total_seconds() / (86400.0 * DAYS_PER_YEAR)
 
 
-def drift_from_display(quantity: str, kind: str, size: float, start: datetime.datetime) -> Drift:
-    """A :class:`Drift` with ``size`` in display units (″ or µm; per year for a ramp)."""
-    if quantity not in DEVIATIONS:
-        raise ParameterError("drift", f"{quantity!r} is not a deviation (one of {', '.join(DEVIATIONS)})")
+def drift_from_display(quantity: str, kind: str, size: float, start: datetime.datetime, *, names=None) -> Drift:
+    """A :class:`Drift` with ``size`` in display units (″ or µm; per year for a ramp).  ``names``: the machine's
+    deviations (default the thesis machine's, :func:`deviation_names`)."""
+    _check_deviation(quantity, "drift", names)
     return Drift(quantity, kind, units.to_internal(size, quantity_unit(quantity)), start)
+
+
+def deviation_names(campaign: Campaign | None = None) -> list[str]:
+    """The deviations a drift or a thermal sensitivity may name: a described machine's own (every generated location
+    error, ISO 230-7 names), else the thesis machine's."""
+    if campaign is not None and campaign.machine.described:
+        from ..machines.deviations import generated
+
+        return [d.name for d in generated(campaign.machine.description)]
+    return list(DEVIATIONS)
+
+
+def _check_deviation(quantity: str, parameter: str, names) -> None:
+    names = list(DEVIATIONS) if names is None else list(names)
+    if quantity not in names:
+        raise ParameterError(parameter, f"{quantity!r} is not a deviation of the machine (one of {', '.join(names)})")
 
 
 def truth_at(truth: Truth, drifts, when: datetime.datetime) -> dict[str, float]:
@@ -81,10 +96,9 @@ def _fresh_offsets(campaign: Campaign, rng: np.random.Generator, priors: dict) -
     return setups, mounts
 
 
-def thermal_from_display(quantity: str, per_degree: float) -> tuple[str, float]:
+def thermal_from_display(quantity: str, per_degree: float, names=None) -> tuple[str, float]:
     """A thermal sensitivity ``(deviation, internal units per °C)`` from display units (″ or µm per °C)."""
-    if quantity not in DEVIATIONS:
-        raise ParameterError("thermal", f"{quantity!r} is not a deviation (one of {', '.join(DEVIATIONS)})")
+    _check_deviation(quantity, "thermal", names)
     return quantity, units.to_internal(per_degree, quantity_unit(quantity))
 
 
@@ -143,9 +157,10 @@ def history_dates(n: int, every_days: float, start=None) -> list[datetime.dateti
     return [t0 + datetime.timedelta(days=every_days * i) for i in range(n)]
 
 
-def parse_drift(spec, kind: str, dates) -> Drift:
+def parse_drift(spec, kind: str, dates, names=None) -> Drift:
     """A :class:`Drift` from ``"NAME=SIZE@K"`` (display units; from the K-th of ``dates`` on), or a Drift as is.
-    ``kind``: ``"step"`` or ``"ramp"`` (the parameter an error names: ``steps`` / ``ramps``)."""
+    ``kind``: ``"step"`` or ``"ramp"`` (the parameter an error names: ``steps`` / ``ramps``); ``names``: the
+    machine's deviations (:func:`deviation_names`)."""
     if isinstance(spec, Drift):
         return spec
     parameter = f"{kind}s"
@@ -157,15 +172,15 @@ def parse_drift(spec, kind: str, dates) -> Drift:
         raise ParameterError(parameter, f"{spec!r}: expected NAME=SIZE@K, e.g. beta_CZ=40@4") from None
     if not 1 <= k <= len(dates):
         raise ParameterError(parameter, f"{spec!r}: K = {k} is not a campaign number (1 to {len(dates)})")
-    return drift_from_display(name.strip(), kind, size, dates[k - 1])
+    return drift_from_display(name.strip(), kind, size, dates[k - 1], names=names)
 
 
-def parse_thermal(spec) -> tuple[str, float]:
+def parse_thermal(spec, names=None) -> tuple[str, float]:
     """A thermal sensitivity ``(deviation, internal units per °C)`` from ``"NAME=K"`` (″ or µm per °C), or as is."""
     if not isinstance(spec, str):
         return spec
     try:
         name, k = spec.split("=")
-        return thermal_from_display(name.strip(), float(k))
+        return thermal_from_display(name.strip(), float(k), names)
     except ValueError:
         raise ParameterError("thermal", f"{spec!r}: expected NAME=K (″ or µm per °C), e.g. alpha_XB=1.5") from None
