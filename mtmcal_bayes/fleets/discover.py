@@ -7,7 +7,9 @@ fingerprinted by its *content*: the bytes of the file and of the files it names 
 output), not its name or place; the fingerprint seeds its work and names its cache entry.
 
 Campaigns are grouped by ``[machine] serial``.  A campaign without a serial cannot be matched with any other:
-it is a machine of its own, known by its file.  A machine's campaigns are in date order (a missing date
+it is a machine of its own, known by its file.  Machines may be of any type and description (the thesis machine,
+described machines); a serial whose campaigns are on two different descriptions is an error of the fleet naming
+its files (:mod:`~mtmcal_bayes.io.machine_identity`), and the other machines are computed.  A machine's campaigns are in date order (a missing date
 sorts after every dated campaign, those in file order); only dated campaigns make its history.
 """
 
@@ -22,6 +24,7 @@ from pathlib import Path
 from ..campaign import Campaign
 from ..errors import InputError, MtmcalError
 from ..io import load_campaign
+from ..io.machine_identity import description_key, description_label
 
 
 @dataclass
@@ -55,7 +58,22 @@ class Machine:
     @property
     def type(self) -> str:
         """The machine's ``[machine] type`` (its latest campaign's; "" when not given)."""
-        return (self.dated or self.campaigns)[-1].campaign.machine.type
+        return self.latest.machine.type
+
+    @property
+    def latest(self) -> Campaign:
+        """Its latest campaign (dated ones first)."""
+        return (self.dated or self.campaigns)[-1].campaign
+
+    @property
+    def type_key(self) -> str:
+        """Whose σ_model it pools with: its ``[machine] type`` on the thesis machine (as before described machines);
+        on a described machine the type with its description, ``"TYPE [LABEL #KEY]"`` (:mod:`~mtmcal_bayes.io.
+        machine_identity`), so two descriptions never pool whatever their type is called; "" without a type."""
+        m = self.latest.machine
+        if not m.type or not m.described:
+            return m.type
+        return f"{m.type} [{description_label(m)} #{description_key(m)[:8]}]"
 
 
 def check_types(found: Discovery) -> None:
@@ -68,7 +86,7 @@ def check_types(found: Discovery) -> None:
     for m in found.machines:
         for cf in m.campaigns:
             t = cf.campaign.machine.type
-            if not t:
+            if not t or cf.campaign.machine.described:  # a described machine's type key holds its description
                 continue
             g = geometry(cf.campaign.machine)
             if t not in first:
@@ -148,9 +166,6 @@ def discover(directory: str | os.PathLike, skip=()) -> Discovery:
     for path in campaign_paths(root, skip):
         try:
             c = load_campaign(path)
-            if c.machine.described:  # fleets of described machines are the next step: say so, never guess
-                raise InputError(str(path), "machine", "a fleet serves the thesis machine and not yet a described one "
-                                 f"({c.machine.description.configuration}); docs/machines.md says what does")
             c.require_measured_runs()  # a campaign designed but not yet measured has nothing to analyse
             loaded.append(CampaignFile(str(path), c, content_digest(path, c)))
         except MtmcalError as exc:
@@ -165,5 +180,14 @@ def discover(directory: str | os.PathLike, skip=()) -> Discovery:
     for m in machines.values():
         m.campaigns = (sorted(m.dated, key=lambda c: (_date_key(c.campaign.date), c.file))
                        + [c for c in m.campaigns if c.campaign.date is None])
+    for key in [k for k, m in machines.items() if len({description_key(c.campaign.machine) for c in m.campaigns}) > 1]:
+        m = machines.pop(key)  # one serial on two descriptions: which is the machine? say so, never guess
+        by = {}
+        for c in m.campaigns:
+            by.setdefault(description_label(c.campaign.machine) + " " + description_key(c.campaign.machine), []).append(c.file)
+        errors.append({"file": None, "machine": m.id,
+                       "message": f"machine {m.id}: its campaigns describe {len(by)} different machines ("
+                       + "; ".join(f"{', '.join(files)}: {label.rsplit(' ', 1)[0]}" for label, files in by.items())
+                       + "); one serial is one machine, on one description"})
     order = sorted(machines.values(), key=lambda m: (m.serial is None, m.id))
     return Discovery(str(root), order, errors)

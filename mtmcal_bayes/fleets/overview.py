@@ -82,8 +82,31 @@ def estimate_text(c: dict) -> str:
 
 
 def _quantities(result) -> list[str]:
+    """The overview's columns: the thesis' eight that any machine has, then every described machine's own
+    deviations (ISO 230-7 names) in the order the machines bring them; each machine fills its own."""
     seen = [q for m in result.machines for q in m["latest"]]
-    return [q for q in OVERVIEW_QUANTITIES if q in seen]
+    own = [q for m in result.machines for q in _own(m) if q in seen and q not in OVERVIEW_QUANTITIES]
+    return [q for q in OVERVIEW_QUANTITIES if q in seen] + list(dict.fromkeys(own))
+
+
+def _own(m: dict) -> list[str]:
+    """The quantities a machine has: a described machine's deviations, else the thesis' eight."""
+    return list(m["deviations"]) if m.get("deviations") is not None else list(OVERVIEW_QUANTITIES)
+
+
+def _has(m: dict, q: str) -> bool:
+    return q in _own(m)
+
+
+def _meaning(result, q: str) -> str:
+    if q in QUANTITIES:
+        return QUANTITIES[q].meaning
+    return next((m["deviations"][q] for m in result.machines if q in (m.get("deviations") or {})), q)
+
+
+def _kind(m: dict) -> str:
+    """``type, description`` of a machine in words (``"TYPE-A, trunnion"``, ``"thesis machine"``)."""
+    return ", ".join(x for x in (m.get("type"), m.get("description")) if x)
 
 
 def _machine_name(m: dict) -> str:
@@ -141,7 +164,7 @@ def text_overview(result) -> str:
         last = next(iter(m["latest"].values()), {})
         rows.append([_machine_name(m), str(len(m["campaigns"])), last.get("date") or "—", _source(m)]
                     + [display(m["latest"][q]["mean"], m["latest"][q]["unit"], 1) + _flags(m["latest"][q])
-                       if q in m["latest"] else "—" for q in qs] + [_recalibrate_by(m) or "—"])
+                       if q in m["latest"] else "—" if _has(m, q) else "" for q in qs] + [_recalibrate_by(m) or "—"])
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     lines += ["  ".join(v.ljust(w) if i < 4 else v.rjust(w) for i, (v, w) in enumerate(zip(r, widths))).rstrip()
               for r in rows]
@@ -152,6 +175,9 @@ def text_overview(result) -> str:
             lines.append(f"  {_machine_name(m)}: change in {c.get('quantity')} at {c.get('date')}"
                          + (f" (probability {c['probability']:.2f})" if isinstance(c.get("probability"), float) else ""))
         lines += [f"  {_machine_name(m)}: {n}" for n in m["notes"]]
+        if m.get("deviations") is not None:
+            lines.append(f"  {_machine_name(m)}: {_kind(m)}; not shown as measured: "
+                         + (", ".join(x["quantity"] for x in m.get("not_determined", [])) or "none"))
     if result.errors:
         lines += ["", f"{len(result.errors)} failed (the rest completed):"] + [f"  {e['message']}" for e in result.errors]
     r = result.run
@@ -167,7 +193,7 @@ def text_overview(result) -> str:
 SUMMARY_COLUMNS = ["serial", "machine", "quantity", "unit", "date", "file", "mean", "sd", "hdi_low", "hdi_high",
                    "conformity", "p_nonconformance", "drift", "drift_date", "drift_probability", "recalibrate_by",
                    "page", "source", "campaign_mean", "campaign_sd", "campaign_conformity",
-                   "campaign_p_nonconformance"]
+                   "campaign_p_nonconformance", "type", "configuration", "description"]
 
 
 def summary_table(result) -> pd.DataFrame:
@@ -185,7 +211,8 @@ def summary_table(result) -> pd.DataFrame:
                          "drift_probability": c["drift_probability"], "recalibrate_by": c["recalibrate_by"],
                          "page": m["page"], "source": c.get("source"), "campaign_mean": own.get("mean"),
                          "campaign_sd": own.get("sd"), "campaign_conformity": own.get("conformity"),
-                         "campaign_p_nonconformance": own.get("p_nonconformance")})
+                         "campaign_p_nonconformance": own.get("p_nonconformance"), "type": m.get("type"),
+                         "configuration": m.get("configuration"), "description": m.get("description")})
     return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
 
 
@@ -232,9 +259,9 @@ def _cell(c: dict | None) -> str:
     return f'<td class="{classes}" title="{html.escape(_cell_title(c))}">{value}{second}</td>'
 
 
-def _head(q: str) -> str:
+def _head(q: str, meaning: str) -> str:
     iso = iso_symbol(q)
-    title = f"{q}{f' ({iso})' if iso else ''}, {units.SYMBOL[quantity_unit(q)]}: {QUANTITIES[q].meaning}"
+    title = f"{q}{f' ({iso})' if iso else ''}, {units.SYMBOL[quantity_unit(q)]}: {meaning}"
     return f'<th class="q" title="{html.escape(title)}">{html_symbol(q)}</th>'
 
 
@@ -244,7 +271,8 @@ def _machine_cell(m: dict) -> str:
     own = campaigns_page(m)
     return (f'<td><a href="{html.escape(m["page"])}">{html.escape(_machine_name(m))}</a><br>'
             f'<span class="sub"><a href="{html.escape(own)}">{n} campaign{"s" * (n != 1)}</a></span><br>'
-            f'<span class="sub">{_source(m)}, {html.escape(str(last.get("date") or "—"))}</span></td>')
+            f'<span class="sub">{_source(m)}, {html.escape(str(last.get("date") or "—"))}</span>'
+            + (f'<br><span class="sub">{html.escape(_kind(m))}</span>' if _kind(m) else "") + "</td>")
 
 
 def overview_page(result) -> Page:
@@ -260,8 +288,9 @@ def overview_page(result) -> Page:
                    f"{MARKS[UNDECIDED]} undecided, with P(outside the tolerance) (green, red, amber); {DRIFT_FLAG} "
                    f"date: the history found a change there; {RECALIBRATE_MARK} date: recalibrate by (the history's "
                    "forecast of when the quantity leaves its tolerance).")
-    head = "".join(["<th>machine</th>", *(_head(q) for q in qs), "<th>recalibrate by</th>"])
-    body = [f"<tr>{_machine_cell(m)}" + "".join(_cell(m["latest"].get(q)) for q in qs)
+    head = "".join(["<th>machine</th>", *(_head(q, _meaning(result, q)) for q in qs), "<th>recalibrate by</th>"])
+    body = [f"<tr>{_machine_cell(m)}" + "".join(_cell(m["latest"].get(q)) if _has(m, q) else '<td class="q"></td>'
+                                                for q in qs)
             + f"<td>{html.escape(_recalibrate_by(m) or '—')}</td></tr>" for m in result.machines]
     page.raw(f'<table class="fleet"><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table>')
     legend = " · ".join(f"{html_symbol(q)} {html.escape(q)}"
@@ -269,6 +298,16 @@ def overview_page(result) -> Page:
                         + f", {units.SYMBOL[quantity_unit(q)]}" for q in qs)
     page.raw(f'<p class="legend">{legend}</p>')
     page.paragraph(CONFORMITY_RULE + f" Tolerances: {_tolerances_text(result)}.")
+    if any(m.get("deviations") is not None for m in result.machines):
+        page.paragraph("Machines of several types and configurations: each machine fills the columns of its own "
+                       "deviations (a blank cell: a quantity the machine does not have; — : one it has without a "
+                       "value). A described machine's deviations that its campaigns do not determine one by one are "
+                       "not shown as measured (docs/fleet.md):")
+        page.table(pd.DataFrame([{"machine": _machine_name(m), "type": m.get("type") or "—",
+                                  "configuration": m.get("configuration"), "description": m.get("description"),
+                                  "not shown as measured": "; ".join(f"{x['quantity']} ({x['why']})"
+                                                                     for x in m.get("not_determined", [])) or "—"}
+                                 for m in result.machines]), index=False)
     notes = [f"{_machine_name(m)}: {n}" for m in result.machines for n in m["notes"]]
     page.box("missing", "Notes", notes)
     if result.types:

@@ -103,13 +103,45 @@ def _latest(campaigns: list[dict], history: dict | None, *, history_file: str | 
     return out
 
 
+def machine_identity(m: Machine) -> dict:
+    """What the overview names of a machine: ``type`` (its ``[machine] type``), ``configuration``, ``description``
+    (the thesis machine, a built-in type's name, or "described <configuration>") and, on a described machine,
+    ``deviations`` (its own, ISO 230-7 name -> meaning) and ``type_key`` (whose σ_model it pools with)."""
+    from ..io.machine_identity import description_label
+
+    machine = m.latest.machine
+    out = {"type": machine.type, "configuration": (machine.description.configuration if machine.described
+                                                   else machine.configuration), "description": description_label(machine)}
+    if machine.described:
+        from ..machines.deviations import selected
+
+        out["deviations"] = {d.name: d.meaning for d in selected(machine.description)}
+        out["type_key"] = m.type_key
+    return out
+
+
+def _not_determined(entry: dict, history: dict | None) -> list[dict]:
+    """A described machine's deviations that are not shown as measured, with why: its history's list, else those
+    its latest campaign's posterior does not identify (``latest`` loses them)."""
+    if history is not None and history.get("not_determined") is not None:
+        left = list(history["not_determined"])
+    else:
+        last = (entry["campaigns"] or [None])[-1]
+        left = [{"quantity": q, "why": f"not identified by the campaign ({s.get('identification')})"}
+                for q, s in ((last or {}).get("summary") or {}).items() if s.get("identified") is False]
+    hidden = {x["quantity"] for x in left}
+    for q in hidden:
+        entry["latest"].pop(q, None)
+    return left
+
+
 def pooled_types(found: Discovery, machines: list[dict], payloads: dict, of_machine: dict) -> dict:
     """Per machine type shared by two or more machines: σ_model pooled over their histories (:mod:`.sigma_model`);
     each machine entry of the type gets it as ``"sigma_model"`` (None for the others)."""
     by_type: dict[str, list[int]] = {}
     for i, m in enumerate(found.machines):
-        if m.type:
-            by_type.setdefault(m.type, []).append(i)
+        if m.type_key:
+            by_type.setdefault(m.type_key, []).append(i)
     out = {}
     for name, members in sorted(by_type.items()):
         rows = [payloads[of_machine[found.machines[i].id]]["result"].get("sigma_model_loglik") for i in members
@@ -123,7 +155,7 @@ def pooled_types(found: Discovery, machines: list[dict], payloads: dict, of_mach
         out[name] = {"type": name, "machines": len(members), **pooled,
                      "prior_file": f"sigma_model_{slug(name)}.toml" if usable else None}
     for i, m in enumerate(found.machines):
-        machines[i]["sigma_model"] = out.get(m.type) if m.type else None
+        machines[i]["sigma_model"] = out.get(m.type_key) if m.type_key else None
     return out
 
 
@@ -204,7 +236,7 @@ class FleetResult:
                 history, files = p["result"], p["files"]
         elif len(m.campaigns) > 1 and len(m.dated) < 2:
             notes.append("no history: it needs at least two dated campaigns")
-        entry = {"serial": m.serial, "id": m.id, "campaigns": campaigns,
+        entry = {"serial": m.serial, "id": m.id, **machine_identity(m), "campaigns": campaigns,
                  "history": None if history is None else {
                      "model": history.get("model"), "dates": history.get("dates"), "files": [c.file for c in m.dated],
                      "summary": history.get("summary"), "diagnostics": history.get("diagnostics"),
@@ -216,6 +248,8 @@ class FleetResult:
                                 else m.dated[-1].campaign.tolerances if m.dated else {})
         entry["latest"] = _latest(campaigns, history, history_file=m.dated[-1].file if history else None,
                                   limits=limits, page=campaigns_page(entry))
+        if m.latest.machine.described:
+            entry["not_determined"] = _not_determined(entry, history)
         return entry, files
 
     # ------------------------------------------------------------------ outputs

@@ -257,6 +257,7 @@ class FirstOrderModel:
     def __init__(self, chain_model):
         self.campaign, self.space = chain_model.campaign, chain_model.space
         self.observations = chain_model.observations
+        self.nominal = getattr(chain_model, "nominal", None)  # a probe model's nominal readings (k, 3), mm
         self.design = complex_step_jacobian(chain_model)
 
     def predict(self, theta: np.ndarray) -> np.ndarray:
