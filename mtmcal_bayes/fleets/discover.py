@@ -9,8 +9,9 @@ output), not its name or place; the fingerprint seeds its work and names its cac
 Campaigns are grouped by ``[machine] serial``.  A campaign without a serial cannot be matched with any other:
 it is a machine of its own, known by its file.  Machines may be of any type and description (the thesis machine,
 described machines); a serial whose campaigns are on two different descriptions is an error of the fleet naming
-its files (:mod:`~mtmcal_bayes.io.machine_identity`), and the other machines are computed.  A machine's campaigns are in date order (a missing date
-sorts after every dated campaign, those in file order); only dated campaigns make its history.
+its files (:mod:`~mtmcal_bayes.io.machine_identity`), and the other machines are computed.  A machine's campaigns
+are in date order (a missing date sorts after every dated campaign, those in file order); only dated campaigns
+make its history.
 """
 
 from __future__ import annotations
@@ -158,6 +159,18 @@ def campaign_paths(directory: str | os.PathLike, skip=()) -> list[Path]:
     return sorted(found, key=lambda p: p.relative_to(root).as_posix())
 
 
+def _two_descriptions(m: Machine) -> dict:
+    """The fleet's error for a serial whose campaigns are on different descriptions: one line naming the files of
+    each description."""
+    by: dict[tuple[str, str], list[str]] = {}
+    for c in m.campaigns:
+        machine = c.campaign.machine
+        by.setdefault((description_key(machine), description_label(machine)), []).append(c.file)
+    each = "; ".join(f"{', '.join(files)}: {label}" for (_, label), files in by.items())
+    return {"file": None, "machine": m.id, "message": f"machine {m.id}: its campaigns describe {len(by)} different "
+            f"machines ({each}); one serial is one machine, on one description"}
+
+
 def discover(directory: str | os.PathLike, skip=()) -> Discovery:
     """Load every campaign below ``directory`` (see the module's description); ``skip``: folders to leave out."""
     root = Path(directory)
@@ -181,13 +194,6 @@ def discover(directory: str | os.PathLike, skip=()) -> Discovery:
         m.campaigns = (sorted(m.dated, key=lambda c: (_date_key(c.campaign.date), c.file))
                        + [c for c in m.campaigns if c.campaign.date is None])
     for key in [k for k, m in machines.items() if len({description_key(c.campaign.machine) for c in m.campaigns}) > 1]:
-        m = machines.pop(key)  # one serial on two descriptions: which is the machine? say so, never guess
-        by = {}
-        for c in m.campaigns:
-            by.setdefault(description_label(c.campaign.machine) + " " + description_key(c.campaign.machine), []).append(c.file)
-        errors.append({"file": None, "machine": m.id,
-                       "message": f"machine {m.id}: its campaigns describe {len(by)} different machines ("
-                       + "; ".join(f"{', '.join(files)}: {label.rsplit(' ', 1)[0]}" for label, files in by.items())
-                       + "); one serial is one machine, on one description"})
+        errors.append(_two_descriptions(machines.pop(key)))  # which is the machine? say so, never guess
     order = sorted(machines.values(), key=lambda m: (m.serial is None, m.id))
     return Discovery(str(root), order, errors)

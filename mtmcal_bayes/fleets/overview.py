@@ -332,7 +332,9 @@ def overview_page(result) -> Page:
     return page
 
 
-def _campaign_rows(c: dict, history_at: dict, *, with_history: bool) -> pd.DataFrame:
+def _campaign_rows(c: dict, history_at: dict, *, with_history: bool, described: bool = False) -> pd.DataFrame:
+    """A campaign's section: each quantity of its posterior; on a described machine with whether the campaign
+    determines it (``determined``: no, and how, where its posterior rests on priors)."""
     rows = []
     for q, s in c["summary"].items():
         t = s.get("tolerance") or {}
@@ -343,7 +345,9 @@ def _campaign_rows(c: dict, history_at: dict, *, with_history: bool) -> pd.DataF
                      "tolerance": tolerance_text(t.get("low"), t.get("high"), s["unit"]) if t else None,
                      "P(outside)": s.get("p_nonconformance"), "verdict": s.get("conformity"),
                      **({"history at this date": estimate_text({**h, "unit": s["unit"]}) if h else None}
-                        if with_history else {})})
+                        if with_history else {}),
+                     **({"determined": "yes" if s.get("identified") is not False
+                         else f"no ({s.get('identification')})"} if described else {})})
     return pd.DataFrame(rows)
 
 
@@ -353,6 +357,8 @@ def machine_page(result, m: dict) -> Page:
     page = Page(f"Machine {_machine_name(m)} — {len(m['campaigns'])} campaign(s)")
     page.raw(f'<p>Part of the fleet below {html.escape(str(result.directory))} '
              '(<a href="../../index.html">overview</a>).</p>')
+    if _kind(m):
+        page.paragraph(f"Machine: {_kind(m)}, configuration {m.get('configuration') or '—'}.")
     page.section("campaigns", "Campaigns")
     page.table(pd.DataFrame([{"file": c["file"], "date": c["date"] or "—", "temperature °C": c["temperature_C"],
                               "converged": c["diagnostics"]["converged"], "warnings": len(c["warnings"])}
@@ -377,8 +383,8 @@ def machine_page(result, m: dict) -> Page:
         for i, c in enumerate(m["campaigns"]):
             page.raw(f'<h3 id="{campaign_anchor(i)}">{html.escape(c["date"] or "undated")} — '
                      f'{html.escape(c["file"])}</h3>')
-            page.table(_campaign_rows(c, summary.get(c["date"]) or {}, with_history=bool(summary)), index=False,
-                       digits=4)
+            page.table(_campaign_rows(c, summary.get(c["date"]) or {}, with_history=bool(summary),
+                                      described=m.get("deviations") is not None), index=False, digits=4)
     page.box("missing", "Notes", m["notes"])
     page.box("warn", "Sampler warnings", [f"{c['file']}: {w}" for c in m["campaigns"] for w in c["warnings"]])
     return page
