@@ -98,6 +98,34 @@ def _has(m: dict, q: str) -> bool:
     return q in _own(m)
 
 
+#: what a cell of a deviation the machine has but its campaigns do not determine shows (never a number)
+NOT_DETERMINED = "n.d."
+
+
+def _why_not(m: dict, q: str) -> str | None:
+    """Why a described machine's quantity is not shown as measured (None: it is, or it is not the machine's)."""
+    return next((x["why"] for x in m.get("not_determined", []) if x["quantity"] == q), None)
+
+
+def _html_cell(m: dict, q: str) -> str:
+    """A machine × quantity cell: blank for a quantity it does not have, n.d. for one not determined, else its
+    estimate."""
+    if not _has(m, q):
+        return '<td class="q"></td>'
+    why = _why_not(m, q)
+    if why is not None and q not in m["latest"]:
+        return f'<td class="q sub" title="{html.escape("not determined: " + why)}">{NOT_DETERMINED}</td>'
+    return _cell(m["latest"].get(q))
+
+
+def _text_cell(m: dict, q: str) -> str:
+    if q in m["latest"]:
+        return display(m["latest"][q]["mean"], m["latest"][q]["unit"], 1) + _flags(m["latest"][q])
+    if not _has(m, q):
+        return ""
+    return NOT_DETERMINED if _why_not(m, q) is not None else "—"
+
+
 def _meaning(result, q: str) -> str:
     if q in QUANTITIES:
         return QUANTITIES[q].meaning
@@ -163,8 +191,7 @@ def text_overview(result) -> str:
     for m in result.machines:
         last = next(iter(m["latest"].values()), {})
         rows.append([_machine_name(m), str(len(m["campaigns"])), last.get("date") or "—", _source(m)]
-                    + [display(m["latest"][q]["mean"], m["latest"][q]["unit"], 1) + _flags(m["latest"][q])
-                       if q in m["latest"] else "—" if _has(m, q) else "" for q in qs] + [_recalibrate_by(m) or "—"])
+                    + [_text_cell(m, q) for q in qs] + [_recalibrate_by(m) or "—"])
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     lines += ["  ".join(v.ljust(w) if i < 4 else v.rjust(w) for i, (v, w) in enumerate(zip(r, widths))).rstrip()
               for r in rows]
@@ -176,7 +203,7 @@ def text_overview(result) -> str:
                          + (f" (probability {c['probability']:.2f})" if isinstance(c.get("probability"), float) else ""))
         lines += [f"  {_machine_name(m)}: {n}" for n in m["notes"]]
         if m.get("deviations") is not None:
-            lines.append(f"  {_machine_name(m)}: {_kind(m)}; not shown as measured: "
+            lines.append(f"  {_machine_name(m)}: {_kind(m)}; not determined ({NOT_DETERMINED}), not shown as measured: "
                          + (", ".join(x["quantity"] for x in m.get("not_determined", [])) or "none"))
     if result.errors:
         lines += ["", f"{len(result.errors)} failed (the rest completed):"] + [f"  {e['message']}" for e in result.errors]
@@ -289,8 +316,7 @@ def overview_page(result) -> Page:
                    f"date: the history found a change there; {RECALIBRATE_MARK} date: recalibrate by (the history's "
                    "forecast of when the quantity leaves its tolerance).")
     head = "".join(["<th>machine</th>", *(_head(q, _meaning(result, q)) for q in qs), "<th>recalibrate by</th>"])
-    body = [f"<tr>{_machine_cell(m)}" + "".join(_cell(m["latest"].get(q)) if _has(m, q) else '<td class="q"></td>'
-                                                for q in qs)
+    body = [f"<tr>{_machine_cell(m)}" + "".join(_html_cell(m, q) for q in qs)
             + f"<td>{html.escape(_recalibrate_by(m) or '—')}</td></tr>" for m in result.machines]
     page.raw(f'<table class="fleet"><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table>')
     legend = " · ".join(f"{html_symbol(q)} {html.escape(q)}"
@@ -300,9 +326,9 @@ def overview_page(result) -> Page:
     page.paragraph(CONFORMITY_RULE + f" Tolerances: {_tolerances_text(result)}.")
     if any(m.get("deviations") is not None for m in result.machines):
         page.paragraph("Machines of several types and configurations: each machine fills the columns of its own "
-                       "deviations (a blank cell: a quantity the machine does not have; — : one it has without a "
-                       "value). A described machine's deviations that its campaigns do not determine one by one are "
-                       "not shown as measured (docs/fleet.md):")
+                       f"deviations (a blank cell: a quantity the machine does not have; {NOT_DETERMINED}: one of its "
+                       "deviations its campaigns do not determine one by one, never shown as measured, the reason on "
+                       "hovering and below; — : one it has without a value; docs/fleet.md):")
         page.table(pd.DataFrame([{"machine": _machine_name(m), "type": m.get("type") or "—",
                                   "configuration": m.get("configuration"), "description": m.get("description"),
                                   "not shown as measured": "; ".join(f"{x['quantity']} ({x['why']})"
