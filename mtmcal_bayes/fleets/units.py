@@ -110,6 +110,15 @@ def _one_line(exc: BaseException, step: str) -> str:
     return f"internal error in {step}: {type(exc).__name__}: {exc}".splitlines()[0]
 
 
+def model_for(campaign, model: str) -> str:
+    """The model a fleet's ``model`` means for ``campaign``: as given, except that a described machine takes its own
+    kinematic model, the chain, where a kinematic model of the thesis machine (``htm-thesis``, ``htm-literal``) is
+    asked for (docs/fleet.md, "Mixed fleets")."""
+    from ..models import DESCRIBED_MODELS
+
+    return model if not campaign.machine.described or model in DESCRIBED_MODELS else "chain"
+
+
 def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
     """The posterior of one campaign, as ``sample --json`` summarises each quantity (with the conformity
     verdicts of the campaign's own ``[tolerances]``), with its warnings and the sampler's verdicts."""
@@ -122,7 +131,8 @@ def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
 
         s = SamplerSettings(seed=seed, max_steps=settings.max_steps, target_ess=settings.target_ess,
                             sampler=settings.sampler)
-        post = sample_posterior(campaign, model=settings.model, settings=s, tolerances=settings.tolerance_set())
+        post = sample_posterior(campaign, model=model_for(campaign, settings.model), settings=s,
+                                tolerances=settings.tolerance_set())
         add_suggestions(post, campaign)
         d = post.diagnostics
         out = {"seed": seed,
@@ -144,7 +154,7 @@ def _machine_history(campaigns: list, seed: int, model: str, tolerances: dict | 
     tolerances of the forecast are ``tolerances`` (plant-wide), else the latest campaign's own."""
     from ..histories import fit_history
 
-    return fit_history(campaigns, model=model, seed=seed, tolerances=tolerances)
+    return fit_history(campaigns, model=model_for(campaigns[-1], model), seed=seed, tolerances=tolerances)
 
 
 def history_unit(campaigns: list, seed: int, with_page: bool, model: str = "linear", *,
