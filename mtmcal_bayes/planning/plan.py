@@ -231,8 +231,12 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     table, si = _tables(planner, candidates, campaign)
     if sweep_pattern is None:
         best = table[table["kind"] == "tool length"]
-        sweep_pattern = str(best.iloc[0]["pattern"]) if len(best) else (str(table["pattern"].iloc[0]) if described
-                                                                          else "CR")
+        if described and len(best):  # the pattern whose value depends most on the tool length (AA, along its
+            spread = best.groupby("pattern", sort=False)["eig_bits"].agg(np.ptp)  # axis, does not at all)
+            sweep_pattern = str(spread.idxmax())
+        else:
+            sweep_pattern = str(best.iloc[0]["pattern"]) if len(best) else (str(table["pattern"].iloc[0])
+                                                                              if described else "CR")
     sweep = tool_length_sweep(planner, campaign, sweep_pattern)
     check = monte_carlo_check(planner, table)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"
@@ -253,6 +257,10 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
               "separates alpha_XB and gamma_XB, which a B = 90° reading sees only as their sum"
               if any(isinstance(c, ProbeCandidate) for c in candidates) else
               "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus")]
+    cols = [c for c in sweep.columns if c.endswith(" sd_after")]
+    if len(sweep) > 1 and np.allclose(sweep[cols].to_numpy(), sweep[cols].to_numpy()[0], rtol=1e-6):
+        notes.append(f"the tool-length sweep of {sweep_pattern} is flat: a longer tool teaches nothing more here "
+                     "(on a machine whose spindle no rotary axis carries, the tool length moves no lever)")
     if described and planner.not_targeted and not targets:
         notes.append(f"not targeted: {', '.join(planner.not_targeted)} — no run of the catalogue determines them one "
                      "by one (identifiability of the campaign and every candidate together, the T ball centred)")
