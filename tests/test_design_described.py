@@ -141,3 +141,32 @@ def test_an_unknown_target_names_the_machines_deviations(run_cli):
     code, _, err = run_cli("design", "--machine", "trunnion", "--target", "alpha_BT=3")
     assert code == 2 and len(err.strip().splitlines()) == 1
     assert "E_B0A" in err
+
+
+def test_probe_candidates_index_each_axis_and_their_rows_are_the_chains_derivatives():
+    """Each rotary axis of the head-head is indexed by a probe candidate within its travel; a candidate's rows are
+    the derivatives of the nonlinear probe model's readings (central differences, to 1e-6 of the largest entry),
+    over the deviations and its own stylus and sphere terms."""
+    from mtmcal_bayes.machines.deviations import quantities
+    from mtmcal_bayes.models.described import ChainProbeModel
+    from mtmcal_bayes.parameters import ParameterSpace
+    from mtmcal_bayes.planning.described_probe_candidates import described_probe_catalogue
+
+    c = api.campaign_of(api.demo_campaign("head-head"))
+    desc = c.machine.description
+    cands = described_probe_catalogue(c)
+    assert {x.axis for x in cands} == {a.letter for a in desc.rotary_axes}
+    for x in cands:
+        for letter, angles in x.positions:
+            lo, hi = np.rad2deg(desc.axes[letter].travel)
+            assert lo <= min(angles) and max(angles) <= hi
+    planner = DescribedPlanner(c, cands[:2], ["E_B0A"])
+    table = quantities(desc)
+    for x, (A, _) in zip(cands[:2], planner.candidate_rows()):
+        own = ParameterSpace([], [], planner.deviations, x.terms(c), table=table)
+        model = ChainProbeModel(x.alone(c), own)
+        h = np.array([units.to_internal(1e-4, "arcsec" if p.kind == "angle" else "um") for p in own.parameters])
+        fd = (model.predict(np.diag(h)) - model.predict(-np.diag(h))) / (2 * h[:, None])
+        cols = [planner.space.index(n) for n in own.names]
+        assert np.allclose(fd.T, A[:, cols], atol=1e-6 * np.abs(A).max())
+        assert not np.delete(A, cols, axis=1).any()

@@ -31,6 +31,7 @@ from ..observations import Observations
 from ..parameters import ParameterSpace
 from .candidates import Candidate
 from .described_candidates import run_of
+from .described_probe_candidates import DescribedProbeCandidate
 from .design import Planner
 
 
@@ -65,10 +66,12 @@ class DescribedPlanner(Planner):
         bb = campaign.ballbar
         self._setups, self._mounts = dict(bb.setups), dict(bb.mounts)
         for c in self.candidates:
-            self._setups.setdefault(c.setup.id, c.setup)
-            self._mounts.setdefault(c.mount.id, c.mount)
+            if isinstance(c, Candidate):
+                self._setups.setdefault(c.setup.id, c.setup)
+                self._mounts.setdefault(c.mount.id, c.mount)
         self.deviations = [d.name for d in selected(self.desc)]
-        probe = self._probe_terms() if data != "ballbar" else ()
+        probe = (self._probe_terms() if data != "ballbar" else []) + \
+            [t for c in self.candidates if isinstance(c, DescribedProbeCandidate) for t in c.terms(campaign)]
         self.space = ParameterSpace(list(self._setups), list(self._mounts), self.deviations, probe, table=self.table)
         priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
         self.prior_var = np.array([p.sd for p in priors]) ** 2
@@ -141,9 +144,21 @@ class DescribedPlanner(Planner):
         candidates' rows made once."""
         if candidates is None or candidates is self.candidates:
             if self._rows_cache is None:
-                self._rows_cache = super().candidate_rows(self.candidates)
+                self._rows_cache = self._rows(self.candidates)
             return self._rows_cache
-        return super().candidate_rows(candidates)
+        return self._rows(candidates)
+
+    def _rows(self, candidates: list) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The thesis planner's rows of ball-bar candidates, a probe candidate's from its own run."""
+        probe = [i for i, c in enumerate(candidates) if isinstance(c, DescribedProbeCandidate)]
+        rest = [i for i in range(len(candidates)) if i not in set(probe)]
+        out: list = [None] * len(candidates)
+        for i, r in zip(rest, super().candidate_rows([candidates[i] for i in rest]) if rest else []):
+            out[i] = r
+        for i in probe:
+            A, base = candidates[i].rows(self.campaign, self.space, self.deviations, self.table)
+            out[i] = (A, 1.0 / (base + self.sigma_probe**2))
+        return out
 
     def _new_run_rows(self, candidates: list[Candidate], length: float):
         """Rows of each new run (bar ``length``), each from a campaign of that run alone — after the campaign's first

@@ -17,6 +17,7 @@ from .candidates import (
 )
 from .described_candidates import catalogue_of, feasibility_of, sweep_candidates
 from .described_planner import planner_for
+from .described_probe_candidates import described_probe_catalogue, described_probe_feasibility
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
 from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility, probe_skipped
@@ -114,7 +115,8 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
     described = campaign.machine.described
     for k, c in enumerate(candidates):
         probe = isinstance(c, ProbeCandidate)
-        ok, why = probe_feasibility(c, campaign) if probe else fits(c)
+        ok, why = (described_probe_feasibility(c, campaign) if described else probe_feasibility(c, campaign)) \
+            if probe else fits(c)
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
         where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
                   "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else
@@ -224,7 +226,8 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     and the Monte-Carlo check use it (:class:`.design.Planner`)."""
     described = campaign.machine.described
     ballbar = [c for c in catalogue_of(campaign) if data != "probe" or c.repeat_of is None]
-    candidates = ballbar + ([] if described else probe_catalogue(campaign)) + list(extra or [])
+    candidates = ballbar + (described_probe_catalogue(campaign) if described else probe_catalogue(campaign)) + \
+        list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
     planner = planner_for(campaign, candidates, targets, sigma_model=sigma, model=model, data=data,
                           sigma_prior=sigma_prior)
@@ -250,7 +253,13 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
               "travels of the machine's description" if described else
               "feasible = the span of each linear-axis command fits the axis travel of [machine] (the campaign "
               "does not give where the C axis sits within the travels)"),
-             ("touch-probe runs are not yet candidates on a described machine (docs/design.md)" if described else
+             ("touch-probe runs (kind 'probe'): each rotary axis indexed to 0° and up to three more positions, "
+              "alone, with the others held, with a longer stylus or the sphere higher; each a new run with its own "
+              "stylus and sphere terms, readings with the probe's repeatability and sigma_model_probe = "
+              f"{units.from_internal(planner.sigma_probe, 'um'):.2f} µm (rms of its prior)"
+              if described and any(isinstance(c, ProbeCandidate) for c in candidates) else
+              "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus"
+              if described else
               f"touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its own "
               f"stylus and datum terms, readings with the probe's repeatability and sigma_model_probe = "
               f"{units.from_internal(planner.sigma_probe, 'um'):.2f} µm (rms of its prior); a B-axis run at 45° "
