@@ -170,3 +170,21 @@ def test_probe_candidates_index_each_axis_and_their_rows_are_the_chains_derivati
         cols = [planner.space.index(n) for n in own.names]
         assert np.allclose(fd.T, A[:, cols], atol=1e-6 * np.abs(A).max())
         assert not np.delete(A, cols, axis=1).any()
+
+
+def test_a_planned_run_beyond_a_rotary_travel_is_refused_when_read(tmp_path, run_cli):
+    """A planned run whose arc leaves the A travel [-120, 30]°: one line naming the run's arc_deg, exit 2, for any
+    command that reads the campaign (here next and plan), nothing written."""
+    c = api.campaign_of(api.demo_campaign("trunnion"))
+    from mtmcal_bayes.campaign import PlannedRun
+
+    c.ballbar.planned = [PlannedRun("AR", "T1", "W1", 3, arc_deg=np.arange(-60.0, 30.1, 1.0))]
+    path = tmp_path / "planned.toml"
+    save_campaign(c, path)
+    path.write_text(path.read_text().replace("arc_deg = [-60.0, 30.0]\nstep_deg = 1.0\nplanned = true",
+                                             "arc_deg = [-150.0, 30.0]\nstep_deg = 1.0\nplanned = true"))
+    for argv in (("next", str(path)), ("plan", str(path), "-o", str(tmp_path / "out"))):
+        code, _, err = run_cli(*argv)
+        assert code == 2 and len(err.strip().splitlines()) == 1, err
+        assert "arc_deg" in err and "travel" in err
+    assert not (tmp_path / "out").exists()
