@@ -251,7 +251,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     timing = Timing(campaign, time_model or TimeModel())
     start = start or (False, None, None)
     goal = Goal(_goal_vector(planner, want), contraction, budget_min)
-    minutes = lambda counts: timing.total_of_counts(cands, counts, start)  # noqa: E731
+    minutes = _remembered(lambda counts: timing.total_of_counts(cands, counts, start))
     search = Search(problem, goal, minutes)
     _check_budget(search, goal)
     if goal.has_targets:
@@ -324,6 +324,19 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                           "contraction": float(result.value.contraction[0]),
                           "contraction_now": c_now},
                   cands, model, notes, start, rounds, learnt_summary(campaign, sigma_prior))
+
+
+def _remembered(minutes):
+    """``minutes(counts)`` computed once per count vector (the search asks again for designs it has timed)."""
+    seen: dict[bytes, float] = {}
+
+    def once(counts) -> float:
+        key = np.asarray(counts, dtype=np.int64).tobytes()
+        if key not in seen:
+            seen[key] = minutes(counts)
+        return seen[key]
+
+    return once
 
 
 def _refuse_within_budget(problem: DesignProblem, goal: Goal, minutes, *, seed, units_of) -> None:
