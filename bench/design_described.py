@@ -29,7 +29,7 @@ from mtmcal_bayes.planning.design_make import design_candidates, make_design
 from mtmcal_bayes.planning.design_output import designed_campaign
 from mtmcal_bayes.planning.design_problem import PROMISE
 from mtmcal_bayes.planning.scale_priors import scale_prior
-from mtmcal_bayes.simulation.simulate import synthetic_campaign
+from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
 
 TYPES = tuple(sys.argv[2:]) or ("vertical-turn-mill", "trunnion", "head-head")
 
@@ -62,17 +62,11 @@ def design_to(c, targets):
 
 
 def draw_truth(c, rng) -> tuple[Truth, float]:
-    truth = Truth()
-    for p in described_space(c).parameters:
-        v = float(make_prior(p.name, p.base, p.kind, c.priors).frozen().rvs(random_state=rng))
-        if p.group == "deviation":
-            truth.deviations[p.name] = v
-        elif p.group == "setup":
-            truth.setups.setdefault(p.owner, {})[p.base] = v
-        elif p.group == "mount":
-            truth.mounts.setdefault(p.owner, {})[p.base] = v
+    """A machine from the priors: every deviation and nuisance term of ``c``'s space, and σ_model."""
+    space = described_space(c)
+    theta = [make_prior(p.name, p.base, p.kind, c.priors).frozen().rvs(random_state=rng) for p in space.parameters]
     sigma = float(scale_prior(c, "sigma_model", None).frozen().rvs(random_state=rng))
-    return truth, sigma
+    return truth_from_vector(space, np.asarray(theta, float)), sigma
 
 
 def main(n: int) -> None:
