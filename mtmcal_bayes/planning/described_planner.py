@@ -22,10 +22,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..inference.identifiability import CENTRED, identifiability
-from ..inference.likelihood import GaussianMeanLikelihood
-from ..inference.priors import make_prior
 from ..machines.deviations import quantities, selected
-from ..models import DESCRIBED_MODELS, check_data, check_model
+from ..models import DESCRIBED_MODELS, check_model
 from ..models.described import ChainBallbarModel, ChainProbeModel, FirstOrderModel
 from ..observations import Observations
 from ..parameters import ParameterSpace
@@ -55,44 +53,29 @@ class DescribedPlanner(Planner):
     def __init__(self, campaign, candidates: list, targets=None, *, sigma_model: float | None = None,
                  model: str = "linear", data: str = "ballbar", sigma_prior=None):
         check_model(model, DESCRIBED_MODELS)
-        self.campaign = campaign
         self.desc = campaign.machine.description
         self.table = quantities(self.desc)
-        self.model = model
-        # a new machine (set-ups and mounts only) is planned for ball-bar data still to come
-        self.data = check_data(data, campaign) if campaign.ballbar.runs or data != "ballbar" else data
-        self.candidates = list(candidates)
-        self._scales(campaign, sigma_model, sigma_prior)
-        bb = campaign.ballbar
-        self._setups, self._mounts = dict(bb.setups), dict(bb.mounts)
-        for c in self.candidates:
-            if isinstance(c, Candidate):
-                self._setups.setdefault(c.setup.id, c.setup)
-                self._mounts.setdefault(c.mount.id, c.mount)
         self.deviations = [d.name for d in selected(self.desc)]
-        probe = (self._probe_terms() if data != "ballbar" else []) + \
-            [t for c in self.candidates if isinstance(c, DescribedProbeCandidate) for t in c.terms(campaign)]
-        self.space = ParameterSpace(list(self._setups), list(self._mounts), self.deviations, probe, table=self.table)
-        priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
-        self.prior_var = np.array([p.sd for p in priors]) ** 2
-        self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
-        obs = Observations.from_campaign(campaign)
-        self.observations = obs
-        self.pooled_sd = obs.pooled_sd()
-        A, V = [np.zeros((0, len(self.space)))], [np.zeros(0)]
-        if data != "probe" and len(obs):
-            A.append(self.rows_for(campaign, self.space))
-            V.append(GaussianMeanLikelihood(obs, bb.accuracy).base_var + self.sigma_model**2)
-        if data != "ballbar":
-            probe_model = FirstOrderModel(ChainProbeModel(campaign, self.space))
-            A.append(probe_model.design)
-            V.append(probe_model.observations.noise_variance() + self.sigma_probe**2)
-        self.A, self.V = np.vstack(A), np.concatenate(V)
-        self._rows_cache: tuple[list, list] | None = None
+        self._rows_cache: list | None = None
         self.not_targeted: list[str] = []
-        self.targets = described_targets(targets, self.desc) if targets else self._determinable()
-        self.T = self.target_matrix(self.space)
-        self.target_units = [self.table[t].unit for t in self.targets]
+        super().__init__(campaign, candidates, targets, sigma_model=sigma_model, model=model, data=data,
+                         sigma_prior=sigma_prior)
+
+    def _make_space(self, data: str) -> ParameterSpace:
+        """The machine's selected deviations, every set-up's and mount's terms (the candidates' too), the probe's own
+        terms with probe data and each probe candidate's."""
+        probe = (self._probe_terms() if data != "ballbar" else []) + \
+            [t for c in self.candidates if isinstance(c, DescribedProbeCandidate) for t in c.terms(self.campaign)]
+        return ParameterSpace(list(self._setups), list(self._mounts), self.deviations, probe, table=self.table)
+
+    def _probe_now(self, campaign) -> tuple[np.ndarray, np.ndarray]:
+        """The campaign's probe rows (the chain's first order) and their noise without sigma_model_probe, mm²."""
+        model = FirstOrderModel(ChainProbeModel(campaign, self.space))
+        return model.design, model.observations.noise_variance()
+
+    def _targets_of(self, targets) -> list[str]:
+        """``targets`` checked; by default the deviations the campaign and every candidate determine one by one."""
+        return self._checked(targets) if targets else self._determinable()
 
     def _probe_terms(self):
         from ..machines.probe_terms import probe_terms

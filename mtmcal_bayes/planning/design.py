@@ -169,40 +169,54 @@ class Planner:
                  model: str = "linear", data: str = "ballbar", sigma_prior=None):
         self.campaign = campaign
         self.model = model
-        self.data = check_data(data, campaign)
+        # a new machine (set-ups and mounts only) is planned for ball-bar data still to come
+        self.data = check_data(data, campaign) if campaign.ballbar.runs or data != "ballbar" else data
         self.candidates = list(candidates)
-        self.targets = check_targets(targets)
         self._scales(campaign, sigma_model, sigma_prior)
         bb = campaign.ballbar
-        setups = dict(bb.setups)
-        mounts = dict(bb.mounts)
+        self._setups, self._mounts = dict(bb.setups), dict(bb.mounts)
         for c in self.candidates:
             if isinstance(c, Candidate):
-                setups.setdefault(c.setup.id, c.setup)
-                mounts.setdefault(c.mount.id, c.mount)
-        self._setups, self._mounts = setups, mounts
-        own_probe = campaign.probe.nuisance_terms() if data != "ballbar" else []
-        cand_probe = [t for c in self.candidates if isinstance(c, ProbeCandidate) for t in probe_terms(c, campaign)]
-        self.space = ParameterSpace(list(setups), list(mounts), SAMPLED_DEVIATIONS, own_probe + cand_probe)
+                self._setups.setdefault(c.setup.id, c.setup)
+                self._mounts.setdefault(c.mount.id, c.mount)
+        self.space = self._make_space(data)
         priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
         self.prior_var = np.array([p.sd for p in priors]) ** 2
         self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
         obs = Observations.from_campaign(campaign)
-        lik = GaussianMeanLikelihood(obs, bb.accuracy)
         self.observations = obs
         self.pooled_sd = obs.pooled_sd()
         A, V = [np.zeros((0, len(self.space)))], [np.zeros(0)]
         if data != "probe" and len(obs):  # the ball bar's rows first: repeats of its runs index them
             A.append(self._design(campaign))
-            V.append(lik.base_var + self.sigma_model**2)
+            V.append(GaussianMeanLikelihood(obs, bb.accuracy).base_var + self.sigma_model**2)
         if data != "ballbar":
-            probe = (LinearProbeModel(campaign, self.space) if model == "linear"
-                     else ProbeModel(campaign, model, self.space))
-            A.append(probe.design if model == "linear" else self._jacobian(probe))
-            V.append(probe.observations.noise_variance() + self.sigma_probe**2)
+            rows, base = self._probe_now(campaign)
+            A.append(rows)
+            V.append(base + self.sigma_probe**2)
         self.A, self.V = np.vstack(A), np.concatenate(V)
+        self.targets = self._targets_of(targets)
         self.T = self.target_matrix(self.space)
-        self.target_units = [QUANTITIES[t].unit for t in self.targets]
+        self.target_units = [self._unit(t) for t in self.targets]
+
+    def _make_space(self, data: str) -> ParameterSpace:
+        """The parameters: the sampled deviations, every set-up's and mount's terms (the candidates' too), the
+        probe's own terms with probe data and each probe candidate's."""
+        own_probe = self.campaign.probe.nuisance_terms() if data != "ballbar" else []
+        cand_probe = [t for c in self.candidates if isinstance(c, ProbeCandidate)
+                      for t in probe_terms(c, self.campaign)]
+        return ParameterSpace(list(self._setups), list(self._mounts), SAMPLED_DEVIATIONS, own_probe + cand_probe)
+
+    def _probe_now(self, campaign) -> tuple[np.ndarray, np.ndarray]:
+        """The campaign's probe rows ``(k, P)`` and their noise without sigma_model_probe ``(k,)``, mm²."""
+        probe = (LinearProbeModel(campaign, self.space) if self.model == "linear"
+                 else ProbeModel(campaign, self.model, self.space))
+        return (probe.design if self.model == "linear" else self._jacobian(probe)), \
+            probe.observations.noise_variance()
+
+    def _targets_of(self, targets) -> list[str]:
+        """The targets valued: ``targets`` checked, by default the eight identifiable quantities."""
+        return self._checked(targets)
 
     def _scales(self, campaign, sigma_model: float | None, sigma_prior) -> None:
         """The learnt prior kept, the ball bar's fixed σ_model (default the rms of its prior) and the probe's."""
