@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 
 from mtmcal_bayes.campaign import Mount, Setup
@@ -116,3 +117,26 @@ def test_bad_times_name_the_file_and_key(tmp_path, text, key):
 def test_design_times_table_names_its_key():
     with pytest.raises(InputError, match=r"c\.toml: design\.times\.tool_change_min"):
         time_model_from_table({"tool_change_min": -3}, "c.toml", "design.times")
+
+
+@pytest.mark.parametrize("machine", [None, "trunnion"])
+def test_the_searchs_minutes_of_a_count_vector_equal_the_schedules(machine):
+    """The design search times count vectors without making runs (``Timing.total_of_counts``); it must equal the
+    schedule of the runs ``designed_runs`` makes, to the last bit, from a new session and from a mounted bar."""
+    from mtmcal_bayes import api
+    from mtmcal_bayes.machine_time import TimeModel
+    from mtmcal_bayes.planning.design_make import design_candidates
+    from mtmcal_bayes.planning.design_runs import designed_runs
+    from mtmcal_bayes.planning.design_timing import Timing
+
+    c = api.campaign_of(api.demo_campaign(machine) if machine else None)
+    cands = design_candidates(c)
+    taken = set(c.ballbar.mounts) | {x.mount.id for x in cands}
+    timing = Timing(c, TimeModel())
+    rng = np.random.default_rng(0)
+    last = c.ballbar.runs[-1]
+    for _ in range(100):
+        counts = rng.integers(0, 4, len(cands)) * (rng.random(len(cands)) < 0.1)
+        for start in ((False, None, None), (True, last.setup, last.mount)):
+            assert timing.total_of_counts(cands, counts, start) == timing.total(designed_runs(cands, counts, taken),
+                                                                                start)

@@ -18,7 +18,7 @@ class DescribedClock(MachineClock):
         bb = campaign.ballbar
         super().__init__(model, L_B=bb.length, feed=bb.feed_mm_per_min)
         self.desc = campaign.machine.description
-        self._cache: dict[int, float] = {}
+        self._cache: dict[int, tuple] = {}  # id -> (candidate, minutes): the candidate kept, its id its own
 
     def run_minutes(self, run) -> float:
         c = run.candidate
@@ -33,8 +33,8 @@ class DescribedClock(MachineClock):
             m = self.model
             one = max(path / self.feed_mm_per_min, span / m.rotary_deg_per_min)
             index = m.index_rotary_min if any(v != 0 for _, v in c.hold_deg) else 0.0
-            self._cache[key] = m.dwell_min + index + c.repeats * m.directions * one
-        return self._cache[key]
+            self._cache[key] = (c, m.dwell_min + index + c.repeats * m.directions * one)
+        return self._cache[key][1]
 
 
 class Timing:
@@ -55,8 +55,7 @@ class Timing:
 
     def total(self, runs, start) -> float:
         """Minutes of ``runs`` in their measuring order."""
-        ordered = [runs[i] for i in self.order(runs, start)]
-        return self.clock.schedule(ordered, start).total_min
+        return self.clock.total([runs[i] for i in self.order(runs, start)], start)
 
     def per_run(self, runs, start) -> list[float]:
         """Minutes of each run of the ordered ``runs``: measuring plus the set-up changes before it."""
@@ -69,7 +68,10 @@ class Timing:
     def total_of_counts(self, candidates, counts, start) -> float:
         """:meth:`total` of the runs of ``counts`` (K,) of ``candidates`` (as :func:`.design_runs.designed_runs`
         makes them: a candidate's further runs each on a placement of its own) without making them: the same
-        schedule walked over (set-up, placement) keys, its minutes added in the same order (the same float)."""
+        schedule walked over (set-up, placement) keys, its minutes added in the same order (the same float).  The
+        search asks this tens of thousands of times; walking stand-in runs through :func:`canonical_order` and
+        ``MachineClock._steps`` took half as long again over a whole design, so the walk is written out here
+        (``tests/test_machine_time.py`` holds it equal to :meth:`total`)."""
         seq = []  # (setup id, placement key, candidate index) in designed order
         for k in np.flatnonzero(counts):
             c = candidates[k]
