@@ -328,15 +328,12 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     import math
 
     from .errors import ParameterError
-    from .models import DESCRIBED_MODELS, MODELS, check_data, check_model
+    from .models import check_data
     from .planning import plan as rank
     from .planning import read_candidates
 
     c = campaign_of(campaign, measured=True)
-    check_model(model, DESCRIBED_MODELS if c.machine.described else MODELS)
-    if c.machine.described and candidates is not None:
-        raise ParameterError("candidates", "a candidates file serves the thesis machine; on a described machine the "
-                             "catalogue is generated from its description (docs/design.md)")
+    _check_planning_model(model, c, candidates)
     data = check_data(data_of(data, c), c)
     _writable(output, "plan")
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):

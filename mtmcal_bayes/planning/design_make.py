@@ -153,6 +153,21 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
     return unique
 
 
+def reporting_planner(campaign, cands: list[Candidate], want: dict, *, tolerances=None, model: str = "linear",
+                      sigma_prior=None) -> Planner:
+    """The planner of a design: the wanted quantities first, then the toleranced ones the machine reports, then
+    every quantity reported by default (the thesis machine's eight identifiable ones; a described machine's
+    deviations the campaign and the candidates determine one by one)."""
+    tol = list(tolerances or {})
+    if campaign.machine.described:
+        planner = planner_for(campaign, cands, None, model=model, sigma_prior=sigma_prior)
+        known = set(planner.targets) | set(want)
+        planner.retarget(list(dict.fromkeys(list(want) + [q for q in tol if q in known] + planner.targets)))
+        return planner
+    names = list(dict.fromkeys(list(want) + [q for q in tol if q in IDENTIFIABLE] + list(IDENTIFIABLE)))
+    return Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
+
+
 def _goal_vector(planner: Planner, targets: dict[str, float]) -> np.ndarray:
     return np.array([targets.get(t, np.nan) for t in planner.targets], dtype=float)
 
@@ -232,15 +247,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     taken = set(campaign.ballbar.mounts) | {c.mount.id for c in cands}
     if not cands:
         raise ParameterError("candidates", "no candidate run fits the machine's travels")
-    if described:  # the deviations the catalogue determines one by one, and the wanted ones
-        planner = planner_for(campaign, cands, None, model=model, sigma_prior=sigma_prior)
-        known = set(planner.targets) | set(want)
-        names = list(dict.fromkeys(list(want) + [q for q in (tolerances or {}) if q in known] + planner.targets))
-        planner.retarget(names)
-    else:
-        names = list(dict.fromkeys(list(want) + [q for q in (tolerances or {}) if q in IDENTIFIABLE]
-                                   + list(IDENTIFIABLE)))
-        planner = Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
+    planner = reporting_planner(campaign, cands, want, tolerances=tolerances, model=model, sigma_prior=sigma_prior)
     if tolerances:
         for q, sd in targets_from_tolerances(planner, tolerances).items():
             want.setdefault(q, sd)

@@ -20,11 +20,9 @@ import numpy as np
 from .. import units
 from ..errors import ParameterError
 from ..machine_time import TimeModel
-from ..parameters import IDENTIFIABLE
 from .candidates import Candidate
-from .described_planner import planner_for
 from .design import Planner
-from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets
+from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets, reporting_planner
 from .design_problem import current_posterior
 from .scale_priors import learnt_summary
 
@@ -93,21 +91,15 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     default to the campaign's ``[design]``; ``sigma_prior`` a σ_model prior learnt elsewhere, as for
     :func:`.design_make.make_design` (a campaign does not record the prior it was designed under: give it again)."""
     goal = campaign.design
-    described = campaign.machine.described
     want = parse_targets(targets if targets is not None else (goal.targets if goal else {}),
-                         campaign.machine.description if described else None)
+                         campaign.machine.description if campaign.machine.described else None)
     if contraction is None:
         contraction = goal.contraction if goal and goal.contraction is not None else CONTRACTION
     if budget_min is None and goal is not None:
         budget_min = goal.budget_min
     bb = campaign.ballbar
     cands = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []))
-    if described:  # the wanted deviations and those the catalogue determines one by one
-        planner = planner_for(campaign, cands, None, model=model, sigma_prior=sigma_prior)
-        planner.retarget(list(dict.fromkeys(list(want) + planner.targets)))
-    else:
-        planner = Planner(campaign, cands, list(dict.fromkeys(list(want) + list(IDENTIFIABLE))), model=model,
-                          sigma_prior=sigma_prior)
+    planner = reporting_planner(campaign, cands, want, model=model, sigma_prior=sigma_prior)
     tg = np.array([want.get(t, np.nan) for t in planner.targets])
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     if bb.runs:
