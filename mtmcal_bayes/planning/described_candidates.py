@@ -44,6 +44,13 @@ def arc_of(candidate: Candidate, desc) -> np.ndarray:
     return np.arange(lo, hi + 1e-9, step)
 
 
+def arc_spec(arc_deg) -> tuple[float, float, float] | None:
+    """A run's angles (k,) degrees as a candidate's ``(start, end, step)``; None for none (the axis' default)."""
+    if arc_deg is None or len(arc_deg) < 2:
+        return None
+    return float(arc_deg[0]), float(arc_deg[-1]), float(arc_deg[1] - arc_deg[0])
+
+
 def run_of(candidate: Candidate, desc) -> Run:
     """The candidate as a campaign run (zero readings, ``repeats`` each: the rows do not depend on them)."""
     return Run(candidate.pattern, candidate.setup.id, candidate.mount.id,
@@ -112,8 +119,7 @@ def described_catalogue(campaign) -> list[Candidate]:
     for i, run in enumerate(bb.runs):
         add(f"repeat {run.label} (+{DEFAULT_REPEATS})", "repeats", run.pattern, bb.setups[run.setup],
             m=bb.mounts[run.mount], hold=tuple((run.hold_deg or {}).items()), repeat_of=i,
-            arc=(float(run.arc_deg[0]), float(run.arc_deg[-1]), float(np.diff(run.arc_deg[:2])[0]))
-            if run.arc_deg is not None and len(run.arc_deg) > 1 else None)
+            arc=arc_spec(run.arc_deg))
     for L_B in OTHER_L_B_MM:
         if L_B != L:
             for p in pats:
@@ -165,7 +171,7 @@ def travel_problems(desc, q: dict) -> tuple[bool, str]:
     return (not over), ("; ".join(over) if over else "within the axis travels")
 
 
-__all__ = ["described_catalogue", "sweep_candidates", "catalogue_of", "feasibility_of", "described_feasibility_check", "run_of", "arc_of", "travel_problems",
+__all__ = ["arc_spec", "described_catalogue", "sweep_candidates", "catalogue_of", "feasibility_of", "described_feasibility_check", "run_of", "arc_of", "travel_problems",
            "EXTENSIONS_MM", "HOLD_DEG", "PLACEMENTS_MM"]
 
 

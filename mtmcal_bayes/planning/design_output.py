@@ -13,7 +13,7 @@ from .. import units
 from ..campaign import DesignGoal, PlannedRun
 from .design_make import Design
 from .design_problem import PROMISE
-from .described_candidates import arc_of
+from .described_candidates import arc_of, arc_spec
 from .design_runs import geometry_of
 from .next_run import NextStep
 
@@ -63,10 +63,10 @@ def run_records(design: Design, programs: bool = False) -> list[dict]:
 def _described_records(design: Design, programs: bool) -> list[dict]:
     out = []
     for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1):
-        arc = arc_of(r.candidate, design.campaign.machine.description)
+        arc = arc_spec(arc_of(r.candidate, design.campaign.machine.description))
         out.append({"order": i, "pattern": r.pattern, "setup": r.setup.id, "mount": r.mount.id,
                     "R_B_mm": _mm(r.setup.R_B), "position_mm": [_mm(x) for x in r.mount.position],
-                    "arc_deg": [float(arc[0]), float(arc[-1]), float(arc[1] - arc[0])],
+                    "arc_deg": list(arc),
                     "hold_deg": {a: float(v) for a, v in r.candidate.hold_deg}, "length_mm": _mm(r.length),
                     "repeats": r.repeats, "minutes": round(m, 2),
                     "program": program_name(i, r.pattern) if programs else None, "why": why,

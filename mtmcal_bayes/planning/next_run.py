@@ -21,6 +21,7 @@ from .. import units
 from ..errors import ParameterError
 from ..machine_time import TimeModel
 from .candidates import Candidate
+from .described_candidates import arc_spec
 from .design import Planner
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets, reporting_planner
 from .design_problem import current_posterior
@@ -63,10 +64,8 @@ def planned_candidates(campaign) -> list[Candidate]:
     out = []
     for p in bb.planned:
         s, m = bb.setups[p.setup], bb.mounts[p.mount]
-        arc = None if p.arc_deg is None or len(p.arc_deg) < 2 else \
-            (float(p.arc_deg[0]), float(p.arc_deg[-1]), float(p.arc_deg[1] - p.arc_deg[0]))
         out.append(Candidate(f"{p.label} (planned)", "planned", p.pattern, s, m, bb.length, p.repeats,
-                             extension=s.R_B - campaign.primary_setup().R_B, arc_deg=arc,
+                             extension=s.R_B - campaign.primary_setup().R_B, arc_deg=arc_spec(p.arc_deg),
                              hold_deg=tuple((p.hold_deg or {}).items())))
     return out
 
