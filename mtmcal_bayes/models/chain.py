@@ -156,3 +156,19 @@ class Chain:
                 d = self._direction(ax.letter, dev, n)
                 x = x + _step(q[ax.letter], d)
         return x
+
+    def ballbar_lengths(self, length: np.ndarray, t_off: np.ndarray, q: dict[str, np.ndarray], placement: np.ndarray,
+                        w_off: np.ndarray, dev: dict[str, np.ndarray]) -> np.ndarray:
+        """The actual length ``|T − W|`` ``(n, k)`` mm of a ball bar at every point, any machine, any campaign format.
+
+        The tool ball sits at the spindle's ``point_mm`` plus ``length`` (n, k) mm (the true tool length) along the
+        spindle, offset by ``t_off`` (n, k, 3) (zero at dummy-sphere points).  The W ball of point j is placed where
+        the tool ball is at point ``placement[j]`` (the index of its mount's dummy-sphere point), carried into the
+        workpiece frame, offset there by ``w_off`` (n, k, 3), and carried back at point j's commands ``q``."""
+        s = self.desc.spindle
+        t = s.point + length[..., None] * s.direction
+        T = self.tool_point(t + t_off, q, dev)
+        q0 = {a: v[placement] for a, v in q.items()}
+        W = self.work_point(self.work_frame(T[:, placement, :], q0, dev) + w_off, q, dev)
+        diff = T - W
+        return np.sqrt(np.einsum("nki,nki->nk", diff, diff))

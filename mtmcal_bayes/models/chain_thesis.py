@@ -26,26 +26,14 @@ class ThesisChainModel(HTMModel):
         self.name = "chain"
         desc = description if description is not None else description_of(campaign.machine)
         self.chain = Chain(desc, generated(desc))
-        self.spindle = desc.spindle
 
     def _dL(self, theta: np.ndarray) -> np.ndarray:
         pts = self._point_table()
-        n, k = len(theta), len(pts.cmd.B)
-        ext = np.concatenate([theta, np.zeros((n, 1))], axis=1)  # column -1 holds zero
+        ext = np.concatenate([theta, np.zeros((len(theta), 1))], axis=1)  # column -1 holds zero
         dev = {d: ext[:, c] for d, c in pts.deviation_cols.items() if c >= 0}
         nui = {b: _column(ext[:, c]) for b, c in pts.setup_cols.items()}  # (n, k)
-        real = ~pts.dummy
-        s = self.spindle.direction
-        length = pts.geometry.R_B + nui["dRB"]  # (n, k)
-        t = self.spindle.point + length[..., None] * s
-        t = t + np.stack([nui["xT"], nui["yT"], nui["zT"]], axis=-1) * real[None, :, None]
-        q = {"X": pts.cmd.X, "Y": pts.cmd.Y, "Z": pts.cmd.Z, "B": pts.cmd.B, "C": pts.cmd.C}
-        T = self.chain.tool_point(t, q, dev)
+        t_off = np.stack([nui["xT"], nui["yT"], nui["zT"]], axis=-1) * (~pts.dummy)[None, :, None]
         w_off = np.stack([ext[:, pts.mount_cols[b]] for b in MOUNT_NUISANCE], axis=-1)  # (n, k, 3)
-        P0 = T[:, pts.placement, :]
-        q_place = {a: v[pts.placement] for a, v in q.items()}
-        w = self.chain.work_frame(P0, q_place, dev) + w_off
-        W = self.chain.work_point(w, q, dev)
-        diff = T - W
-        del k
-        return np.sqrt(np.einsum("nki,nki->nk", diff, diff)) - self.campaign.ballbar.length
+        q = {"X": pts.cmd.X, "Y": pts.cmd.Y, "Z": pts.cmd.Z, "B": pts.cmd.B, "C": pts.cmd.C}
+        return (self.chain.ballbar_lengths(pts.geometry.R_B + nui["dRB"], t_off, q, pts.placement, w_off, dev)
+                - self.campaign.ballbar.length)

@@ -121,17 +121,10 @@ class ChainBallbarModel:
         """ΔL ``(n, k)`` mm at every point, for a batch ``(n, p)``."""
         ext, dev = _values(theta, self.space, self.desc)
         nui = {b: ext[:, c] for b, c in self._setup_cols.items()}  # (n, k)
-        s = self.desc.spindle
-        real = ~self.dummy
-        t = s.point + (self.length + nui["dRB"])[..., None] * s.direction
-        t = t + np.stack([nui["xT"], nui["yT"], nui["zT"]], axis=-1) * real[None, :, None]
-        T = self.chain.tool_point(t, self.q, dev)
-        P0 = T[:, self.placement, :]
-        q0 = {a: v[self.placement] for a, v in self.q.items()}
+        t_off = np.stack([nui["xT"], nui["yT"], nui["zT"]], axis=-1) * (~self.dummy)[None, :, None]
         w_off = np.stack([ext[:, self._mount_cols[b]] for b in MOUNT_NUISANCE], axis=-1)
-        W = self.chain.work_point(self.chain.work_frame(P0, q0, dev) + w_off, self.q, dev)
-        diff = T - W
-        return np.sqrt(np.einsum("nki,nki->nk", diff, diff)) - self.campaign.ballbar.length
+        return (self.chain.ballbar_lengths(self.length + nui["dRB"], t_off, self.q, self.placement, w_off, dev)
+                - self.campaign.ballbar.length)
 
     def traces(self, theta: np.ndarray) -> list[np.ndarray]:
         """ΔL of every run, each ``(n, k_run)`` mm (complex ``theta``: a complex-step derivative goes through)."""
