@@ -89,12 +89,7 @@ class CampaignAnalysis:
         return LogPosterior(self.campaign, self.model, fix_dx_BT=self.fix_dx_BT, sigma_model=self.sigma_model,
                             data=self.data, sigma_prior=self.sigma_prior, space=self.space,
                             observations=self.ballbar_observations,
-                            probe_layout=self.probe_layout if self.data != "ballbar" and not self.described else None)
-
-    @property
-    def described(self) -> bool:
-        """Whether the campaign's machine is a described one (SPEC §19), not the thesis machine."""
-        return self.campaign.machine.described
+                            probe_layout=self.probe_layout if self.data != "ballbar" else None)
 
     def _shared(self, key, make):
         """What ``make()`` derives from the campaign, made once for every variant of the family (kept under
@@ -112,11 +107,13 @@ class CampaignAnalysis:
 
     @property
     def probe_layout(self):
-        """The campaign's touch-probe readings and where they were taken
-        (:class:`~mtmcal_bayes.models.probe_model.ProbeLayout`), made once for every variant."""
-        from .models.probe_model import ProbeLayout
+        """The campaign's touch-probe readings and where they were taken, as its machine's plug-in lays them out for
+        its models (the thesis': :class:`~mtmcal_bayes.models.probe_model.ProbeLayout`), made once for every
+        variant; None where the machine's models read the campaign's probe runs themselves."""
+        from .machines.plugins import provided
 
-        return self._shared("probe_layout", lambda: ProbeLayout(self.campaign))
+        layout = provided(self.campaign.machine, "probe_layout")
+        return None if layout is None else self._shared("probe_layout", lambda: layout(self.campaign))
 
     @property
     def observations(self):

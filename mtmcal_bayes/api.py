@@ -66,22 +66,23 @@ def campaign_of(campaign: CampaignLike, *, measured: bool = False, thesis_only: 
 
 
 def kinematic_model_of(model: str | None, c: Campaign) -> str:
-    """The model asked for (checked: a described machine has ``chain`` and ``linear``), else the machine's kinematic
-    model: ``htm-thesis`` on the thesis machine, ``chain`` on a described one."""
-    from .models import DESCRIBED_MODELS, check_model
+    """The model asked for (checked against the machine's: ``chain`` and ``linear``, and its plug-ins'), else the
+    machine's kinematic model (its plug-in's: ``htm-thesis`` on the thesis machine; else ``chain``)."""
+    from .models import check_model, default_kinematic_model, models_of
 
-    if model is None:
-        return "chain" if c.machine.described else "htm-thesis"
-    return check_model(model, DESCRIBED_MODELS) if c.machine.described else check_model(model)
+    return default_kinematic_model(c.machine) if model is None else check_model(model, models_of(c.machine))
 
 
 def data_of(data: str | None, c: Campaign) -> str:
-    """The data of a likelihood: as given, else the ball bar on the thesis machine and every instrument a described
-    machine's campaign has."""
+    """The data of a likelihood: as given, else what the machine's plug-in states (the thesis machine: the ball bar),
+    else every instrument the campaign has."""
+    from .machines.plugins import provided
+
     if data is not None:
         return data
-    if not c.machine.described:
-        return "ballbar"
+    stated = provided(c.machine, "default_data")
+    if stated is not None:
+        return stated
     return "both" if c.ballbar.runs and c.has_probe_readings() else "probe" if not c.ballbar.runs else "ballbar"
 
 
@@ -160,14 +161,15 @@ def identify(campaign: CampaignLike = None):
     each value beside the published one (an :class:`IdentificationResult`).  On a described machine, which has no
     thesis formulas: the linearised least-squares identification of what its campaign determines, from every
     instrument it has (:class:`~mtmcal_bayes.posterior.least_squares.DescribedIdentification`)."""
-    from .identification import identify as identify_campaign
+    from .machines.plugins import provided
 
     c = campaign_of(campaign, measured=True)
-    if c.machine.described:
-        from .posterior.least_squares import identify_described
+    deterministic = provided(c.machine, "identify")
+    if deterministic is not None:
+        return deterministic(c)
+    from .posterior.least_squares import identify_described
 
-        return identify_described(c, data_of(None, c))
-    return identify_campaign(c)
+    return identify_described(c, data_of(None, c))
 
 
 def probe_fit(path, *, stylus_radius_mm: float | None = None) -> ProbeFit:
@@ -777,9 +779,9 @@ def _check_planning_model(model: str, c: Campaign, candidates) -> None:
     """The model checked for ``c``'s machine; a candidates file refused on a described machine (its catalogue is
     generated from the description)."""
     from .errors import ParameterError
-    from .models import DESCRIBED_MODELS, MODELS, check_model
+    from .models import check_model, models_of
 
-    check_model(model, DESCRIBED_MODELS if c.machine.described else MODELS)
+    check_model(model, models_of(c.machine))
     if c.machine.described and candidates is not None:
         raise ParameterError("candidates", "a candidates file serves the thesis machine; on a described machine the "
                              "catalogue is generated from its description (docs/design.md)")

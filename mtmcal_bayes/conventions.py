@@ -193,8 +193,16 @@ def check_run(run, ballbar) -> None:
                               f"pattern {run.pattern}, and the run gives only {have}: give both components")
 
 
+def reads_machine_frame(run, ballbar) -> bool:
+    """Whether a run's offsets are read in the machine frame itself (the ``"thesis"`` convention, ``D = U``): on any
+    machine, with any pattern, its reported offsets are the machine frame's."""
+    return run_convention(run, ballbar) == "thesis"
+
+
 def machine_repeats(run, ballbar) -> dict[str, np.ndarray]:
     """The run's repeats in the machine frame, ``{component: (r,)}`` mm (only the components it gives)."""
+    if reads_machine_frame(run, ballbar):
+        return dict(run.repeats)
     M = run_matrix(run, ballbar)
     comps = COMPONENTS[run.pattern]
     if np.allclose(M, np.eye(2)):
@@ -209,6 +217,8 @@ def machine_repeats(run, ballbar) -> dict[str, np.ndarray]:
 def reported_values(run, ballbar, machine: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Machine-frame offsets ``{component: (r,)}`` as the run's convention reports them (the inverse of
     :func:`machine_repeats`); every component of the pattern is needed unless the convention keeps them apart."""
+    if reads_machine_frame(run, ballbar):
+        return {c: np.asarray(v) for c, v in machine.items()}
     M = run_matrix(run, ballbar)
     comps = COMPONENTS[run.pattern]
     if np.allclose(M, np.diag(np.diag(M))):

@@ -57,11 +57,9 @@ class Observations:
     def from_campaign(cls, campaign) -> Observations:
         """One entry per component of every run, in the machine frame (each run read in its convention)."""
         keys, mean, sd, n = [], [], [], []
-        described = campaign.machine.described
         for i, run in enumerate(campaign.ballbar.runs):
-            # a described machine's runs are read in its machine frame (no reading conventions yet)
             held = ",".join(f"{a}{v:g}" for a, v in (run.hold_deg or {}).items() if v != 0)
-            for comp, rep in (run.repeats if described else machine_repeats(run, campaign.ballbar)).items():
+            for comp, rep in machine_repeats(run, campaign.ballbar).items():
                 keys.append(ObservationKey(i, run.pattern, run.setup, run.mount, comp, held))
                 mean.append(float(np.mean(rep)))
                 sd.append(float(np.std(rep, ddof=1)) if len(rep) > 1 else np.nan)
@@ -130,7 +128,7 @@ def with_run_values(campaign, keys, values):
         per_run.setdefault(key.run, {})[key.component] = np.asarray(v, dtype=float).copy()
     for i, machine in per_run.items():
         run = out.ballbar.runs[i]
-        run.repeats = machine if out.machine.described else reported_values(run, out.ballbar, machine)
+        run.repeats = reported_values(run, out.ballbar, machine)
         run.trace_csv = None
     return out
 

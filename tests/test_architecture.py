@@ -32,6 +32,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("posterior", "planning", "compensation", "validation", "simulation", "histories"),  # features
     ("reporting",),                                                # the report, built on posterior and planning
     ("fleets",),                                                   # many machines on Dask: posteriors, histories, overview
+    ("plugins",),                                                  # what is particular to one machine (SPEC §20), loaded by name
     ("api",),                                                      # the Python API: one function per command
     ("cli_options",),                                              # the command line's flags
     ("cli", "__init__"),                                           # the command line; the package's public face

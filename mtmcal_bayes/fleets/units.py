@@ -111,12 +111,12 @@ def _one_line(exc: BaseException, step: str) -> str:
 
 
 def model_for(campaign, model: str) -> str:
-    """The model a fleet's ``model`` means for ``campaign``: as given, except that a described machine takes its own
-    kinematic model, the chain, where a kinematic model of the thesis machine (``htm-thesis``, ``htm-literal``) is
-    asked for (docs/fleet.md, "Mixed fleets")."""
-    from ..models import DESCRIBED_MODELS
+    """The model a fleet's ``model`` means for ``campaign``: as given where its machine offers it, else the machine's
+    own kinematic model (a described machine's chain where the thesis machine's ``htm-thesis`` is asked for;
+    docs/fleet.md, "Mixed fleets")."""
+    from ..models import default_kinematic_model, models_of
 
-    return model if not campaign.machine.described or model in DESCRIBED_MODELS else "chain"
+    return model if model in models_of(campaign.machine) else default_kinematic_model(campaign.machine)
 
 
 def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:

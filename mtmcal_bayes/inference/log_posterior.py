@@ -23,6 +23,7 @@ import numpy as np
 
 from .. import units
 from ..errors import ParameterError
+from ..machines.plugins import provided
 from ..machines.space import described_space
 from ..models import JointModel, check_data, make_model
 from ..observations import observation_instruments
@@ -36,15 +37,16 @@ SAMPLED_DEVIATIONS = ("dx_BT", "dz_BT", "alpha_BT", "alpha_XB", "beta_XB", "gamm
 
 
 def parameter_space(campaign, fix_dx_BT: bool, data: str) -> ParameterSpace:
-    """The parameter space of a posterior of ``campaign``'s ``data``: the sampled deviations (without dx_BT under
-    the thesis assumption ``fix_dx_BT``) and the campaign's nuisance terms."""
-    if campaign.machine.described:
-        if fix_dx_BT:
-            raise ParameterError("fix_dx_BT", "the thesis assumption dx_BT = 0 belongs to the thesis machine; a "
-                                 "described machine selects its deviations with [machine] deviations = [...]")
-        return described_space(campaign, data=data)
-    devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
-    return ParameterSpace.for_campaign(campaign, devs, data=data)
+    """The parameter space of a posterior of ``campaign``'s ``data``: the machine's sampled deviations and the
+    campaign's nuisance terms, as its plug-in lays them out where it has one (the thesis': without dx_BT under the
+    thesis assumption ``fix_dx_BT``)."""
+    space_of = provided(campaign.machine, "parameter_space")
+    if space_of is not None:
+        return space_of(campaign, fix_dx_BT, data)
+    if fix_dx_BT:
+        raise ParameterError("fix_dx_BT", "the thesis assumption dx_BT = 0 belongs to the thesis machine; a "
+                             "described machine selects its deviations with [machine] deviations = [...]")
+    return described_space(campaign, data=data)
 
 
 class LogPosterior:

@@ -30,6 +30,7 @@ from ..machines.description import (
     parse_direction,
     vector3,
 )
+from ..machines import plugins
 from ..machines.deviations import generated
 from .textfiles import read_user_text
 from .toml_reader import TomlReader, parse_toml
@@ -44,7 +45,7 @@ BUILTIN_TYPES: dict[str, str] = {
 #: the built-in type whose deviations keep the thesis names
 THESIS_TYPE = "integrex-i200"
 #: keys of a description (a campaign's [machine] adds name, serial, type and the legacy travels)
-DESCRIPTION_KEYS = {"name", "configuration", "axes", "spindle", "deviations", "squareness"}
+DESCRIPTION_KEYS = {"name", "configuration", "axes", "spindle", "deviations", "squareness", "plugins"}
 
 
 def builtin_description(name: str, *, where: tuple[str, str] | None = None) -> MachineDescription:
@@ -124,7 +125,7 @@ def parse_description(t: dict, source: str, path: str, *, builtin: str = "",
                                 "the workpiece side (use \"motion\")")
     thesis = builtin == THESIS_TYPE
     desc = MachineDescription(r.string(t, "name", path), configuration, tool_chain, work_chain, spindle, None,
-                              squareness, builtin, "thesis" if thesis else "iso")
+                              squareness, builtin, "thesis" if thesis else "iso", _plugins(t, fail, key("plugins")))
     check_geometry(desc, fail, path or "machine")
     if "deviations" in t:
         chosen = t["deviations"]
@@ -141,8 +142,22 @@ def parse_description(t: dict, source: str, path: str, *, builtin: str = "",
             fail(key("deviations"), f"{', '.join(twice)} named twice (a deviation by its name and by its ISO "
                                     "symbol is one deviation)")
         desc = MachineDescription(desc.name, configuration, tool_chain, work_chain, spindle,
-                                  tuple(known[n].name for n in chosen), squareness, builtin, desc.names)
+                                  tuple(known[n].name for n in chosen), squareness, builtin, desc.names, desc.plugins)
     return desc
+
+
+def _plugins(t: dict, fail, key: str) -> tuple[str, ...]:
+    """The plug-ins a description names (``plugins = ["thesis"]``), each one that loads (SPEC §20)."""
+    names = t.get("plugins", [])
+    if not isinstance(names, list) or not all(isinstance(x, str) and x for x in names):
+        fail(key, "expected a list of plug-in names, e.g. [\"thesis\"]")
+    for name in names:
+        try:
+            plugins.load(name)
+        except (ImportError, AttributeError) as err:
+            fail(key, f"plug-in {name!r} does not load ({err}); the built-in ones: {', '.join(plugins.BUILTIN)}, or "
+                      "the path of a module whose PLUGIN is the plug-in")
+    return tuple(names)
 
 
 def _travel(r: TomlReader, a: dict, where: str, *, key: str, unit: str) -> tuple[float, float] | None:

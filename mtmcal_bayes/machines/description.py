@@ -90,7 +90,8 @@ class MachineDescription:
 
     ``deviations``: the selected deviation names (None: the default set of :mod:`.deviations`);
     ``builtin``: the built-in type it is (``"integrex-i200"``), else ``""``;
-    ``names``: ``"thesis"`` on the thesis machine (its 13 deviation names), else ``"iso"``.
+    ``names``: ``"thesis"`` on the thesis machine (its 13 deviation names), else ``"iso"``;
+    ``plugins``: the names of its plug-ins (:mod:`.plugins`: what is particular to it, SPEC §20).
     """
 
     name: str
@@ -102,6 +103,7 @@ class MachineDescription:
     squareness: str = "motion"
     builtin: str = ""
     names: str = "iso"
+    plugins: tuple[str, ...] = ()
 
     @property
     def axes(self) -> dict[str, Axis]:

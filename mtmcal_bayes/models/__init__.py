@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
+from ..machines.plugins import provided
 from ..machines.space import described_space
-from ..parameters import ParameterSpace
 from .chain_thesis import ThesisChainModel
 from .described import ChainBallbarModel, ChainProbeModel, FirstOrderModel
 from .joint import JointModel
@@ -21,14 +21,16 @@ from .kinematic import HTMModel, jacobian
 from .linear import LinearModel, linear_coefficients
 from .probe_model import LinearProbeModel, ProbeModel
 
-#: the kinematic (homogeneous-transform) models, which can also compensate NC programs
+#: the kinematic (homogeneous-transform) models of the thesis machine, which can also compensate NC programs
 KINEMATIC_MODELS = ("htm-literal", "htm-thesis")
 #: the kinematic chain of any described machine (SPEC §19); on the thesis machine, ``htm-literal``
 CHAIN = "chain"
-#: every forward model, by name: the thesis relations first
+#: every forward model any machine offers, by name: the thesis relations first (the command line's choices)
 MODELS = ("linear",) + KINEMATIC_MODELS + (CHAIN,)
-#: the models of a described machine: its chain and the chain's first order
-DESCRIBED_MODELS = ("linear", CHAIN)
+#: the engine's models, on every machine: its chain and the chain's first order (a plug-in may offer others)
+ENGINE_MODELS = ("linear", CHAIN)
+#: the name kept for scripts that imported it
+DESCRIBED_MODELS = ENGINE_MODELS
 
 
 def check_model(name: str, allowed=MODELS, parameter: str = "model") -> str:
@@ -38,51 +40,47 @@ def check_model(name: str, allowed=MODELS, parameter: str = "model") -> str:
     return name
 
 
+def models_of(machine) -> tuple[str, ...]:
+    """The forward models ``machine`` offers: its plug-ins' (the thesis machine: :data:`MODELS`), else the engine's."""
+    return provided(machine, "models", ENGINE_MODELS)
+
+
+def default_kinematic_model(machine) -> str:
+    """The default kinematic model of ``machine``: its plug-in's (the thesis machine: ``htm-thesis``), else ``chain``."""
+    return provided(machine, "kinematic_model", CHAIN)
+
+
 #: which measurements a likelihood uses: ball-bar eccentricities, touch-probe readings, or both
 DATA = ("ballbar", "probe", "both")
 
 
 def check_data(data: str, campaign=None, parameter: str = "data") -> str:
-    """``data`` if it is one of :data:`DATA` (and ``campaign`` has probe readings when it asks for them)."""
+    """``data`` if it is one of :data:`DATA` (and ``campaign`` has the readings it asks for)."""
     if data not in DATA:
         raise ParameterError(parameter, f"unknown data {data!r} (expected one of {', '.join(DATA)})")
     if data != "ballbar" and campaign is not None and not campaign.has_probe_readings():
-        where = "[[probe.runs]]" if campaign.machine.described else "[probe.c_axis] or [probe.b_axis.styli]"
+        where = provided(campaign.machine, "probe_sections", "[[probe.runs]]")
         raise ParameterError(parameter, f"{data!r} needs touch-probe readings, and the campaign {campaign.source} "
                              f"has no {where}")
-    if data != "probe" and campaign is not None and campaign.machine.described and not campaign.ballbar.runs:
+    if data != "probe" and campaign is not None and not campaign.ballbar.runs and campaign.has_probe_readings():
         raise ParameterError(parameter, f"{data!r} needs ball-bar runs, and the campaign {campaign.source} has no "
                              "[[ballbar.runs]] (a probe-only campaign: use the probe data)")
     return data
 
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
-    """The forward model ``name`` (one of :data:`MODELS`) for ``campaign``'s ``data`` (one of :data:`DATA`);
-    ``observations``, ``probe_layout``: the campaign's ball-bar :class:`~mtmcal_bayes.observations.Observations` and
-    its :class:`~.probe_model.ProbeLayout` (the probe's readings), if already made."""
-    check_model(name)
+    """The forward model ``name`` (one of the machine's :func:`models_of`) for ``campaign``'s ``data`` (one of
+    :data:`DATA`); ``observations``, ``probe_layout``: the campaign's ball-bar
+    :class:`~mtmcal_bayes.observations.Observations` and its :class:`~.probe_model.ProbeLayout` (the probe's
+    readings), if already made.  A machine's plug-in may build its own models (the thesis' campaign format)."""
+    check_model(name, models_of(campaign.machine))
     check_data(data, campaign)
-    if campaign.machine.described:
-        return _described_model(name, campaign, space, data=data, observations=observations)
-    if space is None:
-        space = ParameterSpace.for_campaign(campaign, data=data)
-    parts = []
-    if data in ("ballbar", "both"):
-        parts.append(LinearModel(campaign, space, observations=observations) if name == "linear"
-                     else ThesisChainModel(campaign, space, observations=observations) if name == CHAIN
-                     else HTMModel(campaign, name, space, observations=observations))
-    if data in ("probe", "both"):
-        probe = (LinearProbeModel(campaign, space, probe_layout) if name == "linear"
-                 else ProbeModel(campaign, "htm-literal" if name == CHAIN else name, space, probe_layout))
-        if name == CHAIN:
-            probe.name = CHAIN  # the thesis machine's chain is htm-literal, its probe model too
-        parts.append(probe)
-    return parts[0] if len(parts) == 1 else JointModel(parts)
+    build = provided(campaign.machine, "make_model", _engine_model)
+    return build(name, campaign, space, data, observations=observations, probe_layout=probe_layout)
 
 
-def _described_model(name: str, campaign, space, *, data: str, observations):
-    """The ``chain`` or ``linear`` model of a described machine's campaign."""
-    check_model(name, DESCRIBED_MODELS)
+def _engine_model(name: str, campaign, space, data: str, *, observations, probe_layout=None):
+    """The ``chain`` or ``linear`` model of a campaign of any described machine."""
     if space is None:
         space = described_space(campaign, data=data)
     parts = []
@@ -96,22 +94,24 @@ def _described_model(name: str, campaign, space, *, data: str, observations):
 
 
 def first_order_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -> float:
-    """Largest difference, mm, between ``htm-thesis`` and its first order (``linear``) at ``theta`` (p,)
-    (``observations``: the campaign's ball-bar observations, if already made).
+    """Largest difference, mm, between the machine's kinematic model and its first order (``linear``) at ``theta``
+    (p,) (``observations``: the campaign's ball-bar observations, if already made).
 
     Above the instrument accuracy, the deviations are too large for the linear model.
     """
-    if campaign.machine.described:  # the chain against its own first order
-        if not campaign.ballbar.runs:
-            return 0.0
-        chain = ChainBallbarModel(campaign, space, observations=observations)
-        return float(np.abs(chain.predict(theta) - FirstOrderModel(chain).predict(theta)).max())
-    linear = LinearModel(campaign, space, observations=observations)
-    kinematic = HTMModel(campaign, "htm-thesis", linear.space, observations=linear.observations)
-    return float(np.abs(kinematic.predict(theta) - linear.predict(theta)).max())
+    gap = provided(campaign.machine, "first_order_gap", _engine_gap)
+    return gap(campaign, theta, space, observations=observations)
 
 
-__all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "DESCRIBED_MODELS", "ThesisChainModel", "ChainBallbarModel",
-           "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "ProbeModel",
-           "LinearProbeModel", "JointModel", "first_order_gap", "LinearModel", "HTMModel",
-           "jacobian", "linear_coefficients"]
+def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -> float:
+    """The chain against its own first order (0 without ball-bar runs)."""
+    if not campaign.ballbar.runs:
+        return 0.0
+    chain = ChainBallbarModel(campaign, space, observations=observations)
+    return float(np.abs(chain.predict(theta) - FirstOrderModel(chain).predict(theta)).max())
+
+
+__all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "ThesisChainModel",
+           "ChainBallbarModel", "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data",
+           "make_model", "models_of", "default_kinematic_model", "ProbeModel", "LinearProbeModel", "JointModel",
+           "first_order_gap", "LinearModel", "HTMModel", "jacobian", "linear_coefficients"]

@@ -157,8 +157,8 @@ class Chain:
                 x = x + _step(q[ax.letter], d)
         return x
 
-    def ballbar_lengths(self, length: np.ndarray, t_off: np.ndarray, q: dict[str, np.ndarray], placement: np.ndarray,
-                        w_off: np.ndarray, dev: dict[str, np.ndarray]) -> np.ndarray:
+    def ballbar_lengths(self, length: np.ndarray, t_off: np.ndarray, q: dict[str, np.ndarray], *,
+                        placement: np.ndarray, w_off: np.ndarray, dev: dict[str, np.ndarray]) -> np.ndarray:
         """The actual length ``|T − W|`` ``(n, k)`` mm of a ball bar at every point, any machine, any campaign format.
 
         The tool ball sits at the spindle's ``point_mm`` plus ``length`` (n, k) mm (the true tool length) along the

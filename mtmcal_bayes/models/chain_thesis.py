@@ -35,5 +35,6 @@ class ThesisChainModel(HTMModel):
         t_off = np.stack([nui["xT"], nui["yT"], nui["zT"]], axis=-1) * (~pts.dummy)[None, :, None]
         w_off = np.stack([ext[:, pts.mount_cols[b]] for b in MOUNT_NUISANCE], axis=-1)  # (n, k, 3)
         q = {"X": pts.cmd.X, "Y": pts.cmd.Y, "Z": pts.cmd.Z, "B": pts.cmd.B, "C": pts.cmd.C}
-        return (self.chain.ballbar_lengths(pts.geometry.R_B + nui["dRB"], t_off, q, pts.placement, w_off, dev)
+        length = pts.geometry.R_B + nui["dRB"]
+        return (self.chain.ballbar_lengths(length, t_off, q, placement=pts.placement, w_off=w_off, dev=dev)
                 - self.campaign.ballbar.length)

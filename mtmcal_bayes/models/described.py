@@ -123,7 +123,8 @@ class ChainBallbarModel:
         nui = {b: ext[:, c] for b, c in self._setup_cols.items()}  # (n, k)
         t_off = np.stack([nui["xT"], nui["yT"], nui["zT"]], axis=-1) * (~self.dummy)[None, :, None]
         w_off = np.stack([ext[:, self._mount_cols[b]] for b in MOUNT_NUISANCE], axis=-1)
-        return (self.chain.ballbar_lengths(self.length + nui["dRB"], t_off, self.q, self.placement, w_off, dev)
+        return (self.chain.ballbar_lengths(self.length + nui["dRB"], t_off, self.q, placement=self.placement,
+                                            w_off=w_off, dev=dev)
                 - self.campaign.ballbar.length)
 
     def traces(self, theta: np.ndarray) -> list[np.ndarray]:

@@ -12,7 +12,7 @@ from .. import units
 from ..analysis import CampaignAnalysis, analysis_of
 from ..inference.analytic import gaussian_posterior
 from ..inference.sampling import SamplingResult
-from ..models import first_order_gap
+from ..models import default_kinematic_model, first_order_gap
 from ..parameters import IDENTIFIABLE, weights
 
 
@@ -32,7 +32,7 @@ def linear_model_check(result: SamplingResult) -> list[str]:
     accuracy = post.campaign.ballbar.accuracy
     if gap <= accuracy:
         return []
-    kinematic = "chain" if post.campaign.machine.described else "htm-thesis"
+    kinematic = default_kinematic_model(post.campaign.machine)
     return [f"the linear model is first order and the deviations found are too large for it: at the posterior "
             f"mean the kinematic model {kinematic} predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} "
             f"µm away from it (instrument accuracy {units.from_internal(accuracy, 'um'):g} µm); use the {kinematic} "

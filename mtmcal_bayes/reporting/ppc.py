@@ -44,8 +44,8 @@ def ppc_table(idata, campaign, observations=None) -> pd.DataFrame:
 
 def _repeats_um(campaign) -> list[np.ndarray]:
     bb = campaign.ballbar
-    read = (lambda run: run.repeats) if campaign.machine.described else (lambda run: machine_repeats(run, bb))  # noqa: E731
-    return [units.from_internal(read(bb.runs[k.run])[k.component], "um") for k in Observations.from_campaign(campaign).keys]
+    return [units.from_internal(machine_repeats(bb.runs[k.run], bb)[k.component], "um")
+            for k in Observations.from_campaign(campaign).keys]
 
 
 def ppc_figure(tables: dict[str, pd.DataFrame], campaign):

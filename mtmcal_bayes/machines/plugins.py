@@ -1,0 +1,51 @@
+"""A machine's plug-ins (SPEC §20): what is particular to one machine, contributed by name, asked for by the engine.
+
+A description names its plug-ins (``plugins = ["thesis"]`` in its TOML): a built-in name (:data:`BUILTIN`) or the
+path of an importable module whose ``PLUGIN`` is the plug-in object.  A plug-in is an object with any of the
+contributions the engine asks for (an attribute per contribution; one it lacks is ``None``):
+
+* ``models`` — the names of the forward models it offers, ``kinematic_model`` the default kinematic one,
+  ``make_model(name, campaign, space, data, observations=, probe_layout=)`` and ``first_order_gap(...)``;
+* ``default_data`` — which instruments a likelihood uses when none is asked for (the engine's rule: every
+  instrument the campaign has);
+* ``identify(campaign)`` — a deterministic identification with the values its source published;
+* and, while the engine still has two paths for them, the whole of a command (``report``, ``program``, ...):
+  each one the engine takes over is one contribution fewer.
+
+The engine never asks which machine it holds: it asks :func:`provided` for a contribution and uses its own where no
+plug-in gives one.  This module is the one place that resolves a machine's plug-ins; the plug-ins are loaded by
+name when first asked for, so that no layer of the package imports them (they sit above every layer they use).
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+
+#: the plug-ins that ship with the package, by the name a description gives
+BUILTIN = {"thesis": "mtmcal_bayes.plugins.thesis"}
+#: the plug-ins of a campaign in the thesis' own format, which names no description (the thesis machine's)
+THESIS_FORMAT = ("thesis",)
+
+
+def plugin_names(machine) -> tuple[str, ...]:
+    """The names of the plug-ins of a campaign's ``machine`` (its description's; a campaign in the thesis' own
+    format has the thesis machine's)."""
+    desc = machine.description
+    return desc.plugins if desc is not None else THESIS_FORMAT
+
+
+@functools.cache
+def load(name: str):
+    """The plug-in object of ``name`` (a built-in name or a module path); ``ImportError`` / ``AttributeError`` when
+    there is none (the description's reader checks its names when it reads them)."""
+    return importlib.import_module(BUILTIN.get(name, name)).PLUGIN
+
+
+def provided(machine, what: str, default=None):
+    """The first contribution ``what`` of ``machine``'s plug-ins, else ``default`` (the engine's own)."""
+    for name in plugin_names(machine):
+        value = getattr(load(name), what, None)
+        if value is not None:
+            return value
+    return default

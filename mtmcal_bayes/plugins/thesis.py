@@ -1,0 +1,100 @@
+"""The thesis plug-in: what the INTEGREX i-200 of the thesis has that no other machine has (SPEC §20).
+
+The thesis machine is the built-in description ``integrex-i200`` plus this plug-in.  It contributes:
+
+* **its published models**: ``linear`` (the thesis relations, Eqs 4.1–4.9 and Table 2.6, with the nuisance terms)
+  and ``htm-thesis`` (the thesis' pivots), beside ``htm-literal`` (Eq 2.10 as printed, the test oracle of the chain)
+  and ``chain`` on the thesis' campaign format; ``htm-thesis`` is its default kinematic model;
+* **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
+* **its campaign keys**: the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables 5.1/5.2);
+* **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3.
+
+Each contribution imports its code when asked for, so loading the plug-in costs nothing.
+"""
+
+from __future__ import annotations
+
+
+def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
+    """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
+    from ..models.chain_thesis import ThesisChainModel
+    from ..models.joint import JointModel
+    from ..models.kinematic import HTMModel
+    from ..models.linear import LinearModel
+    from ..models.probe_model import LinearProbeModel, ProbeModel
+    from ..parameters import ParameterSpace
+
+    if space is None:
+        space = ParameterSpace.for_campaign(campaign, data=data)
+    parts = []
+    if data in ("ballbar", "both"):
+        parts.append(LinearModel(campaign, space, observations=observations) if name == "linear"
+                     else ThesisChainModel(campaign, space, observations=observations) if name == "chain"
+                     else HTMModel(campaign, name, space, observations=observations))
+    if data in ("probe", "both"):
+        probe = (LinearProbeModel(campaign, space, probe_layout) if name == "linear"
+                 else ProbeModel(campaign, "htm-literal" if name == "chain" else name, space, probe_layout))
+        if name == "chain":
+            probe.name = "chain"  # the thesis machine's chain is htm-literal, its probe model too
+        parts.append(probe)
+    return parts[0] if len(parts) == 1 else JointModel(parts)
+
+
+def first_order_gap(campaign, theta, space=None, *, observations=None) -> float:
+    """Largest difference, mm, between ``htm-thesis`` and its first order (``linear``) at ``theta`` (p,)."""
+    import numpy as np
+
+    from ..models.kinematic import HTMModel
+    from ..models.linear import LinearModel
+
+    linear = LinearModel(campaign, space, observations=observations)
+    kinematic = HTMModel(campaign, "htm-thesis", linear.space, observations=linear.observations)
+    return float(np.abs(kinematic.predict(theta) - linear.predict(theta)).max())
+
+
+def parameter_space(campaign, fix_dx_BT: bool, data: str):
+    """The thesis' sampled deviations (Table 2.1 without the linear axes' squareness; without dx_BT under the
+    thesis assumption ``fix_dx_BT``, Eq 4.2) and the nuisance terms of its campaign format."""
+    from ..inference.log_posterior import SAMPLED_DEVIATIONS
+    from ..parameters import ParameterSpace
+
+    devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
+    return ParameterSpace.for_campaign(campaign, devs, data=data)
+
+
+def probe_layout(campaign):
+    """The touch-probe readings of the thesis' campaign format and where they were taken (Tables 5.1/5.2)."""
+    from ..models.probe_model import ProbeLayout
+
+    return ProbeLayout(campaign)
+
+
+def identify(campaign):
+    """Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch probe), each value beside the published one."""
+    from ..identification import identify as identify_campaign
+
+    return identify_campaign(campaign)
+
+
+class ThesisPlugin:
+    """The contributions of the thesis plug-in (see the module's docstring)."""
+
+    name = "thesis"
+    kinematic_model = "htm-thesis"
+    default_data = "ballbar"
+    probe_sections = "[probe.c_axis] or [probe.b_axis.styli]"
+    make_model = staticmethod(make_model)
+    first_order_gap = staticmethod(first_order_gap)
+    identify = staticmethod(identify)
+    parameter_space = staticmethod(parameter_space)
+    probe_layout = staticmethod(probe_layout)
+
+    @property
+    def models(self) -> tuple[str, ...]:
+        """Every model of the registry (:data:`mtmcal_bayes.models.MODELS`): the thesis' and the chain."""
+        from ..models import MODELS
+
+        return MODELS
+
+
+PLUGIN = ThesisPlugin()
