@@ -151,3 +151,19 @@ def test_history_forecasts_a_quantity_outside_its_tolerance_now(outside_fleet, t
     bad.write_text("[tolerances]\nalpha_XB_arcsec = 20\n")
     with pytest.raises(InputError, match="tolerances.alpha_XB_arcsec"):
         mb.history(root / "T-1", seed=1, tolerances=bad)
+
+
+def test_a_described_machines_report_tabulates_its_verdicts(tmp_path):
+    tol = tmp_path / "tol.toml"
+    tol.write_text("[tolerances]\nE_B0C_arcsec = 20\nE_Y0A_um = {high = 0}\n")
+    rep = mb.report(api.demo_campaign("trunnion"), output=tmp_path / "report", sampler="exact", seed=1, tolerances=tol)
+    s = rep.summary
+    for q in ("E_B0C", "E_Y0A"):  # the verdict the rule gives on the reported 95 % interval, in summary.csv too
+        low, high = s.loc[q, "tolerance_low"], s.loc[q, "tolerance_high"]
+        inside = (low != low or s.loc[q, "hdi_low"] >= low) and s.loc[q, "hdi_high"] <= high
+        outside = s.loc[q, "hdi_low"] > high or (low == low and s.loc[q, "hdi_high"] < low)
+        assert s.loc[q, "conformity"] == ("conforms" if inside else "does not conform" if outside else "undecided")
+    assert s["conformity"].notna().sum() == 2
+    csv = (tmp_path / "report" / "summary.csv").read_text(encoding="utf-8")
+    assert "conformity" in csv.splitlines()[0]
+    assert "Conformity with the tolerances" in (tmp_path / "report" / "index.html").read_text(encoding="utf-8")
