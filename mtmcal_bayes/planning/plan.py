@@ -11,7 +11,6 @@ from .. import units
 from .candidates import (
     Candidate,
     candidate_mount,
-    catalogue,
     extended_setup,
     feasibility_check,
 )
