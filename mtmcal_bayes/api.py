@@ -96,13 +96,17 @@ def _thesis_only(c: Campaign, **given) -> None:
                                  "docs/machines.md)")
 
 
-def tolerances_of(tolerances) -> dict | None:
-    """``{name: Tolerance}`` from a ``[tolerances]`` TOML path, a dict of them, or None (the campaign's own)."""
-    if tolerances is None or isinstance(tolerances, dict):
-        return tolerances
-    from .io.tolerances import load_tolerances
+def tolerances_of(tolerances, campaign: Campaign | None = None) -> dict | None:
+    """``{name: Tolerance}`` from a ``[tolerances]`` TOML path, a dict of them, or None (the campaign's own); with
+    ``campaign``, keyed by its machine's quantity names (a name it does not have: an ``InputError`` naming the file
+    and the key, :func:`~mtmcal_bayes.io.tolerances.resolve_tolerances`)."""
+    from .io.tolerances import load_tolerances, resolve_tolerances
 
-    return load_tolerances(tolerances)
+    if tolerances is not None and not isinstance(tolerances, dict):
+        tolerances = load_tolerances(tolerances)
+    if campaign is None:
+        return tolerances
+    return resolve_tolerances(tolerances, campaign.machine)[0]
 
 
 def sigma_model_of(sigma_model_um: float | None) -> float | None:
@@ -243,7 +247,7 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
     data = check_data(data_of(data, c), c)
     _writable(output, "posterior")
     _writable(checkpoint, "checkpoint")
-    tol = tolerances_of(tolerances)
+    tol = tolerances_of(tolerances, c)
     learnt = sigma_model_prior_of(sigma_model_prior, c, sigma_model_um)
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
     result = sample_posterior(analysis_or_campaign(campaign, c), model=model, fix_dx_BT=fix_dx_BT, settings=settings,
@@ -303,14 +307,16 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
         from .reporting.described_report import build_described_report
 
         _thesis_only(c, fix_dx_BT=fix_dx_BT, compare_models=compare_models, posterior=posterior,
-                     tolerances=tolerances, sigma_model_prior=sigma_model_prior)
+                     sigma_model_prior=sigma_model_prior)
+        tol = tolerances_of(tolerances, c)
         analysis = analysis_of(analysis_or_campaign(campaign, c), model=model, data=data,
                                sigma_model=sigma_model_of(sigma_model_um))
-        return build_described_report(analysis, output, settings=settings, progress=progress, command=command)
+        return build_described_report(analysis, output, settings=settings, progress=progress, command=command,
+                                      tolerances=tol)
     return build_report(analysis_or_campaign(campaign, c), output, model=model, settings=settings, fix_dx_BT=fix_dx_BT,
                         compare_models=compare_models,
                         posterior=posterior, progress=progress, command=command, data=data,
-                        tolerances=tolerances_of(tolerances), sigma_model=sigma_model_of(sigma_model_um),
+                        tolerances=tolerances_of(tolerances, c), sigma_model=sigma_model_of(sigma_model_um),
                         sigma_prior=learnt)
 
 
@@ -604,7 +610,8 @@ def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None,
     found = history_campaigns(campaigns)
     if found:
         kinematic_model_of(model, found[-1])  # checked: a described machine has linear and chain
-    result = fit_history(found, model=model, seed=seed, tolerances=tolerances_of(tolerances), trend=trend)
+    tol = tolerances_of(tolerances, found[-1] if found else None)  # the latest campaign's machine names them
+    result = fit_history(found, model=model, seed=seed, tolerances=tol, trend=trend)
     if output is not None:
         result.write(output)
     return result
@@ -822,7 +829,7 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     learnt = sigma_model_prior_of(sigma_model_prior, c)
     items = _time_items(c, times)
     extra = planned_candidates(c) + _user_candidates(candidates, c)
-    d = make_design(c, targets=targets, tolerances=tolerances_of(tolerances), contraction=contraction,
+    d = make_design(c, targets=targets, tolerances=tolerances_of(tolerances, c), contraction=contraction,
                     budget_min=budget_min, candidates=extra, time_model=TimeModel(**items), model=model, seed=seed,
                     candidates_source=str(candidates) if isinstance(candidates, (str, os.PathLike)) else "candidates",
                     sigma_prior=learnt)

@@ -321,12 +321,14 @@ class Truth:
 @dataclass(frozen=True)
 class Tolerance:
     """Tolerance of one quantity, internal units (mm, rad): ``low`` ≤ value ≤ ``high``; None = open
-    (a one-sided tolerance).  ``key`` is where it was given (``tolerances.alpha_XB_arcsec``)."""
+    (a one-sided tolerance).  ``key`` is where it was given (``tolerances.alpha_XB_arcsec``), ``source`` the file
+    it was given in ("" for one made in Python)."""
 
     name: str
     low: float | None
     high: float | None
     key: str = ""
+    source: str = ""
 
 
 def tolerance_text(low, high, unit: str) -> str:
@@ -365,7 +367,7 @@ class Campaign:
     truth: Truth | None = None
     source: str = "<campaign>"
     base_dir: Path | None = None
-    tolerances: dict[str, Tolerance] = field(default_factory=dict)  # by thesis name
+    tolerances: dict[str, Tolerance] = field(default_factory=dict)  # by the machine's quantity names
     date: datetime.datetime | None = None  # when the campaign was measured (a TOML date is taken at 00:00)
     temperature_C: float | None = None  # workshop temperature during the campaign, °C
     design: DesignGoal | None = None  # what the campaign was designed for ([design]), if it was

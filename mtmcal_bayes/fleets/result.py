@@ -244,8 +244,12 @@ class FleetResult:
                  "changes": (history or {}).get("changes") or [], "forecast": (history or {}).get("forecast") or [],
                  "latest": {}, "notes": notes, "page": page}
         # the history's tolerances: the plant-wide set, else its latest campaign's own (as its forecast's)
-        limits = display_limits(settings.tolerance_set() if settings.tolerances is not None
-                                else m.dated[-1].campaign.tolerances if m.dated else {})
+        plant, not_here = settings.tolerances_for((m.dated[-1].campaign if m.dated else m.latest).machine)
+        limits = display_limits(plant if plant is not None else m.dated[-1].campaign.tolerances if m.dated else {})
+        if not_here:  # said, not left blank without a word (and never "conforms")
+            notes.append(f"no verdict on {', '.join(not_here)}: the plant-wide tolerances name quantities this "
+                         "machine does not have")
+            entry["tolerances_not_here"] = not_here
         entry["latest"] = _latest(campaigns, history, history_file=m.dated[-1].file if history else None,
                                   limits=limits, page=campaigns_page(entry))
         if m.latest.machine.described:

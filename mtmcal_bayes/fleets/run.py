@@ -51,7 +51,8 @@ def plan_units(found: Discovery, settings: FleetSettings, *, pages: bool) -> tup
             digests = [c.digest for c in dated]
             key = unit_key("history", digests, settings)
             of_machine[m.id] = key
-            func = functools.partial(history_unit, tolerances=settings.tolerance_set())  # plant-wide, or None
+            # plant-wide (by this machine's names), or None
+            func = functools.partial(history_unit, tolerances=settings.tolerances_for(dated[-1].campaign.machine)[0])
             units.setdefault(key, Unit("history", key, m.id, func,
                                        ([c.campaign for c in dated], unit_seed(digests, settings.seed), pages,
                                         settings.model)))
@@ -113,6 +114,8 @@ def run_fleet(directory, settings: FleetSettings, *, scheduler: str | None = Non
     store = None if folder is None else UnitCache(folder)
     found = discover(directory, skip=[output, folder])
     check_types(found)
+    for m in found.machines:  # two names of one quantity of a machine: the tolerance file's error, before any work
+        settings.tolerances_for(m.latest.machine)
     if not found.machines and not found.errors:
         raise ParameterError("directory", f"{directory}: no campaign files (*.toml) below it")
     units, of_file, of_machine = plan_units(found, settings, pages=output is not None)

@@ -4,6 +4,9 @@
   ``sample --tolerances``, :func:`~mtmcal_bayes.io.tolerances.load_tolerances`) instead of each campaign's own:
   each campaign's conformity, each history's forecast and change thresholds.  It is a setting of the fleet
   (:class:`~.units.FleetSettings`), kept as a hashable, JSON-able tuple, and enters every unit's cache key.
+* :func:`machine_tolerances`: the set as one machine names its quantities (an ISO 230-7 symbol or an alias such as
+  a thesis name, :func:`~mtmcal_bayes.io.tolerances.resolve_tolerances`), and the names it gives that the machine
+  does not have: a machine of another type is not flagged for them, and the overview says so.
 * :func:`estimate_conformity`: the overview shows a machine's *history* estimate at its latest date, mean and sd;
   its conformity is decided on that estimate, taken as normal (what the overview says it does).
 """
@@ -15,7 +18,8 @@ import math
 from .. import units
 from ..campaign import Tolerance
 from ..errors import ParameterError
-from ..parameters import QUANTITIES, quantity_unit
+from ..io.tolerances import resolve_tolerances
+from ..parameters import quantity_unit
 from ..posterior.conformity import CONFORMS, DOES_NOT_CONFORM, UNDECIDED
 
 #: the coverage factor of the interval a history estimate's verdict is decided on (95 % of a normal)
@@ -23,9 +27,11 @@ K_95 = 1.959963984540054
 
 
 def tolerance_tuple(spec) -> tuple:
-    """``((name, low, high), ...)`` sorted by name, internal units (None an open end), from ``{name: Tolerance}``
-    (what :func:`~mtmcal_bayes.io.tolerances.load_tolerances` reads) or from such a tuple; anything else, or a
-    tolerance that is not one, is a :class:`~mtmcal_bayes.errors.ParameterError` of ``tolerances``."""
+    """``((name, low, high), ...)`` in the order given (a file's: an error names the later of two keys), names as
+    written, internal units (None an open end), from ``{name: Tolerance}`` (what
+    :func:`~mtmcal_bayes.io.tolerances.load_tolerances` reads) or from such a tuple; anything else, or a tolerance
+    that is not one of a quantity known by its name, is a :class:`~mtmcal_bayes.errors.ParameterError` of
+    ``tolerances``."""
     if isinstance(spec, dict):
         items = list(spec.items())
     elif isinstance(spec, (tuple, list)) and all(isinstance(t, (tuple, list)) and len(t) == 3 for t in spec):
@@ -37,18 +43,38 @@ def tolerance_tuple(spec) -> tuple:
     for name, t in items:
         low, high = (t.low, t.high) if isinstance(t, Tolerance) else t[1:] if isinstance(t, tuple) else (0.0, 0.0)
         ends = [v for v in (low, high) if v is not None]
-        if name not in QUANTITIES or not ends or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+        if _unit_of(name) is None or not ends or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                                          and math.isfinite(v) for v in ends) \
                 or (low is not None and high is not None and not low < high):
             raise ParameterError("tolerances", f"{name}: {t!r} is not a tolerance of a quantity "
                                  "(Tolerance(name, low, high) with low < high, internal units)")
         out.append((name, None if low is None else float(low), None if high is None else float(high)))
-    return tuple(sorted(out))
+    return tuple(out)
 
 
-def tolerance_dict(spec: tuple) -> dict[str, Tolerance]:
-    """``{name: Tolerance}`` of a :func:`tolerance_tuple`."""
-    return {n: Tolerance(n, lo, hi, f"tolerances.{n}") for n, lo, hi in spec}
+def _unit_of(name) -> str | None:
+    """The unit of a quantity known by its name alone (a thesis name or an ISO symbol), else None."""
+    try:
+        return quantity_unit(name) if isinstance(name, str) else None
+    except KeyError:
+        return None
+
+
+def tolerance_dict(spec: tuple, source: str = "") -> dict[str, Tolerance]:
+    """``{name: Tolerance}`` of a :func:`tolerance_tuple`, each with the key it is written with in ``source`` (the
+    file it was read from, "" for one made in Python)."""
+    return {n: Tolerance(n, lo, hi, f"tolerances.{n}_{quantity_unit(n)}", source) for n, lo, hi in spec}
+
+
+def machine_tolerances(spec: tuple | None, machine, source: str = "") -> tuple[dict[str, Tolerance] | None, list[str]]:
+    """``({name: Tolerance}, not_here)``: the plant-wide :func:`tolerance_tuple` ``spec`` by the quantity names of
+    ``machine`` (a :class:`~mtmcal_bayes.campaign.Machine`) and, sorted, the names it gives that the machine does not
+    have (left out: not decided for this machine).  Two names of one quantity of the machine are an
+    :class:`~mtmcal_bayes.errors.InputError` of ``source`` (a :class:`ParameterError` without one).  None: None."""
+    if spec is None:
+        return None, []
+    resolved, missing = resolve_tolerances(tolerance_dict(spec, source), machine, strict=False)
+    return resolved, sorted(missing)
 
 
 def display_limits(tolerances: dict) -> dict[str, dict]:

@@ -16,13 +16,13 @@ import hashlib
 import json
 import tempfile
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 from ..errors import MtmcalError, ParameterError
 from ..io.json_text import rounded
 from ..version import __version__
-from .tolerances import display_limits, tolerance_dict, tolerance_tuple
+from .tolerances import display_limits, machine_tolerances, tolerance_dict, tolerance_tuple
 from .sigma_model import history_log_likelihood
 
 #: the cache entry's format; a change of what a unit returns must change it (or the package version)
@@ -35,7 +35,9 @@ class FleetSettings:
 
     ``tolerances``: a plant-wide set used instead of each campaign's own ``[tolerances]`` (its conformity, its
     machine's forecast and change thresholds); given as ``{name: Tolerance}``, kept as ``((name, low, high), ...)``
-    (:func:`~.tolerances.tolerance_tuple`); None: each campaign's own.
+    (:func:`~.tolerances.tolerance_tuple`), names as written (each machine resolves them, :meth:`tolerances_for`);
+    None: each campaign's own.  ``tolerances_file``: the file they were read from, named by an error (not a result's
+    setting: it enters neither the JSON nor the cache key).
     """
 
     model: str = "linear"
@@ -44,8 +46,12 @@ class FleetSettings:
     target_ess: float = 1000.0
     max_steps: int = 20_000
     tolerances: tuple | None = None
+    tolerances_file: str = field(default="", compare=False)
 
     def __post_init__(self):  # bad settings fail here, before any work, not in every unit
+        if isinstance(self.tolerances, dict) and not self.tolerances_file:
+            object.__setattr__(self, "tolerances_file", next((t.source for t in self.tolerances.values()
+                                                              if getattr(t, "source", "")), ""))
         if self.tolerances is not None:
             object.__setattr__(self, "tolerances", tolerance_tuple(self.tolerances))
         from ..inference.sampling import SamplerSettings
@@ -60,12 +66,17 @@ class FleetSettings:
                                  f"not for {self.model} (use the emcee sampler)")
 
     def tolerance_set(self) -> dict | None:
-        """The plant-wide tolerances as ``{name: Tolerance}`` (what the units are given), or None."""
-        return None if self.tolerances is None else tolerance_dict(self.tolerances)
+        """The plant-wide tolerances as ``{name: Tolerance}``, names as written, or None."""
+        return None if self.tolerances is None else tolerance_dict(self.tolerances, self.tolerances_file)
+
+    def tolerances_for(self, machine) -> tuple[dict | None, list[str]]:
+        """The plant-wide tolerances by ``machine``'s quantity names and the names it does not have
+        (:func:`~.tolerances.machine_tolerances`); ``(None, [])`` without plant-wide tolerances."""
+        return machine_tolerances(self.tolerances, machine, self.tolerances_file)
 
     def to_json(self) -> dict:
         """The settings; ``tolerances`` as ``{name: {"low", "high"}}`` in ″ / µm (null: each campaign's own)."""
-        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "tolerances"}
+        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("tolerances", "tolerances_file")}
         return {**out, "tolerances": None if self.tolerances is None else display_limits(self.tolerance_set())}
 
 
@@ -77,7 +88,7 @@ def unit_key(kind: str, digests: list[str], settings: FleetSettings) -> str:
     used = settings.to_json() if kind == "campaign" else {"seed": settings.seed, "model": settings.model}
     used.pop("tolerances", None)  # without plant-wide tolerances, the key they had before these existed
     if settings.tolerances is not None:  # a campaign's conformity, a history's forecast and thresholds
-        used["tolerances"] = [list(t) for t in settings.tolerances]
+        used["tolerances"] = [list(t) for t in sorted(settings.tolerances)]  # one key whatever the order given
     text = json.dumps({"format": UNIT_FORMAT, "kind": kind, "digests": digests, "settings": used,
                        "version": __version__}, sort_keys=True)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
@@ -132,7 +143,7 @@ def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
         s = SamplerSettings(seed=seed, max_steps=settings.max_steps, target_ess=settings.target_ess,
                             sampler=settings.sampler)
         post = sample_posterior(campaign, model=model_for(campaign, settings.model), settings=s,
-                                tolerances=settings.tolerance_set())
+                                tolerances=settings.tolerances_for(campaign.machine)[0])
         add_suggestions(post, campaign)
         d = post.diagnostics
         out = {"seed": seed,

@@ -60,11 +60,14 @@ def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: 
     found = changes(hf, dates, thr)
     forecast = [{"quantity": n, "recalibrate_by": recalibrate_by(hf, hf.quantities.index(n), lo, hi, last=dates[-1]),
                  "tolerance": tolerance_text(lo, hi, quantity_unit(n))} for n, (lo, hi) in limits.items()]
+    # a tolerance on a quantity the history does not track: said, not dropped without a word
+    unforecast = [{"quantity": n, "key": t.key, "why": "the campaigns do not determine it one by one: no forecast"}
+                  for n, t in tol.items() if n not in hf.quantities]
     return HistoryResult(campaigns[-1].machine.serial, dates, [c.source for c in campaigns], summary_frame(hf, dates),
                          found, forecast, hf, limits, model=model, linearisation=check,
                          temperatures=[c.temperature_C for c in campaigns] if hm.thermal else None,
                          summary_20C=summary_frame(hf, dates, at_20C=True) if hm.thermal else None,
-                         machine=machine_of(campaigns[-1]), not_determined=left)
+                         machine=machine_of(campaigns[-1]), not_determined=left, no_forecast=unforecast)
 
 
 def tracked(campaigns, hm: HistoryModel) -> tuple[list[str], list[dict]]:

@@ -51,6 +51,8 @@ class HistoryResult:
     machine: dict = field(default_factory=dict)  # {"type", "configuration", "description"} of the latest campaign
     #: a described machine's deviations the campaigns do not determine one by one: ``[{"quantity", "why"}]``
     not_determined: list[dict] = field(default_factory=list)
+    #: toleranced quantities without a forecast, with why: ``[{"quantity", "key", "why"}]``
+    no_forecast: list[dict] = field(default_factory=list)
 
     @property
     def summary_at_20C(self) -> pd.DataFrame:
@@ -118,6 +120,7 @@ class HistoryResult:
                          "delta": c["delta"], "threshold": c["threshold"]} for c in self.flagged],
             "forecast": [{"quantity": f["quantity"], "recalibrate_by": f["recalibrate_by"] and _iso(f["recalibrate_by"]),
                           "tolerance": f["tolerance"]} for f in self.forecast],
+            **({"no_forecast": self.no_forecast} if self.no_forecast else {}),
             "diagnostics": {"acceptance": self.fit.acceptance, "tau_max_steps": self.fit.tau_max,
                             "false_alarm_rate": ALPHA, "flag_level": self.changes[0]["level"] if self.changes else None},
             "output": self.output,
@@ -164,11 +167,12 @@ class HistoryResult:
             lines += [f"  {q:18s} {t['mean']:+7.2f} ± {t['sd']:5.2f} {t['unit']}"
                       + ("" if t["identified"] else f"  prior only (prior sd {t['prior_sd']:g})")
                       for q, t in self.thermal().items()]
-        if self.forecast:
+        if self.forecast or self.no_forecast:
             lines += ["", f"Forecast: the date by which P(out of tolerance) passes {100 * FORECAST_RISK:g} % "
                       f"(horizon {HORIZON_YEARS:g} years):"]
             lines += [f"  {f['quantity']} (tolerance {f['tolerance']}): "
                       f"{_iso(f['recalibrate_by']) if f['recalibrate_by'] else 'beyond the horizon'}" for f in self.forecast]
+        lines += [f"  {f['quantity']} ({f['key'] or 'tolerance'}): {f['why']}" for f in self.no_forecast]
         if self.output:
             lines += ["", f"written to {self.output}/: {', '.join(self.written)}"]
         return "\n".join(lines)

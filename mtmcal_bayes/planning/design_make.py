@@ -121,7 +121,8 @@ def targets_from_tolerances(planner: Planner, tolerances: dict, source: str = "t
         d = min(abs(mean[i] - v) for v in lim)
         unit = planner.target_units[i]
         if d <= 0.0:
-            raise InputError(source, q, "today's estimate lies on the tolerance limit: no uncertainty decides it")
+            raise InputError(tol.source or source, tol.key or q,
+                             "today's estimate lies on the tolerance limit: no uncertainty decides it")
         out[q] = units.from_internal(d / (2.0 * K_DECISION), unit)
     return out
 

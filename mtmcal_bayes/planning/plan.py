@@ -11,7 +11,6 @@ from .. import units
 from .candidates import (
     Candidate,
     candidate_mount,
-    catalogue,
     extended_setup,
     feasibility_check,
 )
@@ -200,12 +199,13 @@ def monte_carlo_check(planner: Planner, table: pd.DataFrame, *, n: int = N_CHECK
 
 
 def best_measurement(campaign, target: str, *, sigma_model_um: float | None = None,
-                     model: str = "linear") -> dict | None:
-    """The catalogue measurement that would make ``target`` most certain (closed form): ``name``,
-    ``sd_before``, ``sd_after`` (display units) and ``unit``; None when no feasible candidate helps."""
-    candidates = catalogue(campaign)
+                     model: str = "linear", data: str = "ballbar") -> dict | None:
+    """The ball-bar catalogue measurement of ``campaign``'s machine that would make ``target`` most certain given the
+    campaign's ``data`` (closed form): ``name``, ``sd_before``, ``sd_after`` (display units) and ``unit``; None when
+    no feasible candidate helps."""
+    candidates = catalogue_of(campaign)
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
-    planner = Planner(campaign, candidates, [target], sigma_model=sigma, model=model)
+    planner = planner_for(campaign, candidates, [target], sigma_model=sigma, model=model, data=data)
     table = _table(planner, candidates, campaign)
     useful = table[table["feasible"] & table["informative"]]
     if useful.empty:

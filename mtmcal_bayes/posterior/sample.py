@@ -210,6 +210,9 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data
     tol = campaign.tolerances if tolerances is None else tolerances
     conf = conformity_table(idata, summary, tol) if tol and statement else None
+    if conf is not None:  # a quantity of the machine that this campaign holds at zero has no posterior to decide on
+        warn += [f"tolerance {t.key or n}: no verdict, the campaign does not estimate {n} (held at zero)"
+                 for n, t in tol.items() if n not in summary.index]
     ident, combos = None, []
     if campaign.machine.described:
         ident = campaign_identifiability(post)

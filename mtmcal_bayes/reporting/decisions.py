@@ -33,7 +33,7 @@ def add_suggestions(result, campaign) -> None:
         y = result.summary.loc[name, "mean"]
         limits = [v for v in (row["tolerance_low"], row["tolerance_high"]) if v == v]
         need = min(abs(y - v) for v in limits) / K_GAUSSIAN
-        best = best_measurement(campaign, name, sigma_model_um=sigma_um, model=result.model)
+        best = best_measurement(campaign, name, sigma_model_um=sigma_um, model=result.model, data=result.data)
         table.at[name, "sd_to_decide"] = need
         if best is not None:
             table.at[name, "next_measurement"] = best["name"]

@@ -38,6 +38,7 @@ from .build import (
     sampler_paragraph,
     summary_table,
 )
+from .decisions import add_suggestions
 from .drawing import Drawing
 
 #: what the thesis machine's report has and a described machine's does not (yet), and why
@@ -63,8 +64,11 @@ CORNER_CAPTION = ("Corner plot of the posterior of the deviations this campaign 
                   "ridge is a combination the data determine better than its terms.")
 
 
-def build_described_report(analysis, out_dir, *, settings, progress=None, command: str = "") -> Report:
-    """Sample, draw, tabulate and write the report of a described machine's ``analysis`` into ``out_dir``."""
+def build_described_report(analysis, out_dir, *, settings, progress=None, command: str = "",
+                           tolerances: dict | None = None) -> Report:
+    """Sample, draw, tabulate and write the report of a described machine's ``analysis`` into ``out_dir``;
+    ``tolerances`` (``{name: Tolerance}`` by the machine's names; default the campaign's own) add the conformity
+    decisions, each undecided one with the planner's next measurement."""
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
     _check_output_dir(out_dir)
@@ -80,7 +84,10 @@ def build_described_report(analysis, out_dir, *, settings, progress=None, comman
             drawing.start([("machine.png", lambda: machine_figure.chain_figure(desc)),
                            ("deviations.png", lambda: machine_figure.deviations_figure(desc))])
             say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
-            rep = sample_posterior(analysis, settings=settings, progress=progress)
+            rep = sample_posterior(analysis, settings=settings, progress=progress, tolerances=tolerances)
+            if rep.conformity is not None and not rep.conformity.empty:
+                say("asking the planner how to decide the undecided tolerances")
+                add_suggestions(rep, campaign)
             deviations = [p.name for p in rep.log_posterior.space.parameters if p.group == "deviation"]
             determined = list(rep.identifiability.determined) + [
                 n for c in rep.identifiability.combinations for n in c.weights if n not in rep.identifiability.determined]
