@@ -369,28 +369,30 @@ def ncgen(pattern: str | None = None, *, campaign: CampaignLike = None, R_B_mm: 
     ``mount`` over ``arc_deg`` = (start, end) degrees by ``step_deg`` with the other rotary axes at ``hold_deg``
     {letter: degrees}; of the campaign's ``run``-th ball-bar run (1-based); or of its probe run ``probe``.
     """
-    from .compensation import measuring_program
+    from .campaign import Machine
     from .errors import ParameterError
     from .io.described_ncgen import described_program
     from .io.textfiles import write_text_atomic
+    from .machines.plugins import provided
 
     c = campaign_of(campaign) if campaign is not None or R_B_mm is None or start is None else None
     _writable(output, "program")
-    if c is not None and c.machine.described:
+    own = provided(c.machine if c is not None else Machine(), "program")  # a plug-in's program format (Fig 4.30(a))
+    if own is not None:
+        given = next((k for k, v in (("run", run), ("probe", probe), ("arc_deg", arc_deg), ("hold_deg", hold_deg))
+                      if v is not None), None)
+        if given:
+            raise ParameterError(given, "for a described machine's campaign only; the thesis machine's "
+                                 "programs are of a pattern and its step")
+        text = own(pattern, c, R_B_mm=R_B_mm, start=start, step_deg=2.5 if step_deg is None else step_deg,
+                   feed=feed, n=n, setup=setup, mount=mount)
+    else:
         given = next((k for k, v in (("R_B_mm", R_B_mm), ("start", start), ("n", n)) if v is not None), None)
         if given:
             raise ParameterError(given, "for the thesis machine only: a described machine's program commands its "
                                  "description's axis positions")
         text = described_program(c, pattern=pattern, run=run, probe=probe, setup=setup, mount=mount,
                                  arc_deg=arc_deg, step_deg=step_deg, hold_deg=hold_deg, feed=feed)
-    else:
-        given = next((k for k, v in (("run", run), ("probe", probe), ("arc_deg", arc_deg), ("hold_deg", hold_deg))
-                      if v is not None), None)
-        if given:
-            raise ParameterError(given, "for a described machine's campaign only; the thesis machine's "
-                                 "programs are of a pattern and its step")
-        text = measuring_program(pattern, c, R_B_mm=R_B_mm, start=start, step_deg=2.5 if step_deg is None else
-                                 step_deg, feed=feed, n=n, setup=setup, mount=mount)
     if output is not None:
         write_text_atomic(output, text)
     return text
@@ -771,15 +773,16 @@ def _time_items(c: Campaign, times) -> dict:
 
 
 def _program(campaign, planned) -> str:
-    """The measuring program of a planned run of ``campaign`` (a designed one)."""
-    if campaign.machine.described:
-        from .io.described_ncgen import ballbar_program
+    """The measuring program of a planned run of ``campaign`` (a designed one), in its machine's plug-in's format
+    where it has one (the thesis': Fig 4.30(a))."""
+    from .io.described_ncgen import ballbar_program
+    from .machines.plugins import provided
 
-        return ballbar_program(campaign, planned, feed=campaign.ballbar.feed_mm_per_min)
-    from .compensation import measuring_program
-
-    return measuring_program(planned.pattern, campaign, setup=planned.setup, mount=planned.mount,
-                             feed=campaign.ballbar.feed_mm_per_min)
+    own = provided(campaign.machine, "program")
+    if own is not None:
+        return own(planned.pattern, campaign, setup=planned.setup, mount=planned.mount,
+                   feed=campaign.ballbar.feed_mm_per_min)
+    return ballbar_program(campaign, planned, feed=campaign.ballbar.feed_mm_per_min)
 
 
 def _check_planning_model(model: str, c: Campaign, candidates) -> None:

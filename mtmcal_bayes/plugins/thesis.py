@@ -7,7 +7,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   and ``chain`` on the thesis' campaign format; ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its campaign keys**: the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables 5.1/5.2);
-* **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3.
+* **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3;
+* **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them.
 
 Each contribution imports its code when asked for, so loading the plug-in costs nothing.
 """
@@ -69,6 +70,14 @@ def probe_layout(campaign):
     return ProbeLayout(campaign)
 
 
+def program(pattern: str, campaign=None, **options) -> str:
+    """The measuring NC program of a thesis pattern in the format of Fig 4.30(a) (:func:`~mtmcal_bayes.compensation.
+    measuring_program`: ``R_B_mm``, ``start``, ``step_deg``, ``feed``, ``n``, ``setup``, ``mount``)."""
+    from ..compensation import measuring_program
+
+    return measuring_program(pattern, campaign, **options)
+
+
 def identify(campaign):
     """Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch probe), each value beside the published one."""
     from ..identification import identify as identify_campaign
@@ -88,6 +97,7 @@ class ThesisPlugin:
     identify = staticmethod(identify)
     parameter_space = staticmethod(parameter_space)
     probe_layout = staticmethod(probe_layout)
+    program = staticmethod(program)
 
     @property
     def models(self) -> tuple[str, ...]:
