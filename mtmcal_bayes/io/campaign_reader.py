@@ -54,6 +54,7 @@ from ..parameters import (
 from ..patterns import COMPONENTS, CR_GEOMETRIES, PATTERNS, mount_conflict
 from ..sphere import fit_sphere
 from ..machines.deviations import quantities as deviation_table
+from ..machines.plugins import provided
 from ..machines.probe_terms import probe_terms
 from .described_campaign import described_ballbar, described_probe
 from .planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
@@ -106,19 +107,8 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
         r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
 
     machine = _machine(r, doc.get("machine"), base_dir)
-    probe_t = r.table(doc, "probe", "", required=False)
-    if machine.described:
-        desc = machine.description
-        ballbar = described_ballbar(r, r.table(doc, "ballbar", "", required=False), desc)
-        probe = described_probe(r, probe_t, desc) if probe_t is not None else None
-        if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
-            r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]] (or, for a machine to design "
-                   "a campaign for, its [ballbar.setups] and [ballbar.mounts])")
-        if "reported" in doc:
-            r.fail("reported", "not read for a described machine yet (docs/machines.md)")
-    else:
-        ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir)
-        probe = _probe(r, probe_t, base_dir) if probe_t is not None else None
+    read_sections = provided(machine, "campaign_sections", measurement_sections)  # a plug-in's campaign keys
+    ballbar, probe = read_sections(r, doc, machine, base_dir)
     deviations = deviation_quantities(machine)
     reported = _reported(r, r.table(doc, "reported", "", required=False) or {}, text)
     priors = _priors(r, r.table(doc, "priors", "", required=False) or {}, deviations)
@@ -130,9 +120,32 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     if temperature is not None and not -50.0 <= temperature <= 100.0:
         r.fail("temperature_C", f"{temperature:g} °C is not a workshop temperature (−50 to 100 °C)")
     design_t = r.table(doc, "design", "", required=False)
-    design = _design(r, design_t, deviations if machine.described else None) if design_t is not None else None
+    design = _design(r, design_t, provided(machine, "quantity_table", deviations)) if design_t is not None else None
     return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances,
                     _date(r, doc), temperature, design)
+
+
+def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path | None) -> tuple[Ballbar, Probe]:
+    """``[ballbar]`` and ``[probe]`` of a campaign of any described machine: set-ups, mounts (the W ball's
+    ``position_mm``), runs ``<axis><R|T|A|X|Y|Z>`` with ``arc_deg`` and ``hold_deg``, ``[[probe.runs]]``."""
+    desc = machine.description
+    probe_t = r.table(doc, "probe", "", required=False)
+    ballbar = described_ballbar(r, r.table(doc, "ballbar", "", required=False), desc)
+    probe = described_probe(r, probe_t, desc) if probe_t is not None else None
+    if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
+        r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]] (or, for a machine to design "
+               "a campaign for, its [ballbar.setups] and [ballbar.mounts])")
+    if "reported" in doc:
+        r.fail("reported", "not read for a described machine yet (docs/machines.md)")
+    return ballbar, probe
+
+
+def thesis_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path | None) -> tuple[Ballbar, Probe]:
+    """``[ballbar]`` and ``[probe]`` in the thesis' campaign format (its lever arms R_B, Z_T, X_T, Z_C, R_C; the
+    probe's ``[probe.c_axis]`` and ``[probe.b_axis]``, thesis Tables 4.2–4.4, 5.1–5.2): the thesis plug-in's keys."""
+    probe_t = r.table(doc, "probe", "", required=False)
+    ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir)
+    return ballbar, _probe(r, probe_t, base_dir) if probe_t is not None else None
 
 
 def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:
@@ -172,8 +185,10 @@ def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:
 
 
 def deviation_quantities(machine: Machine) -> dict:
-    """The deviations a campaign on ``machine`` can name: the thesis' 13, or the described machine's."""
-    return deviation_table(machine.description) if machine.described else dict(DEVIATIONS)
+    """The deviations a campaign on ``machine`` can name: its plug-in's names where it has them (the thesis' 13),
+    else the description's."""
+    names = provided(machine, "deviation_table")
+    return dict(names) if names is not None else deviation_table(machine.description)
 
 
 def _date(r: TomlReader, doc: dict) -> datetime.datetime | None:
@@ -546,7 +561,7 @@ def _priors(r: TomlReader, t: dict, deviations: dict | None = None) -> dict[str,
     return out
 
 
-def _design(r: TomlReader, t: dict, table: dict | None) -> DesignGoal:
+def _design(r: TomlReader, t: dict, known: dict) -> DesignGoal:
     """``[design]``: ``targets`` (quantity -> standard uncertainty, ″ or µm), ``contraction`` (0 < c < 1),
     ``budget_min`` (> 0) and ``times`` (machine-time overrides, minutes; their names are the planner's)."""
     P = "design"
@@ -555,7 +570,6 @@ def _design(r: TomlReader, t: dict, table: dict | None) -> DesignGoal:
     for key in r.table(t, "targets", P, required=False) or {}:
         full = f"{P}.targets.{key}"
         name, unit = units.split_unit_key(key)
-        known = QUANTITIES if table is None else table  # a described machine's deviations by name
         q = known.get(name)
         if q is None or unit not in (None, q.unit):
             r.fail(full, "unknown quantity: expected a canonical name (" + ", ".join(known) + "), with or "
@@ -593,9 +607,8 @@ def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: P
             r.fail(f"{path}.deviations.{key}", "unknown deviation: expected <name>_arcsec or <name>_um "
                    f"with one of {', '.join(known)}")
         truth.deviations[name] = units.to_internal(r.number(dev, key, f"{path}.deviations"), unit)
-    described = machine is not None and machine.described
-    probe_owners = ({o for o, _ in probe_terms(machine.description, probe)} if described else
-                    {o for o, _ in probe.nuisance_terms()}) if probe is not None else set()
+    owners_of = provided(machine, "probe_owners", engine_probe_owners) if machine is not None else thesis_probe_owners
+    probe_owners = owners_of(machine, probe) if probe is not None else set()
     for group, table, owners in (("setups", SETUP_NUISANCE, ballbar.setups),
                                  ("mounts", MOUNT_NUISANCE, ballbar.mounts),
                                  ("probe", PROBE_NUISANCE, probe_owners)):
@@ -635,3 +648,13 @@ def load_truth(path, campaign: Campaign) -> Truth:
 
 #: the tables of a truth
 TRUTH_TABLES = {"deviations", "setups", "mounts", "probe"}
+
+
+def engine_probe_owners(machine: Machine, probe: Probe) -> set[str]:
+    """The owners of a described machine's probe nuisance terms (its styli and spheres)."""
+    return {o for o, _ in probe_terms(machine.description, probe)}
+
+
+def thesis_probe_owners(machine: Machine | None, probe: Probe) -> set[str]:
+    """The owners of the probe nuisance terms in the thesis' campaign format (its styli, ``c_axis``, ``b_axis``)."""
+    return {o for o, _ in probe.nuisance_terms()}

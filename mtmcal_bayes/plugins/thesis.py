@@ -6,7 +6,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   and ``htm-thesis`` (the thesis' pivots), beside ``htm-literal`` (Eq 2.10 as printed, the test oracle of the chain)
   and ``chain`` on the thesis' campaign format; ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
-* **its campaign keys**: the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables 5.1/5.2);
+* **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
+  ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3;
 * **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them.
 
@@ -14,6 +15,21 @@ Each contribution imports its code when asked for, so loading the plug-in costs 
 """
 
 from __future__ import annotations
+
+
+def campaign_sections(r, doc: dict, machine, base_dir):
+    """``[ballbar]`` and ``[probe]`` of a campaign in the thesis' format (lever arms R_B, Z_T, X_T, Z_C, R_C; the
+    probe's ``[probe.c_axis]`` and ``[probe.b_axis]``)."""
+    from ..io.campaign_reader import thesis_sections
+
+    return thesis_sections(r, doc, machine, base_dir)
+
+
+def probe_owners(machine, probe) -> set[str]:
+    """The owners of the probe's nuisance terms in the thesis' format: its styli, ``c_axis`` and ``b_axis``."""
+    from ..io.campaign_reader import thesis_probe_owners
+
+    return thesis_probe_owners(machine, probe)
 
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
@@ -98,6 +114,22 @@ class ThesisPlugin:
     parameter_space = staticmethod(parameter_space)
     probe_layout = staticmethod(probe_layout)
     program = staticmethod(program)
+    campaign_sections = staticmethod(campaign_sections)
+    probe_owners = staticmethod(probe_owners)
+
+    @property
+    def deviation_table(self) -> dict:
+        """The thesis' 13 deviations by their thesis names (Table 2.1), each with its ISO 230-7 symbol."""
+        from ..parameters import DEVIATIONS
+
+        return DEVIATIONS
+
+    @property
+    def quantity_table(self) -> dict:
+        """The deviations and the derived quantity dx_CZ − dx_BT, which a design may target."""
+        from ..parameters import QUANTITIES
+
+        return QUANTITIES
 
     @property
     def models(self) -> tuple[str, ...]:
