@@ -74,8 +74,8 @@ def _sampler_options(s) -> None:
     s.add_argument("--data", **DATA_OPTION)
     s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
     s.add_argument("--target-ess", type=float, default=api.TARGET_ESS, help="stop when the bulk and tail ESS of "
-                   f"each quantity the stopping rule is over (the thesis machine's eight of Table 4.5, a described machine's "
-                   f"deviations) reach this (default {api.TARGET_ESS:g}) and R-hat ≤ 1.01")
+                   "each quantity the stopping rule is over (the thesis machine's eight of Table 4.5, a described "
+                   f"machine's deviations) reach this (default {api.TARGET_ESS:g}) and R-hat ≤ 1.01")
     s.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
                    help="emcee ensembles (default) or independent draws of the exact posterior (linear model)")
     s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")

@@ -51,8 +51,8 @@ NOT_MADE = [
 ]
 
 CHAIN_CAPTION = ("The machine at its home pose: the frame, each rotary axis' nominal line through its point, the "
-                 "spindle and a tool of the campaign's length (the key says whose), the linear axes (primed: they move the workpiece); the chain from "
-                 "workpiece to tool below.")
+                 "spindle and a tool of the campaign's length (the key says whose), the linear axes (primed: they "
+                 "move the workpiece); the chain from workpiece to tool below.")
 DEVIATIONS_CAPTION = ("What each location error means (positive values, exaggerated), as the chain applies it: a "
                       "small rigid displacement of the body the axis carries, turning about the axis' point.")
 
