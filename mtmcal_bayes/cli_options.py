@@ -74,7 +74,8 @@ def _sampler_options(s) -> None:
     s.add_argument("--data", **DATA_OPTION)
     s.add_argument("--fix-dx-BT", action="store_true", help="impose the thesis assumption dx_BT = 0 (Eq 4.2)")
     s.add_argument("--target-ess", type=float, default=api.TARGET_ESS, help="stop when the bulk and tail ESS of "
-                   f"each of the eight quantities reach this (default {api.TARGET_ESS:g}) and R-hat ≤ 1.01")
+                   "each quantity the stopping rule is over (the thesis machine's eight of Table 4.5, a described "
+                   f"machine's deviations) reach this (default {api.TARGET_ESS:g}) and R-hat ≤ 1.01")
     s.add_argument("--sampler", choices=("emcee", "exact"), default="emcee",
                    help="emcee ensembles (default) or independent draws of the exact posterior (linear model)")
     s.add_argument("--max-steps", type=int, default=api.MAX_STEPS, help=f"step budget per ensemble (default {api.MAX_STEPS})")
@@ -192,7 +193,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s = _command(sub, "plan", handlers["plan"], "rank candidate extra measurements by how much they reduce uncertainty",
                  json_help="print JSON, best candidate first")
     s.add_argument("--target", dest="targets", action="append", metavar="NAME",
-                   help="quantity to make more certain (repeatable; default the eight identified quantities)")
+                   help="quantity to make more certain (repeatable; default the quantities the campaign identifies: the "
+                   "thesis machine's eight, a described machine's determined deviations)")
     _model(s, "linear", help="forward model (default linear; htm models are linearised at zero)")
     s.add_argument("--candidates", metavar="FILE.toml", help="extra candidates of your own ([[candidate]] tables)")
     s.add_argument("--sigma-model-um", type=float, default=None,

@@ -27,6 +27,15 @@ _SCALE = {"mm": 1.0, "um": UM, "arcsec": ARCSEC, "deg": DEG, "rad": 1.0}
 SYMBOL = {"mm": "mm", "um": "µm", "arcsec": "″", "deg": "°", "rad": "rad"}
 
 
+#: counts as prose writes them
+_WORDS = ("no", "one", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten", "eleven", "twelve")
+
+
+def in_words(n: int) -> str:
+    """A count as a sentence says it: ``"eight"`` up to twelve, digits beyond (``"13"``)."""
+    return _WORDS[n] if 0 <= n < len(_WORDS) else str(n)
+
+
 def fixed(value: float, decimals: int) -> str:
     """``value`` with ``decimals`` digits after the point, never ``-0.000`` (files re-read ``-0`` as an integer,
     and an NC program should not show a sign for zero)."""

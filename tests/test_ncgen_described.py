@@ -145,3 +145,80 @@ def test_bad_described_input_is_one_line_and_writes_nothing(run_cli, tmp_path, a
 def test_the_thesis_machine_refuses_the_described_options(run_cli):
     code, _, err = run_cli("ncgen", "BX", "--arc-deg", "0", "90")
     assert code == 2 and "--arc-deg: for a described machine's campaign only" in err, err
+
+
+def _sections_dropped(text: str, *prefixes: str) -> str:
+    """A campaign's TOML text without the tables whose names start with one of ``prefixes``."""
+    out, skip = [], False
+    for line in text.splitlines():
+        if line.startswith("["):
+            skip = line.strip("[] ").startswith(prefixes)
+        if not skip:
+            out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def _demo_text(machine) -> str:
+    with open(demo_campaign(machine), encoding="utf-8") as f:
+        return f.read()
+
+
+@pytest.mark.parametrize("machine", DESCRIBED)
+def test_ncgen_on_a_campaign_without_what_the_option_needs_is_one_line_naming_file_and_key(run_cli, tmp_path,
+                                                                                           machine):
+    """Issue 42, defect 6: ``--probe`` without ``[probe]``, ``--run`` without ball-bar runs, a pattern without
+    ``[ballbar]``: one line naming the file and the key, exit 2, nothing written; the instrument the campaign has
+    still gets its programs."""
+    text = _demo_text(machine)
+    no_probe, no_ballbar = tmp_path / "no-probe.toml", tmp_path / "no-ballbar.toml"
+    no_probe.write_text(_sections_dropped(text, "probe"), encoding="utf-8")
+    no_ballbar.write_text(_sections_dropped(text, "ballbar", "truth.setups", "truth.mounts"), encoding="utf-8")
+    pattern = mb.load_campaign(demo_campaign(machine)).ballbar.runs[0].pattern
+    for argv, path, key in ((["--probe", "1"], no_probe, "probe.runs"), (["--run", "1"], no_ballbar, "ballbar.runs"),
+                            ([pattern], no_ballbar, "ballbar.setups")):
+        out = tmp_path / "out.nc"
+        code, stdout, err = run_cli("ncgen", *argv, path, "-o", out)
+        assert code == 2 and len(err.strip().splitlines()) == 1, err
+        assert f"{path}: {key}: " in err and "internal error" not in err, err
+        assert not out.exists() and stdout == ""
+    for argv, path in ((["--run", "1"], no_probe), (["--probe", "1"], no_ballbar)):
+        code, stdout, err = run_cli("ncgen", *argv, path)
+        assert code == 0 and stdout.rstrip().endswith("M30"), err
+
+
+@pytest.mark.parametrize("machine", DESCRIBED)
+def test_ncgen_run_counts_the_planned_runs_after_the_measured_ones(run_cli, tmp_path, machine):
+    """A designed campaign's planned runs get programs by number (as saved: the measured runs, then the planned
+    ones in measuring order), the same program a measured run at that geometry gets."""
+    import re
+
+    text = _sections_dropped(_demo_text(machine), "probe", "truth")
+    planned = tmp_path / "planned.toml"
+    planned.write_text(re.sub(r"^(e[xyz]_um = \[.*\]\n)+", "planned = true\nrepeats = 3\n", text, flags=re.M),
+                       encoding="utf-8")
+    measured = tmp_path / "measured.toml"
+    measured.write_text(text, encoding="utf-8")
+    c = mb.load_campaign(planned)
+    assert not c.ballbar.runs and len(c.ballbar.planned) == len(mb.load_campaign(measured).ballbar.runs)
+    n = len(c.ballbar.planned)
+    code, program, err = run_cli("ncgen", "--run", n, planned)
+    assert code == 0, err
+    code, same, err = run_cli("ncgen", "--run", n, measured)
+    assert code == 0 and program.replace("planned.toml", "measured.toml") == same, err
+    code, _, err = run_cli("ncgen", "--run", n + 1, planned)
+    assert code == 2 and f"--run: the campaign has {n} ball-bar runs" in err, err
+
+
+def test_ncgen_on_a_thesis_campaign_without_runs_writes_from_its_setups(run_cli, tmp_path):
+    """The thesis machine's programs need its set-ups and mounts only: a campaign with no runs yet gets them."""
+    from mtmcal_bayes.datasets import builtin_campaign_text
+
+    text = _sections_dropped(builtin_campaign_text()[0], "ballbar.runs")
+    path = tmp_path / "new.toml"
+    path.write_text("\n".join(ln for ln in text.splitlines() if not ln.startswith("alternative_reason")),
+                    encoding="utf-8")
+    code, program, err = run_cli("ncgen", "BX", path)
+    code0, builtin, _ = run_cli("ncgen", "BX")
+    assert code == code0 == 0 and program == builtin, err
+    code, _, err = run_cli("ncgen", "--probe", "1", path)
+    assert code == 2 and "--probe: for a described machine's campaign only" in err, err

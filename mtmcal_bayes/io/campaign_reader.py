@@ -46,6 +46,7 @@ from ..datasets import builtin_campaign_text, data_path
 from ..errors import InputError, MtmcalError
 from ..parameters import (
     DEVIATIONS,
+    DISCREPANCY_SCALES,
     MOUNT_NUISANCE,
     PROBE_NUISANCE,
     QUANTITIES,
@@ -68,6 +69,8 @@ from .tomlio import printed_decimals
 from .traces import read_trace
 
 FORMAT = "mtmcal-campaign/1"
+#: the discrepancy scales a [priors] entry may name (sigma_model, sigma_model_probe)
+SCALES = tuple(q.name for q in DISCREPANCY_SCALES.values())
 PRIOR_DISTS = {"normal": ("sd",), "halfnormal": ("sd",), "uniform": ("low", "high")}
 #: largest |number| of a [priors] entry, in its unit (1°, 10 mm): no geometric deviation or offset of a working
 #: machine tool comes near it, and numbers like 1e20 break the linear algebra (docs/campaign-format.md)
@@ -526,13 +529,13 @@ def _prior_bounds(r: TomlReader, v: float, key: str, *, unit: str, sd: bool) -> 
 def _priors(r: TomlReader, t: dict, deviations: dict | None = None) -> dict[str, dict]:
     known = {**{k: q.unit for k, q in (DEVIATIONS if deviations is None else deviations).items()},
              **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE, **PROBE_NUISANCE}.items()},
-             "sigma_model": "um"}
+             **{scale: "um" for scale in SCALES}}
     out = {}
     for name, spec in t.items():
         path = f"priors.{name}"
         if name not in known:
             r.fail(path, "unknown parameter (expected a deviation name, one of xT yT zT dRB xW yW zW, "
-                   f"a probe term ({' '.join(PROBE_NUISANCE)}) or sigma_model)")
+                   f"a probe term ({' '.join(PROBE_NUISANCE)}) or a discrepancy scale ({' '.join(SCALES)}))")
         if not isinstance(spec, dict):
             r.fail(path, "expected an inline table such as {dist = \"normal\", sd_arcsec = 30}")
         dist = r.string(spec, "dist", path, required=True)
@@ -552,10 +555,10 @@ def _priors(r: TomlReader, t: dict, deviations: dict | None = None) -> dict[str,
         if dist == "uniform" and spec[f"high_{unit}"] - spec[f"low_{unit}"] < PRIOR_RESOLUTION:
             r.fail(f"{path}.high_{unit}", f"must exceed low by at least {PRIOR_RESOLUTION:g} "
                    f"{units.SYMBOL[unit]}: a narrower prior fixes the parameter below the models' resolution")
-        if name == "sigma_model":  # a standard deviation: the sampler only visits sigma_model > 0
+        if name in SCALES:  # a standard deviation: the sampler only visits a scale > 0
             for p in ("low", "mean"):
                 if parsed.get(p, 0.0) < 0:
-                    r.fail(f"{path}.{p}_{unit}", f"must not be negative for sigma_model (a standard deviation), "
+                    r.fail(f"{path}.{p}_{unit}", f"must not be negative for {name} (a standard deviation), "
                            f"got {units.from_internal(parsed[p], unit):g}")
         out[name] = parsed
     return out

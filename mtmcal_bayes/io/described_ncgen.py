@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import units
 from ..campaign import Run
-from ..errors import ParameterError
+from ..errors import InputError, ParameterError
 from ..machines.description import FRAME
 from ..machines.patterns import axis_of, default_arc_deg, nominal_down, pattern_commands, placement_commands, tool_home
 from ..units import fixed
@@ -363,10 +363,12 @@ def described_program(campaign, *, pattern: str | None = None, run: int | None =
     if probe is not None:
         return probe_program(campaign, _probe_run(campaign, probe), **({} if feed is None else {"feed": feed}))
     if run is not None:
-        runs = campaign.ballbar.runs
+        runs = [*campaign.ballbar.runs, *campaign.ballbar.planned]  # as the file is saved: measured, then planned
+        if not runs:
+            raise InputError(campaign.source, "ballbar.runs", f"no ball-bar runs, measured or planned: no run {run} "
+                             "to write a program of (a probe run's program: give its id or number instead)")
         if not 1 <= run <= len(runs):
-            raise ParameterError("run", f"the campaign has {len(runs)} ball-bar runs" +
-                                 (f": 1 to {len(runs)}" if runs else ""))
+            raise ParameterError("run", f"the campaign has {len(runs)} ball-bar runs: 1 to {len(runs)}")
         return ballbar_program(campaign, runs[run - 1], feed=feed, step_deg=step_deg)
     one = _pattern_run(campaign, pattern, setup=setup, mount=mount, arc_deg=arc_deg, step_deg=step_deg,
                        hold_deg=hold_deg)
@@ -374,7 +376,10 @@ def described_program(campaign, *, pattern: str | None = None, run: int | None =
 
 
 def _probe_run(campaign, probe: str):
-    runs = campaign.probe.runs
+    runs = campaign.probe.runs if campaign.probe is not None else []
+    if not runs:
+        raise InputError(campaign.source, "probe.runs", f"no [[probe.runs]]: no probe run {probe!r} to write a "
+                         "program of (a ball-bar run's program: give its number or a pattern instead)")
     ids = [r.id for r in runs]
     if probe in ids:
         return runs[ids.index(probe)]
@@ -386,6 +391,10 @@ def _probe_run(campaign, probe: str):
 def _pattern_run(campaign, pattern: str, *, setup, mount, arc_deg, step_deg, hold_deg) -> Run:
     """The :class:`Run` of ``pattern`` that ``described_program`` writes (no readings)."""
     bb = campaign.ballbar
+    for key, have, what in (("ballbar.setups", bb.setups, "tool setup"), ("ballbar.mounts", bb.mounts, "W-ball mount")):
+        if not have:
+            raise InputError(campaign.source, key, f"no {what}: a ball-bar program of {pattern} needs the campaign's "
+                             "[ballbar] with its tool setups and W-ball mounts")
     same = next((r for r in bb.runs if r.pattern == pattern), None)
     setup = setup or (same.setup if same else next(iter(bb.setups), ""))
     mount = mount or (same.mount if same else next(iter(bb.mounts), ""))

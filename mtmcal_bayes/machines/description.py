@@ -174,8 +174,16 @@ def parse_configuration(text: str, fail: Fail, key: str = "machine.configuration
     return work_letters, tool_letters
 
 
+#: how far from unit length a direction vector may be and still be taken as meant to be one (then normalised)
+UNIT_TOLERANCE = 1e-6
+#: largest off-axis component, after normalising, of a direction that lies along a frame axis
+ALONG_TOLERANCE = 1e-9
+
+
 def parse_direction(value, fail: Fail, key: str) -> np.ndarray:
-    """A direction: ``"+Y"``/``"-Z"`` or a unit 3-vector along a frame axis -> (3,) unit vector."""
+    """A direction: ``"+Y"``/``"-Z"`` or a 3-vector within :data:`UNIT_TOLERANCE` of unit length (normalised) along
+    a frame axis -> (3,) unit vector.  A zero vector, one further from unit length, and a unit vector not along a
+    frame axis (an inclined axis, not supported yet) each fail with their own reason."""
     if isinstance(value, str):
         m = re.fullmatch(r"\s*([+-]?)([XYZ])\s*", value.upper())
         if not m:
@@ -187,14 +195,17 @@ def parse_direction(value, fail: Fail, key: str) -> np.ndarray:
     norm = float(np.linalg.norm(v))
     if norm == 0.0:
         fail(key, "a zero vector has no direction")
-    if abs(norm - 1.0) > 1e-9:
-        fail(key, f"{_shown(v)} is not a unit vector (its length is {norm:.6g})")
-    i = int(np.argmax(np.abs(v)))
-    if abs(abs(v[i]) - 1.0) > 1e-12:
-        fail(key, f"{_shown(v)} does not lie along a frame axis: ISO 230-7 names location errors by the frame axes "
-                  "they lie along, and the model supports axes and spindles along ±X, ±Y or ±Z")
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        fail(key, f"{_shown(v)} is not a unit vector (its length is {norm:.9g}): a direction is accepted within "
+                  f"{UNIT_TOLERANCE:g} of unit length")
+    u = v / norm
+    i = int(np.argmax(np.abs(u)))
+    if np.delete(np.abs(u), i).max() > ALONG_TOLERANCE:
+        fail(key, f"{_shown(v)} does not lie along a frame axis: inclined axes are not supported yet (ISO 230-7 "
+                  "names location errors by the frame axes they lie along; give an axis or spindle along ±X, ±Y or "
+                  "±Z)")
     out = np.zeros(3)
-    out[i] = np.sign(v[i])
+    out[i] = np.sign(u[i])
     return out
 
 

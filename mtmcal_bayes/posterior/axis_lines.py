@@ -134,11 +134,12 @@ class AxisLines:
 
     def to_text(self) -> str:
         lines = [f"Identified axis lines of {self.machine} at the home pose (machine frame; point: the line's point "
-                 "nearest the described point_mm; mean ± sd, 95 % HDI)"]
+                 "nearest the described point_mm; nominal: the description's; identified: mean ± sd, 95 % HDI)",
+                 f"  {'':6s} {'':15s} {'nominal':>14s} {'identified':>14s}"]
         for _, r in self.table.iterrows():
             mark = "" if r["determined"] else "   not determined: the prior's, not a measurement"
-            lines.append(f"  {r['element']:6s} {r['quantity']:15s} {r['mean']:14.6f} ± {r['sd']:.6f} "
-                         f"{r['unit']:2s} [{r['hdi_low']:.6f}, {r['hdi_high']:.6f}]{mark}")
+            lines.append(f"  {r['element']:6s} {r['quantity']:15s} {r['nominal']:14.6f} {r['mean']:14.6f} ± "
+                         f"{r['sd']:.6f} {r['unit']:2s} [{r['hdi_low']:.6f}, {r['hdi_high']:.6f}]{mark}")
         return "\n".join(lines)
 
 

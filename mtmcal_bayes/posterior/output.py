@@ -97,17 +97,19 @@ def format_posterior(result) -> str:
     lines = [f"Posterior, model {result.model}{data} ({r.chains.shape[0]} ensembles × {r.chains.shape[2]} walkers, "
              f"{r.n_steps} steps, {r.wall_time:.0f} s); 95 % HDI"]
     choice = reading_choice.has_choice(s)
+    c = result.comparison
+    # the deterministic values beside the posterior, where the campaign has any (the thesis' published methods)
+    refs = any(c[k].notna().any() for k in ("ballbar", "probe_reported") if k in c.columns)
     hdr = (f"{'quantity':18s} {'ISO 230-7':10s} {'unit':>4s} {'mean':>9s} {'sd':>7s} {'95 % HDI':>20s} {'R-hat':>6s} "
-           f"{'ESS':>7s}  ball bar  probe(thesis)")
+           f"{'ESS':>7s}" + ("  ball bar  probe(thesis)" if refs else ""))
     width = len(hdr)
     hdr += f"  {reading_choice.HEAD:>16s}" if choice else ""
     lines.append(hdr)
-    c = result.comparison
     for name, row in s.iterrows():
         iso = row["iso"] if isinstance(row["iso"], str) else "—"
         line = (f"{name:18s} {iso:10s} {units.SYMBOL[row['unit']]:>4s} {row['mean']:9.2f} {row['sd']:7.2f} "
                 f"[{row['hdi_low']:8.2f}, {row['hdi_high']:8.2f}] {row['r_hat']:6.3f} {row['ess_bulk']:7.0f}")
-        if name in c.index:
+        if refs and name in c.index:
             ref = c.loc[name]
             bb = ref["ballbar"]
             line += f"  {bb:8.2f}{'' if ref['ballbar_in_hdi'] else '*'}" if bb is not None and bb == bb else "         —"
@@ -116,7 +118,7 @@ def format_posterior(result) -> str:
         if choice and reading_choice.rests(row):
             line = f"{line:{width}s}  {reading_choice.mark_cell(row):>16s}"
         lines.append(line)
-    lines.append("* = outside the 95 % HDI")
+    lines += ["* = outside the 95 % HDI"] if refs else []
     if choice:
         lines.append(result.reading_choice_note)
     lines += ["", gum_block(s), "", budget_block(s, result)]

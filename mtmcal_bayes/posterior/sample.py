@@ -137,11 +137,16 @@ class PosteriorResult:
         return self.log_posterior.data
 
     @property
+    def ess_quantities(self) -> list[str]:
+        """The quantities the diagnostics' smallest ESS is over: the eight of Table 4.5 where the summary has them,
+        else the machine's deviations."""
+        return [n for n in IDENTIFIABLE if n in self.summary.index] or [
+            n for n in self.summary.index if n in self.log_posterior.space.names]
+
+    @property
     def diagnostics(self) -> SamplerDiagnostics:
         r = self.sampling
-        gating = [n for n in IDENTIFIABLE if n in self.summary.index] or [
-            n for n in self.summary.index if n in self.log_posterior.space.names]  # a described machine's deviations
-        eight = self.summary.loc[gating]
+        eight = self.summary.loc[self.ess_quantities]
         ess = eight["ess_bulk"]
         return SamplerDiagnostics(
             converged=r.converged, n_ensembles=r.chains.shape[0], n_walkers=r.chains.shape[2], n_steps=r.n_steps,

@@ -25,12 +25,15 @@ BUDGET_CAPTION = (
     "W-ball clamping). Exact for the linear model at each σ_model (Σ = Σ_g ΣP_gΣ + Σ_k K R_k Kᵀ), averaged over "
     "σ_model's posterior; kinematic models linearised at the posterior mean. Table: summary.csv, budget:* columns."
 )
-SIGMA_CAPTION = (
-    "Posterior sd of each of the eight quantities if σ_model were known, from 0 to 4 µm (closed form), and "
-    "beneath, σ_model's prior (line) and posterior (histogram). Where the posterior is the prior, the data do "
-    "not choose σ_model: the intervals then rest on the assumed prior, and this figure shows how much. The "
-    "dashed line is σ_model's posterior median (or its fixed value)."
-)
+def sigma_caption(names=IDENTIFIABLE) -> str:
+    """The caption of :func:`sigma_figure` drawn for ``names``."""
+    return (f"Posterior sd of each of the {units.in_words(len(names))} quantities if σ_model were known, from 0 to "
+            "4 µm (closed form), and beneath, σ_model's prior (line) and posterior (histogram). Where the posterior is "
+            "the prior, the data do not choose σ_model: the intervals then rest on the assumed prior, and this figure "
+            "shows how much. The dashed line is σ_model's posterior median (or its fixed value).")
+
+
+SIGMA_CAPTION = sigma_caption()
 
 
 def budget_figure(summary: pd.DataFrame):
@@ -76,8 +79,9 @@ def sigma_figure(rep, names=IDENTIFIABLE):
     grid = units.to_internal(np.linspace(0.0, 4.0, 17), "um")  # every 0.25 µm: the curves are smooth
     curves = sd_against_sigma(post, grid, names, theta0=linearisation_point(rep.idata, post))
     names = list(curves.columns)
-    fig = figure(figsize=(12, 7.6))
-    gs = fig.add_gridspec(3, 4, height_ratios=[1, 1, 0.8])
+    rows = max(1, -(-len(names) // 4))  # four curves a row, σ_model's prior and posterior beneath
+    fig = figure(figsize=(12, 2.7 * rows + 2.2))
+    gs = fig.add_gridspec(rows + 1, 4, height_ratios=[1] * rows + [0.8])
     here = rep.sigma_model_um
     for i, n in enumerate(names):
         ax = fig.add_subplot(gs[i // 4, i % 4])
@@ -88,9 +92,9 @@ def sigma_figure(rep, names=IDENTIFIABLE):
         ax.set_ylabel(f"posterior sd [{units.SYMBOL[rep.summary.loc[n, 'unit']]}]", fontsize=8)
         ax.tick_params(labelsize=8)
         ax.grid(alpha=0.25)
-        if i // 4 == 1:
+        if i + 4 >= len(names):  # the lowest curve of its column
             ax.set_xlabel("σ_model fixed at [µm]", fontsize=8)
-    ax = fig.add_subplot(gs[2, :])
+    ax = fig.add_subplot(gs[rows, :])
     scale = post.scales[0]  # with both instruments every scale is fixed at the abscissa; the ball bar's is shown
     top = 4.0
     if post.fixed_sigma is None:

@@ -449,13 +449,14 @@ def sampler_paragraph(rep: PosteriorResult) -> str:
         return (f"{d.kept_draws} independent draws of the exact σ-marginal posterior of the linear model in "
                 f"{d.n_ensembles} chains, no MCMC ({d.wall_time_s:.1f} s).")
     ref = rep.sampling.approximation.kind if rep.sampling.approximation is not None else "prior"
+    n = units.in_words(len(rep.ess_quantities))
     return (f"{d.n_ensembles} independent emcee ensembles × {d.n_walkers} walkers, started from draws of the {ref}; "
             f"moves: independence proposals from it (accepted {100 * d.independence_acceptance:.0f} %) and "
             f"differential evolution. {d.n_steps} steps each (burn-in {d.burn_in}, detected), largest integrated "
             f"autocorrelation time {d.tau_max_steps:.1f} steps, {'converged' if d.converged else 'NOT converged'} "
             f"by the rule: R-hat ≤ {s.max_rhat} across the ensembles and their halves in time, bulk and tail ESS ≥ "
-            f"{s.target_ess:g} for each of the eight quantities and ≥ {s.target_ess_sigma:g} for sigma_model; "
-            f"max R-hat {d.max_r_hat:.3f}, min bulk / tail ESS of the eight {d.min_ess_bulk:.0f} / "
+            f"{s.target_ess:g} for each of the {n} quantities and ≥ {s.target_ess_sigma:g} for sigma_model; "
+            f"max R-hat {d.max_r_hat:.3f}, min bulk / tail ESS of the {n} {d.min_ess_bulk:.0f} / "
             f"{d.min_ess_tail:.0f}, sampling {d.wall_time_s:.1f} s. R-hat is computed across the independent "
             "ensembles (the walkers of one ensemble are not independent chains).")
 
@@ -539,7 +540,8 @@ def budget_table(summary: pd.DataFrame) -> pd.DataFrame:
     return out.rename(columns=lambda c: c.split(":", 1)[1]).rename_axis("quantity")
 
 
-def _budget_section(page: Page, rep: PosteriorResult, tmp: Path) -> None:
+def _budget_section(page: Page, rep: PosteriorResult, tmp: Path, *, sigma_names=IDENTIFIABLE) -> None:
+    """The uncertainty budget's section; ``sigma_names``: the quantities ``sigma_model.png`` was drawn for."""
     post = rep.log_posterior
     page.section("budget", "Uncertainty budget")
     how = (f"σ_model fixed at {rep.sigma_model_um:g} µm" if post.fixed_sigma is not None else
@@ -551,7 +553,7 @@ def _budget_section(page: Page, rep: PosteriorResult, tmp: Path) -> None:
                    + sigma_prior_sentence(post))
     page.figure(tmp / "budget.png", budget_plot.BUDGET_CAPTION, "uncertainty budget")
     page.table((100 * budget_table(rep.summary)).round(1), digits=1)
-    page.figure(tmp / "sigma_model.png", budget_plot.SIGMA_CAPTION, "posterior sd against sigma_model")
+    page.figure(tmp / "sigma_model.png", budget_plot.sigma_caption(sigma_names), "posterior sd against sigma_model")
 
 
 def _statement_section(page: Page, rep: PosteriorResult) -> None:

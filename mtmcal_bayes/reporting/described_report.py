@@ -52,8 +52,8 @@ NOT_MADE = [
 ]
 
 CHAIN_CAPTION = ("The machine at its home pose: the frame, each rotary axis' nominal line through its point, the "
-                 "spindle and a nominal tool, the linear axes (primed: they move the workpiece); the chain from "
-                 "workpiece to tool below.")
+                 "spindle and a tool of the campaign's length (the key says whose), the linear axes (primed: they "
+                 "move the workpiece); the chain from workpiece to tool below.")
 DEVIATIONS_CAPTION = ("What each location error means (positive values, exaggerated), as the chain applies it: a "
                       "small rigid displacement of the body the axis carries, turning about the axis' point.")
 
@@ -81,7 +81,8 @@ def build_described_report(analysis, out_dir, *, settings, progress=None, comman
     with atomic_directory(out_dir) as tmp:
         drawing = Drawing(tmp)
         try:
-            drawing.start([("machine.png", lambda: machine_figure.chain_figure(desc)),
+            tool = machine_figure.campaign_tool(campaign)
+            drawing.start([("machine.png", lambda: machine_figure.chain_figure(desc, tool)),
                            ("deviations.png", lambda: machine_figure.deviations_figure(desc))])
             say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
             rep = sample_posterior(analysis, settings=settings, progress=progress, tolerances=tolerances)
@@ -120,7 +121,7 @@ def build_described_report(analysis, out_dir, *, settings, progress=None, comman
         for name, (df, index) in tables.items():
             df.to_csv(tmp / name, index=index, float_format="%.6g")
             files.append(name)
-        page = _page(rep, ls, tables, campaign=campaign, tmp=tmp, loo=loo)
+        page = _page(rep, ls, tables, campaign=campaign, tmp=tmp, loo=loo, shown=shown)
         elapsed = time.perf_counter() - t0
         files = ["index.html"] + files + ["posterior.nc"]
         page.write(tmp / "index.html", _meta(campaign, model, rep.sampling.settings.seed, command=command,
@@ -168,7 +169,8 @@ def truth_table(rep, ls: LeastSquares, truth) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path, loo) -> Page:
+def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path, loo, shown) -> Page:
+    """The report's page; ``shown``: the deviations its per-quantity figures are drawn for."""
     desc = campaign.machine.description
     post = rep.log_posterior
     ident = rep.identifiability
@@ -226,7 +228,7 @@ def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path, loo) -> Page:
                        "(posterior mean − truth) / posterior sd. truth.csv.")
         page.table(t.set_index("quantity"), digits=2)
     _statement_section(page, rep)
-    _budget_section(page, rep, tmp)
+    _budget_section(page, rep, tmp, sigma_names=shown)
     page.section("corner", "Joint posterior of the determined deviations")
     page.figure(tmp / "corner.png", CORNER_CAPTION, "corner plot")
     page.figure(tmp / "forest.png", "95 % HDI of every deviation (an undetermined one spans its prior).",

@@ -73,10 +73,24 @@ def _label(d: Deviation) -> str:
 # the chain at the home pose
 
 
-def _extent(desc: MachineDescription) -> float:
+def _extent(desc: MachineDescription, tool_mm: float) -> float:
     pts = [a.point for a in desc.rotary_axes] + [desc.spindle.point,
-                                                  desc.spindle.point + TOOL_MM * desc.spindle.direction]
-    return max(float(np.abs(np.array(pts)).max()), TOOL_MM)
+                                                  desc.spindle.point + tool_mm * desc.spindle.direction]
+    return max(float(np.abs(np.array(pts)).max()), tool_mm)
+
+
+def campaign_tool(campaign) -> tuple[float, str]:
+    """The tool a campaign's figure draws: ``(length mm, whose)`` — its first ball-bar set-up's tool length, else
+    its first stylus, else a nominal :data:`TOOL_MM`."""
+    setups = campaign.ballbar.setups
+    if setups:
+        sid, setup = next(iter(setups.items()))
+        return float(setup.R_B), f"set-up {sid}'s tool length"
+    styli = getattr(campaign.probe, "styli", None) or {}
+    if styli:
+        sid, length = next(iter(styli.items()))
+        return float(length), f"stylus {sid}'s length"
+    return TOOL_MM, "a nominal length"
 
 
 def _arc3d(ax, centre: np.ndarray, d: np.ndarray, *, radius: float, colour: str) -> None:
@@ -92,13 +106,15 @@ def _arc3d(ax, centre: np.ndarray, d: np.ndarray, *, radius: float, colour: str)
     ax.quiver(*pts[-1], *(0.5 * radius * tangent), color=colour, lw=1.2, arrow_length_ratio=0.9)
 
 
-def chain_figure(desc: MachineDescription) -> Figure:
+def chain_figure(desc: MachineDescription, tool: tuple[float, str] | None = None) -> Figure:
     """The machine at the home pose, in 3-D, with a key of its axes beside it and its chain from workpiece to tool
-    beneath."""
+    beneath; ``tool`` = (length mm, whose) the tool drawn from the spindle's point (default a nominal
+    :data:`TOOL_MM`; a campaign's: :func:`campaign_tool`)."""
+    tool_mm, whose = tool or (TOOL_MM, "a nominal length")
     fig = figure(figsize=(8.6, 8.8))
     with rc_context({"grid.color": "0.87", "grid.linewidth": 0.5}):  # a light grid: read when the axes is made
         ax = fig.add_axes((0.12, 0.17, 0.88, 0.70), projection="3d")
-    L = _extent(desc)
+    L = _extent(desc, tool_mm)
     half = 1.2 * L
     # the frame axes through the origin, named at their + end
     for i in range(3):
@@ -109,7 +125,7 @@ def chain_figure(desc: MachineDescription) -> Figure:
     # rotary axes: nominal lines through point_mm, the letter at the + end (the − end where the tool is)
     ell = max(0.55 * L, 110.0)  # half the length of a line drawn
     s = desc.spindle
-    tip = s.point + TOOL_MM * s.direction
+    tip = s.point + tool_mm * s.direction
     for a in desc.rotary_axes:
         colour = WORK if a.work_side else TOOL
         ax.plot(*np.c_[a.point - ell * a.direction, a.point + ell * a.direction], color=colour, lw=2.2, ls="-.")
@@ -152,12 +168,12 @@ def chain_figure(desc: MachineDescription) -> Figure:
     fig.text(0.5, 0.95, "the home pose (every axis at 0) in the machine frame (dotted: its axes through the "
              "origin); blue moves the workpiece, orange the tool", ha="center", va="top", fontsize=8.5,
              color="0.25")
-    _key(fig, desc)
+    _key(fig, desc, tool_mm, whose)
     _chain_strip(fig.add_axes((0.03, 0.01, 0.94, 0.15)), desc)
     return fig
 
 
-def _key(fig: Figure, desc: MachineDescription) -> None:
+def _key(fig: Figure, desc: MachineDescription, tool_mm: float, whose: str) -> None:
     """What the 3-D view shows, one coloured line per axis, at the figure's upper left."""
     lines: list[tuple[str, str]] = []
     for a in desc.rotary_axes:
@@ -167,7 +183,7 @@ def _key(fig: Figure, desc: MachineDescription) -> None:
     s = desc.spindle
     carrier = "the bed" if s.carrier == "b" else f"the {s.carrier} axis"
     lines.append((f"spindle (C1) on {carrier}: {_direction_text(s.direction)} from {_point_text(s.point)} mm "
-                  f"(■), tool {TOOL_MM:g} mm drawn", SPINDLE_COLOUR))
+                  f"(■), tool {tool_mm:g} mm drawn ({whose})", SPINDLE_COLOUR))
     tool = [a.letter for a in desc.tool_chain if not a.rotary]
     work = [a.letter for a in desc.work_chain if not a.rotary]
     if tool:

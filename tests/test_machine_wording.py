@@ -1,0 +1,117 @@
+"""What the outputs say about a machine is said of that machine (issue 42, defect 9): the thesis' "eight
+quantities", its "ball bar / probe (thesis)" columns and a fixed "tool 150 mm drawn" appear where they are true —
+the thesis machine — and nowhere else; a described machine's outputs give its own count and its own tool."""
+
+from __future__ import annotations
+
+import pandas as pd
+import pytest
+
+import mtmcal_bayes as mb
+from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, demo_campaign, description_of
+from mtmcal_bayes.machines import selected
+from mtmcal_bayes.units import in_words
+
+#: the columns of the thesis' deterministic values beside the posterior
+THESIS_COLUMNS = "ball bar  probe(thesis)"
+
+
+@pytest.fixture(scope="module")
+def samples():
+    """The emcee posterior (seeded) of each built-in type's demo campaign (the thesis campaign for its type)."""
+    return {t: mb.sample(mb.load_campaign(demo_campaign(t)), seed=1) for t in BUILTIN_TYPES}
+
+
+def _machine_deviations(result) -> list[str]:
+    """The deviations of the campaign's machine the summary shows: from the description's selection, not the code
+    under test."""
+    return [d.name for d in selected(description_of(result.log_posterior.campaign.machine))
+            if d.name in result.summary.index]
+
+
+@pytest.mark.parametrize("machine", list(BUILTIN_TYPES))
+def test_sample_text_names_the_machines_own_quantities(samples, machine):
+    r = samples[machine]
+    text = r.to_text()
+    header = next(ln for ln in text.splitlines() if ln.startswith("quantity "))
+    accuracy = next(ln for ln in text.splitlines() if ln.startswith("Accuracy "))
+    if r.comparison.empty:  # no deterministic values: no empty columns for them
+        assert THESIS_COLUMNS not in header and "ball bar" not in header and "* = outside" not in text
+        n = len(_machine_deviations(r))
+        assert n >= 10 and accuracy.endswith(f"for the {in_words(n)} quantities"), accuracy
+        assert "eight" not in text
+    else:  # the thesis machine keeps its text: its values beside the posterior, over Table 4.5's eight
+        assert machine == "integrex-i200"
+        assert THESIS_COLUMNS in header and accuracy.endswith("for the eight quantities")
+        row = next(ln for ln in text.splitlines() if ln.startswith("beta_CZ "))
+        assert row.split()[-1] == "-26.28"  # thesis Table 5.3's value in its column
+
+
+@pytest.mark.parametrize("machine", list(BUILTIN_TYPES))
+def test_the_report_sampler_paragraph_counts_the_quantities_its_rule_is_over(samples, machine):
+    from mtmcal_bayes.reporting.build import sampler_paragraph
+
+    r = samples[machine]
+    text = sampler_paragraph(r)
+    n = "eight" if machine == "integrex-i200" else in_words(len(_machine_deviations(r)))
+    assert f"for each of the {n} quantities" in text and f"tail ESS of the {n} " in text, text
+
+
+def test_the_sigma_model_caption_and_figure_follow_the_quantities_drawn(samples):
+    from mtmcal_bayes.reporting import budget_plot
+
+    assert budget_plot.SIGMA_CAPTION.startswith("Posterior sd of each of the eight quantities")  # the thesis'
+    r = samples["vertical-turn-mill"]
+    names = _machine_deviations(r)
+    assert budget_plot.sigma_caption(names).startswith(f"Posterior sd of each of the {in_words(len(names))} ")
+    fig = budget_plot.sigma_figure(r, names=names)  # 13 curves: four rows of them, σ_model beneath, none overlaid
+    curves = [ax for ax in fig.axes if ax.get_title()]
+    assert len(curves) == len(names) == 13
+    boxes = [ax.get_position() for ax in fig.axes]
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1:]:
+            assert a.x1 <= b.x0 or b.x1 <= a.x0 or a.y1 <= b.y0 or b.y1 <= a.y0, "two panels overlap"
+
+
+def test_a_described_report_counts_its_own_quantities(tmp_path, run_cli):
+    """The head-head demo determines six deviations one by one or in combination: the report's sigma_model.png
+    caption says six, as its identifiability.csv and combinations.csv list them."""
+    out = tmp_path / "rep"
+    code, _, err = run_cli("report", "--machine", "head-head", "--sampler", "exact", "--seed", "1", "-o", out,
+                           "--quiet")
+    assert code == 0, err
+    ident = pd.read_csv(out / "identifiability.csv")
+    drawn = set(ident.loc[ident["kind"] == "determined", "quantity"])
+    for weights in ident.loc[ident["kind"] == "combination", "weights"]:
+        drawn |= {part.split(":")[0].strip() for part in weights.split(";")}
+    html = (out / "index.html").read_text(encoding="utf-8")
+    assert f"Posterior sd of each of the {in_words(len(drawn))} quantities" in html
+    assert len(drawn) != 8 and "eight quantities" not in html
+
+
+@pytest.mark.parametrize("machine", [t for t in BUILTIN_TYPES if t != "integrex-i200"])
+def test_the_machine_figure_draws_and_names_the_campaigns_tool(tmp_path, machine):
+    """``machine.png`` draws the tool of the campaign's first set-up (else its first stylus) and says so."""
+    from mtmcal_bayes.reporting.machine_figure import campaign_tool, chain_figure
+
+    path = demo_campaign(machine)
+    c = mb.load_campaign(path)
+    setup = next(iter(c.ballbar.setups.values()))
+    assert campaign_tool(c) == (setup.R_B, f"set-up {setup.id}'s tool length")
+    text = "\n".join(t.get_text() for t in chain_figure(c.machine.description, campaign_tool(c)).texts)
+    assert f"tool {setup.R_B:g} mm drawn (set-up {setup.id}'s tool length)" in text
+    # a probe-only campaign: its first stylus
+    body = open(path, encoding="utf-8").read()
+    kept, skip = [], False
+    for line in body.splitlines():
+        if line.startswith("["):
+            skip = line.strip("[] ").startswith(("ballbar", "truth.setups", "truth.mounts"))
+        if not skip:
+            kept.append(line)
+    probe_only = tmp_path / "probe.toml"
+    probe_only.write_text("\n".join(kept) + "\n", encoding="utf-8")
+    p = mb.load_campaign(probe_only)
+    sid, length = next(iter(p.probe.styli.items()))
+    assert campaign_tool(p) == (length, f"stylus {sid}'s length")
+    text = "\n".join(t.get_text() for t in chain_figure(p.machine.description, campaign_tool(p)).texts)
+    assert f"tool {length:g} mm drawn (stylus {sid}'s length)" in text
