@@ -8,6 +8,7 @@ from pathlib import Path
 from .. import units
 from ..campaign import Campaign, PlannedRun, Probe, Truth
 from ..parameters import DEVIATIONS, QUANTITIES, quantity_unit
+from ..machines.plugins import provided
 from .described_writer import described_to_dict
 from .design_table import design_to_dict
 from .truth_table import truth_to_dict
@@ -21,14 +22,18 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
 
     Trace files are written relative to ``save_dir`` (absolute when ``None``).
     """
-    um = lambda v: units.from_internal(v, "um")
     doc: dict = {"format": FORMAT}
     if c.date is not None:
         doc["date"] = c.date
     if c.temperature_C is not None:
         doc["temperature_C"] = c.temperature_C
-    if c.machine.described:
-        return described_to_dict(c, doc)
+    write = provided(c.machine, "campaign_document", described_to_dict)  # a plug-in's campaign keys
+    return write(c, doc, save_dir)
+
+
+def thesis_to_dict(c: Campaign, doc: dict, save_dir: Path | None = None) -> dict:
+    """The rest of ``doc`` for a campaign in the thesis' format (the thesis plug-in's campaign keys)."""
+    um = lambda v: units.from_internal(v, "um")  # noqa: E731
     doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
                       **({"serial": c.machine.serial} if c.machine.serial else {}),
                       **({"type": c.machine.type} if c.machine.type else {}),

@@ -43,8 +43,9 @@ def _direction(v: np.ndarray) -> str:
     return ("+" if v[i] > 0 else "-") + FRAME[i]
 
 
-def described_to_dict(c: Campaign, doc: dict) -> dict:
-    """``doc`` (format, date, ...) completed with a described campaign's machine, ball bar, probe, priors and truth."""
+def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
+    """``doc`` (format, date, ...) completed with a described campaign's machine, ball bar, probe, priors and truth
+    (``save_dir``: unused, its runs carry no trace files)."""
     um = lambda v: units.from_internal(v, "um")  # noqa: E731
     m = c.machine
     machine = {"name": m.name} if m.name else {}

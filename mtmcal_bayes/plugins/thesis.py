@@ -32,6 +32,13 @@ def probe_owners(machine, probe) -> set[str]:
     return thesis_probe_owners(machine, probe)
 
 
+def campaign_document(c, doc: dict, save_dir=None) -> dict:
+    """``doc`` completed with the campaign in the thesis' format (the inverse of :func:`campaign_sections`)."""
+    from ..io.campaign_writer import thesis_to_dict
+
+    return thesis_to_dict(c, doc, save_dir)
+
+
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
     from ..models.chain_thesis import ThesisChainModel
@@ -115,6 +122,9 @@ class ThesisPlugin:
     probe_layout = staticmethod(probe_layout)
     program = staticmethod(program)
     campaign_sections = staticmethod(campaign_sections)
+    campaign_document = staticmethod(campaign_document)
+    description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
+    description_label = "thesis machine"
     probe_owners = staticmethod(probe_owners)
 
     @property
