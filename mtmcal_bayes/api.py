@@ -365,13 +365,13 @@ def ncgen(pattern: str | None = None, *, campaign: CampaignLike = None, R_B_mm: 
     campaign but with both ``R_B_mm`` and ``start`` the program needs none (bar 100 mm, R_C = Z_C = 0).
     ``step_deg`` default 2.5.
 
-    On a described machine (:mod:`~mtmcal_bayes.io.described_ncgen`): the program of ``pattern`` at ``setup`` and
+    On a described machine (:mod:`~mtmcal_bayes.io.chain_programs`): the program of ``pattern`` at ``setup`` and
     ``mount`` over ``arc_deg`` = (start, end) degrees by ``step_deg`` with the other rotary axes at ``hold_deg``
     {letter: degrees}; of the campaign's ``run``-th ball-bar run (1-based); or of its probe run ``probe``.
     """
     from .campaign import Machine
     from .errors import ParameterError
-    from .io.described_ncgen import described_program
+    from .io.chain_programs import described_program
     from .io.textfiles import write_text_atomic
     from .machines.plugins import provided
 
@@ -478,7 +478,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
         used = _described_compensation_options(c, method=method, model=model, values=values, mount=mount)
         rotary = tuple(a.letter for a in c.machine.description.rotary_axes)
         parsed = read_program(program, integer_unit=integer_unit, rotary=rotary, required=LINEAR + rotary)
-        from .compensation.described import program_commands
+        from .compensation.through_chain import program_commands
 
         program_commands(c, parsed)  # every block within the described travels, before any work
     else:
@@ -495,7 +495,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     if refusal and not accept_disagreement:
         raise ParameterError("accept_disagreement", f"not given, and {refusal}")
     if c.machine.described:
-        from .compensation.described import compensate_described
+        from .compensation.through_chain import compensate_described
 
         label = None
         if posterior is None:
@@ -775,7 +775,7 @@ def _time_items(c: Campaign, times) -> dict:
 def _program(campaign, planned) -> str:
     """The measuring program of a planned run of ``campaign`` (a designed one), in its machine's plug-in's format
     where it has one (the thesis': Fig 4.30(a))."""
-    from .io.described_ncgen import ballbar_program
+    from .io.chain_programs import ballbar_program
     from .machines.plugins import provided
 
     own = provided(campaign.machine, "program")

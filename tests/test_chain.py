@@ -344,7 +344,7 @@ def test_chain_is_htm_literal_for_all_twelve_patterns(thesis):
 def test_complex_step_first_order_against_finite_differences(relabelled):
     """The ``linear`` model of a described machine is the complex-step Jacobian of the chain; central finite
     differences (1 µm, 1″ steps) agree with it to their own truncation error, 1e-6 of the largest entry."""
-    from mtmcal_bayes.models.described import complex_step_jacobian
+    from mtmcal_bayes.models.chain_models import complex_step_jacobian
     from mtmcal_bayes.models.kinematic import jacobian
 
     a, _ = relabelled

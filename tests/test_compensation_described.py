@@ -17,7 +17,7 @@ from mtmcal_bayes import units
 from mtmcal_bayes.compensation.chain_inverse import invert, work_tool_point
 from mtmcal_bayes.inference.identifiability import campaign_identifiability
 from mtmcal_bayes.inference.log_posterior import LogPosterior
-from mtmcal_bayes.compensation.described import compensate_described, program_commands
+from mtmcal_bayes.compensation.through_chain import compensate_described, program_commands
 from mtmcal_bayes.io.gcode import LINEAR, read_program
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated

@@ -12,7 +12,7 @@ import pytest
 from mtmcal_bayes import api, units
 from mtmcal_bayes.io.campaign_reader import load_campaign
 from mtmcal_bayes.io.campaign_writer import save_campaign
-from mtmcal_bayes.models.described import ChainBallbarModel
+from mtmcal_bayes.models.chain_models import ChainBallbarModel
 from mtmcal_bayes.planning.described_candidates import described_catalogue, described_feasibility_check, run_of
 from mtmcal_bayes.planning.described_planner import DescribedPlanner
 
@@ -148,7 +148,7 @@ def test_probe_candidates_index_each_axis_and_their_rows_are_the_chains_derivati
     the derivatives of the nonlinear probe model's readings (central differences, to 1e-6 of the largest entry),
     over the deviations and its own stylus and sphere terms."""
     from mtmcal_bayes.machines.deviations import quantities
-    from mtmcal_bayes.models.described import ChainProbeModel
+    from mtmcal_bayes.models.chain_models import ChainProbeModel
     from mtmcal_bayes.parameters import ParameterSpace
     from mtmcal_bayes.planning.described_probe_candidates import described_probe_catalogue
 

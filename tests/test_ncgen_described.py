@@ -1,4 +1,4 @@
-"""Measuring programs of a described machine (``ncgen``, :mod:`mtmcal_bayes.io.described_ncgen`).
+"""Measuring programs of a described machine (``ncgen``, :mod:`mtmcal_bayes.io.chain_programs`).
 
 Each program is read back and its commanded positions are put through the nominal chain (models/chain.py, no
 deviations), an implementation independent of the pattern code that wrote them: a ball-bar program holds the bar
@@ -13,7 +13,7 @@ import pytest
 
 import mtmcal_bayes as mb
 from mtmcal_bayes.campaign import ProbeRun, Run
-from mtmcal_bayes.io.described_ncgen import ballbar_program, probe_program
+from mtmcal_bayes.io.chain_programs import ballbar_program, probe_program
 from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, demo_campaign
 from mtmcal_bayes.io.nc_axes import axis_letters, read_axis_blocks
 from mtmcal_bayes.machines.patterns import placement_commands, tool_home

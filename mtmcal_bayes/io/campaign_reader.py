@@ -57,7 +57,7 @@ from ..sphere import fit_sphere
 from ..machines.deviations import quantities as deviation_table
 from ..machines.plugins import provided
 from ..machines.probe_terms import probe_terms
-from .described_campaign import described_ballbar, described_probe
+from .measurement_sections import described_ballbar, described_probe
 from .planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
 from .planned_runs import planned_in_order, planned_run
 from .dprnt import read_dprnt

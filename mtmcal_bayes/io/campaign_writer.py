@@ -9,7 +9,7 @@ from .. import units
 from ..campaign import Campaign, PlannedRun, Probe, Truth
 from ..parameters import DEVIATIONS, QUANTITIES, quantity_unit
 from ..machines.plugins import provided
-from .described_writer import described_to_dict
+from .description_writer import described_to_dict
 from .design_table import design_to_dict
 from .truth_table import truth_to_dict
 from .campaign_reader import FORMAT

@@ -3,7 +3,7 @@
 A history is one machine measured again and again, and machines of one ``[machine] type`` pool their σ_model: both
 need to know that two campaigns describe the same kinematics.  The key is the one the machine's plug-in gives it (the
 thesis machine's ``"thesis"``), else a
-sha256 (12 hex digits) of the description written out in full (:func:`~.described_writer.description_to_dict` with
+sha256 (12 hex digits) of the description written out in full (:func:`~.description_writer.description_to_dict` with
 the built-in name set aside: a built-in type and the same chain written out by hand are the same machine): its
 configuration, axes (directions, points, travels), spindle, deviation selection and squareness form.
 """
@@ -15,7 +15,7 @@ import hashlib
 import json
 
 from ..machines.plugins import provided
-from .described_writer import description_to_dict
+from .description_writer import description_to_dict
 
 
 def description_key(machine) -> str:

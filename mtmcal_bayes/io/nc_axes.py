@@ -1,7 +1,7 @@
 """Motion blocks with any machine's axis letters: writing them, and reading their positions back.
 
 :mod:`mtmcal_bayes.io.gcode` reads and rewrites the thesis machine's programs (axis words X Y Z B C) for
-compensation.  A described machine's measuring programs (:mod:`mtmcal_bayes.io.described_ncgen`) carry the
+compensation.  A described machine's measuring programs (:mod:`mtmcal_bayes.io.chain_programs`) carry the
 description's own letters (``X Y Z A C`` on a trunnion) and a skip move ``G31`` for probing; this module writes
 their blocks and reads back what they command, so that tests and callers can put the commanded positions through
 a model.  Its reader understands only what those programs contain: ``G00``/``G01`` (modal), ``G31`` (one block),

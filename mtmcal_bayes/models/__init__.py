@@ -15,7 +15,7 @@ from ..errors import ParameterError
 from ..machines.plugins import provided
 from ..machines.space import described_space
 from .chain_thesis import ThesisChainModel
-from .described import ChainBallbarModel, ChainProbeModel, FirstOrderModel
+from .chain_models import ChainBallbarModel, ChainProbeModel, FirstOrderModel
 from .joint import JointModel
 from .kinematic import HTMModel, jacobian
 from .linear import LinearModel, linear_coefficients

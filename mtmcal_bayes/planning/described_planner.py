@@ -5,7 +5,7 @@ Everything the planner, the design search and the exact preposterior check compu
 sds, the σ_model information — rests on four things that depend on the machine: the parameter space, the rows of
 a campaign, the target matrix and the candidate runs as campaign runs.  Here they are the described machine's:
 its selected deviations (ISO 230-7 names) with the nuisance terms of every set-up and mount, the first order of
-:class:`~mtmcal_bayes.models.described.ChainBallbarModel` (complex-step Jacobian, exact to rounding; the `linear`
+:class:`~mtmcal_bayes.models.chain_models.ChainBallbarModel` (complex-step Jacobian, exact to rounding; the `linear`
 and `chain` models share it), each target one deviation, and :func:`.described_candidates.run_of`.
 
 Default targets: the selected deviations the campaign plus every feasible candidate determines one by one
@@ -24,7 +24,7 @@ from ..errors import ParameterError
 from ..inference.identifiability import CENTRED, identifiability
 from ..machines.deviations import quantities, selected
 from ..models import DESCRIBED_MODELS, check_model
-from ..models.described import ChainBallbarModel, ChainProbeModel, FirstOrderModel
+from ..models.chain_models import ChainBallbarModel, ChainProbeModel, FirstOrderModel
 from ..observations import Observations
 from ..parameters import ParameterSpace
 from .candidates import Candidate

@@ -12,7 +12,7 @@ stylus), with the campaign's first stylus and its first run's sphere:
 Each candidate is a new run with its own nuisance terms — its stylus' centring and length (a stylus set anew,
 owner ``<stylus>#<id>``) and its sphere's placement (owner ``<id>``) — and its readings' noise the probe's
 repeatability squared over the repeats, plus ``sigma_model_probe²`` added by the planner.  Its rows are the first
-order of :class:`~mtmcal_bayes.models.described.ChainProbeModel` on a campaign of that run alone.  It is feasible
+order of :class:`~mtmcal_bayes.models.chain_models.ChainProbeModel` on a campaign of that run alone.  It is feasible
 when the commanded X, Y, Z of every position lie within the linear travels.
 """
 
@@ -26,7 +26,7 @@ import numpy as np
 from .. import units
 from ..campaign import Probe, ProbeRun
 from ..machines.probe_terms import probe_terms
-from ..models.described import ChainProbeModel, FirstOrderModel
+from ..models.chain_models import ChainProbeModel, FirstOrderModel
 from ..parameters import ParameterSpace
 from .described_candidates import HOLD_DEG, _hold_for, travel_problems
 from .probe_candidates import PROBE_REPEATS, ProbeCandidate

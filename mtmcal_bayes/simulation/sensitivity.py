@@ -109,7 +109,7 @@ def described_sensitivity_table(campaign: Campaign, model: str = "chain") -> pd.
     from ..machines import generated
     from ..machines.patterns import axis_of, components, patterns_of, pattern_commands
     from ..machines.space import described_space
-    from ..models.described import complex_step_jacobian
+    from ..models.chain_models import complex_step_jacobian
 
     desc = campaign.machine.description
     bb = campaign.ballbar
