@@ -39,6 +39,21 @@ def campaign_document(c, doc: dict, save_dir=None) -> dict:
     return thesis_to_dict(c, doc, save_dir)
 
 
+def simulate(campaign, truth, **options):
+    """The eccentricities of a campaign in the thesis' format for ``truth`` (``model``, ``noise``, ``seed``,
+    ``source``)."""
+    from ..simulation.result import thesis_simulation
+
+    return thesis_simulation(campaign, truth, **options)
+
+
+def sensitivity_table(campaign, model: str):
+    """Thesis Tables 2.4–2.6 as numbers: every pattern's eccentricity per unit deviation and offset."""
+    from ..simulation.sensitivity import sensitivity_table as table
+
+    return table(campaign, model)
+
+
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
     from ..models.chain_thesis import ThesisChainModel
@@ -123,6 +138,8 @@ class ThesisPlugin:
     program = staticmethod(program)
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
+    simulate = staticmethod(simulate)
+    sensitivity_table = staticmethod(sensitivity_table)
     description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
     description_label = "thesis machine"
     probe_owners = staticmethod(probe_owners)

@@ -19,6 +19,7 @@ from .. import units
 from ..campaign import REFERENCE_TEMPERATURE_C, Campaign, Truth
 from ..errors import ParameterError
 from ..inference.priors import make_prior
+from ..machines.plugins import provided
 from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE, quantity_unit
 from .simulate import synthetic_campaign
 
@@ -58,13 +59,16 @@ def drift_from_display(quantity: str, kind: str, size: float, start: datetime.da
 
 
 def deviation_names(campaign: Campaign | None = None) -> list[str]:
-    """The deviations a drift or a thermal sensitivity may name: a described machine's own (every generated location
-    error, ISO 230-7 names), else the thesis machine's."""
-    if campaign is not None and campaign.machine.described:
-        from ..machines.deviations import generated
+    """The deviations a drift or a thermal sensitivity may name: the machine's plug-in's names where it has them (the
+    thesis machine's; also without a campaign), else every location error its description generates (ISO 230-7)."""
+    if campaign is None:
+        return list(DEVIATIONS)
+    names = provided(campaign.machine, "deviation_table")
+    if names is not None:
+        return list(names)
+    from ..machines.deviations import generated
 
-        return [d.name for d in generated(campaign.machine.description)]
-    return list(DEVIATIONS)
+    return [d.name for d in generated(campaign.machine.description)]
 
 
 def _check_deviation(quantity: str, parameter: str, names) -> None:

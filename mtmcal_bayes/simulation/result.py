@@ -10,6 +10,7 @@ import pandas as pd
 from .. import units
 from ..campaign import Campaign, Truth
 from ..io.campaign_writer import save_campaign
+from ..machines.plugins import provided
 from ..models import first_order_gap
 from ..observations import Observations
 from ..parameters import ParameterSpace, quantity_unit
@@ -85,9 +86,15 @@ class Simulation:
 
 def simulate_truth(campaign: Campaign, truth: Truth, *, model: str = "htm-thesis", noise: bool = False,
                    seed: int | None = None, source: str = "<truth>") -> Simulation:
-    """Predict every component for ``truth``; warn when the linear model is asked for a truth too large for it."""
-    if campaign.machine.described:
-        return _described_simulation(campaign, truth, model=model, noise=noise, seed=seed, source=source)
+    """Predict every component for ``truth``; warn when the linear model is asked for a truth too large for it.  A
+    campaign in a plug-in's own format is simulated by the plug-in (the thesis': :func:`thesis_simulation`)."""
+    simulate = provided(campaign.machine, "simulate", _described_simulation)
+    return simulate(campaign, truth, model=model, noise=noise, seed=seed, source=source)
+
+
+def thesis_simulation(campaign: Campaign, truth: Truth, *, model: str, noise: bool, seed: int | None,
+                      source: str) -> Simulation:
+    """The simulation of a campaign in the thesis' format (its eccentricities; its probe readings when saved)."""
     obs, pred = predict_truth(campaign, truth, model, source=source)
     warnings = []
     if model == "linear":  # first order: say so when the truth is too large for it

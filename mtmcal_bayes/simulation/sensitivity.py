@@ -17,6 +17,7 @@ import pandas as pd
 from .. import units
 from ..campaign import Campaign, Run
 from ..errors import InputError
+from ..machines.plugins import provided
 from ..models import jacobian, make_model
 from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
 from ..patterns import B_PATTERNS, C_PATTERNS, COMPONENTS
@@ -153,8 +154,9 @@ def described_sensitivity_table(campaign: Campaign, model: str = "chain") -> pd.
 def sensitivity(campaign: Campaign, *, model: str = "htm-thesis") -> SensitivityTable:
     """:func:`sensitivity_table` (a described machine's: :func:`described_sensitivity_table`, model ``chain`` or
     ``linear``, the same numbers) as a result with its text, Markdown and JSON forms."""
-    if campaign.machine.described:
+    own = provided(campaign.machine, "sensitivity_table")  # the thesis' Tables 2.4–2.6 in its campaign format
+    if own is None:
         df = described_sensitivity_table(campaign, "linear" if model == "linear" else "chain")
         return SensitivityTable(df, df.attrs.get("model", "chain"), df.attrs["geometry"])
-    df = sensitivity_table(campaign, model)
+    df = own(campaign, model)
     return SensitivityTable(df, model, df.attrs["geometry"])
