@@ -48,6 +48,8 @@ P_DISAGREE = 0.01
 FLAT = 30.0
 #: the verdict of a group whose readings the flat terms leave no free direction (no χ² to take)
 UNCHECKED = "unchecked"
+#: equal-probability nodes of the target's discrepancy-scale prior a group's p-value is averaged over
+SIGMA_NODES = 256
 #: posterior draws used per direction
 N_DRAWS = 4000
 
@@ -184,9 +186,9 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
         rank = B.shape[1]
         chi2 = float(res @ Si @ res)
         dof = len(idx) - rank
+        p = _p_value(chi2, Sg, B, target, idx) if dof > 0 else float("nan")
         with np.errstate(invalid="ignore", divide="ignore"):
             z = np.where(np.diag(cov) > 1e-12 * np.max(np.diag(Sg)), res / np.sqrt(np.abs(np.diag(cov))), 0.0)
-        p = float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan")
         worst = int(np.argmax(np.abs(z)))
         labels = [keys[j].label for j in idx]
         for j, lab, zi, ri, vi in zip(idx, labels, z, res, np.diag(Sg)):
@@ -199,6 +201,31 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
                          "max_abs_z": float(np.abs(z).max()), "worst": labels[worst],
                          "verdict": UNCHECKED if dof == 0 else ("disagree" if p < P_DISAGREE else "agree")})
     return pd.DataFrame(rows), pd.DataFrame(verdicts)
+
+
+def _p_value(chi2: float, Sg: np.ndarray, B: np.ndarray, target: LogPosterior, idx: np.ndarray) -> float:
+    """The p-value of a group's ``chi2`` under the target's prior predictive, its discrepancy scale σ unknown.
+
+    ``chi2`` was taken with σ² at its prior mean σ₀² (in ``Sg``, the group's predictive covariance; ``B`` the
+    orthonormal basis of the flat columns).  On the free directions ``Q`` (orthonormal, ``Qᵀ B = 0``) the
+    covariance is ``C + σ² I`` with ``C = Qᵀ (Sg − σ₀² I) Q``, so given σ the statistic is ``Σ_k c_k χ²₁`` with
+    ``c_k = (λ_k + σ²) / (λ_k + σ₀²)`` (``λ`` the eigenvalues of ``C``): the χ² on ``dof`` when σ = σ₀.  Its tail
+    is averaged over :data:`SIGMA_NODES` equal-probability nodes of σ's prior, each by Satterthwaite's scaled
+    χ² (exact when the ``c_k`` are equal: where the noise dominates).  With σ fixed, the plain χ² tail."""
+    dof = len(idx) - B.shape[1]
+    if target.fixed_sigma is not None:
+        return float(stats.chi2.sf(chi2, dof))
+    scale = np.unique(target.scale_of[idx])
+    if len(scale) != 1:
+        raise ValueError("a reading group of two discrepancy scales")  # a group is one instrument's
+    prior = target.priors.priors[target.p + int(scale[0])]
+    s0sq = prior.sd**2 + prior.mean**2
+    Q = np.linalg.svd(B, full_matrices=True)[0][:, B.shape[1]:] if B.shape[1] else np.eye(len(idx))
+    lam = np.clip(np.linalg.eigvalsh(Q.T @ (Sg - s0sq * np.eye(len(idx))) @ Q), 0.0, None)
+    sigma_sq = prior.frozen().ppf((np.arange(SIGMA_NODES) + 0.5) / SIGMA_NODES) ** 2
+    c = (lam[None, :] + sigma_sq[:, None]) / (lam[None, :] + s0sq)  # (nodes, dof)
+    scale_c, nu = (c**2).sum(axis=1) / c.sum(axis=1), c.sum(axis=1) ** 2 / (c**2).sum(axis=1)
+    return float(np.mean(stats.chi2.sf(chi2 / scale_c, nu)))
 
 
 def instrument_consistency(ballbar, probe, n_draws: int = N_DRAWS, seed: int = 0) -> Consistency:
