@@ -186,7 +186,7 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
         rank = B.shape[1]
         chi2 = float(res @ Si @ res)
         dof = len(idx) - rank
-        p = _p_value(chi2, Sg, B, target, idx) if dof > 0 else float("nan")
+        p = _p_value(chi2, Sg, B, target=target, idx=idx) if dof > 0 else float("nan")
         with np.errstate(invalid="ignore", divide="ignore"):
             z = np.where(np.diag(cov) > 1e-12 * np.max(np.diag(Sg)), res / np.sqrt(np.abs(np.diag(cov))), 0.0)
         worst = int(np.argmax(np.abs(z)))
@@ -203,7 +203,7 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
     return pd.DataFrame(rows), pd.DataFrame(verdicts)
 
 
-def _p_value(chi2: float, Sg: np.ndarray, B: np.ndarray, target: LogPosterior, idx: np.ndarray) -> float:
+def _p_value(chi2: float, Sg: np.ndarray, B: np.ndarray, *, target: LogPosterior, idx: np.ndarray) -> float:
     """The p-value of a group's ``chi2`` under the target's prior predictive, its discrepancy scale σ unknown.
 
     ``chi2`` was taken with σ² at its prior mean σ₀² (in ``Sg``, the group's predictive covariance; ``B`` the
