@@ -138,3 +138,18 @@ def test_compensate_refuses_the_disputed_deviations_on_every_machine(campaigns, 
     code, out, err = run_cli("compensate", path, PROGRAM[name], "-o", out_nc, "--accept-disagreement")
     assert code == 0, err
     assert "compensated although" in err and out_nc.exists()
+
+
+def test_a_group_its_flat_terms_leave_no_free_direction_is_unchecked(campaigns):
+    """W-ball clamping known to 1 mm only (instead of 35 µm): on the vertical turn-mill's runs about the W ball on
+    the B axis its offsets span both eccentricities, so those groups have no χ² — *unchecked*, no p-value, not a
+    disagreement, and the text names them."""
+    c = copy.deepcopy(campaigns["vertical-turn-mill"])
+    for k in ("xW", "yW", "zW"):
+        c.priors[k] = {"dist": "normal", "mean": 0.0, "sd": 1.0}
+    chk = check_instruments(c, explain=False)
+    g = chk.consistency.groups
+    unchecked = g[g["verdict"] == "unchecked"]
+    assert len(unchecked) and (unchecked["dof"] == 0).all() and unchecked["p_value"].isna().all()
+    assert chk.agree and "Not checked: " + ", ".join(unchecked["group"]) in chk.to_text()
+    assert (g.loc[g["verdict"] != "unchecked", "dof"] > 0).all()

@@ -21,7 +21,7 @@ from ..inference.analytic import linearisation
 from ..inference.log_posterior import LogPosterior
 from ..parameters import SCALE_LABEL
 from .conflict import ConflictAnalysis, explain_conflict
-from .consistency import Consistency, column_basis, flat_terms, instrument_consistency, reading_groups, target_noise
+from .consistency import UNCHECKED, Consistency, column_basis, flat_terms, instrument_consistency, reading_groups, target_noise
 
 
 def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: LogPosterior) -> dict[str, list[str]]:
@@ -102,6 +102,10 @@ class InstrumentCheck:
                       "does not refuse, but find the cause (docs/probe.md)."]
         else:
             lines += ["", "The instruments agree on every deviation they both measure."]
+        unchecked = list(self.consistency.groups.loc[self.consistency.groups["verdict"] == UNCHECKED, "group"])
+        if unchecked:
+            lines.append(f"Not checked: {', '.join(unchecked)} (their broad nuisance terms leave their readings no "
+                         "free direction; narrower priors on them would).")
         if self.conflict is not None:
             lines += ["", self.conflict.to_text()]
         return "\n".join(lines)
