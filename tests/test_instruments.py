@@ -101,8 +101,8 @@ def test_the_check_is_calibrated_without_a_conflict(campaigns, name):
 @pytest.mark.parametrize("name", TYPES)
 def test_instruments_explains_a_conflict_on_every_machine(campaigns, name, run_cli, tmp_path):
     """``instruments`` on a campaign whose probe disagrees with its ball bar: no internal error; the explanations
-    weigh the stylus length known to 0.3 mm (where its prior is narrower) and a difference of the sessions on each rotary axis of the machine (named by its
-    letter); every reading of the B runs it weighs changes the evidence (none where the runs are read in the
+    weigh the stylus length known to 0.3 mm (where its prior is narrower) and a difference of the sessions on each
+    rotary axis of the machine (named by its letter); every reading of the B runs it weighs changes the evidence (none where the runs are read in the
     machine frame)."""
     path = tmp_path / "shifted.toml"
     save_campaign(shifted(campaigns[name], 25.0), path)

@@ -21,7 +21,8 @@ from ..inference.analytic import linearisation
 from ..inference.log_posterior import LogPosterior
 from ..parameters import SCALE_LABEL
 from .conflict import ConflictAnalysis, explain_conflict
-from .consistency import UNCHECKED, Consistency, column_basis, flat_terms, instrument_consistency, reading_groups, target_noise
+from .consistency import (UNCHECKED, Consistency, column_basis, flat_terms, instrument_consistency, reading_groups,
+                          target_noise)
 
 
 def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: LogPosterior) -> dict[str, list[str]]:

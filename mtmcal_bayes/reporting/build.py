@@ -501,9 +501,9 @@ def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
             "model (both instruments, every parameter and both discrepancy scales integrated out; log Bayes factor "
             "against the campaign as given: above 2.3 strong, above 4.6 decisive): the readings of the B runs (where "
             "the samples at B = 0° and 90° were drawn, the BY bar's side; docs/conventions.md), the stylus length "
-            "along its axis, a difference of each rotary axis' angles between the two sessions. Quantities are the fused "
-            "posterior means under each candidate (″, µm). Full table: explanations.csv; the choice for the built-in "
-            "campaign: docs/thesis-notes.md.")
+            "along its axis, a difference of each rotary axis' angles between the two sessions. Quantities are the "
+            "fused posterior means under each candidate (″, µm). Full table: explanations.csv; the choice for the "
+            "built-in campaign: docs/thesis-notes.md.")
         t = c.conflict.table().head(8)
         scales = [col for col in t.columns if col.endswith("_um")]
         show = ["candidate", "log_bayes_factor"] + scales + list(c.conflict.shown)
