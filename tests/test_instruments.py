@@ -83,6 +83,19 @@ def test_a_shifted_group_of_probe_positions_is_flagged_and_every_sentence_follow
 
 
 @pytest.mark.parametrize("name", TYPES)
+def test_a_15_um_shift_is_flagged_where_the_probe_is_known_to_discrepancy_of_1_um(campaigns, name):
+    """The same 15 µm shift with the probe's σ_model prior half-normal of scale 1 µm (instead of 2 µm): flagged at
+    p < 0.01 on every type (measured p = 3·10⁻⁴ thesis, 7·10⁻⁷ trunnion, 3·10⁻⁴ vertical turn-mill, 2·10⁻⁶
+    head-head), the unmoved campaign's group still agreeing."""
+    c = copy.deepcopy(campaigns[name])
+    c.priors["sigma_model_probe"] = {"dist": "halfnormal", "sd": 0.001}
+    before, after = check_instruments(c, explain=False), check_instruments(shifted(c, 15.0), explain=False)
+    group = _moved_group(before, after)
+    assert before.consistency.groups.set_index("group").loc[group, "p_value"] >= 0.01
+    assert after.consistency.groups.set_index("group").loc[group, "p_value"] < 0.01 and not after.agree
+
+
+@pytest.mark.parametrize("name", TYPES)
 def test_the_check_is_calibrated_without_a_conflict(campaigns, name):
     """Campaigns of each type's design simulated without a conflict (both instruments from one truth; the sphere's
     placement, the stylus length and the datum held at zero as in the demos, the rest drawn from the priors): every
