@@ -10,18 +10,23 @@ plausible causes the data support.  Each candidate is a changed campaign or mode
 * the posterior of the two discrepancy scales (a candidate that explains the conflict needs no large σ);
 * the consistency check of each instrument against the other's posterior (:func:`instrument_consistency`).
 
-Candidates:
+Candidates, each where it applies to the campaign's machine:
 
-* **Readings of the B patterns** (:mod:`mtmcal_bayes.conventions`): the eight orientations in which a
-  ball-bar program can draw the B = 0° and B = 90° ends of its arcs (the thesis' reading among them), each
-  with the BY (and BA) bar on either side of the W ball.  The BX bar's side is fixed by the thesis' NC
-  program (Fig 4.30(a): the T ball at X = −390 mm, 100 mm from the C axis in +X).
-* **Stylus length along its axis** known to 0.3 mm instead of 10 µm (the touch probe's programmed length is
-  the tool eye's at B = 0 with the controller's B-pivot length, which the ball bar's dial-gauge R_B does not
-  share; pre-travel and stylus-ball radius act along the same axis).
-* **A difference between the sessions**: the B-axis angles α_XB, β_XB, γ_XB of the probe's session differ from
-  the ball bar's — by a thermal drift (prior sd 5″ each), or by what clamping the B axis at indexed positions
-  (the probe) changes against continuous motion (the ball bar) (prior sd 20″ each).
+* **Readings of the B patterns** (:mod:`mtmcal_bayes.conventions`), where the campaign has B-pattern runs whose
+  reading the observations honour: the eight orientations in which a ball-bar program can draw the B = 0° and
+  B = 90° ends of its arcs (the thesis' reading among them), each with the BY (and BA) bar on either side of the W
+  ball.  The BX bar's side is fixed by the thesis' NC program (Fig 4.30(a): the T ball at X = −390 mm, 100 mm from
+  the C axis in +X).  A campaign whose runs are read in the machine frame, whatever their convention, has none.
+* **Stylus length along its axis** known to 0.3 mm instead of its prior (the touch probe's programmed length is
+  the tool eye's with the controller's pivot length, which the ball bar's dial-gauge tool length does not share;
+  pre-travel and stylus-ball radius act along the same axis): any machine with a touch probe.
+* **A difference between the sessions**, per rotary axis of the machine: that axis' orientation deviations (its
+  two tilts and its zero; on the thesis machine the B axis' α_XB, β_XB, γ_XB and the C axis' α_CZ, β_CZ) differ in
+  the probe's session from the ball bar's — by a thermal drift (prior sd 5″ each), or by what clamping the axis at
+  indexed positions (the probe) changes against continuous motion (the ball bar) (prior sd 20″ each).
+
+Each candidate shows the fused posterior of the quantities :func:`shown_quantities` picks: the thesis' seven
+(:data:`SHOWN`) where the machine has them, else every deviation it estimates.
 
 The analysis is for the ``linear`` model (the kinematic models' first order: their nonlinearity is below
 0.1 µm at thesis magnitudes) with normal priors.
@@ -41,6 +46,9 @@ from ..errors import ParameterError
 from ..analysis import CampaignAnalysis
 from ..inference.log_posterior import LogPosterior
 from ..inference.marginal import MarginalPosterior
+from ..io.machine_reader import description_of
+from ..machines.deviations import generated
+from ..observations import Observations
 from ..parameters import DERIVED, quantity_unit
 from ..patterns import B_PATTERNS
 from .consistency import instrument_consistency
@@ -49,19 +57,39 @@ from .consistency import instrument_consistency
 CELLS = 24
 #: the stylus length's prior sd in the "stylus length" candidate, mm
 STYLUS_LENGTH_SD = 0.3
-#: the B-axis angles' difference between the sessions: (label, prior sd in ″, what it supposes)
-SESSIONS = (("session drift 5″", 5.0, "a thermal drift of the B-axis angles α_XB, β_XB, γ_XB between the two sessions "
+#: a rotary axis' angles' difference between the sessions: (label, prior sd in ″, what it supposes, with {axis} and
+#: {angles} to fill)
+SESSIONS = (("session drift 5″", 5.0, "a thermal drift of the {axis}-axis angles {angles} between the two sessions "
              "(sd 5″ each)"),
-            ("sessions differ 20″", 20.0, "the B-axis angles differ between the probe's clamped indexed positions and "
-             "the ball bar's continuous motion (sd 20″ each)"))
-DRIFTING = ("alpha_XB", "beta_XB", "gamma_XB")
+            ("sessions differ 20″", 20.0, "the {axis}-axis angles {angles} differ between the probe's clamped indexed "
+             "positions and the ball bar's continuous motion (sd 20″ each)"))
 #: the eight orientations of a B-pattern plot: where B = 0° and B = 90° are drawn (first: the thesis' reading)
 ORIENTATIONS = ("B0=+Z,B90=+X", "B0=+Z,B90=-X", "B0=-Z,B90=+X", "B0=-Z,B90=-X",
                 "B0=+X,B90=+Z", "B0=-X,B90=+Z", "B0=+X,B90=-Z", "B0=-X,B90=-Z")
 #: the patterns whose bar runs along Y (their side of the W ball is not fixed by the thesis)
 Y_BARS = ("BY", "BA")
-#: quantities shown for every candidate
+#: quantities shown for every candidate, where the machine has them (the thesis machine's)
 SHOWN = ("alpha_XB", "gamma_XB", "alpha_XB+gamma_XB", "beta_XB", "alpha_BT", "dy_CZ", "dz_BT")
+
+
+def shown_quantities(post: LogPosterior) -> tuple[str, ...]:
+    """The quantities each candidate shows: :data:`SHOWN` where ``post`` has every deviation they are made of, else
+    the deviations ``post`` estimates, in its order."""
+    names = set(post.space.names)
+    parts = lambda q: q.split("+") if "+" in q else list(DERIVED.get(q, {q: 1.0}))  # noqa: E731
+    if all(k in names for q in SHOWN for k in parts(q)):
+        return SHOWN
+    return tuple(p.name for p in post.space.parameters if p.group == "deviation")
+
+
+def session_axes(campaign, post: LogPosterior) -> dict[str, list[str]]:
+    """``{rotary axis letter: its orientation deviations post estimates}`` (the two tilts and the zero of each rotary
+    axis of the campaign's machine, in the posterior's order; axes with none are left out)."""
+    desc = description_of(campaign.machine)
+    by_axis = {ax.letter: {d.name for d in generated(desc) if d.body == ax.letter and d.role == "orientation"}
+               for ax in desc.rotary_axes}
+    out = {k: [n for n in post.space.names if n in v] for k, v in by_axis.items()}
+    return dict(sorted(((k, v) for k, v in out.items() if v), key=lambda kv: post.space.index(kv[1][0])))
 
 
 def _weights(name: str, names: list[str]) -> np.ndarray:
@@ -107,6 +135,12 @@ def reread(campaign, orientation: str, y_reversed: bool):
     return out if any_b else None
 
 
+def _reads_alike(a, b) -> bool:
+    """Whether two campaigns' ball-bar observations are the same (a campaign whose observations do not follow its
+    runs' conventions reads every reading alike)."""
+    return bool(np.array_equal(Observations.from_campaign(a).mean, Observations.from_campaign(b).mean))
+
+
 def _same_reading(a, b) -> bool:
     """Whether two campaigns read every run alike."""
     return all(np.allclose(run_matrix(x, a.ballbar), run_matrix(y, b.ballbar)) for x, y in zip(a.ballbar.runs,
@@ -128,32 +162,33 @@ def _marginal(post: LogPosterior, extra: np.ndarray | None = None, extra_var: np
                              prior_mean=mean0, groups=post.scale_of, y=post.likelihood.y, cells=cells)
 
 
-def _drift_columns(post: LogPosterior, sd_arcsec: float) -> tuple[np.ndarray, np.ndarray]:
-    """Columns of a difference of the B-axis angles in the probe's session: the angles' own columns on the probe's
-    rows, prior sd ``sd_arcsec`` each."""
+def _drift_columns(post: LogPosterior, sd_arcsec: float, drifting: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Columns of a difference of the angles ``drifting`` in the probe's session: the angles' own columns on the
+    probe's rows, prior sd ``sd_arcsec`` each."""
     A = post.forward.design
     probe_rows = np.array([post.scales[k] == "sigma_model_probe" for k in post.scale_of])
-    cols = [post.space.index(n) for n in DRIFTING]
+    cols = [post.space.index(n) for n in drifting]
     extra = np.where(probe_rows[:, None], A[:, cols], 0.0)
     return extra, np.full(len(cols), units.to_internal(sd_arcsec, "arcsec") ** 2)
 
 
 def weigh(campaign, name: str, kind: str, supposes: str, *, drift_arcsec: float | None = None,
-          post: LogPosterior | None = None) -> Candidate:
-    """Evidence, scales and shown quantities of the fused linear posterior of ``campaign`` (a candidate), with the
-    probe's session's B-axis angles differing by a difference of prior sd ``drift_arcsec`` when it is given.
-    ``post``: that fused linear log posterior when it is at hand."""
+          drifting: list[str] = (), post: LogPosterior | None = None) -> Candidate:
+    """Evidence, scales and shown quantities (:func:`shown_quantities`) of the fused linear posterior of ``campaign``
+    (a candidate), with the probe's session's angles ``drifting`` differing by a difference of prior sd
+    ``drift_arcsec`` when it is given.  ``post``: that fused linear log posterior when it is at hand."""
     post = post or LogPosterior(campaign, "linear", data="both")
     drift = drift_arcsec is not None
-    extra, extra_var = _drift_columns(post, drift_arcsec) if drift else (None, None)
+    extra, extra_var = _drift_columns(post, drift_arcsec, drifting) if drift else (None, None)
     mp = _marginal(post, extra, extra_var)
     y = post.likelihood.y
-    names = list(post.space.names) + ([f"drift {n}" for n in DRIFTING] if drift else [])
-    T = np.array([_weights(q, names) for q in SHOWN])
+    names = list(post.space.names) + ([f"drift {n}" for n in drifting] if drift else [])
+    shown = shown_quantities(post)
+    T = np.array([_weights(q, names) for q in shown])
     mean, sd = mp.target_moments(y[None], T)
     sm, _ = mp.sigma_moments(y)
     quantities = {q: (units.from_internal(mean[0, i], _unit(q)), units.from_internal(sd[0, i], _unit(q)))
-                  for i, q in enumerate(SHOWN)}
+                  for i, q in enumerate(shown)}
     return Candidate(name, kind, supposes, mp.log_evidence(y),
                      {n: units.from_internal(sm[k], "um") for k, n in enumerate(post.scales)}, quantities, campaign)
 
@@ -164,6 +199,11 @@ class ConflictAnalysis:
 
     given: Candidate
     candidates: list[Candidate]
+
+    @property
+    def shown(self) -> tuple[str, ...]:
+        """The quantities every candidate shows (:func:`shown_quantities`)."""
+        return tuple(self.given.quantities)
 
     def table(self) -> pd.DataFrame:
         """One row per candidate: log Bayes factor against the campaign as given, scales, shown quantities."""
@@ -191,12 +231,12 @@ class ConflictAnalysis:
         scale_cols = [c for c in t.columns if c.endswith("_um")]
         head = (f"  {'candidate':50s} {'log BF':>7s} " + " ".join(f"{c[:-3].replace('sigma_model', 'σ'):>8s}"
                                                                    for c in scale_cols)
-                + " " + " ".join(f"{q.replace('alpha_XB+gamma_XB', 'α+γ XB'):>9s}" for q in SHOWN))
+                + " " + " ".join(f"{q.replace('alpha_XB+gamma_XB', 'α+γ XB'):>9s}" for q in self.shown))
         lines.append(head)
         for _, r in t.iterrows():
             lines.append(f"  {r['candidate'][:50]:50s} {r['log_bayes_factor']:7.1f} "
                          + " ".join(f"{r[c]:8.2f}" for c in scale_cols) + " "
-                         + " ".join(f"{r[q]:9.2f}" for q in SHOWN))
+                         + " ".join(f"{r[q]:9.2f}" for q in self.shown))
         return "\n".join(lines)
 
 
@@ -232,13 +272,17 @@ def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
     best_probe = max(out, key=lambda c: c.log_evidence)
     base = best_probe.campaign
     extra = "" if best_probe is given else f"; {best_probe.name}"
-    for label, sd, supposes in SESSIONS:
-        out.append(weigh(base, label + extra, "sessions", supposes + extra, drift_arcsec=sd, post=posts.get(id(base))))
+    base_post = posts.get(id(base)) or LogPosterior(base, "linear", data="both")
+    for axis, angles in session_axes(base, base_post).items():
+        for label, sd, supposes in SESSIONS:
+            out.append(weigh(base, f"{label} ({axis} axis){extra}", "sessions",
+                             supposes.format(axis=axis, angles=", ".join(angles)) + extra, drift_arcsec=sd,
+                             drifting=angles, post=base_post))
     for orientation in ORIENTATIONS:
         for reversed_y in (False, True):
             moved = reread(base, orientation, reversed_y)
-            if moved is None or _same_reading(moved, base):
-                continue  # no B run, or the campaign's own reading
+            if moved is None or _reads_alike(moved, base) or _same_reading(moved, base):
+                continue  # no B run, runs read in the machine frame whatever their convention, or its own reading
             label = orientation + (", BY bar at −Y" if reversed_y else "")
             out.append(weigh(moved, label + extra, "ball-bar reading",
                              f"the B arcs drawn {orientation.replace(',', ', ')}"

@@ -10,13 +10,20 @@ unknown to the source posterior and so drawn from its prior.  The model is linea
 for the probe's datum and placement terms, to first order for the rest), so their part of the
 predictive covariance is ``A_η Σ_η A_ηᵀ`` in closed form; the draws give the rest; the noise is the
 likelihood's with the target instrument's own discrepancy scale at its prior mean of σ² (the source
-posterior, which has not seen the target's data, knows nothing of it).  Broad datum terms (prior sd ≥ 1 mm: where
-the sphere sits in the reading frame) are profiled out as flat: the residual is the generalised
-least-squares residual orthogonal to their columns, with as many fewer degrees of freedom.
+posterior, which has not seen the target's data, knows nothing of it).
 
-Per reading group (the probe's C-axis run, its B-axis run of each stylus, each ball-bar run) the
-check gives ``χ² = rᵀ S⁻¹ r`` on the group's ``dof``, its p-value, the standardised residuals
-``z`` of the readings, and a verdict: *agree* (p ≥ 0.01) or *disagree*.
+The target's own nuisance terms whose prior is broad against the readings' noise (:data:`FLAT`: at one prior sd
+they move a reading of the group by more than 30 noise sd: the sphere's placement, the stylus length, the reading
+datum) are profiled out as flat: the residual is the generalised least-squares residual orthogonal to their
+columns ``B``, and the χ² is taken on the directions they leave free.  Its degrees of freedom are the rank of the
+predictive covariance after them, ``m − rank(B)`` for a group of ``m`` readings (``S`` has full rank: it holds
+the noise), not ``m``: in a direction a broad term spans, the predictive variance is the term's prior, a reading
+there says nothing, and counting it as a degree of freedom makes the check insensitive (χ² ≪ dof).  The narrower
+nuisance terms (the T ball's centring, the W ball's clamping, the stylus centring) stay in ``S`` with their priors.
+
+Per reading group (a probe run of one stylus, each ball-bar run) the check gives ``χ² = rᵀ S⁻¹ r`` of that
+residual on the group's ``dof``, its p-value, the standardised residuals ``z`` of the readings (each residual over
+its sd after the profiling), and a verdict: *agree* (p ≥ 0.01), *disagree*, or *unchecked* (no free direction).
 """
 
 from __future__ import annotations
@@ -36,8 +43,13 @@ from ..observations import ProbeKey
 
 #: a group whose p-value is below this disagrees
 P_DISAGREE = 0.01
-#: nuisance terms at least this broad (mm) are profiled out as flat
-BROAD = 1.0
+#: a target's own nuisance term that moves a reading of a group by more than this many noise sd at one prior sd is
+#: profiled out of the group's check as flat (its prior then carries < 1/900 of a reading's information there)
+FLAT = 30.0
+#: the verdict of a group whose readings the flat terms leave no free direction (no χ² to take)
+UNCHECKED = "unchecked"
+#: equal-probability nodes of the target's discrepancy-scale prior a group's p-value is averaged over
+SIGMA_NODES = 256
 #: posterior draws used per direction
 N_DRAWS = 4000
 
@@ -52,6 +64,10 @@ class Consistency:
     def to_text(self) -> str:
         lines = ["Consistency of the instruments (posterior predictive of one from the other's posterior):"]
         for _, g in self.groups.iterrows():
+            if g["verdict"] == UNCHECKED:
+                lines.append(f"  {g['verdict']:9s} {g['group']} given the {g['given']}-only posterior: its nuisance "
+                             "terms leave its readings no free direction")
+                continue
             lines.append(f"  {g['verdict']:9s} {g['group']} given the {g['given']}-only posterior: "
                          f"χ² = {g['chi2']:.1f} on {g['dof']} dof, p = {g['p_value']:.2g}, "
                          f"largest |z| = {g['max_abs_z']:.1f} ({g['worst']})")
@@ -68,6 +84,33 @@ class Consistency:
 def reading_group(key) -> str:
     """The reading group of an observation key: a probe run (of one stylus) or a ball-bar run."""
     return key.group if isinstance(key, ProbeKey) else f"ball bar {key.pattern}@{key.setup}/{key.mount}"
+
+
+def reading_groups(keys) -> dict[str, np.ndarray]:
+    """``{group: row indices}`` of observation ``keys``, in the order the groups first appear."""
+    groups: dict[str, list[int]] = {}
+    for j, k in enumerate(keys):
+        groups.setdefault(reading_group(k), []).append(j)
+    return {g: np.array(idx) for g, idx in groups.items()}
+
+
+def flat_terms(A_rows: np.ndarray, prior_sd: np.ndarray, own, noise_var: np.ndarray) -> list[int]:
+    """The columns among ``own`` (the target's own nuisance terms) profiled out of a group's check: those that
+    move one of the group's readings by more than :data:`FLAT` noise sd at one prior sd.
+
+    ``A_rows`` (m, p) the design's rows of the group, mm per internal unit; ``prior_sd`` (p,) the prior sds;
+    ``noise_var`` (m,) the readings' noise variance, mm²."""
+    effect = np.abs(A_rows) * prior_sd[None, :] / np.sqrt(noise_var)[:, None]
+    return [i for i in own if effect[:, i].max() > FLAT]
+
+
+def column_basis(B: np.ndarray) -> np.ndarray:
+    """An orthonormal basis ``(m, rank)`` of the column space of ``B`` (m, k) (singular values above 1e-9 of the
+    largest)."""
+    if not B.size:
+        return np.zeros((B.shape[0], 0))
+    U, sv, _ = np.linalg.svd(B, full_matrices=False)
+    return U[:, sv > 1e-9 * sv[0]] if sv[0] > 0 else np.zeros((B.shape[0], 0))
 
 
 def _log_posterior(source) -> LogPosterior:
@@ -120,47 +163,69 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
     pred = model.predict(theta)  # own nuisance terms at zero
     A = model.design if hasattr(model, "design") else jacobian(model)
     prior_sd = target.priors.width[: target.p]
-    broad = [i for i in own if prior_sd[i] >= BROAD]
-    narrow = [i for i in own if prior_sd[i] < BROAD]
-    S = np.cov(pred, rowvar=False) + (A[:, narrow] * prior_sd[narrow] ** 2) @ A[:, narrow].T
-    S += np.diag(target_noise(target))
+    noise = target_noise(target)
+    Sd = np.cov(pred, rowvar=False) + np.diag(noise)
     r_all = target.likelihood.y - pred.mean(axis=0)
     keys = model.observations.keys
-    groups = {}
-    for j, k in enumerate(keys):
-        groups.setdefault(reading_group(k), []).append(j)
     rows, verdicts = [], []
     given = "ball-bar" if post_s.data == "ballbar" else ("probe" if post_s.data == "probe" else "fused")
-    for name, idx in groups.items():
-        idx = np.array(idx)
-        Sg, r = S[np.ix_(idx, idx)], r_all[idx]
-        B = A[np.ix_(idx, broad)]
-        B = B[:, np.abs(B).max(axis=0) > 0] if B.size else B
+    for name, idx in reading_groups(keys).items():
+        flat = flat_terms(A[idx], prior_sd, own, noise[idx])
+        narrow = [i for i in own if i not in flat]
+        An = A[np.ix_(idx, narrow)]
+        Sg = Sd[np.ix_(idx, idx)] + (An * prior_sd[narrow] ** 2) @ An.T
+        r = r_all[idx]
+        B = column_basis(A[np.ix_(idx, flat)])  # flat terms can be collinear (a stylus length and a datum along it)
         Si = np.linalg.inv(Sg)
-        if B.size:  # generalised least squares: profile the flat datum terms out
+        if B.shape[1]:  # generalised least squares: profile the flat terms out (S's part along B would not matter)
             M = np.linalg.inv(B.T @ Si @ B)
             res = r - B @ (M @ (B.T @ Si @ r))
             cov = Sg - B @ M @ B.T
-            rank = np.linalg.matrix_rank(B)
         else:
-            res, cov, rank = r, Sg, 0
+            res, cov = r, Sg
+        rank = B.shape[1]
         chi2 = float(res @ Si @ res)
         dof = len(idx) - rank
+        p = _p_value(chi2, Sg, B, target=target, idx=idx) if dof > 0 else float("nan")
         with np.errstate(invalid="ignore", divide="ignore"):
             z = np.where(np.diag(cov) > 1e-12 * np.max(np.diag(Sg)), res / np.sqrt(np.abs(np.diag(cov))), 0.0)
-        p = float(stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan")
         worst = int(np.argmax(np.abs(z)))
         labels = [keys[j].label for j in idx]
-        for j, lab, zi, ri in zip(idx, labels, z, res):
+        for j, lab, zi, ri, vi in zip(idx, labels, z, res, np.diag(Sg)):
             rows.append({"given": given, "group": name, "reading": lab,
                          "observed_um": units.from_internal(target.likelihood.y[j], "um"),
                          "predictive_mean_um": units.from_internal(pred[:, j].mean(), "um"),
-                         "predictive_sd_um": units.from_internal(np.sqrt(S[j, j]), "um"),
+                         "predictive_sd_um": units.from_internal(np.sqrt(vi), "um"),
                          "residual_um": units.from_internal(ri, "um"), "z": float(zi)})
         verdicts.append({"given": given, "group": name, "chi2": chi2, "dof": int(dof), "p_value": p,
                          "max_abs_z": float(np.abs(z).max()), "worst": labels[worst],
-                         "verdict": "agree" if not p < P_DISAGREE else "disagree"})
+                         "verdict": UNCHECKED if dof == 0 else ("disagree" if p < P_DISAGREE else "agree")})
     return pd.DataFrame(rows), pd.DataFrame(verdicts)
+
+
+def _p_value(chi2: float, Sg: np.ndarray, B: np.ndarray, *, target: LogPosterior, idx: np.ndarray) -> float:
+    """The p-value of a group's ``chi2`` under the target's prior predictive, its discrepancy scale σ unknown.
+
+    ``chi2`` was taken with σ² at its prior mean σ₀² (in ``Sg``, the group's predictive covariance; ``B`` the
+    orthonormal basis of the flat columns).  On the free directions ``Q`` (orthonormal, ``Qᵀ B = 0``) the
+    covariance is ``C + σ² I`` with ``C = Qᵀ (Sg − σ₀² I) Q``, so given σ the statistic is ``Σ_k c_k χ²₁`` with
+    ``c_k = (λ_k + σ²) / (λ_k + σ₀²)`` (``λ`` the eigenvalues of ``C``): the χ² on ``dof`` when σ = σ₀.  Its tail
+    is averaged over :data:`SIGMA_NODES` equal-probability nodes of σ's prior, each by Satterthwaite's scaled
+    χ² (exact when the ``c_k`` are equal: where the noise dominates).  With σ fixed, the plain χ² tail."""
+    dof = len(idx) - B.shape[1]
+    if target.fixed_sigma is not None:
+        return float(stats.chi2.sf(chi2, dof))
+    scale = np.unique(target.scale_of[idx])
+    if len(scale) != 1:
+        raise ValueError("a reading group of two discrepancy scales")  # a group is one instrument's
+    prior = target.priors.priors[target.p + int(scale[0])]
+    s0sq = prior.sd**2 + prior.mean**2
+    Q = np.linalg.svd(B, full_matrices=True)[0][:, B.shape[1]:] if B.shape[1] else np.eye(len(idx))
+    lam = np.clip(np.linalg.eigvalsh(Q.T @ (Sg - s0sq * np.eye(len(idx))) @ Q), 0.0, None)
+    sigma_sq = prior.frozen().ppf((np.arange(SIGMA_NODES) + 0.5) / SIGMA_NODES) ** 2
+    c = (lam[None, :] + sigma_sq[:, None]) / (lam[None, :] + s0sq)  # (nodes, dof)
+    scale_c, nu = (c**2).sum(axis=1) / c.sum(axis=1), c.sum(axis=1) ** 2 / (c**2).sum(axis=1)
+    return float(np.mean(stats.chi2.sf(chi2 / scale_c, nu)))
 
 
 def instrument_consistency(ballbar, probe, n_draws: int = N_DRAWS, seed: int = 0) -> Consistency:

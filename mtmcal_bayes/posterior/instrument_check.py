@@ -18,33 +18,33 @@ from .. import units
 from ..analysis import CampaignAnalysis, analysis_of
 from ..errors import ParameterError
 from ..inference.analytic import linearisation
-from ..inference.log_posterior import SAMPLED_DEVIATIONS, LogPosterior
+from ..inference.log_posterior import LogPosterior
 from ..parameters import SCALE_LABEL
 from .conflict import ConflictAnalysis, explain_conflict
-from .consistency import BROAD, Consistency, instrument_consistency, reading_group
+from .consistency import (UNCHECKED, Consistency, column_basis, flat_terms, instrument_consistency, reading_groups,
+                          target_noise)
 
 
 def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: LogPosterior) -> dict[str, list[str]]:
     """``{deviation: [sentence per disagreeing group that depends on it]}``; ``ballbar``, ``probe``: the log
     posteriors of each instrument's data alone (any model: a kinematic one is linearised).
 
-    A group depends on a deviation when the deviation moves its readings in a way its broad datum terms (prior sd
-    ≥ 1 mm, profiled out by the check) cannot absorb: the deviation's column of the target's linear design,
-    restricted to the group's readings, has a part outside the span of the datum columns."""
+    A group depends on a deviation when the deviation moves its readings in a way the group's flat nuisance terms
+    (those the check profiles out: :func:`~.consistency.flat_terms`) cannot absorb: the deviation's column of the
+    target's linear design, restricted to the group's readings, has a part outside the span of the flat columns.
+    Every deviation the target's posterior has counts, whatever the machine calls it."""
     out: dict[str, list[str]] = {}
     for _, g in consistency.groups[consistency.groups["verdict"] == "disagree"].iterrows():
-        target = probe if g["given"] == "ball-bar" else ballbar
-        model = target.forward
-        rows = np.array([i for i, k in enumerate(model.observations.keys) if reading_group(k) == g["group"]])
+        target, source = (probe, ballbar) if g["given"] == "ball-bar" else (ballbar, probe)
+        rows = reading_groups(target.forward.observations.keys)[g["group"]]
         A = linearisation(target)[0][rows]  # the design of the linear model; a kinematic model's first order
         sd = target.priors.width[: target.p]
-        broad = [i for i, p in enumerate(target.space.parameters) if p.group != "deviation" and sd[i] >= BROAD]
-        B = A[:, broad]
-        B = B[:, np.abs(B).max(axis=0) > 0] if B.size else B
+        own = [i for i, n in enumerate(target.space.names) if n not in source.space.names]
+        B = column_basis(A[:, flat_terms(A, sd, own, target_noise(target)[rows])])
         sentence = (f"{g['group']} given the {g['given']}-only posterior: χ² = {g['chi2']:.1f} on {g['dof']} dof, "
                     f"p = {g['p_value']:.2g}")
         for j, p in enumerate(target.space.parameters):
-            if p.group != "deviation" or p.name not in SAMPLED_DEVIATIONS:
+            if p.group != "deviation":
                 continue
             col = A[:, j] * sd[j]  # the deviation's effect at one prior sd, mm
             if B.size:
@@ -70,7 +70,8 @@ class InstrumentCheck:
 
     @property
     def agree(self) -> bool:
-        return not self.disputed
+        """Whether no reading group disagrees (the one verdict every sentence of the check follows)."""
+        return not self.consistency.disagreeing
 
     def refusal(self, used) -> str | None:
         """The sentence refusing to compensate with the disputed deviations among ``used`` (None when none is)."""
@@ -95,8 +96,17 @@ class InstrumentCheck:
         if self.disputed:
             lines += ["", "Disputed deviations (compensate refuses them unless the disagreement is accepted):"]
             lines += [f"  {d}: {v[0]}" for d, v in self.disputed.items()]
+        elif not self.agree:
+            lines += ["", f"The instruments disagree ({', '.join(self.consistency.disagreeing)}), but on no deviation: "
+                      "no deviation moves those readings beyond what their flat nuisance terms absorb, so the "
+                      "disagreement rests on the readings themselves or their narrower nuisance terms; compensate "
+                      "does not refuse, but find the cause (docs/probe.md)."]
         else:
             lines += ["", "The instruments agree on every deviation they both measure."]
+        unchecked = list(self.consistency.groups.loc[self.consistency.groups["verdict"] == UNCHECKED, "group"])
+        if unchecked:
+            lines.append(f"Not checked: {', '.join(unchecked)} (their broad nuisance terms leave their readings no "
+                         "free direction; narrower priors on them would).")
         if self.conflict is not None:
             lines += ["", self.conflict.to_text()]
         return "\n".join(lines)
@@ -120,7 +130,7 @@ def check_instruments(campaign, *, explain: bool = True) -> InstrumentCheck:
     mean, sd = marginal.sigma_moments(fused.likelihood.y)
     scales = {n: (units.from_internal(mean[k], "um"), units.from_internal(sd[k], "um")) for k, n in
               enumerate(fused.scales)}
-    conflict = explain_conflict(linear) if explain and not cons.groups["verdict"].eq("agree").all() else None
+    conflict = explain_conflict(linear) if explain and cons.disagreeing else None
     return InstrumentCheck(campaign.source, cons, scales, disputed_deviations(cons, ballbar, probe), conflict)
 
 

@@ -35,7 +35,7 @@ from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.checks import thesis_assumption_effect
-from ..posterior.conflict import SHOWN, ConflictAnalysis, explain_conflict
+from ..posterior.conflict import ConflictAnalysis, explain_conflict
 from ..posterior.conformity import (
     CONFORMITY_COLUMNS,
     conformity_table,
@@ -502,11 +502,12 @@ def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
             "model (both instruments, every parameter and both discrepancy scales integrated out; log Bayes factor "
             "against the campaign as given: above 2.3 strong, above 4.6 decisive): the readings of the B runs (where "
             "the samples at B = 0° and 90° were drawn, the BY bar's side; docs/conventions.md), the stylus length "
-            "along its axis, a difference of the B-axis angles between the two sessions. Quantities are the fused "
-            "posterior means under each candidate (″, µm). Full table: explanations.csv; the choice for the built-in "
-            "campaign: docs/thesis-notes.md.")
+            "along its axis, a difference of each rotary axis' angles between the two sessions. Quantities are the "
+            "fused posterior means under each candidate (″, µm). Full table: explanations.csv; the choice for the "
+            "built-in campaign: docs/thesis-notes.md.")
         t = c.conflict.table().head(8)
-        show = ["candidate", "log_bayes_factor"] + [col for col in t.columns if col.endswith("_um")] + list(SHOWN)
+        scales = [col for col in t.columns if col.endswith("_um")]
+        show = ["candidate", "log_bayes_factor"] + scales + list(c.conflict.shown)
         page.table(t[show].rename(columns={"log_bayes_factor": "log BF", "alpha_XB+gamma_XB": "α_XB+γ_XB"}),
                    digits=2, index=False)
 
