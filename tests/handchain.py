@@ -7,7 +7,8 @@ Read from the TOML file with :mod:`tomllib`, not through the package's reader.  
 nearest the workpiece; those between ``b`` and ``(`` carry the tool, the first the one on the bed.  A rotary
 axis of direction ``±e`` turns by its command θ right-handed about its direction through its ``point_mm``
 (the frame axis' rotation matrix at ±θ, written out below); a linear axis moves the tool side by ``+q`` along
-its frame axis and the workpiece side by ``−q``.  A location error of a body (an axis' carried body, or the
+its frame axis (tilted by its squareness errors, ISO 230-1's form: the direction of motion alone) and the
+workpiece side by ``−q``.  A location error of a body (an axis' carried body, or the
 spindle's, ``"C1"``) is ``v ↦ R(ε)(v − p) + p + δ`` with ``R(ε)`` by Rodrigues' formula and ``p`` the body's
 ``point_mm``, applied outside that body's own motion.  Units: mm and rad.
 """
@@ -72,7 +73,9 @@ class HandMachine:
         self.axes = t["axes"]
         self.spindle_direction = unit(t["spindle"]["direction"])
         self.spindle_point = np.array(t["spindle"]["point_mm"], float)
+        self.squareness = t.get("squareness", "motion")
         self.errors: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self.tilts: dict[str, np.ndarray] = {}  # linear axis -> rotation vector of its direction of motion
 
     def rotary(self, letter: str) -> bool:
         return "direction" in self.axes.get(letter, {})  # a linear axis may have no table (no travel given)
@@ -100,7 +103,7 @@ class HandMachine:
             return R @ (v - p) + p
         if turn_only:
             return v
-        e = unit("+" + letter)
+        e = rodrigues(self.tilts.get(letter, np.zeros(3))) @ unit("+" + letter)
         return v + (-q if work else q) * e
 
     def displace(self, body: str, v: np.ndarray) -> np.ndarray:
@@ -135,6 +138,10 @@ class HandMachine:
             p = self.motion(b, q[b], p, work=work)
             k = self.motion(b, q[b], k, work=work, turn_only=True)
         return p, k
+
+
+#: squareness symbol -> (the linear axis whose direction of motion it tilts, the frame axis it turns about)
+SQUARENESS = {"E_C0X": ("X", 2), "E_B0X": ("X", 1), "E_A0Y": ("Y", 0)}
 
 
 def body_of(symbol: str) -> tuple[str, str, int]:

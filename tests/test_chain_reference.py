@@ -1,6 +1,8 @@
 """The chain that simulates the demo and controller-cycle campaigns and infers them, against kinematics written
 out by hand from each built-in type's description file (tests/handchain.py): tool point and W ball at a few
-commands, nominal and with every location error of the rotary axes and the spindle at once."""
+commands, nominal and with every location error of the rotary axes and the spindle and the squareness of the linear
+axes at once (on the thesis machine, whose squareness has the rigid form, tests/test_chain.py holds that form to
+Eq 2.10 and it is left out here)."""
 
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, builtin_description
 from mtmcal_bayes.machines.deviations import generated
 from mtmcal_bayes.models.chain import Chain
 
-from .handchain import HandMachine, body_of
+from .handchain import SQUARENESS, HandMachine, body_of
 
 #: position errors (mm) and orientation errors (rad, about 100″) of the check: large enough that a wrong order
 #: of two bodies, a wrong sign or a wrong pivot moves the points by microns
@@ -31,13 +33,22 @@ def _commands(hand: HandMachine, rng, k: int) -> dict:
 @pytest.mark.parametrize("with_errors", [False, True], ids=["nominal", "location-errors"])
 def test_chain_is_the_hand_written_kinematics(machine, with_errors):
     """Five poses, three tool-side points (the tool ball at two programmed lengths and a point off the spindle
-    axis) and three workpiece-side points: the chain's positions equal the hand-written ones to 1e-9 mm."""
+    axis) and three workpiece-side points: the chain's positions equal the hand-written ones to 1e-9 mm, and a
+    point the chain places on the workpiece side (``work_frame``, how a W ball or a sphere is placed) is taken
+    back by the hand-written workpiece side to where it was."""
     desc = builtin_description(machine)
     hand = HandMachine(machine)
     rng = np.random.default_rng(sum(map(ord, machine)))
-    deviations = [d for d in generated(desc) if d.role != "squareness"] if with_errors else []
+    motion_form = hand.squareness == "motion"  # the thesis machine's rigid form: tests/test_chain.py
+    deviations = [d for d in generated(desc) if d.role != "squareness" or motion_form] if with_errors else []
     values = {}
     for d in deviations:
+        if d.role == "squareness":
+            letter, about = SQUARENESS[d.symbol]
+            assert (d.body, d.component) == (letter, about), d.symbol
+            values[d.name] = np.array([rng.choice([-1.0, 1.0]) * ORIENTATION_RAD])
+            hand.tilts.setdefault(letter, np.zeros(3))[about] += values[d.name][0]
+            continue
         body, role, comp = body_of(d.symbol)
         assert (body, role, comp) == (d.body, d.role, d.component), d.symbol  # the symbol says what it moves
         v = rng.choice([-1.0, 1.0]) * (POSITION_MM if role == "position" else ORIENTATION_RAD) * rng.uniform(0.5, 1)
@@ -56,6 +67,10 @@ def test_chain_is_the_hand_written_kinematics(machine, with_errors):
         want_w = np.array([hand.work_point(w, {a: v[j] for a, v in q.items()}) for j in range(5)])
         assert np.max(np.abs(got_t - want_t)) < 1e-9, (i, got_t - want_t)
         assert np.max(np.abs(got_w - want_w)) < 1e-9, (i, got_w - want_w)
+        # where a ball is placed on the dummy sphere (work_frame): the hand-written work side takes it back there
+        placed = chain.work_frame(got_t[None], q, values)[0]
+        back = np.array([hand.work_point(placed[j], {a: v[j] for a, v in q.items()}) for j in range(5)])
+        assert np.max(np.abs(back - got_t)) < 1e-9, (i, back - got_t)
     if with_errors:  # the errors matter: the nominal chain is microns away
         nominal = chain.tool_point(np.broadcast_to(tool[0], (1, 5, 3)), q, {})[0] - \
             chain.work_point(np.broadcast_to(work[0], (1, 5, 3)), q, {})[0]
