@@ -42,3 +42,32 @@ def run_cli():
         return code, out.getvalue(), err.getvalue() + shown
 
     return run
+
+
+#: the tolerance set of the shared report (tests/test_metrology.py reads its conformity): an ISO symbol and a
+#: thesis name, one quantity that does not conform and one undecided
+SHARED_REPORT_TOLERANCES = "[tolerances]\nE_B0B_arcsec = 30\nalpha_XB_arcsec = 10\n"
+
+
+@pytest.fixture(scope="session")
+def thesis_report_run(tmp_path_factory):
+    """One ``report --json`` of the built-in campaign (seed 2, the default run), shared by every test that reads
+    it: (directory, stdout).  With ``--compare-models`` and ``--tolerances`` (SHARED_REPORT_TOLERANCES): they
+    add their sections, files and columns and change nothing else of the report (its other CSVs are
+    byte-identical to a report without them), so the model comparison, the conformity and the default report are
+    read from one run instead of three."""
+    folder = tmp_path_factory.mktemp("rep")
+    tolerances = folder / "tolerances.toml"
+    tolerances.write_text(SHARED_REPORT_TOLERANCES, encoding="utf-8")
+    out = folder / "thesis"
+    stdout = io.StringIO()
+    with redirect_stdout(stdout):
+        code = main(["report", "-o", str(out), "--json", "--seed", "2", "--quiet", "--compare-models",
+                     "--tolerances", str(tolerances)])
+    assert code == 0
+    return out, stdout.getvalue()
+
+
+@pytest.fixture(scope="session")
+def thesis_report(thesis_report_run):
+    return thesis_report_run[0]

@@ -79,30 +79,44 @@ def test_the_report_builds_each_analysis_of_the_campaign_once(thesis, tmp_path, 
                                              ("space", False, "both")} <= set(spaces), spaces
 
 
-def _slow_figure(seconds: float, text: str):
+def _figure(text: str):
     def make():
-        time.sleep(seconds)
         fig = Figure(figsize=(2, 1))
         fig.text(0.5, 0.5, text)
         return fig, text
     return make
 
 
+def _gated_figure(gate, text: str):
+    """A figure job that waits until the file ``gate`` exists (the test opens it).  A drawing that waited for this
+    job before returning to the caller would never see the gate opened: the job gives up after 60 s and fails,
+    so a broken ``start`` or ``wait`` fails the test instead of hanging it (no time is measured)."""
+    def make():
+        for _ in range(6000):
+            if gate.exists():
+                return _figure(text)()
+            time.sleep(0.01)
+        raise RuntimeError(f"{gate.name} never opened: the caller was waiting for this job")
+    return make
+
+
 def test_batches_drawn_while_the_caller_goes_on_all_arrive(tmp_path):
     """Two batches, the first still drawing when the second starts: every file of both is written, each job's
-    extra comes back, and starting a batch returns at once."""
+    extra comes back, and starting a batch returns at once: with fork, the first batch's jobs wait for a gate the
+    test opens only after both ``start`` calls returned, and none of its files exists before that."""
     drawing = Drawing(tmp_path)
-    t0 = time.perf_counter()
-    drawing.start([(f"a{i}.png", _slow_figure(0.3, f"a{i}")) for i in range(4)])
-    started = time.perf_counter() - t0
-    drawing.start([(f"b{i}.png", _slow_figure(0.0, f"b{i}")) for i in range(3)]
+    gate = tmp_path.parent / f"{tmp_path.name}.gate"
+    first = [(f"a{i}.png", _gated_figure(gate, f"a{i}") if drawing.fork else _figure(f"a{i}")) for i in range(4)]
+    drawing.start(first)
+    drawing.start([(f"b{i}.png", _figure(f"b{i}")) for i in range(3)]
                   + [("note.txt", lambda: (tmp_path / "note.txt").write_text("x") and None)])
+    if drawing.fork:  # both start calls returned while the first batch was held at its gate
+        assert not any(tmp_path.glob("a*.png"))
+        gate.touch()
     extras = drawing.finish()
     names = [f"a{i}.png" for i in range(4)] + [f"b{i}.png" for i in range(3)]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names + ["note.txt"])
     assert {n: extras[n] for n in names} == {n: n[:-4] for n in names} and extras["note.txt"] is None
-    if drawing.fork:
-        assert started < 0.3  # the first batch had not finished when start returned
 
 
 def test_a_failing_job_is_raised_by_finish(tmp_path):
@@ -111,7 +125,7 @@ def test_a_failing_job_is_raised_by_finish(tmp_path):
 
     drawing = Drawing(tmp_path)
     with pytest.raises(StepFailure) as info:  # forked, at finish; drawn in this process, at once
-        drawing.start([("ok.png", _slow_figure(0.0, "ok")), ("bad.png", broken)])
+        drawing.start([("ok.png", _figure("ok")), ("bad.png", broken)])
         drawing.finish()
     assert (info.value.step, info.value.kind) == ("drawing bad.png", "RuntimeError")
     assert info.value.message == "simulated failure while drawing"
@@ -124,21 +138,27 @@ def test_a_failing_job_drawn_without_fork_names_its_step_too(tmp_path):
     drawing = Drawing(tmp_path, workers=1)
     assert not drawing.fork
     with pytest.raises(StepFailure) as info:
-        drawing.start([("ok.png", _slow_figure(0.0, "ok")), ("bad.png", broken)])
+        drawing.start([("ok.png", _figure("ok")), ("bad.png", broken)])
     assert (info.value.step, info.value.kind) == ("drawing bad.png", "RuntimeError")
 
 
 
 def test_one_batch_waited_for_while_another_goes_on_and_a_cancelled_batch_leaves_nothing(tmp_path):
     """``wait`` returns the waited batch's extras without waiting for a slower batch; a cancelled batch's job is
-    ended (its file never written) and its name and extra are gone; ``finish`` still brings the rest."""
+    ended (its file never written) and its name and extra are gone; ``finish`` still brings the rest.  With fork
+    the slow and the cancelled batch wait for a gate the test opens only after ``wait`` returned (a ``wait`` that
+    waited for them would see them fail, _gated_figure); the cancelled one never gets to draw."""
     drawing = Drawing(tmp_path)
-    slow = drawing.start([("slow.png", _slow_figure(1.5, "slow"))])
+    gate = tmp_path.parent / f"{tmp_path.name}.gate"
+    never = tmp_path.parent / f"{tmp_path.name}.never"
+    held = _gated_figure if drawing.fork else (lambda _gate, text: _figure(text))
+    slow = drawing.start([("slow.png", held(gate, "slow"))])
     quick = drawing.start([("quick", lambda: (None, 42))])
-    dropped = drawing.start([("dropped.png", _slow_figure(1.5, "dropped"))])
-    t0 = time.perf_counter()
+    dropped = drawing.start([("dropped.png", held(never, "dropped"))])
     assert drawing.wait(quick)["quick"] == 42
-    waited = time.perf_counter() - t0
+    if drawing.fork:  # the slow batch was not waited for: still held at its gate
+        assert not (tmp_path / "slow.png").exists()
+        gate.touch()
     drawing.cancel(dropped)
     drawing.cancel(None)  # nothing begun: nothing to end
     extras = drawing.finish()
@@ -147,7 +167,6 @@ def test_one_batch_waited_for_while_another_goes_on_and_a_cancelled_batch_leaves
     assert extras["slow.png"] == "slow" and extras["quick"] == 42
     if drawing.fork:  # (without fork each batch is drawn when it starts, so the cancelled one wrote its file)
         assert sorted(p.name for p in tmp_path.iterdir()) == ["slow.png"]
-        assert waited < 1.5  # the slow batch was not waited for
     assert slow != quick != dropped
 
 def test_exact_draws_per_cell_equal_the_gathered_product(thesis):

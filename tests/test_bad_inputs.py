@@ -48,8 +48,8 @@ VALID_TRUTH = "[deviations]\nbeta_XB_arcsec = -24.11\n"  # simulate's --truth (r
 # Argv templates of every command that reads a campaign: {campaign} is the bad file, {out} an output path
 # that must not exist afterwards, {truth} a valid truth file, {program} a valid NC program.  Adding a command
 # that reads a campaign is one entry here; test_every_campaign_command_is_listed fails until it is added.
-# Templates of commands the CLI does not have (yet) are skipped.  sample, report and validate must fail while
-# loading, before any sampling: a slow test here means one of them does real work first.
+# A template of a command the CLI does not have fails (test_every_listed_command_exists).  sample, report and
+# validate must fail while loading, before any sampling: a slow test here means one of them does real work first.
 COMMANDS_READING_CAMPAIGNS = (
     ("identify", "{campaign}"),
     ("simulate", "{campaign}", "--truth", "{truth}", "-o", "{out}"),
@@ -122,14 +122,34 @@ def _commands(parser: argparse.ArgumentParser, prefix: tuple = ()):
 COMMANDS = dict(_commands(build_parser()))
 
 
-def _skip_unless_available(template) -> None:
+def _command_path(template) -> tuple:
+    """The (sub)command a template runs, e.g. ``("validate", "sbc")``; ``()`` when the CLI has no such command
+    (its first word unknown, or a command with subcommands given none of them)."""
     path: tuple = ()
     for a in template:
         if path + (a,) not in COMMANDS:
             break
         path += (a,)
     if not path or any(len(p) > len(path) and p[:len(path)] == path for p in COMMANDS):
-        pytest.skip(f"the CLI has no command {' '.join(template[:2])} (yet)")
+        return ()
+    return path
+
+
+LISTS = {"COMMANDS_READING_CAMPAIGNS": COMMANDS_READING_CAMPAIGNS, "COMMANDS_READING_PROGRAMS": COMMANDS_READING_PROGRAMS,
+         "COMMANDS_READING_DPRNT": COMMANDS_READING_DPRNT, "COMMANDS_READING_SIGMA_PRIORS": COMMANDS_READING_SIGMA_PRIORS,
+         "COMMANDS_READING_TOLERANCES": COMMANDS_READING_TOLERANCES}
+
+
+def test_every_listed_command_exists():
+    """A command removed or renamed fails here (and in each of its parametrised cases), instead of turning the
+    cases of its template into skips."""
+    missing = [f"{name}: {' '.join(t[:2])}" for name, templates in LISTS.items() for t in templates
+               if not _command_path(t)]
+    assert not missing, missing
+
+
+def _assert_available(template) -> None:
+    assert _command_path(template), f"the CLI has no command {' '.join(template[:2])}"
 
 
 def _id(template) -> str:
@@ -206,7 +226,7 @@ def test_every_campaign_command_is_listed():
 @pytest.mark.parametrize("template", COMMANDS_READING_CAMPAIGNS, ids=_id)
 @pytest.mark.parametrize("name,key,fragment", CAMPAIGN_ROWS, ids=[r[0] for r in CAMPAIGN_ROWS])
 def test_bad_campaign(run_cli, tmp_path, inputs, template, name, key, fragment):
-    _skip_unless_available(template)
+    _assert_available(template)
     argv = fill(template, campaign=BAD / name, **inputs)
     assert_one_line_error(run_cli, argv, tmp_path, BAD / name, key, fragment)
 
@@ -216,7 +236,7 @@ def test_bad_campaign(run_cli, tmp_path, inputs, template, name, key, fragment):
 @pytest.mark.parametrize("campaign,named,key,fragment", TRACE_ROWS, ids=[r[0] for r in TRACE_ROWS])
 def test_bad_trace(run_cli, tmp_path, inputs, template, campaign, named, key, fragment):
     """The trace is read when the campaign loads, so every command that reads a campaign reports it."""
-    _skip_unless_available(template)
+    _assert_available(template)
     argv = fill(template, campaign=TRACES / campaign, **inputs)
     assert_one_line_error(run_cli, argv, tmp_path, TRACES / named, key, fragment)
 
@@ -338,7 +358,7 @@ def test_every_tolerances_command_is_listed():
 def test_bad_tolerances(run_cli, tmp_path, inputs, template, name, key, fragment):
     """A bad --tolerances file is one line naming the file and the key, exit 2, before any work, nothing written
     (the fleet's cache included: it would be in {out}/.cache)."""
-    _skip_unless_available(template)
+    _assert_available(template)
     campaigns = tmp_path / "campaigns"
     campaigns.mkdir()
     shutil.copy(DATA / "minimal_one_repeat.toml", campaigns / "one.toml")

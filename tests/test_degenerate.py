@@ -5,7 +5,7 @@ the file and the key, no traceback — or in a successful run whose outputs
 (stdout, stderr, and every CSV, HTML, JSON and TOML file written) contain no
 ``nan`` / ``inf`` token.  Cases: R_C = 0 for the C patterns, equal tool lengths,
 deviations of degrees, a single run, a single repeat per component, all-zero
-data.  Sampler runs are one block of 500 steps (the least ``--max-steps`` allows).
+data.  Sampler runs are one block of 50 steps (the least ``--max-steps`` allows: the first check).
 """
 
 import json
@@ -19,7 +19,7 @@ from mtmcal_bayes import MODELS, load_campaign
 
 from .conftest import DATA
 
-QUICK = ("--max-steps", "500", "--seed", "3", "--quiet")
+QUICK = ("--max-steps", "50", "--seed", "3", "--quiet")
 #: a nan/inf token standing alone: not "information", "infeasible", "nanometre"
 TOKEN = re.compile(r"(?<![A-Za-z0-9_])[-+]?(?:nan|inf|infinity)(?![A-Za-z0-9_])", re.IGNORECASE)
 #: embedded figures: base64 may spell "+nan/" by chance

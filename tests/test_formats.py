@@ -36,7 +36,7 @@ COMMANDS = {
     "sensitivity": ["sensitivity", "{f}"],
     "simulate": ["simulate", "{f}", "--truth", str(TRUTH), "--json"],
     "simulate -o": ["simulate", "{f}", "--truth", str(TRUTH), "--noise", "--seed", "2", "-o", "{out}/sim.toml"],
-    "sample": ["sample", "{f}", "--quiet"],
+    "sample": ["sample", "{f}", "--seed", "1", "--quiet"],
     "sample --data both": ["sample", "{f}", "--data", "both", "--sampler", "exact", "--quiet"],
     "report": ["report", "{f}", "-o", "{out}/report", "--sampler", "exact", "--quiet"],
     "plan": ["plan", "{f}"],

@@ -62,7 +62,12 @@ def test_step_is_flagged_with_its_date_and_probability(base):
     flagged = r.flagged
     assert [(c["quantity"], c["date"]) for c in flagged] == [("beta_CZ", DATES[3])]
     c = flagged[0]
-    assert c["probability"] > 1 - ALPHA / len(r.changes) and c["delta"] == pytest.approx(40.0, abs=8.0)
+    assert c["probability"] > 1 - ALPHA / len(r.changes)
+    # the estimate within 4 of its own posterior sd (the mixture's, about 2.3″) of the 40″ simulated
+    k = r.fit.quantities.index("beta_CZ")
+    m, sd = r.fit.delta_mean[:, 2, k], r.fit.delta_sd[:, 2, k]
+    sd_delta = np.sqrt(np.mean(sd**2 + m**2) - np.mean(m) ** 2)
+    assert c["delta"] == pytest.approx(float(np.mean(m)), abs=1e-12) and abs(c["delta"] - 40.0) < 4 * sd_delta
     doc = r.to_json()
     assert doc["changes"] == [{"quantity": "beta_CZ", "date": "2026-10-05", "probability": c["probability"],
                                "delta": c["delta"], "threshold": c["threshold"]}]
@@ -71,13 +76,24 @@ def test_step_is_flagged_with_its_date_and_probability(base):
 
 def test_false_alarm_rate_without_change(base):
     """Acceptance: 20 seeded histories with no change.  The docs promise that a history with no change raises a
-    flag with probability ≤ 5 % (Bonferroni over the 8 quantities × 4 intervals, on the model's own posterior);
-    20 histories at 5 % give 3 or more flagged ones with probability 7.5 %, so the test allows 2."""
-    flagged = 0
+    flag with probability ≤ α = 5 % (Bonferroni over the K = 8 × 4 (quantity, interval) pairs, on the model's own
+    posterior).  The same argument holds at every level t: with π = min(1, K·(1 − max P(|Δ| > threshold))) a
+    history's Bonferroni p-value (flagged at α exactly when π < α), P(π ≤ t) ≤ t for every t.  The test is that
+    promise, one-sided Kolmogorov–Smirnov against the uniform (too many small π fail), size 1 %.  Power: a rule
+    twice as liberal at every level (P(π ≤ t) = 2t) puts every π below 0.5, D⁺ ≥ 0.5 against the critical 0.33 of
+    n = 20: it fails with probability 1.  (Counting flags at α alone, ≤ 2 of 20, passed such a rule with
+    probability 0.68; a doubled rate at α = 5 % only is out of reach of 20 histories, see bench/history_alarms.py.)"""
+    from scipy import stats
+
+    pi = []
     for seed in range(20):
         camps = synthetic_history(base, Truth(), DATES, seed=100 + seed)
-        flagged += bool(fit_history(camps, seed=seed).flagged)
-    assert flagged <= 2
+        r = fit_history(camps, seed=seed)
+        K = len(r.changes)
+        pi.append(min(1.0, K * (1.0 - max(c["probability"] for c in r.changes))))
+        assert bool(r.flagged) == (pi[-1] < ALPHA)
+    test = stats.kstest(pi, "uniform", alternative="greater")
+    assert test.pvalue > 0.01, (test, sorted(pi))
 
 
 def test_history_cli_json_and_files(run_cli, tmp_path):

@@ -33,20 +33,29 @@ def without_second_tool_length():
 
 
 def test_sampler_matches_closed_form(thesis):
-    """Linear model, sigma_model fixed: means within 0.1 posterior sd, sds within 10 %, all eight quantities."""
+    """Linear model, sigma_model fixed, all eight quantities: the sampled mean and sd each within 4 Monte-Carlo
+    standard errors of the closed form's (ArviZ's MCSE of this run's draws, each walker's sequence one chain as the
+    sampler reads them).  At this run's ESS (about 12 000) that is about 0.036 posterior sd for a mean and 2.6 %
+    for a sd; the sixteen comparisons together fail by chance with probability about 1e-3.  The run must reach
+    the sampler's ESS target, so a short run cannot widen the tolerance past 4/√1000 sd."""
+    import arviz as az
+
     sigma = 0.3e-3
     post = LogPosterior(thesis, "linear", sigma_model=sigma)
-    res = run_ensembles(post, SamplerSettings(seed=3))
+    settings = SamplerSettings(seed=3)
+    res = run_ensembles(post, settings)
     assert res.converged
     g = gaussian_posterior(post, sigma_model=sigma)
-    draws = res.chains.reshape(-1, len(post))
     for name in IDENTIFIABLE:
         w = weights(name, post.names)
         a = np.array([w.get(n, 0.0) for n in post.names])
         m_cf, sd_cf = g.linear_combination(w)
-        x = draws @ a
-        assert abs(x.mean() - m_cf) < 0.1 * sd_cf, (name, x.mean(), m_cf, sd_cf)
-        assert abs(x.std() / sd_cf - 1) < 0.10, (name, x.std(), sd_cf)
+        x = res.chains @ a  # (K, steps, walkers)
+        walkers = np.swapaxes(x, 1, 2).reshape(x.shape[0], -1)
+        assert float(az.ess(walkers, method="bulk")) >= settings.target_ess, name
+        mcse_mean, mcse_sd = float(az.mcse(walkers, method="mean")), float(az.mcse(walkers, method="sd"))
+        assert abs(x.mean() - m_cf) < 4 * mcse_mean, (name, (x.mean() - m_cf) / sd_cf, mcse_mean / sd_cf)
+        assert abs(x.std() - sd_cf) < 4 * mcse_sd, (name, x.std() / sd_cf - 1, mcse_sd / sd_cf)
 
 
 def test_without_cr_at_second_tool_length_alpha_BT_and_dy_CZ_not_identified():
@@ -76,24 +85,40 @@ def test_thesis_campaign_all_eight_identified(thesis):
 
 
 def test_closed_form_coverage_on_simulated_campaigns(thesis):
-    """Ten campaigns simulated (htm-thesis, with noise) from prior draws; closed-form linear posterior at the
-    true noise level: the 95 % interval covers the truth in ≥ 72 of 80 cases. (The sampler's own count is in
-    bench/coverage.py; the sampler is tied to the closed form by test_sampler_matches_closed_form.)"""
+    """100 campaigns simulated (linear model, with noise) from prior draws; closed-form linear posterior at the
+    true noise level: the 95 % intervals of the eight quantities cover the truth in a count inside the central 99 %
+    of that count's distribution under calibration, on both sides.
+
+    The band: the eight errors of one campaign are, under calibration, N(0, R) with R the posterior correlation of
+    the eight (not independent: a plain binomial band would be too narrow); the count's distribution is simulated
+    here from each campaign's own R (20 000 draws): [741, 777] of 800, about ±2.3 % of coverage.  Power (the same
+    simulation, intervals scaled by f): f = 0.85 (coverage 90.4 %) fails with probability 0.97, f = 1.2 (98.1 %)
+    0.95, f = 5 (intervals five times too wide, 100 %) 1.0.  The data come from the model fitted, so the null is
+    exact; data from htm-thesis at prior-sized deviations fall below the band (dz_BT and alpha_BT undercover: the
+    linearisation's error, which σ_model = 0 leaves out).  (The sampler's own count is in bench/coverage.py; the
+    sampler is tied to the closed form by test_sampler_matches_closed_form.)"""
     rng = np.random.default_rng(2026)
     post0 = LogPosterior(thesis, "linear")
-    covered = 0
-    for k in range(10):
+    z, chol = [], []
+    for k in range(100):
         draw = post0.priors.rvs(1, rng)[0]
         truth = truth_from_vector(post0.space, draw)
-        synth = synthetic_campaign(thesis, truth, "htm-thesis", noise=True, seed=int(rng.integers(1 << 31)))
+        synth = synthetic_campaign(thesis, truth, "linear", noise=True, seed=int(rng.integers(1 << 31)))
         post = LogPosterior(synth, "linear", sigma_model=0.0)
         g = gaussian_posterior(post, sigma_model=0.0)
-        for name in IDENTIFIABLE:
-            w = weights(name, post.names)
-            m, sd = g.linear_combination(w)
-            true = sum(v * draw[post0.names.index(n)] for n, v in w.items())
-            covered += abs(true - m) <= 1.959964 * sd
-    assert covered >= 72, covered
+        W = np.array([[weights(q, post.names).get(n, 0.0) for n in post.names] for q in IDENTIFIABLE])
+        true = W @ np.array([draw[post0.names.index(n)] for n in post.names])
+        C = W @ g.cov @ W.T
+        sd = np.sqrt(np.diag(C))
+        z.append((true - W @ g.mean) / sd)
+        chol.append(np.linalg.cholesky(C / np.outer(sd, sd)))
+    covered = int((np.abs(np.array(z)) <= 1.959964).sum())
+    null = np.random.default_rng(0)
+    counts = sum((np.abs(null.standard_normal((20_000, len(IDENTIFIABLE))) @ L.T) <= 1.959964).sum(axis=1)
+                 for L in chol)
+    lo, hi = np.quantile(counts, [0.005, 0.995])
+    assert lo <= covered <= hi, (covered, lo, hi)
+    assert hi < len(z) * len(IDENTIFIABLE)  # the band's upper end is below every case covered: over-coverage fails
 
 
 def test_checkpoint_resume_gives_the_same_draws(tmp_path, thesis):

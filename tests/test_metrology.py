@@ -17,7 +17,6 @@ from mtmcal_bayes.iso import ISO_SYMBOL
 from mtmcal_bayes.posterior.conformity import conformity_table
 
 from . import variants
-from .test_report import QUICK
 
 EIGHT = ["alpha_CZ", "beta_CZ", "alpha_XB", "beta_XB", "gamma_XB", "alpha_BT", "dx_CZ_minus_dx_BT", "dy_CZ"]
 
@@ -233,11 +232,12 @@ def test_compensation_warns_about_prior_only_values(run_cli, tmp_path):
     assert line.startswith("WARNING: ") and "only through the priors on dRB and zT" in line
 
 
-def test_report_carries_iso_gum_and_conformity(run_cli, tmp_path):
-    tol = _tolerances(tmp_path, "t.toml", "E_B0B_arcsec = 30\nalpha_XB_arcsec = 10\n")
-    out_dir = tmp_path / "rep"
-    code, out, err = run_cli("report", "-o", str(out_dir), *QUICK, "--tolerances", tol)
-    assert code == 0, err
+def test_report_carries_iso_gum_and_conformity(thesis_report):
+    """The shared report (conftest.thesis_report_run) was made with E_B0B ±30″ and alpha_XB ±10″."""
+    from .conftest import SHARED_REPORT_TOLERANCES
+
+    assert "E_B0B_arcsec = 30\nalpha_XB_arcsec = 10\n" in SHARED_REPORT_TOLERANCES
+    out_dir = thesis_report
     csv = pd.read_csv(out_dir / "summary.csv", index_col="quantity")
     for col in ("iso", "u", "ci95_shortest_low", "ci95_symmetric_high", "coverage_probability", "U", "k",
                 "identified_through", "p_nonconformance", "conformity", "next_measurement"):

@@ -23,31 +23,36 @@ def _readme_fleet_lines() -> list[str]:
     return [ln for ln in block.strip().splitlines() if ln.strip()]
 
 
-def test_the_readme_lines_give_a_fleet_with_a_flagged_change_and_a_recalibrate_by_date(tmp_path):
-    """Acceptance: the README's three lines, run as written from the clone's root (here: in a copy of what they
-    read, the examples' tolerance file), write fleet/index.html with the step flagged and a recalibrate-by date."""
+def test_the_readme_lines_and_the_fleet_demo_give_a_fleet_with_a_flagged_change_and_a_recalibrate_by_date(tmp_path):
+    """Acceptance, the README's three lines and the demo in one fleet run.
+
+    * The README's two ``simulate`` lines run as written from the clone's root (here: a copy of what they read);
+      they write the same two machines as the demo's M-1 and M-2 (same dates, temperatures, and every repeat
+      within 0.2 µm: both simulate from the built-in campaign's posterior mean, the CLI's and the API's, which
+      round alike but for a few last digits).  The README's ``fleet`` line is read by the CLI's own parser and
+      asks what the demo's fleet does: the plant folder, the exact sampler, the examples' tolerance file.
+    * The demo, a fresh process from outside the checkout: three machines (a step, a drift over a temperature
+      swing, a single campaign beside a broken file), the fleet, and where to look; no warning.  Its fleet shows
+      what the README promises: the step flagged on its date, a recalibrate-by date, σ_model pooled over the
+      type (fleet/index.html and fleet.json).
+    One fleet instead of two (the fleet command itself: tests/test_fleet.py)."""
+    from mtmcal_bayes.cli import build_parser
+
     lines = _readme_fleet_lines()
     assert len(lines) == 3
     (tmp_path / "examples").mkdir()
     (tmp_path / "examples" / "plant_tolerances.toml").write_bytes((ROOT / "examples" / "plant_tolerances.toml").read_bytes())
-    for line in lines:
-        argv = shlex.split(line)
-        assert argv[0] == ".venv/bin/mtmcal-bayes"
+    argvs = [shlex.split(line) for line in lines]
+    assert all(argv[0] == ".venv/bin/mtmcal-bayes" for argv in argvs)
+    assert [argv[1] for argv in argvs] == ["simulate", "simulate", "fleet"]
+    for line, argv in zip(lines[:2], argvs[:2]):
         done = subprocess.run([str(BIN / "mtmcal-bayes"), *argv[1:]], cwd=tmp_path, capture_output=True, text=True,
                               timeout=600)
         assert done.returncode == 0, (line, done.stderr[-2000:])
-    doc = json.loads((tmp_path / "fleet" / "fleet.json").read_text())
-    m1, m2 = doc["machines"]
-    assert [(c["quantity"], c["date"]) for c in m1["changes"]] == [("beta_CZ", "2026-07-06")]
-    assert any(f["recalibrate_by"] for f in m2["forecast"] if f["quantity"] == "alpha_XB")
-    html = (tmp_path / "fleet" / "index.html").read_text()
-    assert "Δ 2026-07-06" in html and "↻" in html
-    assert doc["sigma_model_types"]["MTX"]["machines"] == 2
+    fleet = build_parser().parse_args(argvs[2][1:])
+    assert (fleet.directory, fleet.output, fleet.sampler) == ("plant", "fleet", "exact")
+    assert (tmp_path / fleet.tolerances).read_bytes() == (ROOT / "examples" / "plant_tolerances.toml").read_bytes()
 
-
-def test_the_fleet_demo_runs_and_says_where_to_look(tmp_path):
-    """The demo, a fresh process from outside the checkout: three machines (a step, a drift over a temperature
-    swing, a single campaign beside a broken file), the fleet, and where to look; no warning."""
     done = subprocess.run([sys.executable, str(ROOT / "examples" / "fleet_demo.py"), str(tmp_path / "demo")],
                           cwd=tmp_path, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
@@ -57,7 +62,24 @@ def test_the_fleet_demo_runs_and_says_where_to_look(tmp_path):
     assert re.search(r"M-2: .*recalibrate alpha_XB by \d{4}-\d\d-\d\d", out), out
     assert "reported, the rest completed" in out and "broken.toml" in out
     assert f"open {tmp_path / 'demo' / 'fleet' / 'index.html'}" in out
-    assert (tmp_path / "demo" / "fleet" / "index.html").exists()
+
+    for serial in ("M-1", "M-2"):  # the README's machines are the demo's
+        readme, demo = sorted((tmp_path / "plant" / serial).glob("*.toml")), sorted((tmp_path / "demo" / "plant" / serial).glob("*.toml"))
+        assert [f.name for f in readme] == [f.name for f in demo] and len(readme) == 4
+        for a, b in zip(map(mb.load_campaign, readme), map(mb.load_campaign, demo)):
+            assert a.machine.serial == b.machine.serial == serial and a.temperature_C == b.temperature_C
+            for ra, rb in zip(a.ballbar.runs, b.ballbar.runs, strict=True):
+                assert ra.repeats.keys() == rb.repeats.keys()
+                for comp in ra.repeats:
+                    assert abs(ra.repeats[comp] - rb.repeats[comp]).max() <= 0.2e-3, (serial, comp)
+
+    doc = json.loads((tmp_path / "demo" / "fleet" / "fleet.json").read_text())
+    machines = {m["id"]: m for m in doc["machines"]}
+    assert [(c["quantity"], c["date"]) for c in machines["M-1"]["changes"]] == [("beta_CZ", "2026-07-06")]
+    assert any(f["recalibrate_by"] for f in machines["M-2"]["forecast"] if f["quantity"] == "alpha_XB")
+    html = (tmp_path / "demo" / "fleet" / "index.html").read_text()
+    assert "Δ 2026-07-06" in html and "↻" in html
+    assert max(t["machines"] for t in doc["sigma_model_types"].values()) >= 2
     history = json.loads((tmp_path / "demo" / "fleet" / "machines" / "M-2" / "history.json").read_text())
     assert history["thermal"]["alpha_XB"]["identified"]
 

@@ -94,16 +94,35 @@ def test_closed_form_matches_the_inference_on_an_augmented_campaign(no_cr2):
 
 
 def test_monte_carlo_realised_sd_agrees_with_closed_form(no_cr2):
-    """Three candidates: closed-form expected sd within 20 % of the Monte-Carlo realised sd (seeded)."""
+    """Three candidates, seeded.  The closed form fixes σ_model at the planner's σ0; the Monte-Carlo preposterior
+    (simulated outcomes, each one's exact posterior) integrates σ_model over its posterior.  Compared where both
+    assume the same σ_model (its prior narrowed to σ0 ± 1 %): the realised sd and today's sd lie within the closed
+    form's own values at 0.99 σ0 and 1.01 σ0 (a band of 0.6–0.9 %), widened by 4 Monte-Carlo standard errors
+    (the spread of the realised sds over √n_sim).  Under σ_model's posterior the realised sd is at most today's
+    (the expected posterior variance never exceeds the current one) to 4 MCSE.  The gap between the fixed-σ
+    closed form and the σ-marginal realised sd (0–3.3 % here, 33 MCSE at most) is that approximation, not
+    Monte-Carlo error, and is not asserted."""
+    from scipy import stats
+
     targets = ["alpha_BT", "dy_CZ", "beta_XB"]
     cands = [c for c in catalogue(no_cr2) if c.name in ("CR @ R_B+150 mm", "CR @ R_B+25 mm", "BZ @ RB1")]
     planner = Planner(no_cr2, cands, targets)
-    ev = planner.evaluate()
     for k in range(3):
         mc = realised_sd(planner, k, n_sim=400, seed=k)
-        ratio = mc["sd_realised"] / ev.sd_after[k]
-        assert np.all(np.abs(ratio - 1) < 0.2), (cands[k].name, ratio)
-        assert np.allclose(mc["sd_now"], ev.sd_before, rtol=0.05)
+        mcse = mc["sd_realised_spread"] / np.sqrt(400)
+        assert np.all(mc["sd_realised"] <= mc["sd_now"] + 4 * mcse), cands[k].name
+    s0, d = planner.sigma_model, 0.01
+    lo = Planner(no_cr2, cands, targets, sigma_model=s0 * (1 - d)).evaluate()
+    hi = Planner(no_cr2, cands, targets, sigma_model=s0 * (1 + d)).evaluate()
+    assert np.all(hi.sd_after > lo.sd_after)  # the band has a width: σ_model matters to every target
+    planner.sigma_prior = lambda: stats.uniform(loc=s0 * (1 - d), scale=2 * d * s0)
+    for k in range(3):
+        mc = realised_sd(planner, k, n_sim=400, seed=k)
+        tol = 4 * mc["sd_realised_spread"] / np.sqrt(400)
+        assert np.all((lo.sd_after[k] - tol <= mc["sd_realised"]) & (mc["sd_realised"] <= hi.sd_after[k] + tol)), \
+            (cands[k].name, mc["sd_realised"], lo.sd_after[k], hi.sd_after[k])
+        assert np.all((lo.sd_before * (1 - 1e-9) <= mc["sd_now"]) & (mc["sd_now"] <= hi.sd_before * (1 + 1e-9))), \
+            (mc["sd_now"], lo.sd_before, hi.sd_before)
 
 
 def test_repeats_help_little_and_never_hurt(thesis):

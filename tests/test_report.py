@@ -21,25 +21,7 @@ REQUIRED = ["index.html", "corner.png", "forest.png", "ppc.png", "polar.png", "w
 QUICK = ("--seed", "2", "--quiet")  # the default run: converged in seconds
 
 
-@pytest.fixture(scope="module")
-def thesis_report_run(tmp_path_factory):
-    """One ``report --json`` of the built-in campaign, shared by the tests that read it: (directory, stdout)."""
-    import contextlib
-    import io
-
-    from mtmcal_bayes.cli import main
-
-    out = tmp_path_factory.mktemp("rep") / "thesis"
-    stdout = io.StringIO()
-    with contextlib.redirect_stdout(stdout):
-        code = main(["report", "-o", str(out), "--json", *QUICK])
-    assert code == 0
-    return out, stdout.getvalue()
-
-
-@pytest.fixture(scope="module")
-def thesis_report(thesis_report_run):
-    return thesis_report_run[0]
+# the report of the built-in campaign every test here reads: conftest.thesis_report_run (one per session)
 
 
 def test_report_writes_every_file(thesis_report):
@@ -188,10 +170,9 @@ def test_failure_midway_leaves_nothing_half_written(run_cli, tmp_path, monkeypat
     assert sorted(p.name for p in existing.iterdir()) == ["keep.txt"]
 
 
-def test_compare_models(run_cli, tmp_path):
-    code, out, err = run_cli("report", "-o", tmp_path / "rep", "--compare-models", "--max-steps", "500", "--quiet")
-    assert code == 0, err
-    rep = tmp_path / "rep"
+def test_compare_models(thesis_report):
+    """The shared report was made with --compare-models."""
+    rep = thesis_report
     for name in ("compare_forest.png", "compare_ppc.png", "compare_models.csv", "compare_fit.csv"):
         assert (rep / name).is_file(), name
     table = pd.read_csv(rep / "compare_models.csv")

@@ -1,7 +1,7 @@
 """Every planning command on each described built-in type's demo campaign, one number each checked against the
 exact answer (issue 37, acceptance): ``plan`` (today's sd: the Gaussian posterior at its σ_model, computed here from
 the linear model's own design), ``design`` and ``next`` (today's sd: the exact σ-marginal posterior, against
-``sample --sampler exact``), ``ncgen`` (the program's commands: the model's)."""
+``sample --sampler exact``), ``ncgen`` (every block of the program, against kinematics written out in the test)."""
 
 from __future__ import annotations
 
@@ -15,8 +15,9 @@ from mtmcal_bayes.inference.likelihood import GaussianMeanLikelihood
 from mtmcal_bayes.inference.priors import make_prior
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines.deviations import quantities
-from mtmcal_bayes.machines.patterns import pattern_commands
 from mtmcal_bayes.models import make_model
+
+from .handchain import HandMachine
 
 TYPES = ("vertical-turn-mill", "trunnion", "head-head")
 
@@ -63,17 +64,37 @@ def test_design_and_next_state_todays_sd_as_the_exact_posterior(machine, run_cli
 
 @pytest.mark.parametrize("machine", TYPES)
 def test_ncgen_commands_the_models_positions(machine, run_cli):
-    """The program of the demo's first run commands, at every arc block, the positions the model predicts with."""
-    code, out, err = run_cli("ncgen", "--run", "1", "--machine", machine)
-    assert code == 0, err
+    """Every arc block of the program of each of the demo's runs, against kinematics written out in the test
+    (tests/handchain.py, from the description file): the swivelled axis at the run's arc angles, the other rotary
+    axes at their holds, and the linear words placing the tool ball (the run's tool length) at the bar length from
+    the W ball (the mount's position at the home pose) along the pattern's direction: R radial inwards from K's
+    line through the ball on K's side, T along k × r̂, A along k, X/Y/Z along that machine axis.  Tolerance: the
+    program's four decimals, each word rounded by ≤ 0.05 µm (√3·0.05 µm on a vector)."""
     c = api.campaign_of(demo_campaign(machine))
-    run, bb = c.ballbar.runs[0], c.ballbar
-    cmd = pattern_commands(c.machine.description, run.pattern, length=bb.setups[run.setup].R_B,
-                           ball=bb.mounts[run.mount].position, bar=bb.length, arc_deg=run.arc_deg,
-                           hold_deg=run.hold_deg)
-    blocks = [line for line in out.splitlines() if line.startswith("G01")]
-    assert len(blocks) == len(cmd.psi)
-    words = {w[0]: float(w[1:]) for w in blocks[-1].split()[1:] if w[0].isalpha() and w[0] != "F"}
-    for a, v in cmd.q.items():
-        expect = units.from_internal(v[-1], "deg") if c.machine.description.axes[a].rotary else v[-1]
-        assert words[a] == pytest.approx(expect, abs=1e-4), a
+    bb = c.ballbar
+    hand = HandMachine(machine)
+    rotary = [a for a in hand.work + hand.tool if hand.rotary(a)]
+    for i, run in enumerate(bb.runs, start=1):
+        code, out, err = run_cli("ncgen", "--run", i, "--machine", machine)
+        assert code == 0, err
+        K, d = run.pattern
+        blocks = [line for line in out.splitlines() if line.startswith("G01")]
+        assert len(blocks) == len(run.arc_deg), run.pattern
+        tool = hand.tool_home(bb.setups[run.setup].R_B)
+        ball = np.asarray(bb.mounts[run.mount].position, float)
+        holds = run.hold_deg or {}
+        for block, angle in zip(blocks, run.arc_deg):
+            words = {w[0]: float(w[1:]) for w in block.split()[1:] if w[0].isalpha() and w[0] != "F"}
+            assert words[K] == pytest.approx(angle, abs=1e-9), block
+            for a in set(rotary) - {K}:
+                assert words[a] == pytest.approx(holds.get(a, 0.0), abs=1e-9), (a, block)
+            q = {a: np.deg2rad(words[a]) if a in rotary else words[a] for a in hand.work + hand.tool}
+            T, W = hand.tool_point(tool, q), hand.work_point(ball, q)
+            p, k = hand.axis_line(K, q)
+            on_k = W if K in hand.work else T  # the ball on K's side
+            radial = (on_k - p) - ((on_k - p) @ k) * k
+            r_hat = radial / np.linalg.norm(radial)
+            u = {"R": -r_hat, "T": np.cross(k, r_hat), "A": k}.get(d)
+            if u is None:
+                u = np.eye(3)["XYZ".index(d)]
+            assert np.linalg.norm(T - W - bb.length * u) <= np.sqrt(3) * 0.5e-4, (run.pattern, block, T - W)
