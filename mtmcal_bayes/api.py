@@ -468,23 +468,13 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     the campaign has), ``setup`` the ball-bar set-up whose tool length is the tool's; deviations the data do not
     determine are left at zero and named.
     """
-    from .compensation import compensate as rewrite_program
     from .errors import ParameterError
-    from .inference.log_posterior import SAMPLED_DEVIATIONS
-    from .io.gcode import LINEAR, read_program
+    from .machines.plugins import provided
 
     c = campaign_of(campaign, measured=True)
-    if c.machine.described:
-        used = _described_compensation_options(c, method=method, model=model, values=values, mount=mount)
-        rotary = tuple(a.letter for a in c.machine.description.rotary_axes)
-        parsed = read_program(program, integer_unit=integer_unit, rotary=rotary, required=LINEAR + rotary)
-        from .compensation.through_chain import program_commands
-
-        program_commands(c, parsed)  # every block within the described travels, before any work
-    else:
-        model = "htm-thesis" if model is None else model
-        used = SAMPLED_DEVIATIONS
-        parsed = read_program(program, integer_unit=integer_unit)
+    prepare = provided(c.machine, "compensation_program", _chain_compensation_program)  # a plug-in's methods
+    parsed, used = prepare(c, program, method=method, model=model, values=values, mount=mount,
+                           integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
     if c.has_probe_readings() and c.ballbar.runs and (gap := c.probe_gap()) is not None:
@@ -494,22 +484,41 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
         refusal = instruments(c, explain=False).refusal(used)
     if refusal and not accept_disagreement:
         raise ParameterError("accept_disagreement", f"not given, and {refusal}")
-    if c.machine.described:
-        from .compensation.through_chain import compensate_described
-
-        label = None
-        if posterior is None:
-            posterior = sample(c, sampler="exact", seed=1)
-            label = f"exact posterior of the linear model ({posterior.log_posterior.data} data)"
-        result = compensate_described(c, parsed, posterior, setup=setup, point=point, label=label)
-    else:
-        result = rewrite_program(c, parsed, method=method, model=model, values=values, posterior=posterior,
-                                 point=point, setup=setup, mount=mount)
+    rewrite = provided(c.machine, "compensate", _compensate_through_chain)
+    result = rewrite(c, parsed, method=method, model=model, values=values, posterior=posterior, point=point,
+                     setup=setup, mount=mount)
     if refusal:
         result.warnings.append(f"compensated although {refusal} (accepted)")
     if output is not None:
         result.save(output)
     return result
+
+
+def _chain_compensation_program(c: Campaign, program, *, method: str, model: str | None, values: str,
+                                mount: str | None, integer_unit: str | None):
+    """``(parsed program, deviations the compensation uses)`` on a machine compensated through its chain: the options
+    checked, the rotary axes read by their letters, every block within the travels, before any work."""
+    from .compensation.through_chain import program_commands
+    from .io.gcode import LINEAR, read_program
+
+    used = _described_compensation_options(c, method=method, model=model, values=values, mount=mount)
+    rotary = tuple(a.letter for a in c.machine.description.rotary_axes)
+    parsed = read_program(program, integer_unit=integer_unit, rotary=rotary, required=LINEAR + rotary)
+    program_commands(c, parsed)
+    return parsed, used
+
+
+def _compensate_through_chain(c: Campaign, parsed, *, posterior, point: str, setup: str | None, **_thesis_options):
+    """Newton through the machine's chain with the posterior's values (default: the exact posterior of every
+    instrument the campaign has); the options of a plug-in's methods (``method``, ``values``, ``mount``) were
+    checked by :func:`_chain_compensation_program`."""
+    from .compensation.through_chain import compensate_described
+
+    label = None
+    if posterior is None:
+        posterior = sample(c, sampler="exact", seed=1)
+        label = f"exact posterior of the linear model ({posterior.log_posterior.data} data)"
+    return compensate_described(c, parsed, posterior, setup=setup, point=point, label=label)
 
 
 def _described_compensation_options(c: Campaign, *, method: str, model: str | None, values: str,

@@ -9,7 +9,9 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
   ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3;
-* **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them.
+* **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them;
+* **its compensation**: Eqs 3.4–3.13 as printed beside the exact inversion of its kinematic models, with the
+  published ball-bar values as an option.
 
 Each contribution imports its code when asked for, so loading the plug-in costs nothing.
 """
@@ -52,6 +54,24 @@ def sensitivity_table(campaign, model: str):
     from ..simulation.sensitivity import sensitivity_table as table
 
     return table(campaign, model)
+
+
+def compensation_program(c, program, *, method: str, model, values: str, mount, integer_unit):
+    """``(parsed program, deviations the compensation uses)``: the thesis' X/Y/Z/B/C blocks and its sampled
+    deviations (every option of its methods is taken)."""
+    from ..inference.log_posterior import SAMPLED_DEVIATIONS
+    from ..io.gcode import read_program
+
+    return read_program(program, integer_unit=integer_unit), SAMPLED_DEVIATIONS
+
+
+def compensate(c, parsed, *, method: str, model, values: str, posterior, point: str, setup, mount):
+    """The thesis machine's compensation: exact inversion of its kinematic model (default ``htm-thesis``) or Eqs
+    3.4–3.13 as printed (``method="thesis"``), with the posterior or the ball-bar values of Table 4.5."""
+    from ..compensation import compensate as rewrite_program
+
+    return rewrite_program(c, parsed, method=method, model="htm-thesis" if model is None else model, values=values,
+                           posterior=posterior, point=point, setup=setup, mount=mount)
 
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
@@ -138,6 +158,8 @@ class ThesisPlugin:
     program = staticmethod(program)
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
+    compensation_program = staticmethod(compensation_program)
+    compensate = staticmethod(compensate)
     simulate = staticmethod(simulate)
     sensitivity_table = staticmethod(sensitivity_table)
     description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
