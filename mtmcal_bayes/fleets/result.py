@@ -110,8 +110,7 @@ def machine_identity(m: Machine) -> dict:
     from ..io.machine_identity import description_label
 
     machine = m.latest.machine
-    out = {"type": machine.type, "configuration": (machine.description.configuration if machine.described
-                                                   else machine.configuration), "description": description_label(machine)}
+    out = {"type": machine.type, "configuration": machine.configuration, "description": description_label(machine)}
     if machine.described:
         from ..machines.deviations import selected
 

@@ -82,8 +82,8 @@ def tracked(campaigns, hm: HistoryModel) -> tuple[list[str], list[dict]]:
 def machine_of(c) -> dict:
     """What a history says of its machine: ``{"type", "configuration", "description"}`` (``description``: the
     built-in type's name, "thesis" for the thesis machine, else "described")."""
+    from ..machines.plugins import provided
+
     m = c.machine
-    desc = m.description
-    kind = "thesis" if not m.described else (desc.builtin or "described")
-    return {"type": m.type, "configuration": desc.configuration if m.described else m.configuration,
-            "description": kind}
+    kind = provided(m, "description_key") or m.description.builtin or "described"
+    return {"type": m.type, "configuration": m.configuration, "description": kind}

@@ -37,6 +37,7 @@ from .. import units
 from ..campaign import Run
 from ..errors import InputError, ParameterError
 from ..machines.description import FRAME
+from ..machines.plugins import provided
 from ..machines.patterns import axis_of, default_arc_deg, nominal_down, pattern_commands, placement_commands, tool_home
 from ..units import fixed
 from .nc_axes import DECIMALS, axis_block, axis_letters, comment
@@ -61,9 +62,9 @@ _COMMANDS_NOTE = ("axis words: the description's commands, mm and deg, absolute,
 
 # --------------------------------------------------------------------------- shared
 def _description(campaign):
-    if not campaign.machine.described:
-        raise ParameterError("campaign", "the thesis machine's programs come from its pattern and setup "
-                             "(measuring_program); this one writes a described machine's")
+    if provided(campaign.machine, "program") is not None:
+        raise ParameterError("campaign", "this machine's programs come from its plug-in (the thesis machine's: its "
+                             "pattern and setup, measuring_program); this module writes those of the chain's commands")
     return campaign.machine.description
 
 
