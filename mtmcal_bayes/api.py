@@ -47,19 +47,15 @@ MAX_STEPS = 20_000
 TARGET_ESS = 1000.0
 
 
-def campaign_of(campaign: CampaignLike, *, measured: bool = False, thesis_only: str | None = None) -> Campaign:
+def campaign_of(campaign: CampaignLike, *, measured: bool = False) -> Campaign:
     """A :class:`Campaign` from a campaign, a :class:`~mtmcal_bayes.analysis.CampaignAnalysis` (its campaign), a path
     to a campaign TOML, or None (the built-in thesis campaign).
 
     ``measured``: the command needs data, so a campaign without measured ball-bar runs (only planned ones, or
-    none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``.  ``thesis_only``: the
-    command's name, when it serves the thesis machine only (an InputError naming ``machine`` otherwise)."""
+    none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``."""
     if isinstance(campaign, CampaignAnalysis):
         campaign = campaign.campaign
     c = campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
-    if thesis_only and c.machine.described:
-        raise InputError(c.source, "machine", f"{thesis_only} serves the thesis machine and not yet a described one "
-                         f"({c.machine.description.configuration}); docs/machines.md says what does")
     if measured:
         c.require_measured_runs()
     return c
@@ -261,8 +257,9 @@ def sample(campaign: CampaignLike = None, *, model: str = "linear", seed: int | 
 
 def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, fix_dx_BT: bool = False,
                 model: str = "linear", sigma_model_prior=None) -> ClosedFormResult:
-    """The instant Gaussian posterior of the eight quantities: linear model, sigma_model fixed (µm).  It has no
-    σ_model prior: ``sigma_model_prior`` given is a ``ParameterError`` (the sampled posterior takes one)."""
+    """The instant Gaussian posterior of the quantities the campaign determines (the thesis machine: the eight of
+    Table 4.5), from every instrument it has (the thesis machine: the ball bar): linear model, sigma_model fixed
+    (µm).  It has no σ_model prior: ``sigma_model_prior`` given is a ``ParameterError`` (the sampled posterior takes one)."""
     from .posterior import closed_form as gaussian
 
     if sigma_model_prior is not None:
@@ -271,8 +268,8 @@ def closed_form(campaign: CampaignLike = None, *, sigma_model_um: float = 0.0, f
         raise ParameterError("sigma_model_prior", f"the closed form fixes σ_model (at {sigma_model_um} µm) and has "
                              "no prior of it; a learnt prior is for the sampled posterior")
 
-    return gaussian(campaign_of(campaign, measured=True, thesis_only="the closed form"), sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT,
-                    model=model)
+    c = campaign_of(campaign, measured=True)
+    return gaussian(c, sigma_model_um=sigma_model_um, fix_dx_BT=fix_dx_BT, model=model, data=data_of(None, c))
 
 
 def report(campaign: CampaignLike = None, *, output="report", model: str = "linear", seed: int | None = 1,

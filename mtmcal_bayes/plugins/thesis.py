@@ -167,6 +167,13 @@ class ThesisPlugin:
     probe_owners = staticmethod(probe_owners)
 
     @property
+    def reported_quantities(self) -> tuple[str, ...]:
+        """The eight quantities the thesis identifies (Table 4.5), the combination dx_CZ − dx_BT among them."""
+        from ..parameters import IDENTIFIABLE
+
+        return IDENTIFIABLE
+
+    @property
     def deviation_table(self) -> dict:
         """The thesis' 13 deviations by their thesis names (Table 2.1), each with its ISO 230-7 symbol."""
         from ..parameters import DEVIATIONS

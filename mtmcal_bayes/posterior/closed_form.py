@@ -15,9 +15,11 @@ from scipy import stats
 from .. import units
 from ..errors import ParameterError
 from ..inference.analytic import gaussian_posterior
+from ..inference.identifiability import campaign_identifiability
 from ..inference.log_posterior import LogPosterior
 from ..iso import iso_symbol
-from ..parameters import IDENTIFIABLE, QUANTITIES, weights
+from ..machines.plugins import provided
+from ..parameters import QUANTITIES, quantity_unit, weights
 
 #: probability of the reported interval
 PROB = 0.95
@@ -25,7 +27,7 @@ PROB = 0.95
 
 @dataclass
 class ClosedFormResult:
-    """Mean, sd and 95 % interval of the eight quantities; ``summary`` indexed by quantity (display units)."""
+    """Mean, sd and 95 % interval of the reported quantities; ``summary`` indexed by quantity (display units)."""
 
     summary: pd.DataFrame
     sigma_model_um: float
@@ -46,19 +48,35 @@ class ClosedFormResult:
 
 
 def closed_form(campaign, *, sigma_model_um: float = 0.0, fix_dx_BT: bool = False,
-                model: str = "linear") -> ClosedFormResult:
-    """The Gaussian posterior of the eight quantities with sigma_model fixed at ``sigma_model_um`` µm."""
+                model: str = "linear", data: str = "ballbar") -> ClosedFormResult:
+    """The Gaussian posterior of the quantities a campaign's ``data`` determine, with sigma_model fixed at
+    ``sigma_model_um`` µm: the ones its machine's plug-in reports (the thesis machine: the eight of Table 4.5),
+    else every deviation determined one by one and every combination determined only as a whole
+    (:func:`~mtmcal_bayes.inference.identifiability.campaign_identifiability`)."""
     if model != "linear":
         raise ParameterError("model", f"the closed form is exact for the linear model only, not {model}")
     sigma = units.to_internal(sigma_model_um, "um")
-    post = LogPosterior(campaign, "linear", fix_dx_BT=fix_dx_BT, sigma_model=sigma)
+    post = LogPosterior(campaign, "linear", fix_dx_BT=fix_dx_BT, sigma_model=sigma, data=data)
     g = gaussian_posterior(post, sigma_model=sigma)
     z = float(stats.norm.ppf(0.5 + PROB / 2))
     rows = {}
-    for name in IDENTIFIABLE:
-        m, sd = g.linear_combination(weights(name, g.names))
-        unit = QUANTITIES[name].unit
+    for name, coefficients, unit in _reported(post, g.names):
+        m, sd = g.linear_combination(coefficients)
         m, sd = units.from_internal(m, unit), units.from_internal(sd, unit)
         rows[name] = {"iso": iso_symbol(name), "mean": m, "sd": sd, "hdi_low": m - z * sd, "hdi_high": m + z * sd,
                       "unit": unit}
     return ClosedFormResult(pd.DataFrame.from_dict(rows, orient="index"), sigma_model_um, fix_dx_BT)
+
+
+def _reported(post, names) -> list[tuple[str, dict, str]]:
+    """``(name, coefficients, unit)`` of each reported quantity: the coefficients over ``names`` give its value in
+    internal units of ``unit`` (a combination of lengths and angles scaled to its leading deviation's unit)."""
+    own = provided(post.campaign.machine, "reported_quantities")
+    if own is not None:
+        return [(n, weights(n, names), QUANTITIES[n].unit) for n in own]
+    ident = campaign_identifiability(post)
+    per_display = {n: units.from_internal(1.0, quantity_unit(n)) for n in ident.deviations}
+    out = [(n, {n: 1.0}, quantity_unit(n)) for n in ident.determined]
+    out += [(c.name, {k: w * per_display[k] / units.from_internal(1.0, c.unit) for k, w in c.weights.items()}, c.unit)
+            for c in ident.combinations]
+    return out
