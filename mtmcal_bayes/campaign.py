@@ -37,7 +37,7 @@ class Machine:
     @property
     def described(self) -> bool:
         """Whether the machine is one described by its chain, not the thesis' INTEGREX i-200 (thesis names, models)."""
-        return self.description is not None and not self.description.is_thesis
+        return self.description is not None and not self.description.plugins
 
 
 @dataclass

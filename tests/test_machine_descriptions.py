@@ -178,7 +178,7 @@ def test_a_spindle_on_the_bed_every_axis_moving_the_workpiece():
 def test_each_builtin_parses(name):
     desc = builtin_description(name)
     assert desc.builtin == name
-    assert desc.is_thesis == (name == "integrex-i200")
+    assert ("thesis" in desc.plugins) == (name == "integrex-i200")
     assert desc.spindle.carrier == desc.tool_chain[-1].letter
     assert {d.name for d in selected(desc)} <= {d.name for d in generated(desc)}
 
@@ -235,7 +235,7 @@ def test_a_description_file_referenced_relative_to_the_campaign(tmp_path):
     (tmp_path / "machines").mkdir()
     (tmp_path / "machines" / "mine.toml").write_text(builtin_toml("trunnion"), encoding="utf-8")
     desc = referenced_description("machines/mine.toml", str(tmp_path / "c.toml"), "machine", tmp_path)
-    assert desc.configuration == "w-C'A'bYXZ(C1)-t" and desc.builtin == "" and not desc.is_thesis
+    assert desc.configuration == "w-C'A'bYXZ(C1)-t" and desc.builtin == "" and not desc.plugins
     assert [d.symbol for d in generated(desc)] == GENERATED["trunnion"][0]
     # a built-in type by name
     assert referenced_description("head-head", "c.toml", "machine", tmp_path).builtin == "head-head"

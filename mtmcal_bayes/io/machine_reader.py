@@ -123,9 +123,10 @@ def parse_description(t: dict, source: str, path: str, *, builtin: str = "",
         fail(key("squareness"), "the rigid form needs the three linear axes next to the bed on the tool side; "
                                 f"{configuration!r} has {''.join(a.letter for a in work_chain if not a.rotary)} on "
                                 "the workpiece side (use \"motion\")")
-    thesis = builtin == THESIS_TYPE
+    names = _plugins(t, fail, key("plugins"))
+    aliases = tuple(pair for name in names for pair in getattr(plugins.load(name), "aliases", ()))
     desc = MachineDescription(r.string(t, "name", path), configuration, tool_chain, work_chain, spindle, None,
-                              squareness, builtin, "thesis" if thesis else "iso", _plugins(t, fail, key("plugins")))
+                              squareness, builtin, aliases, names)
     check_geometry(desc, fail, path or "machine")
     if "deviations" in t:
         chosen = t["deviations"]
@@ -142,7 +143,7 @@ def parse_description(t: dict, source: str, path: str, *, builtin: str = "",
             fail(key("deviations"), f"{', '.join(twice)} named twice (a deviation by its name and by its ISO "
                                     "symbol is one deviation)")
         desc = MachineDescription(desc.name, configuration, tool_chain, work_chain, spindle,
-                                  tuple(known[n].name for n in chosen), squareness, builtin, desc.names, desc.plugins)
+                                  tuple(known[n].name for n in chosen), squareness, builtin, desc.aliases, desc.plugins)
     return desc
 
 

@@ -90,8 +90,9 @@ class MachineDescription:
 
     ``deviations``: the selected deviation names (None: the default set of :mod:`.deviations`);
     ``builtin``: the built-in type it is (``"integrex-i200"``), else ``""``;
-    ``names``: ``"thesis"`` on the thesis machine (its 13 deviation names), else ``"iso"``;
-    ``plugins``: the names of its plug-ins (:mod:`.plugins`: what is particular to it, SPEC §20).
+    ``aliases``: ``(ISO symbol, name)`` pairs, the names its plug-ins give deviations instead of their symbols (the
+    thesis plug-in: its 13 names, ``dx_CZ`` for ``E_X0C``, ...); ``plugins``: the names of its plug-ins
+    (:mod:`.plugins`: what is particular to it, SPEC §20).
     """
 
     name: str
@@ -102,7 +103,7 @@ class MachineDescription:
     deviations: tuple[str, ...] | None = None
     squareness: str = "motion"
     builtin: str = ""
-    names: str = "iso"
+    aliases: tuple[tuple[str, str], ...] = ()
     plugins: tuple[str, ...] = ()
 
     @property
@@ -115,9 +116,9 @@ class MachineDescription:
         """The rotary axes, work side first (bed outwards), then tool side (bed outwards)."""
         return tuple(a for a in self.work_chain + self.tool_chain if a.rotary)
 
-    @property
-    def is_thesis(self) -> bool:
-        return self.names == "thesis"
+    def name_of(self, symbol: str) -> str:
+        """The name of the deviation with ISO 230-7 ``symbol`` on this machine: its alias, else the symbol."""
+        return dict(self.aliases).get(symbol, symbol)
 
 
 _TOKEN = re.compile(r"\([^)]*\)?|[A-Za-z]'?|.")

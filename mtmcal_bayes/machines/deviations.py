@@ -86,8 +86,7 @@ def generated(desc: MachineDescription) -> list[Deviation]:
                     f"offset of the spindle along its own axis ({FRAME[s]}), signed along +{FRAME[s]}"))
     for sym, (about, tilted, ref) in SQUARENESS_ERRORS.items():
         out.append((sym, "angle", tilted, "squareness", about, f"squareness of {tilted} to {ref}"))
-    thesis = desc.is_thesis
-    return [Deviation(THESIS_NAMES.get(sym, sym) if thesis else sym, sym, kind, body, role, comp, meaning)
+    return [Deviation(desc.name_of(sym), sym, kind, body, role, comp, meaning)
             for sym, kind, body, role, comp, meaning in out]
 
 

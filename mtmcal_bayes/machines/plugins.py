@@ -30,7 +30,9 @@ THESIS_FORMAT = ("thesis",)
 
 def plugin_names(machine) -> tuple[str, ...]:
     """The names of the plug-ins of a campaign's ``machine`` (its description's; a campaign in the thesis' own
-    format has the thesis machine's)."""
+    format has the thesis machine's), or of a description itself."""
+    if hasattr(machine, "plugins"):
+        return machine.plugins
     desc = machine.description
     return desc.plugins if desc is not None else THESIS_FORMAT
 
@@ -43,7 +45,8 @@ def load(name: str):
 
 
 def provided(machine, what: str, default=None):
-    """The first contribution ``what`` of ``machine``'s plug-ins, else ``default`` (the engine's own)."""
+    """The first contribution ``what`` of the plug-ins of ``machine`` (a campaign's machine or a description), else
+    ``default`` (the engine's own)."""
     for name in plugin_names(machine):
         value = getattr(load(name), what, None)
         if value is not None:

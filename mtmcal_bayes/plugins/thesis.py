@@ -6,6 +6,7 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   and ``htm-thesis`` (the thesis' pivots), beside ``htm-literal`` (Eq 2.10 as printed, the test oracle of the chain)
   and ``chain`` on the thesis' campaign format; ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
+* **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
   ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3;
@@ -162,9 +163,17 @@ class ThesisPlugin:
     compensate = staticmethod(compensate)
     simulate = staticmethod(simulate)
     sensitivity_table = staticmethod(sensitivity_table)
+    selection_source = "the thesis' 13 deviations (Table 2.1)"
     description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
     description_label = "thesis machine"
     probe_owners = staticmethod(probe_owners)
+
+    @property
+    def aliases(self) -> tuple[tuple[str, str], ...]:
+        """The thesis' names of its deviations by ISO 230-7 symbol (SPEC §19: dx_CZ = E_X0C, ...)."""
+        from ..machines.deviations import THESIS_NAMES
+
+        return tuple(THESIS_NAMES.items())
 
     @property
     def reported_quantities(self) -> tuple[str, ...]:

@@ -23,6 +23,7 @@ from matplotlib.patches import FancyBboxPatch
 from ..figure_style import figure, save_png, tight_layout
 from ..machines.description import FRAME, SPINDLE, MachineDescription
 from ..machines.deviations import SQUARENESS_ERRORS, Deviation, generated, redundant, selected
+from ..machines.plugins import provided
 from ..models.chain import Chain
 from ..models.htm import rotation
 
@@ -362,8 +363,7 @@ def _not_estimated(desc: MachineDescription) -> dict[str, str]:
         if d.name in why and d.name not in chosen:
             out[d.name] = why[d.name]
         elif d.name not in chosen:
-            out[d.name] = ("not among the thesis' 13 deviations (Table 2.1)" if desc.is_thesis
-                           else "not in [machine] deviations")
+            out[d.name] = f"not among {provided(desc, 'selection_source', 'the [machine] deviations')}"
     return out
 
 
