@@ -9,12 +9,14 @@ import pandas as pd
 
 from .. import units
 from ..analysis import analysis_of
-from ..inference.identifiability import campaign_identifiability, combination_summaries
+from ..inference.identifiability import campaign_identifiability
 from ..inference import reading_choice
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import (
+    combination_summaries,
     diagnostics_warnings,
     not_identified,
+    prior_sensitivity_notes,
     summarize,
     to_inference_data,
 )
@@ -63,6 +65,7 @@ class SamplerDiagnostics:
     independence_acceptance: float
     checks: list[dict]
     reference: dict | None
+    prior_sensitivity: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -85,7 +88,10 @@ class PosteriorResult:
         each quantity's posterior beside the ball-bar and touch-probe values.
     sampling : SamplingResult
         the chains of every ensemble in internal units, and the sampler's own facts.
-    warnings, not_identified : sentences to heed.
+    warnings, not_identified : sentences to heed; ``not_identified`` what the campaign's Jacobian leaves
+        undetermined or determines only in combination.
+    prior_notes : the prior-sensitivity diagnostic's sentences (the nuisance priors an interval rests on); they
+        never decide what is identified.
     conformity : pandas.DataFrame or None
         with tolerances: per toleranced quantity its limits, probability of nonconformance and verdict
         (:func:`~mtmcal_bayes.posterior.conformity.conformity_table`).
@@ -100,8 +106,9 @@ class PosteriorResult:
     reference: ReferenceCheck | None = None
     output: str | None = None  # where :meth:`save` wrote the NetCDF
     conformity: pd.DataFrame | None = None  # one row per toleranced quantity (posterior.conformity)
-    identifiability: object | None = None  # a described machine's: what its campaign determines (Identifiability)
+    identifiability: object | None = None  # what its campaign determines (Identifiability)
     combinations: list[dict] = field(default_factory=list)  # its named combinations with their posteriors
+    prior_notes: list[str] = field(default_factory=list)  # the prior-sensitivity diagnostic's sentences
 
     @property
     def log_posterior(self) -> LogPosterior:
@@ -153,7 +160,8 @@ class PosteriorResult:
             independence_acceptance=r.independence_acceptance,
             checks=[{"steps": c.steps, "burn_in": c.burn, "max_r_hat": c.max_rhat, "min_ess_over_target": c.min_ess_ratio}
                     for c in r.checks],
-            reference=None if self.reference is None else self.reference.to_json())
+            reference=None if self.reference is None else self.reference.to_json(),
+            prior_sensitivity=self.prior_notes)
 
     def save(self, path) -> None:
         """Write the InferenceData as NetCDF (atomically); ``compensate --posterior`` reads it."""
@@ -199,7 +207,8 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     seed = settings.seed if settings else None
     beside = lean and result.settings.sampler == "exact"  # exact draws whose intervals alone are shown
     idata = to_inference_data(result, seed=seed, posterior_only=beside)
-    summary = summarize(idata, post, statement=statement, diagnostics=not beside)
+    ident = campaign_identifiability(post)
+    summary = summarize(idata, post, statement=statement, diagnostics=not beside, identifiability=ident)
     choice = analysis.reading_choice(summary.index) if statement else None  # a reading chosen over another
     if choice is not None:
         summary = summary.join(choice)
@@ -210,9 +219,6 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data
     tol = campaign.tolerances if tolerances is None else tolerances
     conf = conformity_table(idata, summary, tol) if tol and statement else None
-    ident, combos = None, []
-    if campaign.machine.described:
-        ident = campaign_identifiability(post)
-        combos = combination_summaries(ident, idata)
     return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf,
-                           identifiability=ident, combinations=combos)
+                           identifiability=ident, combinations=combination_summaries(ident, idata),
+                           prior_notes=prior_sensitivity_notes(summary))
