@@ -594,10 +594,10 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
 
 
 def _planning(campaign, rep, drawing: Drawing, *, batch: int, say) -> tuple[PlanResult, bool]:
-    """The plan for the quantities the data do not identify, else for all eight (that one begun before the
-    sampling, in ``batch``: waited for here), and whether its figures are drawn already (they are for that one)."""
-    targets = [n for n in IDENTIFIABLE if n in rep.summary.index
-               and rep.summary.loc[n, "identification"] == "not identified"]
+    """The plan for the quantities the data do not determine one by one (the Jacobian's statement: not at all, or
+    only in combination), else for all eight (that one begun before the sampling, in ``batch``: waited for here),
+    and whether its figures are drawn already (they are for that one)."""
+    targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
     if not targets:
         return drawing.wait(batch)[PLAN_JOB], True
     drawing.cancel(batch)
@@ -671,7 +671,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     best = planned.table.iloc[0]
     page.paragraph(
         f"Targets: {', '.join(planned.targets)}"
-        + (" (the quantities this campaign does not identify)" if len(planned.targets) < len(IDENTIFIABLE) else "")
+        + (" (the quantities this campaign does not determine one by one)" if len(planned.targets) < len(IDENTIFIABLE) else "")
         + f". Best candidate: {best['name']}, expected information gain {best['eig_bits']:.2f} bits"
         + (f", which identifies {best['newly_identified']}" if best["newly_identified"] else "")
         + ". Closed form for the linear model; the full ranking is in plan.csv, and mtmcal-bayes plan "
