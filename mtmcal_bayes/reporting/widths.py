@@ -16,7 +16,7 @@ CAPTION = (
     "posterior/prior written beside it: a ratio near 1 means the data taught nothing about that quantity. "
     "What the data determine is the campaign's Jacobian's statement (nuisance terms included): red labels mark "
     "quantities it leaves undetermined, so their width reflects priors, not the measurement; orange labels those "
-    "determined only in a combination with others (named in the summary). 'Rests on the nuisance prior …' is a "
+    "determined only in a combination with others (named in the summary). 'Rests on xT prior' is a "
     f"separate diagnostic: the quantity's sd grows more than {NOT_IDENTIFIED_GROWTH:g}× when the nuisance priors "
     f"(T-ball centring, tool length, W-ball clamping) are widened {WIDEN:g}×, so its interval states that set-up "
     "knowledge as much as the machine (docs/metrology.md)."
@@ -40,8 +40,8 @@ def widths_figure(summary: pd.DataFrame, names=IDENTIFIABLE):
     ax.set_xlim(lo / 3, hi * 6)
     for yi, (n, r) in zip(y, s.iterrows()):
         note = {UNDETERMINED: "  not identified", IN_COMBINATION: "  only in combination"}.get(r["identification"], "")
-        rests = r.get("prior_sensitivity")
-        note += f"  {rests}" if isinstance(rests, str) and rests else ""
+        through = r.get("identified_through")  # the prior-sensitivity diagnostic, in short
+        note += f"  rests on {through} prior{'s' if ',' in through else ''}" if isinstance(through, str) and through else ""
         ax.text(max(r["prior_sd"], r["sd"]) * 1.25, yi, f"× {r['sd_ratio']:.3g}" + note, va="center", fontsize=9,
                 color=IDENTIFICATION_COLOUR[r["identification"]])
     ax.set_yticks(y, [label(n) for n in names], fontsize=11)
