@@ -53,7 +53,7 @@ class CompensationResult:
     not_compensable: list[dict] = field(default_factory=list)
     info: dict = field(default_factory=dict)
     output: str | None = None  # where :meth:`save` wrote the compensated program
-    warnings: list[str] = field(default_factory=list)  # values the data identify only through priors
+    warnings: list[str] = field(default_factory=list)  # values the data do not determine, or that rest on priors
     reading_choice: dict | None = None  # deviations resting on the campaign's choice of reading (.reading_choice)
 
     def save(self, path) -> None:

@@ -57,7 +57,8 @@ def _checked_lines(result) -> list[str]:
         return [("The first eight are the quantities of thesis Table 4.5; the rest are the other sampled deviations "
                  "and sigma_model.")]
     ident = result.identifiability
-    what = f"the {_plural(len(ident.determined), 'deviation')} this campaign determines one by one"
+    one_by_one = len(result.identified) - len(ident.combinations)  # reported quantities, derived ones included
+    what = f"the {one_by_one} quantit{'y' if one_by_one == 1 else 'ies'} this campaign determines one by one"
     if ident.combinations:
         what += (f" and its {_plural(len(ident.combinations), 'identifiable combination')} (Σ w·θ, display "
                  "units)")
