@@ -103,7 +103,7 @@ RC0 = MINIMAL.replace("[ballbar.mounts.C]\nZ_C_mm = 65.5348\nR_C_mm = 50.0",
 def test_r_c_zero(run_cli, tmp_path):
     """CA at R_C = 0 carries no information on the C-axis tilt (ex_CA = R_C·beta_CZ): identify says so, the
     sensitivity table (which needs an R_C > 0 mount) refuses by name, the posterior flags alpha_CZ and beta_CZ
-    as not identified, and the planner proposes a CA at R_C > 0 first."""
+    as determined only in combination with the C line's offsets, and the planner proposes a CA at R_C > 0 first."""
     assert RC0 != MINIMAL
     f = write(tmp_path, "rc0.toml", RC0)
     out, _ = assert_clean(run_cli("identify", f))
@@ -116,8 +116,10 @@ def test_r_c_zero(run_cli, tmp_path):
 
     assert_clean(run_cli("simulate", f, "--truth", write(tmp_path, "t.toml", "[deviations]\nbeta_CZ_arcsec = 20\n")))
     out, _ = assert_clean(run_cli("sample", f, *QUICK))
-    assert "Identifiability (closed-form prior-sensitivity check):" in out
-    assert "  - alpha_CZ: not identified by the data" in out and "  - beta_CZ: not identified by the data" in out
+    assert "Identifiability (the campaign's Jacobian, nuisance terms included):" in out
+    # each tilt is seen only beside the C line's offset at the mount's height (the Jacobian's combinations)
+    assert "  - alpha_CZ: determined only in combination: alpha_CZ + " in out and "·dy_CZ" in out
+    assert "  - beta_CZ: determined only in combination: beta_CZ − " in out and "·dx_CZ" in out
 
     doc = finite_json(assert_clean(run_cli("plan", f, "--json"))[0])
     best = doc["candidates"][0]
@@ -235,7 +237,7 @@ def test_single_run(run_cli, tmp_path):
     rep = tmp_path / "rep"
     out, _ = assert_clean(run_cli("report", f, "-o", rep, *QUICK), rep)
     assert (rep / "index.html").exists() and (rep / "summary.csv").exists()
-    assert "Identifiability (closed-form prior-sensitivity check):" in out
+    assert "Identifiability (the campaign's Jacobian, nuisance terms included):" in out
 
 
 def test_single_bx_run_plan(run_cli, tmp_path):

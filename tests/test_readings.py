@@ -208,12 +208,14 @@ def test_instruments_command(run_cli):
 
 
 def test_identification_through_nuisance_priors_is_not_identified(run_cli):
-    """dz_BT rests on the dRB and zT priors: ``identified`` false, ``identification`` says why."""
+    """dz_BT, confounded with the tool-length error, is not determined (``identified`` false, ``identification``
+    "not identified"); the prior-sensitivity diagnostic names the priors it rests on."""
     code, out, err = run_cli("sample", "--sampler", "exact", "--json", "--seed", "1")
     assert code == 0, err
     s = json.loads(out)["summary"]
-    assert s["dz_BT"]["identified"] is False and s["dz_BT"]["identification"] == "nuisance priors"
+    assert s["dz_BT"]["identified"] is False and s["dz_BT"]["identification"] == "not identified"
     assert set(s["dz_BT"]["identified_through"]) == {"dRB", "zT"}
+    assert s["dz_BT"]["prior_sensitivity"] == "rests on the nuisance priors dRB and zT"
     assert s["alpha_XB"]["identified"] is True and s["alpha_XB"]["identification"] == "data"
 
 

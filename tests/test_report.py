@@ -131,12 +131,13 @@ def test_report_without_second_tool_length_says_what_is_missing(run_cli, tmp_pat
     assert code == 0, err
     html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
     assert "needs ey of CR at a second tool length (R'_B)" in html
-    assert "alpha_BT: not identified by the data" in html
+    assert "alpha_BT: determined only in combination: dy_CZ" in html  # the Jacobian: dy_CZ − Z_T·alpha_BT only
     s = pd.read_csv(tmp_path / "rep" / "summary.csv", index_col="quantity")
     assert not s.loc["alpha_BT", "identified"] and np.isnan(s.loc["alpha_BT", "ballbar"])
-    # the plan begun before the sampling (for all eight) is replaced by one for what the data do not identify,
-    # and its figures are drawn from that one
-    unidentified = {n for n in IDENTIFIABLE if s.loc[n, "identification"] == "not identified"}
+    # the plan begun before the sampling (for all eight) is replaced by one for what the data do not determine one
+    # by one, and its figures are drawn from that one
+    unidentified = {n for n in IDENTIFIABLE if s.loc[n, "identification"] != "data"}
+    assert {"alpha_BT", "dy_CZ"} <= unidentified
     planned = pd.read_csv(tmp_path / "rep" / "plan.csv")
     assert {c[: -len(" sd_after")] for c in planned.columns if c.endswith(" sd_after")} == unidentified
     assert all((tmp_path / "rep" / f).stat().st_size > 0 and f in out for f in ("plan_sweep.png", "plan_ranking.png"))

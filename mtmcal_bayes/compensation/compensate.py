@@ -17,7 +17,8 @@ import numpy as np
 
 from .. import units
 from ..errors import ParameterError
-from ..inference.analytic import NOT_IDENTIFIED_GROWTH, prior_sensitivity
+from ..inference.analytic import prior_sensitivity
+from ..inference.identifiability import DETERMINED, IN_COMBINATION, campaign_identifiability
 from ..inference.log_posterior import LogPosterior
 from ..io.gcode import Program, rewrite
 from ..io.textfiles import write_text_atomic
@@ -52,7 +53,7 @@ class CompensationResult:
     not_compensable: list[dict] = field(default_factory=list)
     info: dict = field(default_factory=dict)
     output: str | None = None  # where :meth:`save` wrote the compensated program
-    warnings: list[str] = field(default_factory=list)  # values the data identify only through priors
+    warnings: list[str] = field(default_factory=list)  # values the data do not determine, or that rest on priors
     reading_choice: dict | None = None  # deviations resting on the campaign's choice of reading (.reading_choice)
 
     def save(self, path) -> None:
@@ -166,22 +167,33 @@ def compensate(campaign, program: Program, *, method: str = "exact", model: str 
 
 
 def prior_only_values(campaign, theta: np.ndarray, posterior=None) -> list[str]:
-    """A warning for each deviation compensated with a value the data do not identify, or identify only through
-    a nuisance prior (closed-form check of :func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`, at the
-    posterior median of sigma_model when the posterior has one)."""
+    """A warning for each deviation compensated with a value the data do not determine one by one (the campaign's
+    Jacobian, :func:`~mtmcal_bayes.inference.identifiability.campaign_identifiability`, for the posterior's data),
+    and, separately, for each whose value rests on nuisance priors (the closed-form diagnostic
+    :func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`, at the posterior median of sigma_model when the
+    posterior has one)."""
     idata = getattr(posterior, "idata", posterior)
-    sigma_um = (float(np.median(idata.posterior["sigma_model"])) if hasattr(idata, "posterior")
-                and "sigma_model" in idata.posterior else SIGMA_MODEL_UM)
-    sens = prior_sensitivity(LogPosterior(campaign, "linear"), units.to_internal(sigma_um, "um"))
+    has_draws = hasattr(idata, "posterior")
+    sigma_um = (float(np.median(idata.posterior["sigma_model"])) if has_draws and "sigma_model" in idata.posterior
+                else SIGMA_MODEL_UM)
+    data = str(idata.posterior.attrs.get("data", "ballbar")) if has_draws else "ballbar"
+    lp = LogPosterior(campaign, "linear", data=data)
+    ident = campaign_identifiability(lp)
+    sens = prior_sensitivity(lp, units.to_internal(sigma_um, "um"))
     out = []
     for i, name in enumerate(DEVIATIONS):
         if name not in sens.through or theta[i] == 0.0:
             continue
         shown = f"{name} = {units.from_internal(theta[i], DEVIATIONS[name].unit):.3g} {units.SYMBOL[DEVIATIONS[name].unit]}"
-        if sens.deviation_growth[name] > NOT_IDENTIFIED_GROWTH:
-            out.append(f"compensating with {shown}, which the data do not identify (its value follows the prior)")
-        elif sens.through[name]:
-            out.append(f"compensating with {shown}, which the data identify only through the prior"
-                       f"{'s' if len(sens.through[name]) > 1 else ''} on {' and '.join(sens.through[name])}: the "
+        verdict, combos = ident.of(name)
+        if verdict == IN_COMBINATION:
+            out.append(f"compensating with {shown}, which the data determine only in combination ({'; '.join(combos)}): "
+                       "its own value follows the priors")
+        elif verdict != DETERMINED:
+            out.append(f"compensating with {shown}, which the data do not identify (the campaign's Jacobian leaves it "
+                       "undetermined; its value follows the priors)")
+        if sens.through[name]:
+            out.append(f"compensating with {shown}, whose value rests on the nuisance prior"
+                       f"{'s' if len(sens.through[name]) > 1 else ''} {' and '.join(sens.through[name])}: the "
                        "correction is as good as that set-up knowledge (docs/metrology.md)")
     return out

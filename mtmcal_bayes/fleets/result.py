@@ -121,12 +121,12 @@ def machine_identity(m: Machine) -> dict:
 
 def _not_determined(entry: dict, history: dict | None) -> list[dict]:
     """A described machine's deviations that are not shown as measured, with why: its history's list, else those
-    its latest campaign's posterior does not identify (``latest`` loses them)."""
+    its latest campaign does not determine one by one (the Jacobian's statement; ``latest`` loses them)."""
     if history is not None and history.get("not_determined") is not None:
         left = list(history["not_determined"])
     else:
         last = (entry["campaigns"] or [None])[-1]
-        left = [{"quantity": q, "why": f"not identified by the campaign ({s.get('identification')})"}
+        left = [{"quantity": q, "why": f"not determined one by one by the campaign ({s.get('identification')})"}
                 for q, s in ((last or {}).get("summary") or {}).items() if s.get("identified") is False]
     hidden = {x["quantity"] for x in left}
     for q in hidden:

@@ -92,14 +92,15 @@ def gaussian_posterior(post: LogPosterior, sigma_model=0.0, *, theta0: np.ndarra
 
 #: widening factor of the priors in :func:`prior_sensitivity`
 WIDEN = 10.0
-#: a quantity whose posterior sd grows more than this when its priors widen ``WIDEN``-fold is not identified
+#: a quantity whose posterior sd grows more than this when its priors widen ``WIDEN``-fold has a width that follows
+#: them (a diagnostic: what the data determine is the Jacobian's statement, :mod:`.identifiability`)
 NOT_IDENTIFIED_GROWTH = 2.0
 #: "removing" a prior in :func:`prior_sensitivity` widens it this much
 REMOVED = 1e4
 #: a nuisance prior whose ``WIDEN``-fold widening alone widens a quantity this much is named among those the
 #: quantity rests on, where no single prior's removal leaves it unidentified
 NAMED_GROWTH = 1.1
-#: the quantities a posterior summary reports with an identifiability verdict
+#: the quantities a posterior summary reports (the thesis machine's, in Table 4.5's order)
 REPORTED: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT")
 
 
@@ -114,10 +115,11 @@ def reported(post) -> tuple[str, ...]:
 class PriorSensitivity:
     """How each reported quantity's posterior sd depends on the priors (closed form, linearised at zero).
 
-    ``deviation_growth[name]``: sd growth when every deviation prior widens ``WIDEN``-fold; above
-    ``NOT_IDENTIFIED_GROWTH`` the quantity is not identified by the data.  ``nuisance_growth[name]``: the
-    same for the nuisance priors (T-ball centring, tool length, W-ball clamping, probe terms); above the
-    threshold the quantity is identified only through them, and ``through[name]`` names them (base names,
+    A diagnostic, never the verdict on what the data determine (that is the campaign's Jacobian's,
+    :func:`~.identifiability.campaign_identifiability`; SPEC §20).  ``deviation_growth[name]``: sd growth when
+    every deviation prior widens ``WIDEN``-fold; above ``NOT_IDENTIFIED_GROWTH`` its width follows those priors.
+    ``nuisance_growth[name]``: the same for the nuisance priors (T-ball centring, tool length, W-ball clamping,
+    probe terms); above the threshold the quantity's interval rests on them, and ``through[name]`` names them (base names,
     e.g. ``("dRB", "zT")``): each prior whose removal alone leaves the quantity unidentified, or, where no
     single one does, each whose ``WIDEN``-fold widening alone widens it by ``NAMED_GROWTH`` or more.
     """

@@ -25,10 +25,9 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 
 from .. import units
-from ..arviz_import import az
 from ..errors import ParameterError
+from ..parameters import weights as quantity_weights
 from .analytic import linearisation
-from .results import HDI_PROB
 
 #: a unit vector whose component in (or out of) a subspace is below this is taken as orthogonal to (or in) it;
 #: also the relative size below which a weight is dropped.  The null basis carries the Jacobian's relative error
@@ -37,6 +36,11 @@ from .results import HDI_PROB
 SUBSPACE_TOL = 1e-6
 #: significant digits of the weights written into a combination's name
 NAME_DIGITS = 4
+
+
+#: what the data say of a quantity (:meth:`Identifiability.of`); the words are those of the summaries' JSON
+#: ``identification`` key, which scripts read
+DETERMINED, IN_COMBINATION, UNDETERMINED = "data", "combination", "not identified"
 
 
 @dataclass(frozen=True)
@@ -73,6 +77,23 @@ class Identifiability:
         if norm == 0.0 or self.unseen is None or self.unseen.shape[1] == 0:
             return True
         return float(np.linalg.norm(self.unseen.T @ c)) <= tol * norm
+
+    def of(self, name: str, weights: dict[str, float] | None = None) -> tuple[str | None, tuple[str, ...]]:
+        """What the data say of the quantity ``name`` (a deviation, or a derived quantity such as
+        ``dx_CZ_minus_dx_BT``; ``weights`` per display unit, default :func:`~mtmcal_bayes.parameters.weights`):
+        ``(verdict, combinations)``.
+
+        ``verdict`` is :data:`DETERMINED` when the data determine it (:meth:`estimable`), else
+        :data:`IN_COMBINATION` when it enters an estimable combination (``combinations``: their names), else
+        :data:`UNDETERMINED`; None for a quantity on no classified deviation (a discrepancy scale).
+        """
+        w = {n: v for n, v in (weights or quantity_weights(name)).items() if n in self.deviations and v}
+        if not w:
+            return None, ()
+        if self.estimable(w):
+            return DETERMINED, ()
+        combos = tuple(c.name for c in self.combinations if set(c.weights) & set(w))
+        return (IN_COMBINATION if combos else UNDETERMINED), combos
 
     def as_dict(self) -> dict:
         """JSON-ready: ``{"determined": [...], "combinations": [{"name", "weights", "unit"}],
@@ -229,16 +250,3 @@ def campaign_identifiability(post) -> Identifiability:
     space = post.space
     known = [b for b in CENTRED if any(p.base == b for p in space.parameters)]
     return identifiability(linearisation(post)[0], space, known=known)
-
-
-def combination_summaries(ident: Identifiability, idata) -> list[dict]:
-    """Each combination with its posterior from the draws of ``idata``: ``{"name", "weights", "mean", "sd",
-    "hdi_low", "hdi_high", "unit"}`` (display units; weights per display unit)."""
-    out = []
-    for c in ident.combinations:
-        draws = sum(w * np.asarray(idata.posterior[n]) for n, w in c.weights.items())
-        flat = np.ravel(draws)
-        low, high = az.hdi(flat, hdi_prob=HDI_PROB)
-        out.append({"name": c.name, "weights": dict(c.weights), "mean": float(flat.mean()),
-                    "sd": float(flat.std(ddof=1)), "hdi_low": float(low), "hdi_high": float(high), "unit": c.unit})
-    return out

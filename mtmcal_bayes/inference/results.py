@@ -18,6 +18,7 @@ from ..parameters import DERIVED, NUISANCE_MEANING, combine, iso_kind, quantity_
 from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity, reported
 from .budget import linearisation_point, variance_budget
 from .gum import gum_table
+from .identifiability import DETERMINED, IN_COMBINATION, UNDETERMINED, Identifiability, campaign_identifiability
 
 HDI_PROB = 0.95
 RHAT_MAX = 1.01
@@ -135,20 +136,24 @@ def prior_sd(result_or_post, names) -> dict[str, float]:
     return {n: sd[n] for n in names if n in sd}
 
 
-def summarize(idata, post, names=None, *, statement: bool = True, diagnostics: bool = True) -> pd.DataFrame:
+def summarize(idata, post, names=None, *, statement: bool = True, diagnostics: bool = True,
+              identifiability: Identifiability | None = None) -> pd.DataFrame:
     """One row per quantity: its ISO 230-7 symbol, mean, sd, median, 95 % HDI, R-hat, bulk/tail ESS, unit,
-    prior sd, identifiability, the Monte-Carlo standard errors of mean and sd, and the GUM statement
-    (:data:`~mtmcal_bayes.inference.gum.GUM_COLUMNS`).
+    prior sd, what the data determine of it, the prior-sensitivity diagnostic, the Monte-Carlo standard errors of
+    mean and sd, and the GUM statement (:data:`~mtmcal_bayes.inference.gum.GUM_COLUMNS`).
 
-    ``sd_ratio`` is posterior sd / prior sd; ``prior_growth`` how much the posterior sd grows when the
-    deviation priors widen tenfold, ``nuisance_growth`` when the nuisance priors do
-    (:func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`).  A quantity whose ``prior_growth``
-    exceeds 2 is not identified by the data (``identified`` False); one whose ``nuisance_growth`` does is
-    identified only through the nuisance priors named in ``identified_through`` (comma-separated base names,
-    empty otherwise).  ``identification`` says which: ``"data"``, ``"nuisance priors"`` or ``"not identified"``
-    (:func:`identification`); ``identified`` is True for ``"data"`` only — a quantity resting on nuisance priors
-    is not identified by the data, and a script reading ``identified`` must not take it for one that is — and
-    None where no check applies (the discrepancy scales).
+    Whether the data determine a quantity is the campaign's Jacobian's statement (``identifiability``, default
+    :func:`~.identifiability.campaign_identifiability` of ``post``; SPEC §20), on every machine:
+    ``identification`` is ``"data"`` (determined one by one), ``"combination"`` (only within the estimable
+    combinations named in ``combination``, ``"; "``-separated) or ``"not identified"``; ``identified`` is True for
+    ``"data"`` only, and both are None where no statement applies (the discrepancy scales).
+
+    The prior-sensitivity check (:func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`) is a separate
+    diagnostic that never decides ``identified``: ``sd_ratio`` is posterior sd / prior sd; ``prior_growth`` how much
+    the posterior sd grows when the deviation priors widen tenfold, ``nuisance_growth`` when the nuisance priors
+    do; ``identified_through`` the nuisance priors a quantity's interval rests on (comma-separated base names,
+    empty otherwise) and ``prior_sensitivity`` its sentence (``"rests on the nuisance prior dRB"``; empty when
+    none).
 
     ``statement=False`` leaves out the GUM statement and the uncertainty budget (intervals and identifiability
     only: what a posterior shown beside another needs).  ``diagnostics=False``, for independent draws of the exact
@@ -168,20 +173,36 @@ def summarize(idata, post, names=None, *, statement: bool = True, diagnostics: b
     psd = prior_sd(post, s.index)
     s["prior_sd"] = [psd.get(n, np.nan) for n in s.index]
     s["sd_ratio"] = s["sd"] / s["prior_sd"]
+    ident = identifiability if identifiability is not None else campaign_identifiability(post)
+    verdicts = [ident.of(n) for n in s.index]
+    s["identification"] = pd.Series([v for v, _ in verdicts], index=s.index, dtype=object)
+    s["identified"] = pd.Series([None if v is None else v == DETERMINED for v, _ in verdicts], index=s.index,
+                                dtype=object)
+    s["combination"] = pd.Series(["; ".join(c) if c else None for _, c in verdicts], index=s.index, dtype=object)
     sens = prior_sensitivity(post, scale_medians(idata, post))
     s["prior_growth"] = [sens.deviation_growth.get(n, np.nan) for n in s.index]
     s["nuisance_growth"] = [sens.nuisance_growth.get(n, np.nan) for n in s.index]
     s["identified_through"] = [", ".join(sens.through[n]) if n in sens.through else None for n in s.index]
-    ident = [identification(g, t) for g, t in zip(s["prior_growth"], s["identified_through"])]
-    s["identification"] = pd.Series(ident, index=s.index, dtype=object)
-    s["identified"] = pd.Series([None if i is None else i == IDENTIFIED_BY_DATA for i in ident], index=s.index,
-                                dtype=object)
+    s["prior_sensitivity"] = [rests_on(t) for t in s["identified_through"]]
     s = s[["iso", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit",
-           "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identification",
-           "identified_through", "mcse_mean", "mcse_sd"]]
+           "prior_sd", "sd_ratio", "prior_growth", "nuisance_growth", "identified", "identification", "combination",
+           "identified_through", "prior_sensitivity", "mcse_mean", "mcse_sd"]]
     if not statement:
         return s
     return pd.concat([s, gum_table(idata, s), budget_columns(idata, post).reindex(s.index)], axis=1)
+
+
+def rests_on(through: str | None) -> str | None:
+    """The prior-sensitivity sentence of a quantity whose interval rests on the nuisance priors ``through``
+    (comma-separated base names): ``"rests on the nuisance prior dRB"``, ``"… priors dRB and zT"``; ``""`` when it
+    rests on none, None where the check does not apply."""
+    if not isinstance(through, str):
+        return None
+    bases = [b for b in through.split(", ") if b]
+    if not bases:
+        return ""
+    listed = bases[0] if len(bases) == 1 else ", ".join(bases[:-1]) + " and " + bases[-1]
+    return f"rests on the nuisance prior{'s' if len(bases) > 1 else ''} {listed}"
 
 
 def scale_draws(idata, post) -> np.ndarray | None:
@@ -201,19 +222,8 @@ def scale_medians(idata, post) -> np.ndarray:
     return np.median(draws, axis=0)
 
 
-#: what a quantity's interval rests on (``identification`` column)
-IDENTIFIED_BY_DATA, BY_NUISANCE_PRIORS, NOT_IDENTIFIED = "data", "nuisance priors", "not identified"
-
-
-def identification(prior_growth: float, through: str | None) -> str | None:
-    """``"not identified"`` when widening the deviation priors widens the quantity more than
-    :data:`~.analytic.NOT_IDENTIFIED_GROWTH`, else ``"nuisance priors"`` when it rests on nuisance priors
-    (``through`` names them), else ``"data"``; None where no check applies."""
-    if prior_growth is None or np.isnan(prior_growth):
-        return None
-    if prior_growth > NOT_IDENTIFIED_GROWTH:
-        return NOT_IDENTIFIED
-    return BY_NUISANCE_PRIORS if isinstance(through, str) and through else IDENTIFIED_BY_DATA
+#: the words of the ``identification`` column (:meth:`~.identifiability.Identifiability.of`)
+IDENTIFIED_BY_DATA, IN_COMBINATION, NOT_IDENTIFIED = DETERMINED, IN_COMBINATION, UNDETERMINED
 
 
 def budget_columns(idata, post) -> pd.DataFrame:
@@ -235,23 +245,53 @@ def diagnostics_warnings(summary: pd.DataFrame) -> list[str]:
 
 
 def not_identified(summary: pd.DataFrame) -> list[str]:
-    """Sentences for the quantities the data do not identify, and for those identified only through
-    nuisance priors (naming them)."""
+    """Sentences for the quantities the data (the campaign's Jacobian) do not determine one by one: not at all, or
+    only within the combinations named."""
     out = []
     for n, r in summary.iterrows():
         if r["identification"] == NOT_IDENTIFIED:
-            out.append(f"{n}: not identified by the data — its width follows the priors (widening the deviation "
-                       f"priors {WIDEN:g}× widens it {r['prior_growth']:.1f}×; posterior sd {r['sd']:.3g} "
-                       f"{units.SYMBOL[r['unit']]} = {r['sd_ratio']:.2f} × prior sd)")
+            out.append(f"{n}: not identified by the data (the campaign's Jacobian, nuisance terms included, leaves it "
+                       f"undetermined) — its width is set by priors (its own, or the nuisance priors it is confounded with); "
+                       f"posterior sd {r['sd']:.3g} "
+                       f"{units.SYMBOL[r['unit']]} = {r['sd_ratio']:.2f} × prior sd")
+        elif r["identification"] == IN_COMBINATION:
+            out.append(f"{n}: determined only in combination: {r['combination']} — not one by one; its own width "
+                       f"follows the priors (posterior sd {r['sd']:.3g} {units.SYMBOL[r['unit']]} = "
+                       f"{r['sd_ratio']:.2f} × prior sd)")
+    return out
+
+
+def prior_sensitivity_notes(summary: pd.DataFrame) -> list[str]:
+    """The prior-sensitivity diagnostic's sentences, which never decide ``identified``: each quantity whose interval
+    rests on nuisance priors (naming them), and each the data determine whose width still follows the deviation
+    priors (a weakly determined direction)."""
+    out = []
+    for n, r in summary.iterrows():
         if isinstance(r["identified_through"], str) and r["identified_through"]:
             out.append(identified_through_sentence(n, r["identified_through"].split(", "), r["nuisance_growth"]))
+        if r["identification"] == IDENTIFIED_BY_DATA and r["prior_growth"] > NOT_IDENTIFIED_GROWTH:
+            out.append(f"{n}: determined by the data, but weakly — widening the deviation priors {WIDEN:g}× widens it "
+                       f"{r['prior_growth']:.1f}×")
     return out
 
 
 def identified_through_sentence(name: str, bases: list[str], growth: float) -> str:
-    """"dz_BT: identified only through the priors on dRB (…) and zT (…)": the nuisance priors it rests on."""
+    """"dz_BT: rests on the nuisance priors dRB (…) and zT (…)": the nuisance priors its interval rests on."""
     what = [f"{b} ({NUISANCE_MEANING[b]})" for b in bases]
     listed = what[0] if len(what) == 1 else ", ".join(what[:-1]) + " and " + what[-1]
-    return (f"{name}: identified only through the prior{'s' if len(what) > 1 else ''} on {listed} — widening the "
+    return (f"{name}: rests on the nuisance prior{'s' if len(what) > 1 else ''} {listed} — widening the "
             f"nuisance priors {WIDEN:g}× widens it {growth:.1f}×; its interval states that set-up knowledge as much "
             "as the machine")
+
+
+def combination_summaries(ident: Identifiability, idata) -> list[dict]:
+    """Each combination with its posterior from the draws of ``idata``: ``{"name", "weights", "mean", "sd",
+    "hdi_low", "hdi_high", "unit"}`` (display units; weights per display unit)."""
+    out = []
+    for c in ident.combinations:
+        draws = sum(w * np.asarray(idata.posterior[n]) for n, w in c.weights.items())
+        flat = np.ravel(draws)
+        low, high = az.hdi(flat, hdi_prob=HDI_PROB)
+        out.append({"name": c.name, "weights": dict(c.weights), "mean": float(flat.mean()),
+                    "sd": float(flat.std(ddof=1)), "hdi_low": float(low), "hdi_high": float(high), "unit": c.unit})
+    return out

@@ -21,8 +21,8 @@
   rank-normalised R-hat over 2K chains, each ensemble split into halves in time,
   so it compares the ensembles with each other and each ensemble's start with its
   end.  The run stops when that R-hat ≤ ``max_rhat`` and ArviZ's bulk and tail ESS
-  reach ``target_ess`` for the eight quantities of Table 4.5 and
-  ``target_ess_sigma`` for sigma_model — or at ``max_steps``, with a warning.
+  reach ``target_ess`` for every reported quantity (:func:`_gating`) and
+  ``target_ess_sigma`` for each sampled discrepancy scale — or at ``max_steps``, with a warning.
   The checks cost little: a run has a few of them, on chains of tens to hundreds
   of steps.
 * Storage is preallocated and grows geometrically; with a checkpoint, emcee's
@@ -45,8 +45,9 @@ import numpy as np
 
 from ..arviz_import import az
 from ..errors import MtmcalError, ParameterError
-from ..parameters import IDENTIFIABLE, is_scale
+from ..parameters import is_scale
 from ..progress import Progress, ProgressEvent, emit
+from .analytic import reported
 from .approximation import PosteriorApproximation
 from .checkpoint import claim
 from .log_posterior import LogPosterior
@@ -157,9 +158,9 @@ class _GrowingBackend(emcee.backends.Backend):
 
 
 def _gating(post: LogPosterior) -> list[str]:
-    if post.campaign.machine.described:  # its deviations: which are identified is computed, not known
-        return [p.name for p in post.space.parameters if p.group == "deviation"] + list(post.sampled_scales)
-    return [n for n in IDENTIFIABLE] + list(post.sampled_scales)
+    """The quantities whose convergence stops a run: every quantity the posterior reports (:func:`.analytic.reported`,
+    whatever the data determine of it: a prior-dominated one must mix too), then the sampled discrepancy scales."""
+    return list(reported(post)) + list(post.sampled_scales)
 
 
 def _gating_draws(post: LogPosterior, chains_z: np.ndarray) -> dict[str, np.ndarray]:

@@ -36,8 +36,10 @@ def quantity_json(name: str, row, conformity=None) -> dict:
         "endpoint_tolerance": _num(row["endpoint_tolerance"]), "significant_digits": int(row["significant_digits"]),
         "identified": row["identified"] if isinstance(row["identified"], bool) else None,
         "identification": row["identification"] if isinstance(row["identification"], str) else None,
+        "combination": row["combination"].split("; ") if isinstance(row.get("combination"), str) else [],
         "identified_through": through.split(", ") if isinstance(through, str) and through else [],
         "prior_growth": _num(row["prior_growth"]), "nuisance_growth": _num(row["nuisance_growth"]),
+        "prior_sensitivity": row.get("prior_sensitivity") or None,
     })
     budget = {k.split(":", 1)[1]: float(v) for k, v in row.items() if k.startswith("budget:") and v == v}
     if budget:
@@ -70,8 +72,7 @@ def posterior_json(result) -> dict:
                            for k, v in row.items()} for n, row in result.comparison.iterrows()},
         "diagnostics": result.diagnostics.to_json(),
         **choice_json(result.summary, post.campaign),
-        **({"identifiability": result.identifiability.as_dict(), "combinations": result.combinations}
-           if result.identifiability is not None else {}),
+        "identifiability": result.identifiability.as_dict(), "combinations": result.combinations,
     }
 
 
@@ -125,7 +126,11 @@ def format_posterior(result) -> str:
     if result.conformity is not None and not result.conformity.empty:
         lines += ["", conformity_block(result.conformity, s)]
     if result.not_identified:
-        lines += ["", "Identifiability (closed-form prior-sensitivity check):"] + [f"  - {m}" for m in result.not_identified]
+        lines += ["", "Identifiability (the campaign's Jacobian, nuisance terms included):"] + [
+            f"  - {m}" for m in result.not_identified]
+    if result.prior_notes:
+        lines += ["", "Prior sensitivity (closed form; a diagnostic, it does not decide what is identified):"] + [
+            f"  - {m}" for m in result.prior_notes]
     d = result.diagnostics
     lines += ["", f"Diagnostics: converged {d.converged}, τ_max {d.tau_max_steps:.1f} steps, burn-in "
               f"{d.burn_in}, min bulk / tail ESS {d.min_ess_bulk:.0f} / {d.min_ess_tail:.0f} (target "
@@ -214,7 +219,7 @@ def identifiability_block(ident, combinations: list[dict]) -> str:
         lines.append(f"  in combination: {c['name']} = {c['mean']:.2f} ± {c['sd']:.2f} {units.SYMBOL[c['unit']]} "
                      f"(95 % HDI {c['hdi_low']:.2f} to {c['hdi_high']:.2f})")
     lines.append("  not at all:     " + (", ".join(ident.undetermined) or "none") +
-                 ("  (their posterior is their prior)" if ident.undetermined else ""))
+                 ("  (their width is set by priors)" if ident.undetermined else ""))
     return "\n".join(lines)
 
 

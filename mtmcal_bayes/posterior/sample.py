@@ -9,18 +9,19 @@ import pandas as pd
 
 from .. import units
 from ..analysis import analysis_of
-from ..inference.identifiability import campaign_identifiability, combination_summaries
+from ..inference.identifiability import campaign_identifiability
 from ..inference import reading_choice
 from ..inference.log_posterior import LogPosterior
 from ..inference.results import (
+    combination_summaries,
     diagnostics_warnings,
     not_identified,
+    prior_sensitivity_notes,
     summarize,
     to_inference_data,
 )
 from ..inference.sampling import SamplerSettings, SamplingResult, run_ensembles
 from ..io.netcdf import write_netcdf_atomic
-from ..parameters import IDENTIFIABLE
 from ..progress import Progress
 from .checks import (
     ReferenceCheck,
@@ -36,7 +37,8 @@ from .conformity import conformity_table
 class SamplerDiagnostics:
     """How the sampler run went: convergence, sizes, autocorrelation, ESS and R-hat, and what to heed.
 
-    ``min_ess_bulk``, ``min_ess_tail`` and ``ess_bulk_per_second`` are over the eight quantities of Table 4.5;
+    ``min_ess_bulk``, ``min_ess_tail`` and ``ess_bulk_per_second`` are over the reported quantities (those whose
+    ESS stops the sampler, the discrepancy scales apart);
     ``max_r_hat`` over every summarised quantity; ``independence_acceptance`` how often the independence
     proposal from the linearised posterior was accepted; ``checks`` the stopping checks (steps, burn-in,
     R-hat, smallest ESS over its target); ``reference`` the comparison with the exact or linearised posterior.
@@ -63,6 +65,7 @@ class SamplerDiagnostics:
     independence_acceptance: float
     checks: list[dict]
     reference: dict | None
+    prior_sensitivity: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
         return asdict(self)
@@ -85,7 +88,10 @@ class PosteriorResult:
         each quantity's posterior beside the ball-bar and touch-probe values.
     sampling : SamplingResult
         the chains of every ensemble in internal units, and the sampler's own facts.
-    warnings, not_identified : sentences to heed.
+    warnings, not_identified : sentences to heed; ``not_identified`` what the campaign's Jacobian leaves
+        undetermined or determines only in combination.
+    prior_notes : the prior-sensitivity diagnostic's sentences (the nuisance priors an interval rests on); they
+        never decide what is identified.
     conformity : pandas.DataFrame or None
         with tolerances: per toleranced quantity its limits, probability of nonconformance and verdict
         (:func:`~mtmcal_bayes.posterior.conformity.conformity_table`).
@@ -100,8 +106,9 @@ class PosteriorResult:
     reference: ReferenceCheck | None = None
     output: str | None = None  # where :meth:`save` wrote the NetCDF
     conformity: pd.DataFrame | None = None  # one row per toleranced quantity (posterior.conformity)
-    identifiability: object | None = None  # a described machine's: what its campaign determines (Identifiability)
+    identifiability: object | None = None  # what its campaign determines (Identifiability)
     combinations: list[dict] = field(default_factory=list)  # its named combinations with their posteriors
+    prior_notes: list[str] = field(default_factory=list)  # the prior-sensitivity diagnostic's sentences
 
     @property
     def log_posterior(self) -> LogPosterior:
@@ -138,27 +145,27 @@ class PosteriorResult:
 
     @property
     def ess_quantities(self) -> list[str]:
-        """The quantities the diagnostics' smallest ESS is over: the eight of Table 4.5 where the summary has them,
-        else the machine's deviations."""
-        return [n for n in IDENTIFIABLE if n in self.summary.index] or [
-            n for n in self.summary.index if n in self.log_posterior.space.names]
+        """The quantities the diagnostics' smallest ESS is over: every reported quantity (the set whose ESS stops
+        the sampler), the discrepancy scales aside."""
+        return [n for n in self.summary.index if n not in self.log_posterior.scales]
 
     @property
     def diagnostics(self) -> SamplerDiagnostics:
         r = self.sampling
-        eight = self.summary.loc[self.ess_quantities]
-        ess = eight["ess_bulk"]
+        reported = self.summary.loc[self.ess_quantities]
+        ess = reported["ess_bulk"]
         return SamplerDiagnostics(
             converged=r.converged, n_ensembles=r.chains.shape[0], n_walkers=r.chains.shape[2], n_steps=r.n_steps,
             burn_in=r.burn, tau_max_steps=float(np.nanmax(r.tau)), kept_draws=r.n_draws,
             acceptance=r.acceptance.tolist(), wall_time_s=r.wall_time, min_ess_bulk=float(ess.min()),
             ess_bulk_per_second=float(ess.min() / r.wall_time), max_r_hat=float(self.summary["r_hat"].max()),
             warnings=self.warnings, not_identified=self.not_identified, messages=r.messages,
-            sampler=r.settings.sampler, target_ess=r.settings.target_ess, min_ess_tail=float(eight["ess_tail"].min()),
+            sampler=r.settings.sampler, target_ess=r.settings.target_ess, min_ess_tail=float(reported["ess_tail"].min()),
             independence_acceptance=r.independence_acceptance,
             checks=[{"steps": c.steps, "burn_in": c.burn, "max_r_hat": c.max_rhat, "min_ess_over_target": c.min_ess_ratio}
                     for c in r.checks],
-            reference=None if self.reference is None else self.reference.to_json())
+            reference=None if self.reference is None else self.reference.to_json(),
+            prior_sensitivity=self.prior_notes)
 
     def save(self, path) -> None:
         """Write the InferenceData as NetCDF (atomically); ``compensate --posterior`` reads it."""
@@ -204,7 +211,8 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     seed = settings.seed if settings else None
     beside = lean and result.settings.sampler == "exact"  # exact draws whose intervals alone are shown
     idata = to_inference_data(result, seed=seed, posterior_only=beside)
-    summary = summarize(idata, post, statement=statement, diagnostics=not beside)
+    ident = campaign_identifiability(post)
+    summary = summarize(idata, post, statement=statement, diagnostics=not beside, identifiability=ident)
     choice = analysis.reading_choice(summary.index) if statement else None  # a reading chosen over another
     if choice is not None:
         summary = summary.join(choice)
@@ -218,9 +226,6 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     if conf is not None:  # a quantity of the machine that this campaign holds at zero has no posterior to decide on
         warn += [f"tolerance {t.key or n}: no verdict, the campaign does not estimate {n} (held at zero)"
                  for n, t in tol.items() if n not in summary.index]
-    ident, combos = None, []
-    if campaign.machine.described:
-        ident = campaign_identifiability(post)
-        combos = combination_summaries(ident, idata)
     return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf,
-                           identifiability=ident, combinations=combos)
+                           identifiability=ident, combinations=combination_summaries(ident, idata),
+                           prior_notes=prior_sensitivity_notes(summary))

@@ -68,7 +68,8 @@ from .drawing import Drawing
 from .missing import missing_data
 
 SUMMARY_COLUMNS = ["iso", "unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
-                   "prior_sd", "sd_ratio", "identified", "identification", "identified_through", "prior_growth", "nuisance_growth",
+                   "prior_sd", "sd_ratio", "identified", "identification", "combination", "identified_through",
+                   "prior_sensitivity", "prior_growth", "nuisance_growth",
                    *GUM_COLUMNS]
 REFERENCE_COLUMNS = ["ballbar", "ballbar_in_hdi", "ballbar_z", "probe_reported", "probe_reported_in_hdi",
                      "probe_reported_z", "probe_recomputed", "probe_recomputed_in_hdi", "probe_recomputed_z"]
@@ -436,7 +437,7 @@ def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
                         "probe (thesis)": s["probe_reported"], "in HDI ": s["probe_reported_in_hdi"],
                         "probe (recomputed)": s["probe_recomputed"], "in HDI  ": s["probe_recomputed_in_hdi"],
                         "R-hat": s["r_hat"], "bulk ESS": s["ess_bulk"].round(0).astype(int),
-                        "identified by": s["identification"]})
+                        "identified by": s["identification"], "prior sensitivity": s["prior_sensitivity"]})
     if reading_choice.has_choice(s):  # the mark and the value under the best rejected reading
         out[reading_choice.HEAD] = [reading_choice.mark_cell(r) for _, r in s.iterrows()]
     return out
@@ -524,8 +525,8 @@ def _compensation_section(page: Page, c: ReportContent) -> None:
                        "--accept-disagreement to compensate anyway (with a warning).")
     elif c.instruments is not None:
         page.paragraph(base + "The two instruments agree on every deviation they both measure, so it compensates "
-                       "without asking; quantities identified only through nuisance priors are named in its "
-                       "warnings.")
+                       "without asking; deviations the data do not determine one by one, and those whose values rest "
+                       "on nuisance priors, are named in its warnings.")
     else:
         page.paragraph(base + "This campaign has one instrument: nothing checks its deviations against a second one.")
     if reading_choice.marked(c.posterior.summary):
@@ -596,10 +597,10 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
 
 
 def _planning(campaign, rep, drawing: Drawing, *, batch: int, say) -> tuple[PlanResult, bool]:
-    """The plan for the quantities the data do not identify, else for all eight (that one begun before the
-    sampling, in ``batch``: waited for here), and whether its figures are drawn already (they are for that one)."""
-    targets = [n for n in IDENTIFIABLE if n in rep.summary.index
-               and rep.summary.loc[n, "identification"] == "not identified"]
+    """The plan for the quantities the data do not determine one by one (the Jacobian's statement: not at all, or
+    only in combination), else for all eight (that one begun before the sampling, in ``batch``: waited for here),
+    and whether its figures are drawn already (they are for that one)."""
+    targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
     if not targets:
         return drawing.wait(batch)[PLAN_JOB], True
     drawing.cancel(batch)
@@ -614,7 +615,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     page.paragraph("What the intervals rest on (share of each posterior variance by source; section 'Uncertainty "
                    "budget'): " + budget_plot.dominant_sentence(rep.summary, post=rep.log_posterior))
     page.box("missing", "Missing from this campaign", c.missing)
-    page.box("warn", "Warnings", rep.warnings + rep.not_identified)
+    page.box("warn", "Warnings", rep.warnings + rep.not_identified + rep.prior_notes)
 
     page.section("results", "Results")
     page.paragraph(
@@ -673,7 +674,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     best = planned.table.iloc[0]
     page.paragraph(
         f"Targets: {', '.join(planned.targets)}"
-        + (" (the quantities this campaign does not identify)" if len(planned.targets) < len(IDENTIFIABLE) else "")
+        + (" (the quantities this campaign does not determine one by one)" if len(planned.targets) < len(IDENTIFIABLE) else "")
         + f". Best candidate: {best['name']}, expected information gain {best['eig_bits']:.2f} bits"
         + (f", which identifies {best['newly_identified']}" if best["newly_identified"] else "")
         + ". Closed form for the linear model; the full ranking is in plan.csv, and mtmcal-bayes plan "

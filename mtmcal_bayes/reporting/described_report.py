@@ -179,7 +179,7 @@ def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path, loo, shown) -> 
                    "budget'): " + budget_plot.dominant_sentence(rep.summary, [n for n in rep.summary.index
                                                                             if n in post.space.names], post=post))
     page.box("missing", "Not in this report (sections of the thesis machine's)", NOT_MADE)
-    page.box("warn", "Warnings", rep.warnings + rep.not_identified)
+    page.box("warn", "Warnings", rep.warnings + rep.not_identified + rep.prior_notes)
 
     page.section("machine", "The machine")
     kind = f"built-in type {desc.builtin}" if desc.builtin else "described in the campaign"
@@ -208,7 +208,8 @@ def _page(rep, ls: LeastSquares, tables, *, campaign, tmp: Path, loo, shown) -> 
     s = rep.summary
     page.table(pd.DataFrame({"unit": s["unit"].map(units.SYMBOL), "mean": s["mean"], "sd": s["sd"],
                              "HDI 2.5 %": s["hdi_low"], "HDI 97.5 %": s["hdi_high"], "R-hat": s["r_hat"],
-                             "identified by": s["identification"]}), digits={"R-hat": 3})
+                             "identified by": s["identification"], "prior sensitivity": s["prior_sensitivity"]}),
+               digits={"R-hat": 3})
     page.section("least-squares", "Least-squares identification beside the posterior")
     page.paragraph(f"The deterministic counterpart: the least-squares solution of the chain's first order, the "
                    f"nuisance terms held to their set-up knowledge, the deviations free, at σ_model = "

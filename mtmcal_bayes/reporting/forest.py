@@ -19,13 +19,16 @@ from ..figure_style import (
 )
 from ..parameters import IDENTIFIABLE
 from .corner_plot import OFF_SCALE_SD, reference_values
+from .widths import IDENTIFICATION_COLOUR
 
 CAPTION = (
     "One row per quantity, each with its own scale (″ for angles, µm for lengths): posterior mean (dot) and "
     "95 % highest-density interval (bar), and below it the deterministic values: ball bar (thesis Eqs "
     "4.10–4.18 recomputed from the campaign), touch probe as printed (Table 5.3) and touch probe recomputed "
     f"(Eqs 5.1–5.19). A reference value outside the bar is outside the 95 % HDI. Values more than "
-    f"{OFF_SCALE_SD:g} posterior sd away are not drawn to scale: an arrow at the edge gives the value."
+    f"{OFF_SCALE_SD:g} posterior sd away are not drawn to scale: an arrow at the edge gives the value. "
+    "A red name: the campaign's Jacobian leaves the quantity undetermined (its bar is set by priors); orange: "
+    "determined only in a combination with others."
 )
 
 CAPTION_DATA = (
@@ -41,6 +44,13 @@ _REF_STYLE = {"ballbar": dict(marker="o", ms=9, mfc="none", mew=2),
 
 def _colour(label: str, several: bool) -> str:
     return {**MODEL_COLOURS, **DATA_COLOURS}.get(label, COLOURS["posterior"]) if several else COLOURS["posterior"]
+
+
+def _label_colour(rows) -> str:
+    """A quantity's label colour: what the data determine of it (the Jacobian's statement) where every posterior
+    drawn says the same, else black."""
+    verdicts = {r.get("identification") for r in rows}
+    return IDENTIFICATION_COLOUR.get(verdicts.pop(), "black") if len(verdicts) == 1 else "black"
 
 
 def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame | None, names=IDENTIFIABLE):
@@ -87,7 +97,7 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
         ax.set_yticks([])
         iso = iso_mathtext(n)
         ax.set_ylabel(f"{symbol(n)}\n{iso + chr(10) if iso else ''}[{unit_symbol(n)}]", rotation=0, ha="right",
-                      va="center", fontsize=12)
+                      va="center", fontsize=12, color=_label_colour(rows.values()))
         if xlim[0] < 0 < xlim[1]:
             ax.axvline(0, color="0.6", lw=0.8, zorder=0)
         ax.grid(axis="x", alpha=0.3)

@@ -8,21 +8,23 @@ from matplotlib.lines import Line2D
 
 from ..figure_style import COLOURS, label, new_figure
 from ..inference.analytic import NOT_IDENTIFIED_GROWTH, WIDEN
+from ..inference.identifiability import DETERMINED, IN_COMBINATION, UNDETERMINED
 from ..parameters import IDENTIFIABLE
 
 CAPTION = (
     "Prior sd (grey) and posterior sd (blue) of each quantity on a logarithmic axis, with the ratio "
     "posterior/prior written beside it: a ratio near 1 means the data taught nothing about that quantity. "
-    f"Red labels mark quantities that are not identified by the data: their posterior sd grows more than "
-    f"{NOT_IDENTIFIED_GROWTH:g}× when the deviation priors are widened {WIDEN:g}× (closed-form check), "
-    "so their width reflects the prior, not the measurement. 'Only through the prior on …' (orange) marks quantities whose "
-    f"sd grows more than {NOT_IDENTIFIED_GROWTH:g}× when the nuisance priors (T-ball centring, tool length, W-ball "
-    "clamping) are widened instead: the data identify them only with that set-up knowledge (docs/metrology.md)."
+    "What the data determine is the campaign's Jacobian's statement (nuisance terms included): red labels mark "
+    "quantities it leaves undetermined, so their width reflects priors, not the measurement; orange labels those "
+    "determined only in a combination with others (named in the summary). 'Rests on xT prior' is a "
+    f"separate diagnostic: the quantity's sd grows more than {NOT_IDENTIFIED_GROWTH:g}× when the nuisance priors "
+    f"(T-ball centring, tool length, W-ball clamping) are widened {WIDEN:g}×, so its interval states that set-up "
+    "knowledge as much as the machine (docs/metrology.md)."
 )
 
 
-#: colour of a quantity's label by what its interval rests on
-IDENTIFICATION_COLOUR = {"data": "black", "nuisance priors": "#B25E00", "not identified": "#C00000", None: "black"}
+#: colour of a quantity's label by what the data determine of it (the Jacobian's statement)
+IDENTIFICATION_COLOUR = {DETERMINED: "black", IN_COMBINATION: "#B25E00", UNDETERMINED: "#C00000", None: "black"}
 
 
 def widths_figure(summary: pd.DataFrame, names=IDENTIFIABLE):
@@ -37,9 +39,9 @@ def widths_figure(summary: pd.DataFrame, names=IDENTIFIABLE):
     lo, hi = float(min(s["sd"].min(), s["prior_sd"].min())), float(max(s["sd"].max(), s["prior_sd"].max()))
     ax.set_xlim(lo / 3, hi * 6)
     for yi, (n, r) in zip(y, s.iterrows()):
-        through = r.get("identified_through")
-        note = ("  not identified" if r["identification"] == "not identified" else "") + (
-            f"  only through the prior on {through}" if isinstance(through, str) and through else "")
+        note = {UNDETERMINED: "  not identified", IN_COMBINATION: "  only in combination"}.get(r["identification"], "")
+        through = r.get("identified_through")  # the prior-sensitivity diagnostic, in short
+        note += f"  rests on {through} prior{'s' if ',' in through else ''}" if isinstance(through, str) and through else ""
         ax.text(max(r["prior_sd"], r["sd"]) * 1.25, yi, f"× {r['sd_ratio']:.3g}" + note, va="center", fontsize=9,
                 color=IDENTIFICATION_COLOUR[r["identification"]])
     ax.set_yticks(y, [label(n) for n in names], fontsize=11)

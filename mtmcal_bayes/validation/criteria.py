@@ -6,22 +6,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..parameters import IDENTIFIABLE
-
-#: ranked quantities: the eight of Table 4.5, then the other sampled deviations and sigma_model (with touch-probe
-#: data :func:`sbc_quantities` ranks each instrument's discrepancy scale)
-SBC_QUANTITIES: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT", "sigma_model")
 
 
 @dataclass(frozen=True)
 class Checked:
     """The quantities ranked for one posterior and how each is read from parameter draws.
 
-    ``names``: in ranking order; ``identified``: those the verdict is over (the thesis machine: the eight of
-    Table 4.5; a described machine: the deviations its campaign determines one by one and its identifiable
-    combinations); ``weights``: a described machine's combinations, name -> {deviation: weight per display
-    unit}, their values Σ w·θ in display units; ``identifiability``: a described machine's
-    :class:`~mtmcal_bayes.inference.identifiability.Identifiability` (None on the thesis machine).
+    ``names``: in ranking order; ``identified``: those the verdict is over (the reported quantities the campaign
+    determines one by one and its identifiable combinations); ``weights``: the combinations, name -> {deviation:
+    weight per display unit}, their values Σ w·θ in display units; ``identifiability``: the campaign's
+    :class:`~mtmcal_bayes.inference.identifiability.Identifiability` (None: not computed).
     """
 
     names: tuple[str, ...]
@@ -40,18 +34,18 @@ class Checked:
 
 
 def checked_quantities(post) -> Checked:
-    """What SBC ranks for ``post``.  The thesis machine: the deviations of :data:`SBC_QUANTITIES`, then the
-    discrepancy scales.  A described machine (SPEC §19): the deviations its campaign determines one by one, its
-    identifiable combinations (both from :func:`~mtmcal_bayes.inference.identifiability.campaign_identifiability`),
-    then the discrepancy scales; the deviations it does not determine are not ranked (their posterior is their
-    prior)."""
-    if not post.campaign.machine.described:
-        return Checked(SBC_QUANTITIES[:-1] + tuple(post.scales), IDENTIFIABLE)
-    from ..inference.identifiability import campaign_identifiability
+    """What SBC ranks for ``post``, on every machine (SPEC §20): the quantities the posterior reports
+    (:func:`~mtmcal_bayes.inference.analytic.reported`; on the thesis machine in Table 4.5's order, derived ones
+    included) that its campaign determines one by one, its identifiable combinations (both from
+    :func:`~mtmcal_bayes.inference.identifiability.campaign_identifiability`), then the discrepancy scales; the
+    deviations it does not determine are not ranked (their width is set by priors)."""
+    from ..inference.analytic import reported
+    from ..inference.identifiability import DETERMINED, campaign_identifiability
 
     ident = campaign_identifiability(post)
     combos = {c.name: dict(c.weights) for c in ident.combinations}
-    identified = tuple(ident.determined) + tuple(combos)
+    determined = tuple(n for n in reported(post) if ident.of(n)[0] == DETERMINED)
+    identified = determined + tuple(combos)
     return Checked(identified + tuple(post.scales), identified, combos, ident)
 
 

@@ -41,7 +41,7 @@ def format_sbc(result) -> str:
 
 
 def _count(result) -> str:
-    """"eight" on the thesis machine (its Table 4.5), "n identified" on a described one."""
+    """"n identified": the quantities the verdict is over ("eight" where that is not known: Table 4.5's)."""
     if result.identifiability is None:
         return "eight"
     return f"{len(result.identified)} identified"
@@ -52,12 +52,13 @@ def _plural(n: int, word: str) -> str:
 
 
 def _checked_lines(result) -> list[str]:
-    """What the rows are, and on a described machine what is not checked."""
+    """What the rows are, and what is not checked."""
     if result.identifiability is None:
         return [("The first eight are the quantities of thesis Table 4.5; the rest are the other sampled deviations "
                  "and sigma_model.")]
     ident = result.identifiability
-    what = f"the {_plural(len(ident.determined), 'deviation')} this campaign determines one by one"
+    one_by_one = len(result.identified) - len(ident.combinations)  # reported quantities, derived ones included
+    what = f"the {one_by_one} quantit{'y' if one_by_one == 1 else 'ies'} this campaign determines one by one"
     if ident.combinations:
         what += (f" and its {_plural(len(ident.combinations), 'identifiable combination')} (Σ w·θ, display "
                  "units)")

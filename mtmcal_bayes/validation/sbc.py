@@ -6,9 +6,9 @@ repeat means from the likelihood, ``ỹ ~ N(f(θ̃), s²/n + u_inst² + σ̃²)`
 the campaign's own repeat counts, repeat sds and instrument accuracy — exactly
 the data-generating process the likelihood assumes; draw from the posterior
 given ỹ; rank θ̃ among ``L`` near-independent posterior draws, for every
-quantity (:func:`~.criteria.checked_quantities`: on the thesis machine the
-eight of Table 4.5, dx_CZ, dx_BT, dz_BT; on a described machine the deviations
-its campaign determines one by one and its identifiable combinations Σ w·θ;
+quantity (:func:`~.criteria.checked_quantities`: on every machine the reported
+quantities its campaign's Jacobian determines one by one — on the thesis campaign
+the eight of Table 4.5, dx_CZ and dx_BT — and its identifiable combinations Σ w·θ;
 then the discrepancy scales).  If the inference is right, each rank is uniform
 on {0, …, L} whatever the prior and the design, and the truth lies inside the posterior's
 x % highest-density interval in x % of the replicates.
@@ -41,7 +41,6 @@ from ..progress import Progress, ProgressEvent, emit
 from .criteria import (  # noqa: F401  (re-exported)
     INTERVALS,
     P_MIN,
-    SBC_QUANTITIES,
     Checked,
     checked_quantities,
     sbc_quantities,
@@ -101,9 +100,9 @@ class SBCResult:
     wall_time: float
     output: str | None = None  # directory written by :meth:`write`
     files: list[str] = field(default_factory=list)
-    #: the quantities the verdict is over (:attr:`Checked.identified`; the thesis machine: the eight of Table 4.5)
+    #: the quantities the verdict is over (:attr:`Checked.identified`: what the campaign's Jacobian determines)
     identified: tuple[str, ...] = IDENTIFIABLE
-    #: a described machine's: what its campaign determines (undetermined deviations are not ranked)
+    #: what its campaign determines (undetermined deviations are not ranked)
     identifiability: Identifiability | None = None
 
     @property
