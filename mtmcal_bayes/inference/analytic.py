@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MtmcalError
+from ..machines.plugins import provided
 from ..models import jacobian
 from ..parameters import IDENTIFIABLE, weights
 from .log_posterior import LogPosterior
@@ -105,10 +106,10 @@ REPORTED: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT")
 
 
 def reported(post) -> tuple[str, ...]:
-    """The quantities a posterior reports: the thesis' (:data:`REPORTED`), or a described machine's deviations."""
-    if post.campaign.machine.described:
-        return tuple(p.name for p in post.space.parameters if p.group == "deviation")
-    return REPORTED
+    """The quantities a posterior reports: its machine's plug-in's (the thesis': :data:`REPORTED`), else the
+    machine's deviations."""
+    own = provided(post.campaign.machine, "summary_quantities")
+    return own if own is not None else tuple(p.name for p in post.space.parameters if p.group == "deviation")
 
 
 @dataclass(frozen=True)

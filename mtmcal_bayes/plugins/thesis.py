@@ -183,6 +183,13 @@ class ThesisPlugin:
         return IDENTIFIABLE
 
     @property
+    def summary_quantities(self) -> tuple[str, ...]:
+        """What a posterior summary reports: the eight, and dx_CZ, dx_BT and dz_BT apart."""
+        from ..inference.analytic import REPORTED
+
+        return REPORTED
+
+    @property
     def deviation_table(self) -> dict:
         """The thesis' 13 deviations by their thesis names (Table 2.1), each with its ISO 230-7 symbol."""
         from ..parameters import DEVIATIONS
