@@ -19,7 +19,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-import coverage
+# bench/coverage.py (the coverage of credible intervals) would shadow the coverage package
+sys.path = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+import coverage  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "mtmcal_bayes"

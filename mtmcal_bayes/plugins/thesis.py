@@ -75,6 +75,13 @@ def compensate(c, parsed, *, method: str, model, values: str, posterior, point: 
                            posterior=posterior, point=point, setup=setup, mount=mount)
 
 
+def sample_notes(result) -> list[str]:
+    """What ``sample`` adds on the thesis machine: the effect of the thesis assumption dx_BT = 0 (Eq 4.2)."""
+    from ..posterior.output import thesis_assumption_lines
+
+    return thesis_assumption_lines(result)
+
+
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
     from ..models.chain_thesis import ThesisChainModel
@@ -159,6 +166,7 @@ class ThesisPlugin:
     program = staticmethod(program)
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
+    sample_notes = staticmethod(sample_notes)
     compensation_program = staticmethod(compensation_program)
     compensate = staticmethod(compensate)
     simulate = staticmethod(simulate)

@@ -7,6 +7,7 @@ import math
 from .. import units
 from ..inference import reading_choice
 from ..inference.budget import sigma_prior_sentence, sigma_prior_sources
+from ..machines.plugins import provided
 from .checks import thesis_assumption_effect
 
 #: summary columns of the JSON (SPEC §10)
@@ -224,17 +225,27 @@ def identifiability_block(ident, combinations: list[dict]) -> str:
 
 
 def format_sample(result) -> str:
-    """What ``sample`` prints: :func:`format_posterior` and, unless imposed, the effect of dx_BT = 0."""
+    """What ``sample`` prints: :func:`format_posterior`, the identifiability and what the machine's plug-in adds
+    (the thesis': unless imposed, the effect of dx_BT = 0, :func:`thesis_assumption_lines`)."""
     lines = [format_posterior(result)]
     post = result.log_posterior
     if result.identifiability is not None:
         lines += ["", identifiability_block(result.identifiability, result.combinations)]
-    if not post.fix_dx_BT and not post.campaign.machine.described:
-        sigma_um = result.sigma_model_um
-        lines += ["", f"The thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = {sigma_um:.2f} µm "
-                  f"({'as fixed' if post.fixed_sigma is not None else 'the posterior median'}; fix_dx_BT, on the command "
-                  "line --fix-dx-BT, samples it):",
-                  thesis_assumption_effect(post.campaign, post.model_name, sigma_um, post.data).round(2).to_string()]
+    notes = provided(post.campaign.machine, "sample_notes")  # what a plug-in adds (the thesis': dx_BT = 0)
+    if notes is not None:
+        lines += notes(result)
     if result.output:
         lines += ["", f"posterior written to {result.output} (ArviZ InferenceData, NetCDF)"]
     return "\n".join(lines)
+
+
+def thesis_assumption_lines(result) -> list[str]:
+    """The effect of the thesis assumption dx_BT = 0 (Eq 4.2) on a posterior that does not impose it."""
+    post = result.log_posterior
+    if post.fix_dx_BT:
+        return []
+    sigma_um = result.sigma_model_um
+    return ["", f"The thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = {sigma_um:.2f} µm "
+            f"({'as fixed' if post.fixed_sigma is not None else 'the posterior median'}; fix_dx_BT, on the command "
+            "line --fix-dx-BT, samples it):",
+            thesis_assumption_effect(post.campaign, post.model_name, sigma_um, post.data).round(2).to_string()]

@@ -22,6 +22,7 @@ from ..inference.results import (
 )
 from ..inference.sampling import SamplerSettings, SamplingResult, run_ensembles
 from ..io.netcdf import write_netcdf_atomic
+from ..machines.plugins import provided
 from ..progress import Progress
 from .checks import (
     ReferenceCheck,
@@ -216,7 +217,8 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     choice = analysis.reading_choice(summary.index) if statement else None  # a reading chosen over another
     if choice is not None:
         summary = summary.join(choice)
-    comp = pd.DataFrame() if campaign.machine.described else comparison(summary, analysis.identification)
+    has_own = provided(campaign.machine, "identify") is not None  # published values to set beside (the thesis')
+    comp = comparison(summary, analysis.identification) if has_own else pd.DataFrame()
     ref = None if beside else reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + ([] if beside else diagnostics_warnings(summary))
     warn += reference_warnings(ref, summary)
