@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import ParameterError
 from .candidates import Candidate
 from .described_candidates import catalogue_of, feasibility_of
+from .design import MIN_GAIN
 from .determined import Determination
 
 #: one line names at most this many runs
@@ -104,8 +105,8 @@ def refuse_undetermined(problem, goal) -> None:
 
 
 def beyond_note(problem, target: str) -> str:
-    """``"; the run that would lower it most, X, lies beyond the travels: why"`` when a run of the catalogue beyond
-    the travels would lower ``target``'s sd below every feasible run's (empty otherwise)."""
+    """``"; N runs of the catalogue lie beyond the travels; the one that would lower it most, X: why"`` when a run
+    of the catalogue beyond the travels would lower ``target``'s sd (empty otherwise)."""
     beyond = beyond_travels(problem.planner.campaign, problem.candidates)
     if not beyond:
         return ""
@@ -113,13 +114,15 @@ def beyond_note(problem, target: str) -> str:
         wide, _ = _wider(problem, [c for c, _ in beyond], target)
     except (ParameterError, KeyError, ValueError):
         return ""
-    sd = wide.evaluate().sd_after[:, 0]  # one run of each candidate added to the campaign
+    ev = wide.evaluate()  # one run of each candidate added to the campaign
+    sd, before = ev.sd_after[:, 0], ev.sd_before[0]
     K = len(problem.candidates)
     j = int(np.argmin(sd[K:]))
-    if sd[K + j] >= sd[:K].min():
+    if sd[K + j] >= (1.0 - MIN_GAIN) * before:
         return ""
     c, why = beyond[j]
-    return f"; the run that would lower it most, {c.name}, lies beyond the travels: {why}"
+    return (f"; {len(beyond)} run(s) of the catalogue lie beyond the travels, the one that would lower it most "
+            f"{c.name}: {why}")
 
 
 __all__ = ["beyond_travels", "probe_candidates", "what_would_determine", "refuse_undetermined", "beyond_note"]
