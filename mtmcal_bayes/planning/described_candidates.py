@@ -103,7 +103,7 @@ def described_catalogue(campaign) -> list[Candidate]:
                 add(_label(p, base, w), "other pattern", p, base, m=w)
             hold = _hold_for(desc, p[0])
             if hold and (p, base.id, w.id, tuple(sorted(hold))) not in measured:
-                add(_label(p, base, w, hold=hold), "held axes", p, base, m=w)
+                add(_label(p, base, w, hold=hold), "held axes", p, base, m=w, hold=hold)
     for w in bb.mounts.values():
         for e in EXTENSIONS_MM:
             s = Setup(f"{base.id}+{e:g}", base.R_B + e, 0.0, 0.0)
