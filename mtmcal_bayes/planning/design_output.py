@@ -146,7 +146,7 @@ def design_text(design: Design) -> str:
         lines.append(f"{t:<18} {e['sd_before']:>7.3g} {u} {e['sd_after']:>6.3g} {u} "
                      f"{e['sd_after_p10']:>7.3g}–{e['sd_after_p90']:<6.3g} {u} {tg:>6} {share:>7}")
     if design.not_targeted:
-        lines += ["", "not reported (no quantity of their own):"]
+        lines += ["", "not targeted (no reported quantity of their own):"]
         lines += [f"  {d}: {why}" for d, why in design.not_targeted.items()]
     c = design.check.contraction
     ctext = f"{c.mean():.2f}" if c.size else "unchanged"

@@ -137,7 +137,6 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
             break
         # the closed form already promises what the exact posterior has not reached: ask it for the ratio more
         goal = {q: v * min(1.0, v / sd_now[planner.targets.index(q)]) ** 2 for q, v in goal.items()}
-        # (a target met by its prior alone makes the re-plan choose runs that determine it: design.runs is not empty)
         if c_now < contraction_goal:  # and halve what σ_model's variance may keep of its prior, until a run is due
             contraction = 1.0 - 0.5 * (1.0 - contraction)
     if not design.runs:
