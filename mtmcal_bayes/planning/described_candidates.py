@@ -1,6 +1,7 @@
 """Candidate ball-bar runs of a described machine, generated from its description (SPEC §19, docs/design.md).
 
-The catalogue of :func:`described_catalogue`, for the campaign's primary set-up ``T`` and first mount ``W``:
+The catalogue of :func:`described_catalogue`, for the campaign's primary set-up ``T`` and every mount ``W`` (the
+other placements below from the first mount):
 
 * every pattern ``<K><d>`` of every rotary axis K (:func:`~mtmcal_bayes.machines.patterns.patterns_of`) over K's
   default arc (a turn by 5°, or 90° by 1° for a tilting axis), the other rotary axes at 0;
@@ -96,21 +97,23 @@ def described_catalogue(campaign) -> list[Candidate]:
                              setup.R_B - base.R_B, arc, tuple(hold or ())))
 
     measured = {(r.pattern, r.setup, r.mount, tuple(sorted((r.hold_deg or {}).items()))) for r in bb.runs}
-    for p in pats:
-        if (p, base.id, mount.id, ()) not in measured:
-            add(_label(p, base, mount), "other pattern", p, base, m=mount)
-        hold = _hold_for(desc, p[0])
-        if hold and (p, base.id, mount.id, tuple(sorted(hold))) not in measured:
-            add(_label(p, base, mount, hold=hold), "held axes", p, base, m=mount, hold=hold)
-    for e in EXTENSIONS_MM:
-        s = Setup(f"{base.id}+{e:g}", base.R_B + e, 0.0, 0.0)
+    for w in bb.mounts.values():  # every mount of the campaign: each W-ball placement its runs may use
         for p in pats:
-            add(f"{p} @ R_B+{e:g} mm", "tool length", p, s, m=mount)
-    for s in bb.setups.values():
-        if s.id != base.id:
+            if (p, base.id, w.id, ()) not in measured:
+                add(_label(p, base, w), "other pattern", p, base, m=w)
+            hold = _hold_for(desc, p[0])
+            if hold and (p, base.id, w.id, tuple(sorted(hold))) not in measured:
+                add(_label(p, base, w, hold=hold), "held axes", p, base, m=w, hold=hold)
+    for w in bb.mounts.values():
+        for e in EXTENSIONS_MM:
+            s = Setup(f"{base.id}+{e:g}", base.R_B + e, 0.0, 0.0)
             for p in pats:
-                if (p, s.id, mount.id, ()) not in measured:
-                    add(_label(p, s, mount) + " (existing setup)", "existing setup", p, s, m=mount)
+                add(f"{p} @ R_B+{e:g} mm" + ("" if w is mount else f", mount {w.id}"), "tool length", p, s, m=w)
+        for s in bb.setups.values():
+            if s.id != base.id:
+                for p in pats:
+                    if (p, s.id, w.id, ()) not in measured:
+                        add(_label(p, s, w) + " (existing setup)", "existing setup", p, s, m=w)
     for k, off in enumerate(PLACEMENTS_MM):
         m = Mount(f"{mount.id}@{k + 1}", 0.0, 0.0, position=np.asarray(mount.position, float) + off)
         shift = ", ".join(f"{a}{v:+g}" for a, v in zip("XYZ", off) if v)

@@ -31,7 +31,9 @@ from .design_check import Preposterior, preposterior
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
 from .design_runs import DesignedRun, designed_runs
 from .design_search import Goal, Search
+from .design_refusal import beyond_note, refuse_undetermined
 from .design_timing import Timing
+from .determined import not_targeted
 from .scale_priors import learnt_notes, learnt_summary
 
 #: default σ_model contraction target: the data, not the prior, then set σ_model
@@ -69,10 +71,21 @@ class Design:
     rounds: int = 1
     #: the σ_model prior learnt elsewhere, as :func:`.scale_priors.learnt_summary` gives it (empty: assumed)
     learnt: dict = field(default_factory=dict)
+    #: (t,) whether the campaign plus the designed runs determine each quantity (:mod:`.determined`)
+    determined: np.ndarray | None = None
+    #: {deviation: why} the deviations that are no reported quantity of their own (:func:`.determined.not_targeted`)
+    not_targeted: dict = field(default_factory=dict)
 
     @property
     def total_minutes(self) -> float:
         return self.timing.total(self.runs, self.start)
+
+    def probability_targets_met(self) -> float:
+        """The share of simulated machines meeting every target; 0 while a target's quantity is not determined
+        (met by its prior alone is not met)."""
+        if self.determined is not None and np.any(np.isfinite(self.goal.targets) & ~np.asarray(self.determined)):
+            return 0.0
+        return self.check.share_all_met(self.goal.targets)
 
 
 def parse_targets(targets: dict | None, desc=None) -> dict[str, float]:
@@ -174,7 +187,8 @@ def _goal_vector(planner: Planner, targets: dict[str, float]) -> np.ndarray:
 
 
 def _check_reachable(problem: DesignProblem, search: Search, goal: Goal, units_of: list[str]) -> None:
-    """Refuse targets no design of the candidates reaches (all at their most runs), naming the quantity."""
+    """Refuse targets no design of the candidates reaches (all at their most runs), naming the quantity and, where
+    a run beyond the travels would lower it further, that run and the axis that keeps it out."""
     most = np.where(search.allowed, MAX_INSTANCES, 0)
     v = problem.value(most)
     sd = v.sd_promised[0]
@@ -183,7 +197,8 @@ def _check_reachable(problem: DesignProblem, search: Search, goal: Goal, units_o
             u = units.SYMBOL[units_of[i]]
             raise ParameterError("targets", f"{t} = {goal.targets[i]:g} {u} cannot be reached: every candidate "
                                  f"measured {MAX_INSTANCES} times gives {sd[i]:.3g} {u} (at σ_model's "
-                                 f"{PROMISE:.0%} quantile); the best reachable is no smaller")
+                                 f"{PROMISE:.0%} quantile); the best reachable is no smaller"
+                                 + beyond_note(problem, t))
     if goal.contraction is not None and v.contraction[0] < goal.contraction:
         raise ParameterError("contraction", f"{goal.contraction:g} cannot be reached: every candidate measured "
                              f"{MAX_INSTANCES} times teaches σ_model {v.contraction[0]:.2f}")
@@ -256,9 +271,13 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         raise ParameterError("targets", "nothing to design for: give target sds, tolerances, a σ_model contraction "
                              "or a budget")
     problem = DesignProblem(planner)
+    goal = Goal(_goal_vector(planner, want), contraction, budget_min)
+    det = problem.determination
+    refuse_undetermined(problem, goal)
+    # a target the campaign does not determine yet is met only once the designed runs determine it
+    problem.watch = np.isfinite(goal.targets) & ~det.determined()
     timing = Timing(campaign, time_model or TimeModel())
     start = start or (False, None, None)
-    goal = Goal(_goal_vector(planner, want), contraction, budget_min)
     minutes = _remembered(lambda counts: timing.total_of_counts(cands, counts, start))
     search = Search(problem, goal, minutes)
     _check_budget(search, goal)
@@ -324,6 +343,11 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         notes.append(f"σ_model's contraction target {goal.contraction:g} is met before any run ({c_now:.2f}): with "
                      "its prior learnt elsewhere σ_model is known that well already, so no run is designed to teach "
                      "it")
+    determined = det.determined(counts)
+    left = [t for t, d, g in zip(planner.targets, determined, goal.targets) if np.isfinite(g) and not d]
+    if left:
+        notes.append(f"not determined by the campaign and the designed runs: {', '.join(left)} (within the budget): "
+                     "their targets are not met, whatever their prior's sd")
     if not kept:
         notes.append(f"the exact check finds some target met in fewer than {PROMISE:.0%} of the simulated machines "
                      f"after {ROUNDS} rounds (see 'met in'): the promise is not kept in full")
@@ -331,7 +355,8 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                   check, {"sd_promised": result.value.sd_promised[0], "sd_mean": result.value.sd_mean[0],
                           "contraction": float(result.value.contraction[0]),
                           "contraction_now": c_now},
-                  cands, model, notes, start, rounds, learnt_summary(campaign, sigma_prior))
+                  cands, model, notes, start, rounds, learnt_summary(campaign, sigma_prior), determined,
+                  not_targeted(planner, det.identifiability()))
 
 
 def _remembered(minutes):
@@ -356,6 +381,10 @@ def _refuse_within_budget(problem: DesignProblem, goal: Goal, minutes, *, seed, 
         alone[i] = goal.targets[i]
         best = Search(problem, Goal(alone, None, goal.budget), minutes).run(seed, restarts=0)
         sd = float(problem.value(best.counts).sd_promised[0, i])
+        if not best.met and sd <= goal.targets[i] * (1 + 1e-9):  # met by its prior only: no run within the budget
+            within = "of the candidates" if goal.budget is None else f"within {goal.budget:g} min"
+            raise ParameterError("targets", f"{problem.planner.targets[i]}: the search found no design {within} that "
+                                 "determines it (its sd would be its prior's): raise the budget or add candidates")
         if sd > goal.targets[i] * (1 + 1e-9) and (worst is None or sd / goal.targets[i] > worst[1]):
             worst = (i, sd / goal.targets[i], sd)
     if worst is not None:

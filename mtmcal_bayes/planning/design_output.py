@@ -85,18 +85,30 @@ def _where(rec: dict) -> str:
     return f"R_B {rec['R_B_mm']:.1f} mm, W ({x:g}, {y:g}, {z:g}) mm, {lo:g}…{hi:g}°{held}"
 
 
+def _determined(design: Design) -> np.ndarray:
+    """(t,) whether the campaign plus the designed runs determine each quantity."""
+    return np.ones(len(design.targets), bool) if design.determined is None else np.asarray(design.determined, bool)
+
+
 def expected(design: Design) -> dict:
-    """``expected`` of ``design --json``: per quantity the sd today and after the design (mean, 10–90 %)."""
+    """``expected`` of ``design --json``: per quantity the sd today and after the design (mean, 10–90 %), and
+    whether the runs determine it; the share of machines meeting a target only for a determined quantity (a
+    target met by the prior alone is not met: ``share_met`` null)."""
     chk = design.check
     p10, p90 = chk.sd_quantile(0.1), chk.sd_quantile(0.9)
-    share = chk.share_met(design.goal.targets)
+    determined = _determined(design)
+    share = np.where(determined, chk.share_met(design.goal.targets), np.nan)
     out = {}
     for i, (t, u) in enumerate(zip(design.targets, design.target_units)):
         out[t] = {"unit": units.SYMBOL[u], "sd_before": _num(chk.sd_now[i]), "sd_after": _num(chk.sd_mean[i]),
                   "sd_after_p10": _num(p10[i]), "sd_after_p90": _num(p90[i]),
                   "target": _num(design.goal.targets[i]), "share_met": _num(share[i]),
-                  "sd_after_closed_form": _num(design.closed_form["sd_promised"][i])}
+                  "sd_after_closed_form": _num(design.closed_form["sd_promised"][i]),
+                  "determined": bool(determined[i])}
     return out
+
+
+
 
 
 def design_document(design: Design, campaign_path: str | None = None, programs: bool = False) -> dict:
@@ -110,9 +122,10 @@ def design_document(design: Design, campaign_path: str | None = None, programs: 
                             "contraction_after_p90": float(np.quantile(c, 0.9)) if c.size else None,
                             "target": design.goal.contraction} | design.learnt,
             "budget_min": design.goal.budget, "promise": PROMISE,
-            "probability_targets_met": design.check.share_all_met(design.goal.targets),
+            "probability_targets_met": design.probability_targets_met(),
             "schedule": [e.__dict__ | {} for e in design.timing.events(design.runs, design.start)],
-            "model": design.model, "notes": design.notes, "campaign": campaign_path}
+            "model": design.model, "notes": design.notes, "not_targeted": design.not_targeted,
+            "campaign": campaign_path}
 
 
 def design_text(design: Design) -> str:
@@ -127,9 +140,14 @@ def design_text(design: Design) -> str:
     for t, e in expected(design).items():
         tg = "" if e["target"] is None else f"{e['target']:.3g}"
         share = "" if e["share_met"] is None else f"{e['share_met']:.0%}"
+        if not e["determined"]:
+            share = "not determined"
         u = f"{e['unit']:<2}"
         lines.append(f"{t:<18} {e['sd_before']:>7.3g} {u} {e['sd_after']:>6.3g} {u} "
                      f"{e['sd_after_p10']:>7.3g}–{e['sd_after_p90']:<6.3g} {u} {tg:>6} {share:>7}")
+    if design.not_targeted:
+        lines += ["", "not targeted (no reported quantity of their own):"]
+        lines += [f"  {d}: {why}" for d, why in design.not_targeted.items()]
     c = design.check.contraction
     ctext = f"{c.mean():.2f}" if c.size else "unchanged"
     lines += ["", f"σ_model contraction: {design.check.contraction_now:.2f} now → {ctext} after"
@@ -201,7 +219,8 @@ def next_document(step: NextStep, program: str | None = None) -> dict:
     exp = {}
     after = expected(step.design) if step.design is not None else {}
     for i, (t, u) in enumerate(zip(step.targets, step.target_units)):
-        e = {"unit": units.SYMBOL[u], "sd_now": _num(step.sd_now[i]), "target": _num(step.target_sd[i])}
+        e = {"unit": units.SYMBOL[u], "sd_now": _num(step.sd_now[i]), "target": _num(step.target_sd[i]),
+             "determined_now": None if step.determined_now is None else bool(step.determined_now[i])}
         if t in after:
             e.update({k: after[t][k] for k in ("sd_after", "sd_after_p10", "sd_after_p90")})
         exp[t] = e
@@ -244,7 +263,9 @@ def next_text(step: NextStep) -> str:
     for i, t in enumerate(step.targets):
         u = units.SYMBOL[step.target_units[i]]
         tg = "" if not np.isfinite(step.target_sd[i]) else f"{step.target_sd[i]:.3g} {u:<2}"
-        lines.append(f"{t:<18} {step.sd_now[i]:>7.3g} {u:<2} {tg:>10}")
+        undetermined = step.determined_now is not None and not step.determined_now[i]
+        lines.append(f"{t:<18} {step.sd_now[i]:>7.3g} {u:<2} {tg:>10}" + ("  not determined yet" if undetermined
+                                                                           else ""))
     lines.append(f"σ_model contraction now {step.contraction_now:.2f}"
                  + (f" (target {step.contraction_target:g})" if step.contraction_target is not None else "")
                  + _against(step.learnt))

@@ -34,6 +34,7 @@ from .. import units
 from ..inference.marginal import MarginalPosterior
 from ..inference.priors import make_prior
 from .design import Planner, sigma_contraction
+from .determined import SUBSPACE_TOL, Determination
 
 #: most runs of one candidate in a design (each further one on its own W-ball placement)
 MAX_INSTANCES = 3
@@ -47,11 +48,14 @@ PROMISE = 0.9
 class DesignValue:
     """The criterion of one or many designs (leading axis ``B``).
 
-    ``sd_nodes`` (B, S, t) target sds at the σ nodes, display units; ``contraction_nodes`` (B, S).
+    ``sd_nodes`` (B, S, t) target sds at the σ nodes, display units; ``contraction_nodes`` (B, S);
+    ``undetermined`` (B, t) of the watched targets (:attr:`DesignProblem.watch`) the part the design's runs do not
+    see, 0 where they determine it (:meth:`.determined.Determination.unseen`; None: none watched).
     """
 
     sd_nodes: np.ndarray
     contraction_nodes: np.ndarray
+    undetermined: np.ndarray | None = None
 
     @property
     def sd_promised(self) -> np.ndarray:
@@ -95,6 +99,11 @@ def prior_means(planner: Planner) -> np.ndarray:
                      for p in planner.space.parameters])
 
 
+def _unseen(norms: np.ndarray, watch: np.ndarray) -> np.ndarray:
+    """(B, t) the unseen part of the watched targets, 0 where determined (:data:`.determined.SUBSPACE_TOL`)."""
+    return np.where(watch[None] & (norms > SUBSPACE_TOL), norms, 0.0)
+
+
 def _inv_powers(N: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``N⁻¹, N⁻², N⁻³`` of a batch of symmetric positive definite matrices ``(..., r, r)``."""
     Ni = np.linalg.inv(N)
@@ -114,11 +123,16 @@ class DesignProblem:
     def __init__(self, planner: Planner, nodes: np.ndarray | None = None):
         self.planner = planner
         self.candidates = planner.candidates
+        #: (t,) the targets whose determination by the design's runs is part of the criterion (None: none): a target
+        #: the prior alone meets is met only once the runs determine it (:mod:`.determined`)
+        self.watch: np.ndarray | None = None
         self.nodes = sigma_nodes(planner) if nodes is None else np.asarray(nodes, float)
         self.sigma_prior_var = float(planner.sigma_prior().var())
         self.sigma_reference_var = planner.contraction_reference()  # None: the prior's
         scale = np.sqrt(planner.prior_var)
         rows = planner.candidate_rows()
+        self._rows = [A for A, _ in rows]
+        self._determination = None
         s2 = self.nodes**2  # (S,)
         X0 = planner.A * scale
         cols = np.any(X0 != 0.0, axis=0)
@@ -187,10 +201,23 @@ class DesignProblem:
         t = self.base_t[None] + first @ self.first_t + again @ self.again_t
         return M, t
 
+    @property
+    def determination(self) -> Determination:
+        """What the campaign plus any set of the candidates determines (:class:`.determined.Determination`)."""
+        if self._determination is None:
+            self._determination = Determination(self.planner, self._rows)
+        return self._determination
+
+    def _watched(self) -> bool:
+        return self.watch is not None and bool(np.any(self.watch))
+
     def value(self, counts: np.ndarray) -> DesignValue:
         """The criterion of designs ``counts`` (B, K) or (K,)."""
         M, t = self.moments(counts)
-        return self._value(M, t)
+        v = self._value(M, t)
+        if self._watched():
+            v.undetermined = _unseen(self.determination.unseen_many(counts), self.watch)
+        return v
 
     def _value(self, M: np.ndarray, t: np.ndarray) -> DesignValue:
         P = M.shape[-1]
@@ -248,7 +275,10 @@ class DesignProblem:
         fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
         sd = np.sqrt(np.maximum(var_new, 0.0)) * self.to_display
         contraction = sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)
-        return DesignValue(sd, contraction), counts < MAX_INSTANCES
+        v = DesignValue(sd, contraction)
+        if self._watched():
+            v.undetermined = _unseen(self.determination.unseen_plus_one(counts), self.watch)
+        return v, counts < MAX_INSTANCES
 
     def value_now(self) -> DesignValue:
         """The criterion of the campaign as it is."""

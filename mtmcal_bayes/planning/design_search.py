@@ -10,8 +10,11 @@ exhaustive search on small candidate sets.
 
 The criterion (:mod:`.design_problem`) is in log units so that sds and the σ_model contraction add up:
 
-* shortfall ``Φ = Σ_t max(0, ln(sd_t / target_t)) + max(0, ln((1 − c)/(1 − C)))``, ``sd_t`` the promised sd,
-  ``c`` the contraction, ``C`` its target: a design meets its targets when ``Φ = 0``;
+* shortfall ``Φ = Σ_t max(0, ln(sd_t / target_t)) + max(0, ln((1 − c)/(1 − C))) + Σ_t ln 2 · (1 + u_t)/2``,
+  the last sum over the targets whose sd is met but that the runs leave undetermined, ``sd_t`` the promised sd, ``c`` the contraction, ``C`` its
+  target, ``u_t`` the part of the target the runs do not see (:mod:`.determined`: a target the prior alone would
+  meet is unmet; the graded part lets a run that sees some of it count before the run that completes it):
+  a design meets its targets when ``Φ = 0``;
 * improvement ``J = Σ_t ln(sd_t,now / sd_t) + ln((1 − c_now)/(1 − c))`` (sds averaged over σ_model).
 """
 
@@ -31,6 +34,8 @@ JITTER = 0.3
 #: most exchange passes of one start
 MAX_PASSES = 30
 MET = 1e-9
+#: the shortfall of a target the design's runs leave undetermined (its sd met by the prior only): a factor 2 in sd
+UNDETERMINED = float(np.log(2.0))
 #: designs valued at once by :func:`exhaustive` (memory: 3 × CHUNK × S × P² floats)
 CHUNK = 128
 
@@ -56,6 +61,9 @@ def shortfall(v: DesignValue, goal: Goal) -> np.ndarray:
     phi = np.sum(np.maximum(0.0, np.log(ratio)), axis=1)
     if goal.contraction is not None:
         phi = phi + np.maximum(0.0, np.log((1.0 - v.contraction) / (1.0 - goal.contraction)))
+    if v.undetermined is not None:  # counted where the sd alone would be met: elsewhere its own shortfall leads
+        u = np.where(has & (ratio <= 1.0) & (v.undetermined > 0), 0.5 * (1.0 + v.undetermined), 0.0)
+        phi = phi + UNDETERMINED * np.sum(u, axis=1)
     return phi
 
 

@@ -25,6 +25,7 @@ from .described_candidates import arc_spec
 from .design import Planner
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets, reporting_planner
 from .design_problem import current_posterior
+from .determined import Determination
 from .scale_priors import learnt_summary
 
 
@@ -52,6 +53,8 @@ class NextStep:
     added: list[str] = field(default_factory=list)
     #: the σ_model prior learnt elsewhere (:func:`.scale_priors.learnt_summary`; empty: assumed)
     learnt: dict = field(default_factory=dict)
+    #: (t,) whether the measured runs determine each quantity (:mod:`.determined`; a target is reached only then)
+    determined_now: np.ndarray | None = None
 
     @property
     def minutes_left(self) -> float:
@@ -113,10 +116,14 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         sd_now = np.sqrt((planner.T**2) @ planner.prior_var) * scale
         ref = planner.contraction_reference()
         c_now = 0.0 if ref is None else float(1.0 - planner.sigma_prior().var() / ref)
-    met = bool(np.all(sd_now <= np.where(np.isfinite(tg), tg, np.inf))) and c_now >= contraction
+    # a target counts as reached only where the measured runs determine its quantity (not its prior alone)
+    determined_now = Determination(planner, []).determined()
+    met = (bool(np.all(sd_now <= np.where(np.isfinite(tg), tg, np.inf))) and c_now >= contraction
+           and bool(np.all(determined_now | ~np.isfinite(tg))))
     base = dict(targets=list(planner.targets), target_units=list(planner.target_units), target_sd=tg, sd_now=sd_now,
                 contraction_now=c_now, contraction_target=contraction, measured=len(bb.runs),
-                planned_left=[p.label for p in bb.planned], learnt=learnt_summary(campaign, sigma_prior))
+                planned_left=[p.label for p in bb.planned], learnt=learnt_summary(campaign, sigma_prior),
+                determined_now=determined_now)
     if met:
         return NextStep("stop", probability_targets_met=_conditional_met(planner, tg, c_now >= contraction), **base)
     start = (True, bb.runs[-1].setup, bb.runs[-1].mount) if bb.runs else (False, None, None)
@@ -138,7 +145,7 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
                              "run lowers it further in the closed form: relax the target or add candidates")
     planned = {p.label for p in bb.planned}
     chosen = {r.label for r in design.runs}
-    return NextStep("measure", probability_targets_met=design.check.share_all_met(tg), design=design,
+    return NextStep("measure", probability_targets_met=design.probability_targets_met(), design=design,
                     dropped=sorted(planned - chosen), added=sorted(chosen - planned), **base)
 
 

@@ -234,6 +234,8 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     table, si = _tables(planner, candidates, campaign)
     if sweep_pattern is None:
         best = table[table["kind"] == "tool length"]
+        if described and len(best):  # the sweep is at the first mount (sweep_candidates): choose among its runs
+            best = best[best["mount"] == next(iter(campaign.ballbar.mounts))]
         if described and len(best):  # the pattern whose value depends most on the tool length (AA, along its
             spread = best.groupby("pattern", sort=False)["eig_bits"].agg(np.ptp)  # axis, does not at all)
             sweep_pattern = str(spread.idxmax())

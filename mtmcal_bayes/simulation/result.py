@@ -110,7 +110,7 @@ def thesis_simulation(campaign: Campaign, truth: Truth, *, model: str, noise: bo
 def _described_simulation(campaign: Campaign, truth: Truth, *, model: str, noise: bool, seed: int | None,
                           source: str) -> Simulation:
     """A described machine's simulation: its ball-bar eccentricities (if it has runs) and probe readings."""
-    if campaign.ballbar.runs:
+    if campaign.ballbar.runs or campaign.ballbar.planned:  # planned runs are simulated (and written) too
         obs, pred = predict_truth(campaign, truth, model, source=source)
     else:
         obs, pred = Observations((), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int)), np.zeros(0)
