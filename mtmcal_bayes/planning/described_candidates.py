@@ -174,7 +174,7 @@ def travel_problems(desc, q: dict) -> tuple[bool, str]:
     return (not over), ("; ".join(over) if over else "within the axis travels")
 
 
-__all__ = ["arc_spec", "described_catalogue", "sweep_candidates", "catalogue_of", "feasibility_of", "described_feasibility_check", "run_of", "arc_of", "travel_problems",
+__all__ = ["arc_spec", "described_catalogue", "sweep_candidates", "described_feasibility_check", "run_of", "arc_of", "travel_problems",
            "EXTENSIONS_MM", "HOLD_DEG", "PLACEMENTS_MM"]
 
 
@@ -185,16 +185,3 @@ def sweep_candidates(campaign, pattern: str, extensions) -> list[Candidate]:
     return [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, Setup(f"{base.id}+{e:g}", base.R_B + e, 0.0, 0.0),
                       mount, campaign.ballbar.length, extension=float(e)) for e in extensions]
 
-
-def catalogue_of(campaign) -> list[Candidate]:
-    """The candidate catalogue of ``campaign``'s machine: :func:`described_catalogue` or the thesis machine's."""
-    from .candidates import catalogue
-
-    return described_catalogue(campaign) if campaign.machine.described else catalogue(campaign)
-
-
-def feasibility_of(campaign):
-    """``check(candidate) -> (feasible, why)`` for ``campaign``'s machine."""
-    from .candidates import feasibility_check
-
-    return described_feasibility_check(campaign) if campaign.machine.described else feasibility_check(campaign)

@@ -181,9 +181,4 @@ class DescribedPlanner(Planner):
 
 
 
-def planner_for(campaign, candidates: list, targets=None, **kw) -> Planner:
-    """The planner of ``campaign``: :class:`DescribedPlanner` on a described machine, else the thesis machine's
-    :class:`~.design.Planner` (keywords as theirs)."""
-    cls = DescribedPlanner if campaign.machine.described else Planner
-    return cls(campaign, candidates, targets, **kw)
-__all__ = ["DescribedPlanner", "described_targets", "planner_for"]
+__all__ = ["DescribedPlanner", "described_targets"]

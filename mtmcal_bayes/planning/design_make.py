@@ -20,13 +20,10 @@ import numpy as np
 
 from .. import units
 from ..errors import InputError, ParameterError
-from ..iso import thesis_name
 from ..machine_time import TimeModel
-from ..parameters import IDENTIFIABLE
 from .candidates import Candidate
-from .described_candidates import catalogue_of, feasibility_of
-from .described_planner import described_targets, planner_for
-from .design import Planner, check_targets
+from .machine_kit import catalogue_of, feasibility_of, kit_of, planner_for
+from .design import Planner
 from .design_check import Preposterior, preposterior
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
 from .design_runs import DesignedRun, designed_runs
@@ -88,16 +85,13 @@ class Design:
         return self.check.share_all_met(self.goal.targets)
 
 
-def parse_targets(targets: dict | None, desc=None) -> dict[str, float]:
-    """``{quantity: sd}`` (display units; ISO symbols allowed) checked: known names, positive finite sds; ``desc`` a
-    described machine's description (its deviations' names), None the thesis machine's."""
+def parse_targets(targets: dict | None, campaign) -> dict[str, float]:
+    """``{quantity: sd}`` (display units; ISO symbols allowed) checked: quantities of ``campaign``'s machine (its
+    planning kit's names, :func:`~.machine_kit.kit_of`), positive finite sds."""
     out = {}
+    name_of = kit_of(campaign).target_name
     for name, sd in (targets or {}).items():
-        if desc is None:
-            q = thesis_name(str(name))
-            check_targets([q])
-        else:
-            q = described_targets([str(name)], desc)[0]
+        q = name_of(str(name), campaign)
         try:
             v = float(sd)
         except (TypeError, ValueError):
@@ -173,13 +167,12 @@ def reporting_planner(campaign, cands: list[Candidate], want: dict, *, tolerance
     every quantity reported by default (the thesis machine's eight identifiable ones; a described machine's
     deviations the campaign and the candidates determine one by one)."""
     tol = list(tolerances or {})
-    if campaign.machine.described:
-        planner = planner_for(campaign, cands, None, model=model, sigma_prior=sigma_prior)
-        known = set(planner.targets) | set(want)
-        planner.retarget(list(dict.fromkeys(list(want) + [q for q in tol if q in known] + planner.targets)))
-        return planner
-    names = list(dict.fromkeys(list(want) + [q for q in tol if q in IDENTIFIABLE] + list(IDENTIFIABLE)))
-    return Planner(campaign, cands, names, model=model, sigma_prior=sigma_prior)
+    kit = kit_of(campaign)
+    planner = kit.reported(campaign, lambda names: kit.planner(campaign, cands, names, model=model,
+                                                                sigma_prior=sigma_prior))
+    known = set(planner.targets) | set(want)
+    planner.retarget(list(dict.fromkeys(list(want) + [q for q in tol if q in known] + planner.targets)))
+    return planner
 
 
 def _goal_vector(planner: Planner, targets: dict[str, float]) -> np.ndarray:
@@ -257,8 +250,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         raise ParameterError("contraction", f"must lie between 0 and 1, got {contraction!r}")
     if budget_min is not None and not (math.isfinite(budget_min) and budget_min > 0):
         raise ParameterError("budget_min", f"must be a positive number of minutes, got {budget_min!r}")
-    described = campaign.machine.described
-    want = parse_targets(targets, campaign.machine.description if described else None)
+    want = parse_targets(targets, campaign)
     cands = design_candidates(campaign, candidates, candidates_source)
     taken = set(campaign.ballbar.mounts) | {c.mount.id for c in cands}
     if not cands:

@@ -13,8 +13,9 @@ from .. import units
 from ..campaign import DesignGoal, PlannedRun
 from .design_make import Design
 from .design_problem import PROMISE
-from .described_candidates import arc_of, arc_spec
 from .design_runs import geometry_of
+from .run_records import RUN_COLUMNS, program_name  # noqa: F401  (RUN_COLUMNS: a design's table)
+from .machine_kit import kit_of
 from .next_run import NextStep
 
 
@@ -23,55 +24,13 @@ def _num(v) -> float | None:
     return v if math.isfinite(v) else None
 
 
-def _mm(v) -> float:
-    """A length to a thousandth of a µm: 12.2877, not 12.287700000000001 (112.2877 − 100)."""
-    return round(float(v), 6)
-
-
-def program_name(order: int, pattern: str) -> str:
-    return f"programs/{order:02d}_{pattern}.nc"
-
-
-#: the columns of a design's run records, in order (the table of a design without runs has them too)
-RUN_COLUMNS = ["order", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm", "R_C_mm", "Z_C_mm", "length_mm",
-               "repeats", "minutes", "program", "why", "candidate"]
-
-
-#: ... on a described machine: the W ball's position, the arc and the held axes instead of the thesis' lever arms
-DESCRIBED_RUN_COLUMNS = ["order", "pattern", "setup", "mount", "R_B_mm", "position_mm", "arc_deg", "hold_deg",
-                         "length_mm", "repeats", "minutes", "program", "why", "candidate"]
-
-
 def run_columns(design: Design) -> list[str]:
-    return DESCRIBED_RUN_COLUMNS if design.campaign.machine.described else RUN_COLUMNS
+    return kit_of(design.campaign).run_columns
 
 
 def run_records(design: Design, programs: bool = False) -> list[dict]:
-    """The ``runs`` of ``design --json``, in measuring order."""
-    if design.campaign.machine.described:
-        return _described_records(design, programs)
-    out = []
-    for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1):
-        out.append({"order": i, "pattern": r.pattern, "setup": r.setup.id, "mount": r.mount.id,
-                    "R_B_mm": _mm(r.setup.R_B), "Z_T_mm": _mm(r.setup.Z_T), "X_T_mm": _mm(r.setup.X_T),
-                    "R_C_mm": _mm(r.mount.R_C), "Z_C_mm": _mm(r.mount.Z_C), "length_mm": _mm(r.length), "repeats": r.repeats, "minutes": round(m, 2),
-                    "program": program_name(i, r.pattern) if programs else None, "why": why,
-                    "candidate": r.candidate.name})
-    return out
-
-
-def _described_records(design: Design, programs: bool) -> list[dict]:
-    out = []
-    for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1):
-        arc = arc_spec(arc_of(r.candidate, design.campaign.machine.description))
-        out.append({"order": i, "pattern": r.pattern, "setup": r.setup.id, "mount": r.mount.id,
-                    "R_B_mm": _mm(r.setup.R_B), "position_mm": [_mm(x) for x in r.mount.position],
-                    "arc_deg": list(arc),
-                    "hold_deg": {a: float(v) for a, v in r.candidate.hold_deg}, "length_mm": _mm(r.length),
-                    "repeats": r.repeats, "minutes": round(m, 2),
-                    "program": program_name(i, r.pattern) if programs else None, "why": why,
-                    "candidate": r.candidate.name})
-    return out
+    """The ``runs`` of ``design --json``, in measuring order (as the machine's planning kit writes them)."""
+    return kit_of(design.campaign).run_records(design, programs)
 
 
 def _where(rec: dict) -> str:
@@ -174,10 +133,9 @@ def designed_campaign(design: Design, goal: DesignGoal | None = None):
     bb.setups, bb.mounts = geometry_of(base, design.runs)
     bb.planned = [PlannedRun(r.pattern, r.setup.id, r.mount.id, r.repeats, minutes=round(m, 1), why=why, order=i)
                   for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)]
-    if base.machine.described:  # each planned run with its arc and held axes
-        desc = base.machine.description
-        for p, r in zip(bb.planned, design.runs):
-            p.arc_deg, p.hold_deg = arc_of(r.candidate, desc), dict(r.candidate.hold_deg) or None
+    kit = kit_of(base)
+    for p, r in zip(bb.planned, design.runs):  # what else a planned run records (a described one: arc, held axes)
+        kit.planned_geometry(p, r.candidate, base)
     out.ballbar = bb
     targets = {t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)}
     out.design = goal or DesignGoal(targets, design.goal.contraction, design.goal.budget, {})

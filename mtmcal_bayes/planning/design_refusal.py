@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from .candidates import Candidate
-from .described_candidates import catalogue_of, feasibility_of
+from .machine_kit import catalogue_of, feasibility_of
 from .design import MIN_GAIN
 from .determined import Determination
 
@@ -50,7 +50,7 @@ def probe_candidates(campaign) -> list:
 
 def _wider(problem, extra: list, target: str):
     """A planner over the design's candidates plus ``extra`` valuing ``target`` alone, and its determination."""
-    from .described_planner import planner_for
+    from .machine_kit import planner_for
 
     p = problem.planner
     wide = planner_for(p.campaign, list(p.candidates) + list(extra), [target], model=p.model)

@@ -93,8 +93,7 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     default to the campaign's ``[design]``; ``sigma_prior`` a σ_model prior learnt elsewhere, as for
     :func:`.design_make.make_design` (a campaign does not record the prior it was designed under: give it again)."""
     goal = campaign.design
-    want = parse_targets(targets if targets is not None else (goal.targets if goal else {}),
-                         campaign.machine.description if campaign.machine.described else None)
+    want = parse_targets(targets if targets is not None else (goal.targets if goal else {}), campaign)
     if contraction is None:
         contraction = goal.contraction if goal and goal.contraction is not None else CONTRACTION
     if budget_min is None and goal is not None:

@@ -8,18 +8,11 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from .candidates import (
-    Candidate,
-    candidate_mount,
-    extended_setup,
-    feasibility_check,
-)
-from .described_candidates import catalogue_of, feasibility_of, sweep_candidates
-from .described_planner import planner_for
-from .described_probe_candidates import described_probe_catalogue, described_probe_feasibility
+from .candidates import Candidate
+from .machine_kit import catalogue_of, kit_of, planner_for
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
-from .probe_candidates import ProbeCandidate, probe_catalogue, probe_feasibility, probe_skipped
+from .probe_candidates import ProbeCandidate, probe_skipped
 from .scale_priors import learnt_notes, learnt_summary, scale_prior
 
 #: tool-length differences of the sweep, mm
@@ -110,19 +103,14 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
     ev = planner.evaluate(candidates, rows=made)
     si = planner.sigma_information(candidates, rows=made)
     rows = []
-    fits = feasibility_of(campaign)
-    described = campaign.machine.described
+    kit = kit_of(campaign)
+    fits = kit.feasibility(campaign)
     for k, c in enumerate(candidates):
         probe = isinstance(c, ProbeCandidate)
-        ok, why = (described_probe_feasibility(c, campaign) if described else probe_feasibility(c, campaign)) \
-            if probe else fits(c)
+        ok, why = kit.probe_feasibility(c, campaign) if probe else fits(c)
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
         where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
-                  "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else
-                 {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": np.nan, "mount": c.mount.id,
-                  "R_C_mm": np.nan} if described else
-                 {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "mount": c.mount.id,
-                  "R_C_mm": c.mount.R_C})
+                  "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else kit.where(c))
         row = {"name": c.name, "kind": c.kind, "pattern": c.pattern, **where, "L_B_mm": c.length,
                "repeats": c.repeats, "extension_mm": c.extension, "feasible": ok, "feasibility": why,
                "eig_bits": float(ev.eig_bits[k]), "informative": bool(ev.informative[k]),
@@ -152,21 +140,16 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
 
 def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP_MM) -> pd.DataFrame:
     """Expected target sds for ``pattern`` at the primary setup plus each extension (mm)."""
-    described = campaign.machine.described
-    if described:
-        cands = sweep_candidates(campaign, pattern, extensions)
-    else:
-        base, mount = campaign.primary_setup(), candidate_mount(campaign, pattern)
-        cands = [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e),
-                           mount, campaign.ballbar.length, extension=float(e)) for e in extensions]
+    kit = kit_of(campaign)
+    cands = kit.sweep(campaign, pattern, extensions)
     sub = planner_for(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
                       data=planner.data, sigma_prior=planner.learnt)
     ev = sub.evaluate()
     rows = []
-    fits = feasibility_of(campaign)
+    fits = kit.feasibility(campaign)
     for k, (c, e) in enumerate(zip(cands, extensions)):
         ok, why = fits(c)
-        row = {"extension_mm": float(e), "R_B_mm": c.setup.R_B, "Z_T_mm": np.nan if described else c.setup.Z_T,
+        row = {"extension_mm": float(e), "R_B_mm": c.setup.R_B, "Z_T_mm": kit.where(c)["Z_T_mm"],
                "feasible": ok,
                "eig_bits": float(ev.eig_bits[k]),
                "verdict": _verdict(ok, why, bool(ev.informative[k]))}
@@ -224,24 +207,15 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere (None: the assumed priors): the closed form's
     σ_model (unless ``sigma_model_um``) and the probe's scale are the rms of its priors, and the σ_model information
     and the Monte-Carlo check use it (:class:`.design.Planner`)."""
-    described = campaign.machine.described
-    ballbar = [c for c in catalogue_of(campaign) if data != "probe" or c.repeat_of is None]
-    candidates = ballbar + (described_probe_catalogue(campaign) if described else probe_catalogue(campaign)) + \
-        list(extra or [])
+    kit = kit_of(campaign)
+    ballbar = [c for c in kit.catalogue(campaign) if data != "probe" or c.repeat_of is None]
+    candidates = ballbar + kit.probe_catalogue(campaign) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
     planner = planner_for(campaign, candidates, targets, sigma_model=sigma, model=model, data=data,
                           sigma_prior=sigma_prior)
     table, si = _tables(planner, candidates, campaign)
     if sweep_pattern is None:
-        best = table[table["kind"] == "tool length"]
-        if described and len(best):  # the sweep is at the first mount (sweep_candidates): choose among its runs
-            best = best[best["mount"] == next(iter(campaign.ballbar.mounts))]
-        if described and len(best):  # the pattern whose value depends most on the tool length (AA, along its
-            spread = best.groupby("pattern", sort=False)["eig_bits"].agg(np.ptp)  # axis, does not at all)
-            sweep_pattern = str(spread.idxmax())
-        else:
-            sweep_pattern = str(best.iloc[0]["pattern"]) if len(best) else (str(table["pattern"].iloc[0])
-                                                                              if described else "CR")
+        sweep_pattern = kit.sweep_pattern(table, campaign)
     sweep = tool_length_sweep(planner, campaign, sweep_pattern)
     check = monte_carlo_check(planner, table)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"
@@ -251,28 +225,15 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
              f"{candidates[0].repeats if candidates else 3} times with repeat sd "
              f"{units.from_internal(planner.pooled_sd, 'um'):.2f} µm (pooled from the campaign) and instrument "
              f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm",
-             ("feasible = every command of every point (the arc, the held axes, the linear axes) lies within the "
-              "travels of the machine's description" if described else
-              "feasible = the span of each linear-axis command fits the axis travel of [machine] (the campaign "
-              "does not give where the C axis sits within the travels)"),
-             ("touch-probe runs (kind 'probe'): each rotary axis indexed to 0° and up to three more positions, "
-              "alone, with the others held, with a longer stylus or the sphere higher; each a new run with its own "
-              "stylus and sphere terms, readings with the probe's repeatability and sigma_model_probe = "
-              f"{units.from_internal(planner.sigma_probe, 'um'):.2f} µm (rms of its prior)"
-              if described and any(isinstance(c, ProbeCandidate) for c in candidates) else
-              "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus"
-              if described else
-              f"touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its own "
-              f"stylus and datum terms, readings with the probe's repeatability and sigma_model_probe = "
-              f"{units.from_internal(planner.sigma_probe, 'um'):.2f} µm (rms of its prior); a B-axis run at 45° "
-              "separates alpha_XB and gamma_XB, which a B = 90° reading sees only as their sum"
+             kit.feasibility_note,
+             (kit.probe_note.format(sigma_probe=units.from_internal(planner.sigma_probe, 'um'))
               if any(isinstance(c, ProbeCandidate) for c in candidates) else
               "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus")]
     cols = [c for c in sweep.columns if c.endswith(" sd_after")]
     if len(sweep) > 1 and np.allclose(sweep[cols].to_numpy(), sweep[cols].to_numpy()[0], rtol=1e-6):
         notes.append(f"the tool-length sweep of {sweep_pattern} is flat: a longer tool teaches nothing more here "
                      "(on a machine whose spindle no rotary axis carries, the tool length moves no lever)")
-    if described and planner.not_targeted and not targets:
+    if getattr(planner, "not_targeted", None) and not targets:
         notes.append(f"not targeted: {', '.join(planner.not_targeted)} — no run of the catalogue determines them one "
                      "by one (identifiability of the campaign and every candidate together, the T ball centred)")
     notes += probe_skipped(campaign)

@@ -82,6 +82,57 @@ def sample_notes(result) -> list[str]:
     return thesis_assumption_lines(result)
 
 
+def planning():
+    """The planning of the thesis' campaign format: its 12 patterns at its lever arms (R_B, Z_T, X_T, R_C, Z_C), its
+    probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
+    import numpy as np
+
+    from ..machine_time import MachineClock
+    from ..parameters import IDENTIFIABLE
+    from ..planning.candidates import Candidate, candidate_mount, catalogue, extended_setup, feasibility_check
+    from ..iso import thesis_name
+    from ..planning.design import Planner, check_targets
+    from ..planning.run_records import RUN_COLUMNS, thesis_records
+    from ..planning.machine_kit import PlanningKit
+    from ..planning.probe_candidates import probe_catalogue, probe_feasibility
+
+    def target_name(name, campaign):
+        q = thesis_name(str(name))
+        check_targets([q])
+        return q
+
+    def clock(model, campaign):
+        bb = campaign.ballbar
+        return MachineClock(model, L_B=bb.length, cr_geometry=bb.cr_geometry, feed=bb.feed_mm_per_min)
+
+    def where(c) -> dict:
+        return {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "mount": c.mount.id,
+                "R_C_mm": c.mount.R_C}
+
+    def sweep(campaign, pattern, extensions):
+        base, mount = campaign.primary_setup(), candidate_mount(campaign, pattern)
+        return [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e), mount,
+                          campaign.ballbar.length, extension=float(e)) for e in extensions]
+
+    def sweep_pattern(table, campaign) -> str:
+        best = table[table["kind"] == "tool length"]
+        return str(best.iloc[0]["pattern"]) if len(best) else "CR"
+
+    return PlanningKit(
+        catalogue=catalogue, feasibility=feasibility_check, probe_catalogue=probe_catalogue,
+        probe_feasibility=probe_feasibility, planner=Planner,
+        reported=lambda campaign, planner_of: planner_of(list(IDENTIFIABLE)), target_name=target_name,
+        clock=clock, where=where, sweep=sweep, sweep_pattern=sweep_pattern,
+        feasibility_note="feasible = the span of each linear-axis command fits the axis travel of [machine] (the "
+                         "campaign does not give where the C axis sits within the travels)",
+        probe_note="touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its "
+                   "own stylus and datum terms, readings with the probe's repeatability and sigma_model_probe = "
+                   "{sigma_probe:.2f} µm (rms of its prior); a B-axis run at 45° separates alpha_XB and gamma_XB, "
+                   "which a B = 90° reading sees only as their sum",
+        run_columns=RUN_COLUMNS,
+        run_records=thesis_records, planned_geometry=lambda planned, candidate, campaign: None)
+
+
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
     from ..models.chain_thesis import ThesisChainModel
@@ -167,6 +218,12 @@ class ThesisPlugin:
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
     sample_notes = staticmethod(sample_notes)
+
+    @property
+    def planning(self):
+        """Its planning kit (:func:`planning`)."""
+        return planning()
+
     compensation_program = staticmethod(compensation_program)
     compensate = staticmethod(compensate)
     simulate = staticmethod(simulate)

@@ -1,0 +1,117 @@
+"""What planning asks of a campaign's machine (SPEC §20): its catalogue, feasibility, planner, clock, names and the
+shape of its planned runs, in one object.
+
+The engine's own kit serves every machine from its description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its
+arcs, held axes and W-ball positions, :mod:`.described_candidates`).  A machine whose plug-in has a campaign format
+of its own contributes ``planning``, a :class:`PlanningKit` built from its functions (the thesis plug-in: the thesis'
+12 patterns and lever arms, :mod:`.candidates`, :mod:`.probe_candidates`, :class:`~.design.Planner`).  Planning asks
+:func:`kit_of` and never which kind of machine it holds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..machines.plugins import provided
+
+
+@dataclass(frozen=True)
+class PlanningKit:
+    """The planning contributions of one campaign format.
+
+    ``catalogue(campaign)`` the candidate ball-bar runs; ``feasibility(campaign)`` a ``check(candidate) -> (ok,
+    why)``; ``probe_catalogue(campaign)`` and ``probe_feasibility(candidate, campaign)`` the touch-probe runs;
+    ``planner(campaign, candidates, targets, **kw)`` the :class:`~.design.Planner`; ``reported(campaign, planner_of)``
+    the quantities a design reports by default (``planner_of(names)`` builds a planner for names, None: the planner's
+    own targets); ``target_name(name, campaign)`` a quantity's canonical name (ISO symbols accepted) or a
+    ParameterError; ``clock(time_model, campaign)`` the machine minutes of runs; ``where(candidate)`` the geometry
+    columns of the plan's table; ``sweep(campaign, pattern, extensions)`` the tool-length sweep's candidates;
+    ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for; ``feasibility_note`` and
+    ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
+    ``run_records(design, programs)`` the design's runs as records; ``planned_geometry(planned, candidate,
+    campaign)`` what a planned run records beyond pattern, set-up and mount (the arc and held axes)."""
+
+    catalogue: Callable
+    feasibility: Callable
+    probe_catalogue: Callable
+    probe_feasibility: Callable
+    planner: Callable
+    reported: Callable
+    target_name: Callable
+    clock: Callable
+    where: Callable
+    sweep: Callable
+    sweep_pattern: Callable
+    feasibility_note: str
+    probe_note: str
+    run_columns: list
+    run_records: Callable
+    planned_geometry: Callable
+
+
+def kit_of(campaign) -> PlanningKit:
+    """The planning kit of ``campaign``'s machine: its plug-in's, else the engine's (:func:`engine_kit`)."""
+    return provided(campaign.machine, "planning") or engine_kit()
+
+
+def engine_kit() -> PlanningKit:
+    """The engine's planning, for any machine from its description."""
+    from . import described_candidates as dc
+    from .described_planner import DescribedPlanner, described_targets
+    from .described_probe_candidates import described_probe_catalogue, described_probe_feasibility
+    from .chain_clock import DescribedClock
+    from .run_records import DESCRIBED_RUN_COLUMNS, described_records
+
+    def reported(campaign, planner_of):
+        return planner_of(None)
+
+    def where(c) -> dict:
+        return {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": np.nan, "mount": c.mount.id, "R_C_mm": np.nan}
+
+    def sweep_pattern(table, campaign) -> str:
+        best = table[table["kind"] == "tool length"]
+        best = best[best["mount"] == next(iter(campaign.ballbar.mounts))]  # the sweep is at the first mount
+        if not len(best):
+            return str(table["pattern"].iloc[0])
+        # the pattern whose value depends most on the tool length (AA, along its axis, does not at all)
+        spread = best.groupby("pattern", sort=False)["eig_bits"].agg(np.ptp)
+        return str(spread.idxmax())
+
+    def planned_geometry(planned, candidate, campaign) -> None:
+        planned.arc_deg = dc.arc_of(candidate, campaign.machine.description)
+        planned.hold_deg = dict(candidate.hold_deg) or None
+
+    return PlanningKit(
+        catalogue=dc.described_catalogue, feasibility=dc.described_feasibility_check,
+        probe_catalogue=described_probe_catalogue, probe_feasibility=described_probe_feasibility,
+        planner=DescribedPlanner, reported=reported,
+        target_name=lambda name, campaign: described_targets([name], campaign.machine.description)[0],
+        clock=lambda model, campaign: DescribedClock(model, campaign), where=where, sweep=dc.sweep_candidates,
+        sweep_pattern=sweep_pattern,
+        feasibility_note="feasible = every command of every point (the arc, the held axes, the linear axes) lies "
+                         "within the travels of the machine's description",
+        probe_note="touch-probe runs (kind 'probe'): each rotary axis indexed to 0° and up to three more positions, "
+                   "alone, with the others held, with a longer stylus or the sphere higher; each a new run with its "
+                   "own stylus and sphere terms, readings with the probe's repeatability and sigma_model_probe = "
+                   "{sigma_probe:.2f} µm (rms of its prior)",
+        run_columns=DESCRIBED_RUN_COLUMNS, run_records=described_records,
+        planned_geometry=planned_geometry)
+
+
+def catalogue_of(campaign) -> list:
+    """The candidate catalogue of ``campaign``'s machine."""
+    return kit_of(campaign).catalogue(campaign)
+
+
+def feasibility_of(campaign):
+    """``check(candidate) -> (feasible, why)`` for ``campaign``'s machine."""
+    return kit_of(campaign).feasibility(campaign)
+
+
+def planner_for(campaign, candidates: list, targets=None, **kw):
+    """The planner of ``campaign``'s machine (the engine's :class:`~.described_planner.DescribedPlanner`, or its
+    plug-in's, the thesis machine's :class:`~.design.Planner`; keywords as theirs)."""
+    return kit_of(campaign).planner(campaign, candidates, targets, **kw)
