@@ -387,8 +387,9 @@ class Campaign:
 
     def require_measured_runs(self) -> None:
         """An :class:`~mtmcal_bayes.errors.InputError` (the file, key ``ballbar.runs``) when the campaign has no
-        measured ball-bar run: a campaign designed but not yet measured, or a machine with set-ups only."""
-        if self.ballbar.runs or (self.machine.described and self.has_probe_readings()):
+        measured run of either instrument: a campaign designed but not yet measured, or a machine with set-ups
+        only."""
+        if self.ballbar.runs or self.has_probe_readings():
             return
         n = len(self.ballbar.planned)
         if n:

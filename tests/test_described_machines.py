@@ -151,24 +151,6 @@ def test_a_bad_described_measurement_is_one_line(tmp_path, run_cli, old, new, ke
     assert key in err and words in err, err
 
 
-@pytest.mark.parametrize("argv", [["sample", "--closed-form"]])
-def test_what_serves_the_thesis_machine_alone_says_so(tmp_path, run_cli, argv):
-    """What does not serve a described machine yet says so in one line naming the file and ``machine`` (exit 2,
-    nothing written), never a wrong number."""
-    from mtmcal_bayes.datasets import data_path
-
-    argv = [str(data_path("fig4_30a_bx_original.nc")) if a == "PROGRAM" else str(tmp_path / "out.nc") if a == "OUT"
-            else a for a in argv]
-    if argv[0] == "ncgen":
-        argv += [demo_campaign("trunnion")]
-    else:
-        argv += ["--machine", "trunnion"]
-    code, _, err = run_cli(*argv)
-    assert code == 2 and len(err.strip().splitlines()) == 1, err
-    assert ": machine: " in err and "not yet a described one" in err
-    assert not (tmp_path / "out.nc").exists()
-
-
 def test_a_probe_run_may_give_its_stylus_length_alone():
     from mtmcal_bayes.io.campaign_reader import parse_campaign
 

@@ -13,14 +13,15 @@ named; or not determined by every campaign).
 from __future__ import annotations
 
 from ..inference.identifiability import campaign_identifiability
-from ..parameters import IDENTIFIABLE
+from ..machines.plugins import provided
 
 
 def history_quantities(campaigns, posts, deviations) -> tuple[list[str], list[dict]]:
     """The tracked quantities (names, in the order of ``deviations``) and the deviations left out
     (``[{"quantity", "why"}]``), from the campaigns and their ball-bar log posteriors ``posts`` (one each)."""
-    if not campaigns[-1].machine.described:
-        return list(IDENTIFIABLE), []
+    own = provided(campaigns[-1].machine, "reported_quantities")  # a plug-in's (the thesis': Table 4.5's eight)
+    if own is not None:
+        return list(own), []
     idents = [campaign_identifiability(p) for p in posts]
     determined = [d for d in deviations if all(d in i.determined for i in idents)]
     last = idents[-1]

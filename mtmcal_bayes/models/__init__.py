@@ -99,14 +99,14 @@ def first_order_gap(campaign, theta: np.ndarray, space=None, *, observations=Non
 
     Above the instrument accuracy, the deviations are too large for the linear model.
     """
+    if not campaign.ballbar.runs:  # a probe-only campaign: the gap is of the ball bar's eccentricities
+        return 0.0
     gap = provided(campaign.machine, "first_order_gap", _engine_gap)
     return gap(campaign, theta, space, observations=observations)
 
 
 def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -> float:
-    """The chain against its own first order (0 without ball-bar runs)."""
-    if not campaign.ballbar.runs:
-        return 0.0
+    """The chain against its own first order."""
     chain = ChainBallbarModel(campaign, space, observations=observations)
     return float(np.abs(chain.predict(theta) - FirstOrderModel(chain).predict(theta)).max())
 

@@ -40,12 +40,10 @@ def beyond_travels(campaign, cands: list[Candidate]) -> list[tuple[Candidate, st
 
 def probe_candidates(campaign) -> list:
     """The catalogue's feasible touch-probe runs (none without a ``[probe]`` to take them from)."""
-    from .described_probe_candidates import described_probe_catalogue, described_probe_feasibility
-    from .probe_candidates import probe_catalogue, probe_feasibility
+    from .machine_kit import kit_of
 
-    if campaign.machine.described:
-        return [c for c in described_probe_catalogue(campaign) if described_probe_feasibility(c, campaign)[0]]
-    return [c for c in probe_catalogue(campaign) if probe_feasibility(c, campaign)[0]]
+    kit = kit_of(campaign)
+    return [c for c in kit.probe_catalogue(campaign) if kit.probe_feasibility(c, campaign)[0]]
 
 
 def _wider(problem, extra: list, target: str):

@@ -50,6 +50,20 @@ def simulate(campaign, truth, **options):
     return thesis_simulation(campaign, truth, **options)
 
 
+def simulated_probe(campaign, truth, model: str, **options):
+    """The touch-probe readings of a campaign in the thesis' format simulated for ``truth``."""
+    from ..simulation.simulate import thesis_probe
+
+    return thesis_probe(campaign, truth, model, **options)
+
+
+def pattern_components(pattern: str) -> tuple[str, ...]:
+    """The eccentricity components of a thesis pattern (Tables 2.2/2.3)."""
+    from ..patterns import COMPONENTS
+
+    return COMPONENTS[pattern]
+
+
 def sensitivity_table(campaign, model: str):
     """Thesis Tables 2.4–2.6 as numbers: every pattern's eccentricity per unit deviation and offset."""
     from ..simulation.sensitivity import sensitivity_table as table
@@ -228,6 +242,8 @@ class ThesisPlugin:
     compensate = staticmethod(compensate)
     simulate = staticmethod(simulate)
     sensitivity_table = staticmethod(sensitivity_table)
+    simulated_probe = staticmethod(simulated_probe)
+    pattern_components = staticmethod(pattern_components)
     selection_source = "the thesis' 13 deviations (Table 2.1)"
     description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
     description_label = "thesis machine"

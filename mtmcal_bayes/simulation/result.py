@@ -66,7 +66,7 @@ class Simulation:
 
     def to_json(self) -> dict:
         out = {"model": self.model, "eccentricities": eccentricity_records(self.observations, self.predicted)}
-        if self.campaign.machine.described:
+        if provided(self.campaign.machine, "simulate") is None:  # the engine's simulation: the machine and truth too
             out["machine"] = self.campaign.machine.description.builtin or self.campaign.machine.name
             out["truth"] = {n: units.from_internal(v, quantity_unit(n)) for n, v in self.truth.deviations.items()}
             if self.probe_readings is not None:

@@ -19,11 +19,11 @@ from ..campaign import Campaign, Run, Truth
 from ..errors import InputError
 from ..machines import selected
 from ..machines.patterns import components
+from ..machines.plugins import provided
 from ..machines.space import described_space
 from ..models import make_model
 from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_run_values
 from ..parameters import ParameterSpace, nuisance_name
-from ..patterns import COMPONENTS
 
 #: repeat scatter of a described machine's probe readings where the campaign states no repeatability, mm
 DEFAULT_PROBE_SD = units.to_internal(1.0, "um")
@@ -44,9 +44,10 @@ def truth_vector(space: ParameterSpace, truth: Truth, source: str = "<truth>") -
 
 
 def simulation_space(campaign: Campaign, truth: Truth, data: str) -> ParameterSpace | None:
-    """The space a truth is simulated in: on a described machine its selected deviations and any other the truth
-    gives (every generated one may be simulated); None (the model's default, all 13) on the thesis machine."""
-    if not campaign.machine.described:
+    """The space a truth is simulated in: the machine's selected deviations and any other the truth gives (every
+    generated one may be simulated); None (the model's default) where the machine's plug-in builds the models of its
+    own campaign format (the thesis': all 13)."""
+    if provided(campaign.machine, "make_model") is not None:
         return None
     chosen = [d.name for d in selected(campaign.machine.description)]
     return described_space(campaign, chosen + [d for d in truth.deviations if d not in chosen], data=data)
@@ -81,8 +82,7 @@ def planned_as_runs(campaign: Campaign) -> Campaign:
                              f"L_B = {bb.length:g} mm: simulate it from a campaign whose [ballbar] length_mm is "
                              f"{run.length:g}")
     out = copy.deepcopy(campaign)
-    desc = campaign.machine.description if campaign.machine.described else None
-    comps = (lambda p: COMPONENTS[p]) if desc is None else (lambda p: components(desc, p))  # noqa: E731
+    comps = provided(campaign.machine, "pattern_components") or (lambda p: components(campaign.machine.description, p))
     out.ballbar.runs += [Run(p.pattern, p.setup, p.mount, {c: np.zeros(p.repeats) for c in comps(p.pattern)},
                              convention=p.convention, arc_deg=p.arc_deg, hold_deg=p.hold_deg)
                          for p in out.ballbar.planned]
@@ -142,7 +142,7 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
     """
     campaign = planned_as_runs(campaign)
     rng = np.random.default_rng(seed) if noise else None
-    if campaign.machine.described and not campaign.ballbar.runs:  # a probe-only campaign
+    if not campaign.ballbar.runs and campaign.has_probe_readings():  # a probe-only campaign
         out = copy.deepcopy(campaign)
         out.probe = simulated_probe(campaign, truth, model, noise=noise, rng=rng, repeats=repeats)
         out.truth = copy.deepcopy(truth)
@@ -171,15 +171,26 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
     ``noise``: as many repeats as measured (or ``repeats``), each scattered by the probe's repeatability.
     DPRNT file names and fit covariances are dropped: the readings are centres now.
     """
-    described = campaign.machine.described
-    if not campaign.has_probe_readings() or (campaign.probe.repeatability is None and not described):
+    own = provided(campaign.machine, "simulated_probe")  # a plug-in's probe format (the thesis': its two runs)
+    if own is not None:
+        return own(campaign, truth, model, noise=noise, rng=rng, repeats=repeats)
+    if not campaign.has_probe_readings():
+        return copy.deepcopy(campaign.probe) if campaign.probe is not None else None
+    fm = make_model(model, campaign, simulation_space(campaign, truth, "probe"), data="probe")
+    return _described_probe(campaign, fm, truth_vector(fm.space, truth.probe_part()), noise=noise, rng=rng,
+                            repeats=repeats)
+
+
+def thesis_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
+                 rng: np.random.Generator | None = None, repeats: int | None = None):
+    """:func:`simulated_probe` of a campaign in the thesis' format: its C-axis run and B-axis styli, in the reading
+    frame (its repeatability needed for noise; a gap of the campaign, none)."""
+    if not campaign.has_probe_readings() or campaign.probe.repeatability is None:
         return copy.deepcopy(campaign.probe) if campaign.probe is not None else None
     if campaign.probe_gap() is not None:  # readings the probe model cannot simulate: none (Simulation.save says so)
         return None
     fm = make_model(model, campaign, simulation_space(campaign, truth, "probe"), data="probe")
     theta = truth_vector(fm.space, truth.probe_part())
-    if campaign.machine.described:
-        return _described_probe(campaign, fm, theta, noise=noise, rng=rng, repeats=repeats)
     layout = fm.layout
     flat = fm.predict(theta)  # observations: Qᵀ (reading − nominal)
     dev = np.einsum("kij,kj->ki", layout.rotation, flat.reshape(-1, 3))  # back to reading-frame axes

@@ -1,0 +1,54 @@
+"""One machine model (SPEC §20): the thesis machine is a description plus a plug-in, and what the engine does it does
+for every machine, asking the machine what it provides."""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+
+import mtmcal_bayes as mb
+from mtmcal_bayes.datasets import builtin_text
+from mtmcal_bayes.machines.plugins import provided
+
+
+def test_the_thesis_machine_is_its_description_and_its_plugin():
+    """The built-in thesis campaign's machine has the thesis plug-in, which gives its models, its default data and
+    the thesis' names as aliases of the ISO symbols; a described machine has none of these from a plug-in."""
+    thesis = mb.load_campaign()
+    assert provided(thesis.machine, "kinematic_model") == "htm-thesis"
+    assert provided(thesis.machine, "default_data") == "ballbar"
+    from mtmcal_bayes.io.machine_reader import builtin_description
+
+    desc = builtin_description("integrex-i200")
+    assert desc.plugins == ("thesis",) and desc.name_of("E_X0C") == "dx_CZ" and desc.name_of("E_C0C") == "E_C0C"
+    trunnion = builtin_description("trunnion")
+    assert trunnion.plugins == () and trunnion.name_of("E_X0C") == "E_X0C"
+    assert provided(trunnion, "kinematic_model") is None
+
+
+def test_a_description_naming_an_unknown_plugin_is_refused(tmp_path, run_cli):
+    text = builtin_text("machines/trunnion.toml").replace('configuration =', 'plugins = ["no_such_plugin"]\nconfiguration =', 1)
+    machine = tmp_path / "m.toml"
+    machine.write_text(text, encoding="utf-8")
+    campaign = builtin_text("machines/trunnion-demo.toml")
+    campaign = campaign.replace('description = "trunnion"', f'description = "{machine.name}"', 1)
+    assert f'description = "{machine.name}"' in campaign
+    path = tmp_path / "c.toml"
+    path.write_text(campaign, encoding="utf-8")
+    code, _, err = run_cli("sample", str(path), "--sampler", "exact")
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "plugins" in err and "no_such_plugin" in err, err
+
+
+def test_a_probe_only_campaign_of_the_thesis_machine_is_a_campaign(tmp_path, run_cli):
+    """As on any machine: its probe data sample; its default data (the plug-in's, the ball bar) is refused in one line
+    saying to use the probe data."""
+    c = copy.deepcopy(mb.load_campaign())
+    c.ballbar.runs, c.reported = [], {}
+    path = tmp_path / "probe_only.toml"
+    mb.save_campaign(c, path)
+    code, out, err = run_cli("sample", str(path), "--sampler", "exact", "--data", "probe", "--seed", "1", "--json")
+    assert code == 0, err
+    code, _, err = run_cli("sample", str(path), "--sampler", "exact")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "use the probe data" in err, err
