@@ -77,13 +77,15 @@ def body_lines(path: Path) -> set[int]:
 
 
 def measure(name: str, argvs: list[list[str]], workdir: Path) -> dict[str, set[int]]:
-    cov = coverage.Coverage(data_file=str(workdir / f".coverage.{name}"), source=[str(PACKAGE)],
-                            concurrency=["thread", "multiprocessing"])
+    rc = workdir / f"coveragerc.{name}"
+    rc.write_text(f"[run]\nsource = {PACKAGE}\nconcurrency = thread, multiprocessing\nparallel = true\n"
+                  f"data_file = {workdir / f'.coverage.{name}'}\n", encoding="utf-8")
+    cov = coverage.Coverage(config_file=str(rc))
     cov.start()
     run_all(argvs)
     cov.stop()
     cov.save()
-    cov.combine()
+    cov.combine(data_paths=[str(workdir)])
     data = cov.get_data()
     return {f: set(data.lines(f) or ()) for f in data.measured_files()}
 

@@ -13,8 +13,8 @@ from mtmcal_bayes import api, units
 from mtmcal_bayes.io.campaign_reader import load_campaign
 from mtmcal_bayes.io.campaign_writer import save_campaign
 from mtmcal_bayes.models.chain_models import ChainBallbarModel
-from mtmcal_bayes.planning.described_candidates import described_catalogue, described_feasibility_check, run_of
-from mtmcal_bayes.planning.described_planner import DescribedPlanner
+from mtmcal_bayes.planning.chain_candidates import described_catalogue, described_feasibility_check, run_of
+from mtmcal_bayes.planning.chain_planner import DescribedPlanner
 
 
 @pytest.fixture(scope="module")
@@ -150,7 +150,7 @@ def test_probe_candidates_index_each_axis_and_their_rows_are_the_chains_derivati
     from mtmcal_bayes.machines.deviations import quantities
     from mtmcal_bayes.models.chain_models import ChainProbeModel
     from mtmcal_bayes.parameters import ParameterSpace
-    from mtmcal_bayes.planning.described_probe_candidates import described_probe_catalogue
+    from mtmcal_bayes.planning.chain_probe_candidates import described_probe_catalogue
 
     c = api.campaign_of(api.demo_campaign("head-head"))
     desc = c.machine.description

@@ -44,7 +44,7 @@ class Candidate:
     parameters, so a candidate at an existing setup shares its offsets.
     ``repeat_of`` is the index of the campaign run it repeats (``None`` for a
     new run); ``extension`` the tool-length difference to the primary setup, mm; ``arc_deg``, ``hold_deg``
-    a described machine's arc and held axes (:mod:`.described_candidates`).
+    a described machine's arc and held axes (:mod:`.chain_candidates`).
     """
 
     name: str

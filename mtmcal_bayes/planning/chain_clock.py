@@ -6,7 +6,7 @@ import numpy as np
 
 from ..machine_time import MachineClock, TimeModel
 from ..machines.patterns import pattern_commands
-from .described_candidates import arc_of
+from .chain_candidates import arc_of
 
 
 class DescribedClock(MachineClock):

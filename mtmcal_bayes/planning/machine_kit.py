@@ -2,7 +2,7 @@
 shape of its planned runs, in one object.
 
 The engine's own kit serves every machine from its description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its
-arcs, held axes and W-ball positions, :mod:`.described_candidates`).  A machine whose plug-in has a campaign format
+arcs, held axes and W-ball positions, :mod:`.chain_candidates`).  A machine whose plug-in has a campaign format
 of its own contributes ``planning``, a :class:`PlanningKit` built from its functions (the thesis plug-in: the thesis'
 12 patterns and lever arms, :mod:`.candidates`, :mod:`.probe_candidates`, :class:`~.design.Planner`).  Planning asks
 :func:`kit_of` and never which kind of machine it holds.
@@ -59,9 +59,9 @@ def kit_of(campaign) -> PlanningKit:
 
 def engine_kit() -> PlanningKit:
     """The engine's planning, for any machine from its description."""
-    from . import described_candidates as dc
-    from .described_planner import DescribedPlanner, described_targets
-    from .described_probe_candidates import described_probe_catalogue, described_probe_feasibility
+    from . import chain_candidates as dc
+    from .chain_planner import DescribedPlanner, described_targets
+    from .chain_probe_candidates import described_probe_catalogue, described_probe_feasibility
     from .chain_clock import DescribedClock
     from .run_records import DESCRIBED_RUN_COLUMNS, described_records
 
@@ -112,6 +112,6 @@ def feasibility_of(campaign):
 
 
 def planner_for(campaign, candidates: list, targets=None, **kw):
-    """The planner of ``campaign``'s machine (the engine's :class:`~.described_planner.DescribedPlanner`, or its
+    """The planner of ``campaign``'s machine (the engine's :class:`~.chain_planner.DescribedPlanner`, or its
     plug-in's, the thesis machine's :class:`~.design.Planner`; keywords as theirs)."""
     return kit_of(campaign).planner(campaign, candidates, targets, **kw)

@@ -21,7 +21,7 @@ from .. import units
 from ..errors import ParameterError
 from ..machine_time import TimeModel
 from .candidates import Candidate
-from .described_candidates import arc_spec
+from .chain_candidates import arc_spec
 from .design import Planner
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets, reporting_planner
 from .design_problem import current_posterior

@@ -3,7 +3,7 @@ described machine's W ball, arc and held axes (the two campaign formats' plannin
 
 from __future__ import annotations
 
-from .described_candidates import arc_of, arc_spec
+from .chain_candidates import arc_of, arc_spec
 
 
 def _mm(v) -> float:

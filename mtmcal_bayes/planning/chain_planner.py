@@ -6,7 +6,7 @@ sds, the σ_model information — rests on four things that depend on the machin
 a campaign, the target matrix and the candidate runs as campaign runs.  Here they are the described machine's:
 its selected deviations (ISO 230-7 names) with the nuisance terms of every set-up and mount, the first order of
 :class:`~mtmcal_bayes.models.chain_models.ChainBallbarModel` (complex-step Jacobian, exact to rounding; the `linear`
-and `chain` models share it), each target one deviation, and :func:`.described_candidates.run_of`.
+and `chain` models share it), each target one deviation, and :func:`.chain_candidates.run_of`.
 
 Default targets: the selected deviations the campaign plus every feasible candidate determines one by one
 (:func:`~mtmcal_bayes.inference.identifiability.identifiability` of their stacked rows, the T ball centred as in
@@ -28,8 +28,8 @@ from ..models.chain_models import ChainBallbarModel, ChainProbeModel, FirstOrder
 from ..observations import Observations
 from ..parameters import ParameterSpace
 from .candidates import Candidate
-from .described_candidates import run_of
-from .described_probe_candidates import DescribedProbeCandidate
+from .chain_candidates import run_of
+from .chain_probe_candidates import DescribedProbeCandidate
 from .design import Planner
 
 

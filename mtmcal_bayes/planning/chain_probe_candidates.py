@@ -28,7 +28,7 @@ from ..campaign import Probe, ProbeRun
 from ..machines.probe_terms import probe_terms
 from ..models.chain_models import ChainProbeModel, FirstOrderModel
 from ..parameters import ParameterSpace
-from .described_candidates import HOLD_DEG, _hold_for, travel_problems
+from .chain_candidates import HOLD_DEG, _hold_for, travel_problems
 from .probe_candidates import PROBE_REPEATS, ProbeCandidate
 
 #: a longer stylus of the catalogue, mm added to the campaign's first
