@@ -412,9 +412,12 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     if compare_models:
         for other in compared:
             if other != model:
+                variant = analysis.variant(model=other)
+                # exact draws where this model's posterior has them, else the sampler
+                s = (settings if settings.sampler != "exact" or variant.approximation.exact
+                     else dataclasses.replace(settings, sampler="emcee"))
                 say(f"sampling the posterior ({other}) for the model comparison")
-                reports[other] = sample_posterior(analysis.variant(model=other), settings=settings,
-                                                  progress=progress)
+                reports[other] = sample_posterior(variant, settings=s, progress=progress)
         reports = {m: reports[m] for m in compared}
     draw([])  # a figure of an earlier batch already failed: stop before planning
     planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say, listed=shown.listed)
@@ -784,9 +787,9 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         + (" The planner weighs the assumed prior of σ_model, not the one learnt elsewhere that the posterior above "
            "uses." if rep.log_posterior.sigma_prior is not None else ""))
     page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
-    shown = planned.table.head(10)
+    ranked = planned.table.head(10)
     cols = ["name", "eig_bits", "verdict", "newly_identified"] + [f"{t} sd_after" for t in planned.targets[:4]]
-    page.table(shown[cols].rename(columns={"newly_identified": "identifies"}), digits=3, index=False)
+    page.table(ranked[cols].rename(columns={"newly_identified": "identifies"}), digits=3, index=False)
     page.figure(tmp / "plan_sweep.png", plan_figures.SWEEP_CAPTION, "tool-length sweep")
     if len(planned.check):
         page.paragraph("Monte-Carlo check of the closed form (data simulated from the posterior predictive, "
