@@ -27,6 +27,7 @@ from ..identification.output import identification_table
 from ..inference import reading_choice
 from ..inference.budget import sigma_prior_sentence
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
+from ..inference.identifiability import DETERMINED, campaign_identifiability
 from ..inference.sampling import SamplerSettings
 from ..io.netcdf import write_netcdf_atomic
 from ..io.textfiles import atomic_directory
@@ -206,7 +207,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     with atomic_directory(out_dir) as tmp:
         drawing = Drawing(tmp)
         try:
-            ahead = _ahead(analysis, drawing, say)
+            ahead, planned_for = _ahead(analysis, drawing, say, ident)
             tol = campaign.tolerances if tolerances is None else tolerances
             if posterior is not None:
                 rep = posterior
@@ -239,7 +240,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             draw(first)
             content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
                                       compare_models=compare_models, draw=draw, ahead=ahead, drawing=drawing,
-                                      ident=ident, shown=shown, ppc_here=ppc_here)
+                                      ident=ident, shown=shown, ppc_here=ppc_here, planned_for=planned_for)
             if not ppc_here:
                 ppc_df = content.ppc
             extras = drawing.finish()
@@ -296,6 +297,16 @@ PLAN_JOB = "plan"
 PLAN_FIGURES = (("plan_sweep.png", plan_figures.sweep_figure), ("plan_ranking.png", plan_figures.ranking_figure))
 
 
+def _expected_unidentified(analysis, ident) -> list[str]:
+    """The quantities the report will list (:class:`Shown`) that the campaign's Jacobian leaves undetermined or
+    determines only in combination: known before the posterior exists (it does not depend on σ_model), so the plan
+    begun beside the sampling is the one the report shows."""
+    listed = (IDENTIFIABLE if ident is not None else
+              [p.name for p in analysis.space.parameters if p.group == "deviation"])
+    determined = campaign_identifiability(analysis.log_posterior)
+    return [n for n in listed if determined.of(n)[0] not in (None, DETERMINED)]
+
+
 def _plan_and_figures(campaign, directory: Path, targets=None, sigma_prior=None):
     """A drawing job: the plan (:func:`~mtmcal_bayes.planning.plan.plan`, under the posterior's learnt σ_model
     prior ``sigma_prior`` if any) and its figures written into ``directory``; returns ``(None, plan)``."""
@@ -318,19 +329,22 @@ def _explanations_apply(campaign) -> bool:
     return _compares_instruments(campaign) and campaign.probe.b_axis is not None
 
 
-def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
+def _ahead(analysis, drawing: Drawing, say, ident) -> tuple[dict[str, int], list[str]]:
     """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
     sampler leaves the second core idle): the figures of the machine's description (where it has one), the plan
-    for the default targets and its figures (kept when the posterior identifies every listed quantity, else made
-    again for the unidentified ones, :func:`_planning`) and, for a campaign whose conflict explanations apply, the
-    weighing of those explanations (kept when the comparison finds a conflict or a B run reads otherwise than in
-    the thesis).  Returns their batches by job name."""
+    for the listed quantities the data are expected not to identify (:func:`_expected_unidentified`; none: the
+    planner's default targets) and its figures (kept when the posterior agrees, else made again, :func:`_planning`)
+    and, for a campaign whose conflict explanations apply, the weighing of those explanations (kept when the
+    comparison finds a conflict or a B run reads otherwise than in the thesis).  Returns their batches by job name
+    and the targets the plan was begun for."""
     campaign = analysis.campaign
     ahead = {}
+    targets = _expected_unidentified(analysis, ident)
     if campaign.machine.description is not None:
         drawing.start(machine_sections.figure_jobs(campaign))
     say("planning the next measurement (beside the sampling)")
     ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory,
+                                                                         targets=targets or None,
                                                                          sigma_prior=analysis.sigma_prior))])
     if _explanations_apply(campaign):
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
@@ -338,7 +352,7 @@ def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
         # the report shows its own consistency check: none for the candidates
         ahead[CONFLICT_JOB] = drawing.start([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis,
                                                                                           consistency_of=0)))])
-    return ahead
+    return ahead, targets
 
 
 #: the figures in the order the report's file list names them
@@ -384,7 +398,7 @@ class _Rest:
 
 
 def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw, ahead, drawing,
-                    ident, shown: Shown, ppc_here: bool) -> _Rest:
+                    ident, shown: Shown, ppc_here: bool, planned_for: list[str]) -> _Rest:
     """The instruments' comparison, the model comparison, the tables, the dx_BT = 0 effect and the plan; the figures
     of the comparison are handed to ``draw`` as soon as it exists, those of the model comparison (and of a plan made
     here) once the plan exists.  The plan with its figures and the weighing of the instruments' conflict (only a
@@ -420,7 +434,8 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                 reports[other] = sample_posterior(variant, settings=s, progress=progress)
         reports = {m: reports[m] for m in compared}
     draw([])  # a figure of an earlier batch already failed: stop before planning
-    planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say, listed=shown.listed)
+    planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say, listed=shown.listed,
+                               planned_for=planned_for)
     figures = [] if drawn else [(name, lambda make=make: make(planned)) for name, make in PLAN_FIGURES]
     if compare_models:
         figures[:0] = [("compare_forest.png", lambda: forest.forest_figure(
@@ -667,12 +682,14 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
     page.table(pd.DataFrame(rows), digits={"P(nonconformance)": 3}, index=False)
 
 
-def _planning(campaign, rep, drawing: Drawing, *, batch: int, say, listed: list[str]) -> tuple[PlanResult, bool]:
+def _planning(campaign, rep, drawing: Drawing, *, batch: int, say, listed: list[str],
+              planned_for: list[str]) -> tuple[PlanResult, bool]:
     """The plan for the ``listed`` quantities the data do not determine one by one (the Jacobian's statement: not at
-    all, or only in combination), else for the planner's default targets (that one begun before the sampling, in
-    ``batch``: waited for here), and whether its figures are drawn already (they are for that one)."""
+    all, or only in combination), else for the planner's default targets (the one begun before the sampling for
+    ``planned_for``, in ``batch``, is waited for here when it was begun for these), and whether its figures are
+    drawn already (they are for that one)."""
     targets = [n for n in listed if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
-    if not targets:
+    if targets == planned_for:
         return drawing.wait(batch)[PLAN_JOB], True
     drawing.cancel(batch)
     say("planning the next measurement for the quantities the data do not identify")
