@@ -182,3 +182,18 @@ def test_a_described_machine_report_reuses_a_given_posterior(tmp_path):
     written = az.from_netcdf(tmp_path / "rep" / "posterior.nc")
     q = s.index[0]
     np.testing.assert_array_equal(np.asarray(written.posterior[q]), np.asarray(post.idata.posterior[q]))
+
+
+def test_a_described_machine_report_takes_a_learnt_sigma_model_prior(tmp_path):
+    """``report(sigma_model_prior=...)`` on a described machine: every posterior of the report (the main one and
+    the instruments' side posteriors) is sampled under the learnt prior, and the budget names its source."""
+    from mtmcal_bayes.sigma_prior import SigmaModelPrior
+
+    learnt = SigmaModelPrior({"sigma_model": (1.0, 0.1)}, "fleet of test trunnions")
+    c = mb.load_campaign(demo_campaign("trunnion"))
+    rep = mb.report(c, output=tmp_path / "rep", sigma_model_prior=learnt, sampler="exact", seed=1)
+    assert rep.posterior.log_posterior.sigma_prior == learnt
+    priors = pd.read_csv(tmp_path / "rep" / "priors.csv", index_col="parameter")
+    assert "fleet of test trunnions" in priors.loc["sigma_model", "reason"]
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    assert "fleet of test trunnions" in html.split('<h2 id="budget">')[1].split("<h2")[0]
