@@ -322,19 +322,12 @@ def _compares_instruments(campaign) -> bool:
     return bool(campaign.ballbar.runs) and campaign.has_probe_readings() and campaign.probe_gap() is None
 
 
-def _explanations_apply(campaign) -> bool:
-    """Whether the candidate explanations of a conflict between the instruments can be weighed on this campaign:
-    they re-read its B patterns, lengthen its stylus and shift the B-axis angles of its probe session
-    (:mod:`~mtmcal_bayes.posterior.conflict`), so it needs a B-axis probe session."""
-    return _compares_instruments(campaign) and campaign.probe.b_axis is not None
-
-
 def _ahead(analysis, drawing: Drawing, say, ident) -> tuple[dict[str, int], list[str]]:
     """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
     sampler leaves the second core idle): the figures of the machine's description (where it has one), the plan
-    for the listed quantities the data are expected not to identify (:func:`_expected_unidentified`; none: the
-    planner's default targets) and its figures (kept when the posterior agrees, else made again, :func:`_planning`)
-    and, for a campaign whose conflict explanations apply, the weighing of those explanations (kept when the
+    for the listed quantities the campaign's Jacobian does not determine one by one (:func:`_expected_unidentified`;
+    none: the planner's default targets) and its figures and, for a campaign with both instruments, the weighing of
+    the explanations of a conflict between them (kept when the
     comparison finds a conflict or a B run reads otherwise than in the thesis).  Returns their batches by job name
     and the targets the plan was begun for."""
     campaign = analysis.campaign
@@ -346,7 +339,7 @@ def _ahead(analysis, drawing: Drawing, say, ident) -> tuple[dict[str, int], list
     ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory,
                                                                          targets=targets or None,
                                                                          sigma_prior=analysis.sigma_prior))])
-    if _explanations_apply(campaign):
+    if _compares_instruments(campaign):
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
         # the report shows its own consistency check: none for the candidates
@@ -448,7 +441,9 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     missing = missing_data(campaign, ident)
     effect = (thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
               if ident is not None and not analysis.fix_dx_BT else None)
-    machine_tables = ({} if rep.identifiability is None else
+    # the Jacobian's statement and the stated truth tabulated beside the least squares, where those are the
+    # deterministic values (the thesis machine's tables of Eqs 4.10–4.18 say what its campaign identifies)
+    machine_tables = ({} if shown.least_squares is None else
                       machine_sections.tables(rep, shown.least_squares, campaign.truth))
     return _Rest(instruments, disputed, None, reports, missing, summary_table(rep),
                  mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df, machine_tables)
@@ -713,7 +708,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
 
     if desc is not None:
         machine_sections.machine_section(page, desc, rep, tmp)
-    if rep.identifiability is not None:
+    if shown.least_squares is not None:
         machine_sections.determined_section(page, rep)
     page.section("results", "Results")
     if ident is not None:
