@@ -230,8 +230,9 @@ def test_the_marks_of_the_choice_of_reading_render(thesis_report_run):
 def test_the_weighing_begun_before_the_sampling_is_dropped_when_nothing_needs_explaining(thesis, thesis_report,
                                                                                          tmp_path, monkeypatch):
     """The built-in campaign's instruments agree; read as the thesis reads it (patched here) nothing is left to
-    explain: the weighing begun beside the sampling is ended and the report has no explanations table, while the
-    built-in reading (the shared report) keeps it."""
+    explain: the weighing, begun beside the sampling only for a campaign read otherwise (else only when the
+    comparison finds a conflict), is not made and the report has no explanations table, while the built-in reading
+    (the shared report) keeps it."""
     assert (thesis_report / "explanations.csv").exists()
     monkeypatch.setattr(report_build, "reads_as_thesis", lambda ballbar: True)
     dropped = report_build.build_report(thesis, tmp_path / "dropped", settings=report_build.SamplerSettings(seed=2))

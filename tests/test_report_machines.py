@@ -197,3 +197,27 @@ def test_a_described_machine_report_takes_a_learnt_sigma_model_prior(tmp_path):
     assert "fleet of test trunnions" in priors.loc["sigma_model", "reason"]
     html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
     assert "fleet of test trunnions" in html.split('<h2 id="budget">')[1].split("<h2")[0]
+
+
+def test_a_probe_only_campaign_gets_the_sections_it_has_what_they_need_for(tmp_path):
+    """A described campaign with touch-probe runs and no ball bar (the trunnion demo without its [ballbar]): the
+    report is written without the sections that need ball-bar runs (trajectories, predictive check of
+    eccentricities, the instruments side by side) or a ball-bar set-up (the planner's catalogue), and says why."""
+    body = open(demo_campaign("trunnion"), encoding="utf-8").read()
+    kept, skip = [], False
+    for line in body.splitlines():
+        if line.startswith("["):
+            skip = line.strip("[] ").startswith(("ballbar", "truth.setups", "truth.mounts"))
+        if not skip:
+            kept.append(line)
+    path = tmp_path / "probe_only.toml"
+    path.write_text("\n".join(kept) + "\n", encoding="utf-8")
+    c = mb.load_campaign(path)
+    assert not c.ballbar.runs and c.has_probe_readings()
+    rep = mb.report(c, output=tmp_path / "rep", sampler="exact", seed=1)
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    anchors = set(re.findall(r'<h2 id="([^"]+)">', html))
+    assert {"machine", "determined", "results", "least-squares", "budget", "corner", "forest", "widths"} <= anchors
+    assert not anchors & {"polar", "instruments", "plan"}
+    assert not any((tmp_path / "rep" / f).exists() for f in ("ppc.csv", "polar.png", "plan.csv", "instruments.csv"))
+    assert any("No ball-bar runs" in m for m in rep.missing) and any("No ball-bar set-up" in m for m in rep.missing)

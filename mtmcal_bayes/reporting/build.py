@@ -117,7 +117,7 @@ class ReportContent:
     off_scale: list[str]
     sigma_um: float
     fix_dx_BT: bool
-    planned: PlanResult
+    planned: PlanResult | None
     instruments: InstrumentComparison | None = None  # ball bar, probe, fused: when the campaign has probe readings
     loo: LooResult | None = None  # leave-one-out consistency of the main posterior's observations
     disputed: dict | None = None  # deviations the instruments disagree on, with the verdicts behind each
@@ -207,7 +207,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     with atomic_directory(out_dir) as tmp:
         drawing = Drawing(tmp)
         try:
-            ahead, planned_for = _ahead(analysis, drawing, say, ident)
+            ahead, planned_for = _ahead(analysis, drawing, say)
             tol = campaign.tolerances if tolerances is None else tolerances
             if posterior is not None:
                 rep = posterior
@@ -278,15 +278,20 @@ class Shown:
 
     @classmethod
     def of(cls, rep: PosteriorResult, ident: IdentificationResult | None) -> Shown:
-        """A campaign with a deterministic identification (``ident``) shows the quantities it identifies (the
-        thesis' eight, Table 4.5 order) beside its values; one without shows every deviation of its machine, the
-        ones its campaign determines jointly, beside their least-squares values."""
+        """The quantities the machine's plug-in reports (the thesis': its eight, Table 4.5 order), listed and drawn
+        together, else every deviation of the machine, those its campaign determines drawn together; beside the
+        plug-in's deterministic values (``ident``) where it gives them, else the least squares."""
+        post = rep.log_posterior
+        own = provided(post.campaign.machine, "reported_quantities")
+        if own is not None:
+            listed = joint = [n for n in own if n in rep.summary.index]
+        else:
+            listed = [p.name for p in post.space.parameters if p.group == "deviation"]
+            joint = machine_sections.shown_together(rep)
         if ident is not None:
-            names = [n for n in IDENTIFIABLE if n in rep.summary.index]
-            return cls(names, names, rep.comparison)
-        deviations = [p.name for p in rep.log_posterior.space.parameters if p.group == "deviation"]
+            return cls(listed, joint, rep.comparison)
         ls = machine_sections.least_squares_of(rep)
-        return cls(deviations, machine_sections.shown_together(rep), machine_sections.reference(ls), ls)
+        return cls(listed, joint, machine_sections.reference(ls), ls)
 
 
 #: the job that weighs the explanations of the instruments' conflict beside the figures (no file of its own)
@@ -297,14 +302,19 @@ PLAN_JOB = "plan"
 PLAN_FIGURES = (("plan_sweep.png", plan_figures.sweep_figure), ("plan_ranking.png", plan_figures.ranking_figure))
 
 
-def _expected_unidentified(analysis, ident) -> list[str]:
+def _expected_unidentified(analysis) -> list[str]:
     """The quantities the report will list (:class:`Shown`) that the campaign's Jacobian leaves undetermined or
     determines only in combination: known before the posterior exists (it does not depend on σ_model), so the plan
     begun beside the sampling is the one the report shows."""
-    listed = (IDENTIFIABLE if ident is not None else
-              [p.name for p in analysis.space.parameters if p.group == "deviation"])
+    listed = provided(analysis.campaign.machine, "reported_quantities",
+                      [p.name for p in analysis.space.parameters if p.group == "deviation"])
     determined = campaign_identifiability(analysis.log_posterior)
     return [n for n in listed if determined.of(n)[0] not in (None, DETERMINED)]
+
+
+def _plans(campaign) -> bool:
+    """Whether the planner can rank measurements for this campaign: its catalogue starts from a ball-bar set-up."""
+    return bool(campaign.ballbar.setups)
 
 
 def _plan_and_figures(campaign, directory: Path, targets=None, sigma_prior=None):
@@ -322,30 +332,35 @@ def _compares_instruments(campaign) -> bool:
     return bool(campaign.ballbar.runs) and campaign.has_probe_readings() and campaign.probe_gap() is None
 
 
-def _ahead(analysis, drawing: Drawing, say, ident) -> tuple[dict[str, int], list[str]]:
+def _ahead(analysis, drawing: Drawing, say) -> tuple[dict[str, int], list[str]]:
     """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
     sampler leaves the second core idle): the figures of the machine's description (where it has one), the plan
     for the listed quantities the campaign's Jacobian does not determine one by one (:func:`_expected_unidentified`;
-    none: the planner's default targets) and its figures and, for a campaign with both instruments, the weighing of
-    the explanations of a conflict between them (kept when the
-    comparison finds a conflict or a B run reads otherwise than in the thesis).  Returns their batches by job name
+    none: the planner's default targets) and its figures and, for a campaign with both instruments some of whose
+    B runs read otherwise than in the thesis, the weighing of the explanations of a conflict between them, which
+    that reading always wants (elsewhere it is begun only when the comparison finds a conflict,
+    :func:`_rest_of_report`).  Returns their batches by job name
     and the targets the plan was begun for."""
     campaign = analysis.campaign
     ahead = {}
-    targets = _expected_unidentified(analysis, ident)
+    targets = _expected_unidentified(analysis)
     if campaign.machine.description is not None:
         drawing.start(machine_sections.figure_jobs(campaign))
-    say("planning the next measurement (beside the sampling)")
-    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory,
-                                                                         targets=targets or None,
-                                                                         sigma_prior=analysis.sigma_prior))])
-    if _compares_instruments(campaign):
+    if _plans(campaign):
+        say("planning the next measurement (beside the sampling)")
+        ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(
+            campaign, drawing.directory, targets=targets or None, sigma_prior=analysis.sigma_prior))])
+    if _compares_instruments(campaign) and not reads_as_thesis(campaign.ballbar):  # wanted whatever the comparison
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
-        # the report shows its own consistency check: none for the candidates
-        ahead[CONFLICT_JOB] = drawing.start([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis,
-                                                                                          consistency_of=0)))])
+        ahead[CONFLICT_JOB] = drawing.start([_conflict_job(analysis)])
     return ahead, targets
+
+
+def _conflict_job(analysis) -> tuple:
+    """The drawing job that weighs the explanations of a conflict between the instruments (no file of its own; the
+    report shows its own consistency check, so none for the candidates)."""
+    return CONFLICT_JOB, lambda: (None, explain_conflict(analysis, consistency_of=0))
 
 
 #: the figures in the order the report's file list names them
@@ -385,7 +400,7 @@ class _Rest:
     summary: pd.DataFrame
     diagnostics: pd.DataFrame
     effect: pd.DataFrame | None
-    planned: PlanResult
+    planned: PlanResult | None  # None: the planner has no catalogue for this campaign (no ball-bar set-up)
     ppc: pd.DataFrame | None  # the ball-bar posterior's predictive check, when it is a side posterior
     machine_tables: dict  # identifiability, combinations, least squares, truth: where the posterior has them
 
@@ -404,9 +419,9 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
         instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
         disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                        instruments.posteriors["probe"].log_posterior)
-        if CONFLICT_JOB in ahead and not (instruments.consistency.disagreeing
-                                          or not reads_as_thesis(campaign.ballbar)):
-            drawing.cancel(ahead.pop(CONFLICT_JOB))  # the instruments agree: nothing to explain
+        if instruments.consistency.disagreeing and CONFLICT_JOB not in ahead:  # a conflict to explain after all
+            say("weighing the explanations of the conflict between the instruments")
+            ahead[CONFLICT_JOB] = drawing.start([_conflict_job(analysis)])
         figures = [("instruments_forest.png", lambda: forest.forest_figure(
             {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, shown.reference,
             names=shown.listed))]
@@ -427,8 +442,10 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                 reports[other] = sample_posterior(variant, settings=s, progress=progress)
         reports = {m: reports[m] for m in compared}
     draw([])  # a figure of an earlier batch already failed: stop before planning
-    planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say, listed=shown.listed,
-                               planned_for=planned_for)
+    planned, drawn = None, True
+    if PLAN_JOB in ahead:
+        planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say, listed=shown.listed,
+                                   planned_for=planned_for)
     figures = [] if drawn else [(name, lambda make=make: make(planned)) for name, make in PLAN_FIGURES]
     if compare_models:
         figures[:0] = [("compare_forest.png", lambda: forest.forest_figure(
@@ -483,7 +500,8 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: Identific
         if c.conflict is not None:
             csv("explanations.csv", c.conflict.table(), index=False)
     csv("budget.csv", budget_table(rep.summary))
-    csv("plan.csv", c.planned.table, index=False)
+    if c.planned is not None:
+        csv("plan.csv", c.planned.table, index=False)
     return files
 
 
@@ -776,6 +794,32 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     page.paragraph("Priors, each with its reason (priors.csv):")
     page.table(priors_table(rep.log_posterior))
 
+    if planned is not None:
+        _plan_section(page, planned, rep, shown=shown, tmp=tmp)
+
+    page.section("diagnostics", "Sampler diagnostics")
+    page.paragraph(sampler_paragraph(rep))
+    if rep.reference is not None:
+        page.paragraph(f"Accuracy {rep.reference.sentence()}. Per quantity, the difference of the sampled "
+                       "mean (in reference sd) and sd (in %):" + ("" if rep.reference.exact else
+                       " the kinematic posterior against its linearisation, i.e. what the nonlinearity of the "
+                       "model changes, not sampler error."))
+        page.table(reference_table(rep.reference), digits={"mean difference [sd]": 3, "sd difference [%]": 1})
+    page.table(diag.assign(ess_bulk=diag["ess_bulk"].round().astype(int), ess_tail=diag["ess_tail"].round().astype(int)),
+               digits={"r_hat": 3, "tau_steps": 0})
+    page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
+    page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
+
+    if ident is not None:
+        _thesis_section(page, ident, effect, sigma_um)
+    if reports is not None:
+        _models_section(page, reports, campaign, tmp, names=shown.listed, with_fit=ppc_df is not None and rep.data != "probe")
+    return page
+
+
+def _plan_section(page: Page, planned: PlanResult, rep: PosteriorResult, *, shown: Shown, tmp: Path) -> None:
+    """Which measurement next: the plan's targets, its best candidate, what would teach σ_model, its figures."""
+    summary = rep.summary
     page.section("plan", "Which measurement next")
     unidentified = [n for n in shown.listed if summary.loc[n, "identified"] is False]
     best = planned.table.iloc[0]
@@ -808,25 +852,6 @@ def _page(c: ReportContent, tmp: Path) -> Page:
                        "sigma_model learnt from them):")
         page.table(planned.check[["candidate", "target", "sd_after_closed_form", "sd_after_monte_carlo",
                                   "relative_difference"]], digits=3, index=False)
-
-    page.section("diagnostics", "Sampler diagnostics")
-    page.paragraph(sampler_paragraph(rep))
-    if rep.reference is not None:
-        page.paragraph(f"Accuracy {rep.reference.sentence()}. Per quantity, the difference of the sampled "
-                       "mean (in reference sd) and sd (in %):" + ("" if rep.reference.exact else
-                       " the kinematic posterior against its linearisation, i.e. what the nonlinearity of the "
-                       "model changes, not sampler error."))
-        page.table(reference_table(rep.reference), digits={"mean difference [sd]": 3, "sd difference [%]": 1})
-    page.table(diag.assign(ess_bulk=diag["ess_bulk"].round().astype(int), ess_tail=diag["ess_tail"].round().astype(int)),
-               digits={"r_hat": 3, "tau_steps": 0})
-    page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
-    page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
-
-    if ident is not None:
-        _thesis_section(page, ident, effect, sigma_um)
-    if reports is not None:
-        _models_section(page, reports, campaign, tmp, names=shown.listed, with_fit=ppc_df is not None and rep.data != "probe")
-    return page
 
 
 def _thesis_section(page: Page, ident: IdentificationResult, effect: pd.DataFrame | None, sigma_um: float) -> None:

@@ -25,6 +25,9 @@ def missing_data(campaign, ident) -> list[str]:
     if not campaign.ballbar.runs:
         out.append("No ball-bar runs in this campaign: no ball-bar trajectories, no predictive check of "
                    "eccentricities and no comparison of the instruments.")
+    if not campaign.ballbar.setups:
+        out.append("No ball-bar set-up in this campaign: the planner's catalogue of candidate measurements starts "
+                   "from one, so the report has no plan of the next measurement.")
     if campaign.has_probe_readings() and (gap := campaign.probe_gap()) is not None:
         out.append(gap.skipped("The comparison of the instruments (the ball-bar-only, probe-only and fused posteriors "
                                "side by side, the consistency check, the weighing of a conflict's explanations)"))
