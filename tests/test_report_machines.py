@@ -221,3 +221,25 @@ def test_a_probe_only_campaign_gets_the_sections_it_has_what_they_need_for(tmp_p
     assert not anchors & {"polar", "instruments", "plan"}
     assert not any((tmp_path / "rep" / f).exists() for f in ("ppc.csv", "polar.png", "plan.csv", "instruments.csv"))
     assert any("No ball-bar runs" in m for m in rep.missing) and any("No ball-bar set-up" in m for m in rep.missing)
+
+
+def test_a_described_campaign_whose_probe_disagrees_gets_the_explanations(tmp_path):
+    """The trunnion demo with one group of probed positions (A = −30°) moved 60 µm along Z: the consistency check
+    finds the disagreement, and the report then weighs the explanations of the conflict (begun only once the
+    comparison finds it: the runs read as the thesis reads them) and shows them."""
+    import ast
+
+    text = open(demo_campaign("trunnion"), encoding="utf-8").read()
+    line = next(ln for ln in text.splitlines() if ln.startswith("centres_mm = "))
+    centres = ast.literal_eval(line.split("=", 1)[1].strip())
+    for repeat in centres:
+        for i in range(4, 8):  # the positions at A = −30°
+            repeat[i][2] += 0.060
+    path = tmp_path / "shifted.toml"
+    path.write_text(text.replace(line, "centres_mm = " + repr(centres)), encoding="utf-8")
+    rep = mb.report(path, output=tmp_path / "rep", sampler="exact", seed=1)
+    verdicts = pd.read_csv(tmp_path / "rep" / "consistency.csv").set_index("given")["verdict"]
+    assert (verdicts == "disagree").any()
+    assert "explanations.csv" in rep.files and len(pd.read_csv(tmp_path / "rep" / "explanations.csv")) > 1
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    assert "Where a conflict could come from" in html
