@@ -82,16 +82,6 @@ def data_of(data: str | None, c: Campaign) -> str:
     return "both" if c.ballbar.runs and c.has_probe_readings() else "probe" if not c.ballbar.runs else "ballbar"
 
 
-def _thesis_only(c: Campaign, **given) -> None:
-    """A :class:`ParameterError` naming the first option given that a described machine's report does not take yet."""
-    from .errors import ParameterError
-
-    for name, value in given.items():
-        if value not in (None, False):
-            raise ParameterError(name, f"not for a described machine yet ({c.machine.description.configuration}; "
-                                 "docs/machines.md)")
-
-
 def tolerances_of(tolerances, campaign: Campaign | None = None) -> dict | None:
     """``{name: Tolerance}`` from a ``[tolerances]`` TOML path, a dict of them, or None (the campaign's own); with
     ``campaign``, keyed by its machine's quantity names (a name it does not have: an ``InputError`` naming the file
@@ -279,10 +269,12 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
            sigma_model_um: float | None = None, sigma_model_prior=None) -> Report:
     """Sample the posterior and write the HTML report with its figures, tables and NetCDF into ``output``.
 
-    ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
-    ``compare_models`` adds the same campaign under all three forward models.  ``data`` as for
-    :func:`sample`; a campaign with touch-probe readings also gets its ball-bar-only, probe-only and
-    fused posteriors side by side and the instruments' consistency check.  ``tolerances``,
+    One report for every machine: each section appears where the campaign and its machine have what it needs
+    (docs/report.md).  ``posterior`` reuses a posterior already sampled from this campaign (:func:`sample`);
+    ``compare_models`` adds the same campaign under every forward model its machine offers (the thesis machine's
+    four, a described machine's ``linear`` and ``chain``).  ``data`` as for :func:`sample`; a campaign with ball-bar
+    runs and touch-probe readings also gets its ball-bar-only, probe-only and fused posteriors side by side and the
+    instruments' consistency check.  ``tolerances``,
     ``sigma_model_um`` and ``sigma_model_prior`` as for :func:`sample` (the learnt prior for every posterior of
     the report; with ``posterior``, it must be the one that posterior was sampled with).
     """
@@ -299,17 +291,6 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
         raise ParameterError("sigma_model_prior", "is not the prior the given posterior was sampled with")
     settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
-    if c.machine.described:
-        from .analysis import analysis_of
-        from .reporting.described_report import build_described_report
-
-        _thesis_only(c, fix_dx_BT=fix_dx_BT, compare_models=compare_models, posterior=posterior,
-                     sigma_model_prior=sigma_model_prior)
-        tol = tolerances_of(tolerances, c)
-        analysis = analysis_of(analysis_or_campaign(campaign, c), model=model, data=data,
-                               sigma_model=sigma_model_of(sigma_model_um))
-        return build_described_report(analysis, output, settings=settings, progress=progress, command=command,
-                                      tolerances=tol)
     return build_report(analysis_or_campaign(campaign, c), output, model=model, settings=settings, fix_dx_BT=fix_dx_BT,
                         compare_models=compare_models,
                         posterior=posterior, progress=progress, command=command, data=data,

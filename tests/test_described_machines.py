@@ -36,25 +36,7 @@ def test_demo_campaign_recovers_its_truth(machine):
         assert abs(mean - t) <= Z_MAX * sd, (name, t, mean, sd)
 
 
-def test_report_of_a_demo(tmp_path, run_cli):
-    """``report --machine trunnion`` writes the report of a described machine: its figures, its truth beside the
-    posterior and the least squares, the combinations, no thesis table."""
-    out = tmp_path / "rep"
-    code, text, err = run_cli("report", "--machine", "trunnion", "--sampler", "exact", "-o", str(out), "--quiet")
-    assert code == 0, err
-    for name in ("index.html", "machine.png", "deviations.png", "corner.png", "truth.csv", "least_squares.csv",
-                 "identifiability.csv", "combinations.csv", "summary.csv", "ppc.png", "ppc.csv", "loo.csv",
-                 "posterior.nc"):
-        assert (out / name).stat().st_size > 0, name
-    assert not (out / "identification_ballbar.csv").exists()
-    import pandas as pd
-
-    t = pd.read_csv(out / "truth.csv")
-    assert (np.abs(t["z"]) <= Z_MAX).all(), t
-    # least squares and posterior agree on what is determined (weak priors: a fraction of a sd)
-    assert (np.abs(t["least_squares"] - t["mean"]) <= 0.5 * t["sd"]).all(), t
-    html = (out / "index.html").read_text(encoding="utf-8")
-    assert "E_A0C + E_A0A" in html and "Eqs 4.10" not in html
+# the report of each demo: tests/test_report_machines.py
 
 
 def test_sample_json_interface(run_cli):

@@ -51,8 +51,9 @@ def ranking_figure(result):
     ax.set_xlim(0, limit)
     ax.set_xlabel("expected information gain about the targets [bits]")
     kinds = list(dict.fromkeys(t["kind"]))
-    ax.legend(handles=[Rectangle((0, 0), 1, 1, color=KIND_COLOURS.get(k, "0.5")) for k in kinds], labels=kinds,
-              loc="lower right", fontsize=8)
+    if kinds:  # no bar, no legend (matplotlib refuses an empty one)
+        ax.legend(handles=[Rectangle((0, 0), 1, 1, color=KIND_COLOURS.get(k, "0.5")) for k in kinds], labels=kinds,
+                  loc="lower right", fontsize=8)
     if not len(t):
         ax.text(0.5, 0.5, "no feasible candidate improves the targets", transform=ax.transAxes, ha="center")
     ax.set_title(f"targets: {', '.join(result.targets)}\nbeside each bar the (at most two) targets it "

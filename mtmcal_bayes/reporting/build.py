@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
@@ -27,10 +27,12 @@ from ..identification.output import identification_table
 from ..inference import reading_choice
 from ..inference.budget import sigma_prior_sentence
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
+from ..inference.identifiability import DETERMINED, campaign_identifiability
 from ..inference.sampling import SamplerSettings
 from ..io.netcdf import write_netcdf_atomic
 from ..io.textfiles import atomic_directory
-from ..models import KINEMATIC_MODELS
+from ..machines.plugins import provided
+from ..models import models_of
 from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
@@ -63,6 +65,7 @@ from . import (
     ppc,
     widths,
 )
+from . import machine_sections
 from .decisions import SUGGESTION_COLUMNS, add_suggestions, suggestion_text
 from .drawing import Drawing
 from .missing import missing_data
@@ -105,20 +108,22 @@ class ReportContent:
     model: str
     posterior: PosteriorResult
     compared: dict[str, PosteriorResult] | None  # all models, when they are compared
-    ident: IdentificationResult
+    ident: IdentificationResult | None  # the deterministic identification, where the machine's plug-ins give one
     missing: list[str]
     summary: pd.DataFrame
-    ppc: pd.DataFrame
+    ppc: pd.DataFrame | None  # None: no posterior saw the ball bar
     diagnostics: pd.DataFrame
     thesis_effect: pd.DataFrame | None
     off_scale: list[str]
     sigma_um: float
     fix_dx_BT: bool
-    planned: PlanResult
+    planned: PlanResult | None
     instruments: InstrumentComparison | None = None  # ball bar, probe, fused: when the campaign has probe readings
     loo: LooResult | None = None  # leave-one-out consistency of the main posterior's observations
     disputed: dict | None = None  # deviations the instruments disagree on, with the verdicts behind each
     conflict: ConflictAnalysis | None = None  # candidate explanations, when they disagree or a run is read otherwise
+    shown: Shown | None = None  # the quantities listed and drawn, with their deterministic values
+    machine_tables: dict = field(default_factory=dict)  # identifiability, least squares, truth (machine_sections)
 
 
 def summary_table(rep: PosteriorResult) -> pd.DataFrame:
@@ -169,17 +174,18 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                  fix_dx_BT: bool = False, compare_models: bool = False, posterior: PosteriorResult | None = None,
                  progress: Progress | None = None, command: str = "", data: str = "ballbar",
                  tolerances: dict | None = None, sigma_model: float | None = None, sigma_prior=None) -> Report:
-    """Sample, draw, tabulate and write the report of ``campaign`` into ``out_dir``.
+    """Sample, draw, tabulate and write the report of ``campaign`` (any machine's) into ``out_dir``.
 
-    ``posterior``: a posterior of this campaign already sampled (its model and
-    dx_BT assumption then hold); else one is sampled with ``settings``.
+    ``posterior``: a posterior of this campaign already sampled (its model, data, dx_BT assumption and σ_model
+    prior then hold); else one is sampled with ``settings``.
     ``progress`` receives the sampler's events and one ``"report"`` event per stage.  ``data``: the
-    measurements of the main posterior (``"ballbar"``, ``"probe"``, ``"both"``); a campaign with
+    measurements of the main posterior (``"ballbar"``, ``"probe"``, ``"both"``); a campaign with ball-bar runs and
     touch-probe readings also gets the three posteriors side by side and the instruments' consistency.
-    ``tolerances`` (``{name: Tolerance}``, default the campaign's own) adds the conformity decisions;
-    ``sigma_model`` (mm) fixes the model-discrepancy scale of every posterior instead of sampling it;
+    ``tolerances`` (``{name: Tolerance}`` by the machine's names, default the campaign's own) adds the conformity
+    decisions; ``sigma_model`` (mm) fixes the model-discrepancy scale of every posterior instead of sampling it;
     ``sigma_prior`` (a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`) is the prior of the sampled scales of every
-    posterior, learnt elsewhere (None: the assumed default).
+    posterior, learnt elsewhere (None: the assumed default).  Each section appears where the campaign and its
+    machine have what it needs (docs/report.md).
     """
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
@@ -195,25 +201,32 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     analysis = analysis_of(campaign, model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model,
                            sigma_prior=sigma_prior)
     campaign = analysis.campaign
+    # the deterministic values beside the posterior: the plug-in's identification where it gives one (the thesis'),
+    # else the least squares of the chain's first order (after the sampling: at its σ_model)
+    ident = analysis.identification if provided(campaign.machine, "identify") is not None else None
     with atomic_directory(out_dir) as tmp:
         drawing = Drawing(tmp)
         try:
-            ahead = _ahead(analysis, drawing, say)
+            ahead, planned_for = _ahead(analysis, drawing, say)
+            tol = campaign.tolerances if tolerances is None else tolerances
             if posterior is not None:
                 rep = posterior
+                if tol:
+                    rep.conformity = conformity_table(rep.idata, rep.summary, tol)
             else:
                 say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
-                rep = sample_posterior(analysis, settings=settings, progress=progress)
-            tol = campaign.tolerances if tolerances is None else tolerances
-            if tol:
-                rep.conformity = conformity_table(rep.idata, rep.summary, tol)
+                rep = sample_posterior(analysis, settings=settings, progress=progress, tolerances=tol)
+            if rep.conformity is not None and not rep.conformity.empty:
                 say("asking the planner how to decide the undecided tolerances")
                 add_suggestions(rep, campaign)
+            shown = Shown.of(rep, ident)
             loo = loo_check(rep.idata)
             # the main posterior's figures and its NetCDF while the instruments are weighed and the plan is made
-            first = _main_figures(rep, model, campaign, loo)
+            first = _main_figures(rep, model, loo, shown)
             first.insert(1, ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc")))
-            ppc_here = data == "ballbar"  # the eccentricity plots show the ball-bar posterior: the main one here
+            # the eccentricity plots show the main posterior where it saw the ball bar, else the ball-bar one
+            ppc_here = data != "probe" and bool(campaign.ballbar.runs)
+            ppc_df = None
             if ppc_here:
                 ppc_df = ppc.ppc_table(rep.idata, campaign, analysis.ballbar_observations)
                 first[2:2] = _eccentricity_figures(rep, ppc_df, campaign)
@@ -226,20 +239,22 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
 
             draw(first)
             content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
-                                      compare_models=compare_models, draw=draw, ahead=ahead, drawing=drawing)
+                                      compare_models=compare_models, draw=draw, ahead=ahead, drawing=drawing,
+                                      ident=ident, shown=shown, ppc_here=ppc_here, planned_for=planned_for)
             if not ppc_here:
                 ppc_df = content.ppc
             extras = drawing.finish()
             off_scale, content.conflict = extras["corner.png"], extras.get(CONFLICT_JOB)
-            files = _write_tables(tmp, rep, content, ident=analysis.identification, ppc_df=ppc_df, loo=loo)
+            files = _write_tables(tmp, rep, content, ident=ident, ppc_df=ppc_df, loo=loo, shown=shown)
         finally:
             drawing.stop()
         files = [n for n in FIGURE_ORDER if (tmp / n).exists()] + files + ["posterior.nc"]
         page_content = ReportContent(campaign, model, rep, content.reports if compare_models else None,
-                                     analysis.identification, content.missing, content.summary, ppc_df,
+                                     ident, content.missing, content.summary, ppc_df,
                                      content.diagnostics, content.effect, off_scale, rep.sigma_model_um,
                                      analysis.fix_dx_BT, content.planned, content.instruments, loo=loo,
-                                     disputed=content.disputed, conflict=content.conflict)
+                                     disputed=content.disputed, conflict=content.conflict, shown=shown,
+                                     machine_tables=content.machine_tables)
         page = _page(page_content, tmp)
         elapsed = time.perf_counter() - t0
         files.insert(0, "index.html")
@@ -249,15 +264,57 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     return Report(out_dir, files, content.summary, console, elapsed, rep, content.missing)
 
 
-#: the models ``--compare-models`` sets side by side: the thesis relations and the two readings of its chain (``chain``
-#: is ``htm-literal`` on the thesis machine)
-COMPARED_MODELS = ("linear",) + KINEMATIC_MODELS
+@dataclass
+class Shown:
+    """Which quantities the report lists and draws: ``listed`` one by one (results, forest, widths, the plan's
+    targets), ``joint`` in the corner, trace and rank plots, with the deterministic values beside them
+    (``reference``: a comparison table, :func:`~mtmcal_bayes.inference.results.comparison`, or the least squares');
+    ``least_squares`` where those are the deterministic values."""
+
+    listed: list[str]
+    joint: list[str]
+    reference: pd.DataFrame
+    least_squares: object | None = None
+
+    @classmethod
+    def of(cls, rep: PosteriorResult, ident: IdentificationResult | None) -> Shown:
+        """The quantities the machine's plug-in reports (the thesis': its eight, Table 4.5 order), listed and drawn
+        together, else every deviation of the machine, those its campaign determines drawn together; beside the
+        plug-in's deterministic values (``ident``) where it gives them, else the least squares."""
+        post = rep.log_posterior
+        own = provided(post.campaign.machine, "reported_quantities")
+        if own is not None:
+            listed = joint = [n for n in own if n in rep.summary.index]
+        else:
+            listed = [p.name for p in post.space.parameters if p.group == "deviation"]
+            joint = machine_sections.shown_together(rep)
+        if ident is not None:
+            return cls(listed, joint, rep.comparison)
+        ls = machine_sections.least_squares_of(rep)
+        return cls(listed, joint, machine_sections.reference(ls), ls)
+
+
 #: the job that weighs the explanations of the instruments' conflict beside the figures (no file of its own)
 CONFLICT_JOB = "explanations"
 #: the job that makes the plan of the next measurement beside the sampling, and draws its figures
 PLAN_JOB = "plan"
 #: the plan's figures: file name, drawing function of a PlanResult
 PLAN_FIGURES = (("plan_sweep.png", plan_figures.sweep_figure), ("plan_ranking.png", plan_figures.ranking_figure))
+
+
+def _expected_unidentified(analysis) -> list[str]:
+    """The quantities the report will list (:class:`Shown`) that the campaign's Jacobian leaves undetermined or
+    determines only in combination: known before the posterior exists (it does not depend on σ_model), so the plan
+    begun beside the sampling is the one the report shows."""
+    listed = provided(analysis.campaign.machine, "reported_quantities",
+                      [p.name for p in analysis.space.parameters if p.group == "deviation"])
+    determined = campaign_identifiability(analysis.log_posterior)
+    return [n for n in listed if determined.of(n)[0] not in (None, DETERMINED)]
+
+
+def _plans(campaign) -> bool:
+    """Whether the planner can rank measurements for this campaign: its catalogue starts from a ball-bar set-up."""
+    return bool(campaign.ballbar.setups)
 
 
 def _plan_and_figures(campaign, directory: Path, targets=None, sigma_prior=None):
@@ -269,47 +326,64 @@ def _plan_and_figures(campaign, directory: Path, targets=None, sigma_prior=None)
     return None, planned
 
 
-def _ahead(analysis, drawing: Drawing, say) -> dict[str, int]:
+def _compares_instruments(campaign) -> bool:
+    """Whether the campaign has two instruments to set side by side: ball-bar runs and touch-probe readings the
+    likelihood can take (else :func:`~.missing.missing_data` says why not)."""
+    return bool(campaign.ballbar.runs) and campaign.has_probe_readings() and campaign.probe_gap() is None
+
+
+def _ahead(analysis, drawing: Drawing, say) -> tuple[dict[str, int], list[str]]:
     """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
-    sampler leaves the second core idle): the plan for all eight quantities and its figures (kept when the
-    posterior identifies every one, else made again for the unidentified ones, :func:`_planning`) and, for a
-    campaign with both instruments, the weighing of the explanations of a conflict between them (kept when the
-    comparison finds one or a B run reads otherwise than in the thesis).  Returns their batches by job name."""
+    sampler leaves the second core idle): the figures of the machine's description (where it has one), the plan
+    for the listed quantities the campaign's Jacobian does not determine one by one (:func:`_expected_unidentified`;
+    none: the planner's default targets) and its figures and, for a campaign with both instruments some of whose
+    B runs read otherwise than in the thesis, the weighing of the explanations of a conflict between them, which
+    that reading always wants (elsewhere it is begun only when the comparison finds a conflict,
+    :func:`_rest_of_report`).  Returns their batches by job name
+    and the targets the plan was begun for."""
     campaign = analysis.campaign
     ahead = {}
-    say("planning the next measurement (beside the sampling)")
-    ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(campaign, drawing.directory,
-                                                                         sigma_prior=analysis.sigma_prior))])
-    if campaign.has_probe_readings() and campaign.ballbar.runs and campaign.probe_gap() is None:
+    targets = _expected_unidentified(analysis)
+    if campaign.machine.description is not None:
+        drawing.start(machine_sections.figure_jobs(campaign))
+    if _plans(campaign):
+        say("planning the next measurement (beside the sampling)")
+        ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(
+            campaign, drawing.directory, targets=targets or None, sigma_prior=analysis.sigma_prior))])
+    if _compares_instruments(campaign) and not reads_as_thesis(campaign.ballbar):  # wanted whatever the comparison
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
-        # the report shows its own consistency check: none for the candidates
-        ahead[CONFLICT_JOB] = drawing.start([(CONFLICT_JOB, lambda: (None, explain_conflict(analysis,
-                                                                                          consistency_of=0)))])
-    return ahead
+        ahead[CONFLICT_JOB] = drawing.start([_conflict_job(analysis)])
+    return ahead, targets
+
+
+def _conflict_job(analysis) -> tuple:
+    """The drawing job that weighs the explanations of a conflict between the instruments (no file of its own; the
+    report shows its own consistency check, so none for the candidates)."""
+    return CONFLICT_JOB, lambda: (None, explain_conflict(analysis, consistency_of=0))
 
 
 #: the figures in the order the report's file list names them
-FIGURE_ORDER = ("corner.png", "forest.png", "ppc.png", "polar.png", "widths.png", "rank.png", "trace.png", "loo.png",
-                "compare_forest.png", "compare_ppc.png", "instruments_forest.png", "budget.png", "sigma_model.png",
-                "plan_ranking.png", "plan_sweep.png")
+FIGURE_ORDER = ("machine.png", "deviations.png", "corner.png", "forest.png", "ppc.png", "polar.png", "widths.png",
+                "rank.png", "trace.png", "loo.png", "compare_forest.png", "compare_ppc.png", "instruments_forest.png",
+                "budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png")
 
 
-def _main_figures(rep: PosteriorResult, model: str, campaign, loo: LooResult) -> list:
+def _main_figures(rep: PosteriorResult, model: str, loo: LooResult, shown: Shown) -> list:
     """The figures that show the main posterior alone: drawn as soon as it exists (the longest first, so that the
     two drawing processes end together)."""
-    return [("corner.png", lambda: corner_plot.corner_figure(rep.idata, rep.comparison)),
-            ("sigma_model.png", lambda: budget_plot.sigma_figure(rep)),
-            ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling)),
-            ("forest.png", lambda: forest.forest_figure({model: rep.summary}, rep.comparison)),
-            ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata)),
+    return [("corner.png", lambda: corner_plot.corner_figure(rep.idata, shown.reference, names=shown.joint)),
+            ("sigma_model.png", lambda: budget_plot.sigma_figure(rep, names=shown.joint)),
+            ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling, names=shown.joint)),
+            ("forest.png", lambda: forest.forest_figure({model: rep.summary}, shown.reference, names=shown.listed)),
+            ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata, names=shown.joint)),
             ("budget.png", lambda: budget_plot.budget_figure(rep.summary)),
-            ("widths.png", lambda: widths.widths_figure(rep.summary)),
+            ("widths.png", lambda: widths.widths_figure(rep.summary, names=shown.listed)),
             ("loo.png", lambda: loo_plot.loo_figure(loo))]
 
 
 def _eccentricity_figures(bb_rep: PosteriorResult, ppc_df: pd.DataFrame, campaign) -> list:
-    """The posterior predictive check and the polar trajectories: the ball-bar posterior's."""
+    """The posterior predictive check and the polar trajectories of a posterior that saw the ball bar."""
     return [("ppc.png", lambda: ppc.ppc_figure({bb_rep.model: ppc_df}, campaign)),
             ("polar.png", lambda: polar.polar_figure(bb_rep.sampling, campaign))]
 
@@ -321,17 +395,18 @@ class _Rest:
     instruments: InstrumentComparison | None
     disputed: dict | None
     conflict: ConflictAnalysis | None
-    bb_rep: PosteriorResult
     reports: dict
     missing: list[str]
     summary: pd.DataFrame
     diagnostics: pd.DataFrame
     effect: pd.DataFrame | None
-    planned: PlanResult
+    planned: PlanResult | None  # None: the planner has no catalogue for this campaign (no ball-bar set-up)
     ppc: pd.DataFrame | None  # the ball-bar posterior's predictive check, when it is a side posterior
+    machine_tables: dict  # identifiability, combinations, least squares, truth: where the posterior has them
 
 
-def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw, ahead, drawing) -> _Rest:
+def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw, ahead, drawing,
+                    ident, shown: Shown, ppc_here: bool, planned_for: list[str]) -> _Rest:
     """The instruments' comparison, the model comparison, the tables, the dx_BT = 0 effect and the plan; the figures
     of the comparison are handed to ``draw`` as soon as it exists, those of the model comparison (and of a plan made
     here) once the plan exists.  The plan with its figures and the weighing of the instruments' conflict (only a
@@ -340,45 +415,59 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     then)."""
     model, data = analysis.model, analysis.data
     instruments = disputed = ppc_df = None
-    if campaign.has_probe_readings() and campaign.probe_gap() is None:  # else missing_data says why not
+    if _compares_instruments(campaign):
         instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
         disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                        instruments.posteriors["probe"].log_posterior)
-        if not (instruments.consistency.disagreeing or not reads_as_thesis(campaign.ballbar)):
-            drawing.cancel(ahead.pop(CONFLICT_JOB, None))  # the instruments agree: nothing to explain
+        if instruments.consistency.disagreeing and CONFLICT_JOB not in ahead:  # a conflict to explain after all
+            say("weighing the explanations of the conflict between the instruments")
+            ahead[CONFLICT_JOB] = drawing.start([_conflict_job(analysis)])
         figures = [("instruments_forest.png", lambda: forest.forest_figure(
-            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, rep.comparison))]
-        if data != "ballbar":  # the eccentricity plots show the ball-bar posterior, a side one here
+            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, shown.reference,
+            names=shown.listed))]
+        if not ppc_here:  # the eccentricity plots show the ball-bar posterior, a side one here
             ppc_df = ppc.ppc_table(instruments.posteriors["ballbar"].idata, campaign, analysis.ballbar_observations)
             figures += _eccentricity_figures(instruments.posteriors["ballbar"], ppc_df, campaign)
         draw(figures)
-    bb_rep = instruments.posteriors["ballbar"] if instruments is not None else rep  # eccentricity plots
     reports = {model: rep}
+    compared = models_of(campaign.machine)
     if compare_models:
-        for other in COMPARED_MODELS:
+        for other in compared:
             if other != model:
+                variant = analysis.variant(model=other)
+                # exact draws where this model's posterior has them, else the sampler
+                s = (settings if settings.sampler != "exact" or variant.approximation.exact
+                     else dataclasses.replace(settings, sampler="emcee"))
                 say(f"sampling the posterior ({other}) for the model comparison")
-                reports[other] = sample_posterior(analysis.variant(model=other, data="ballbar"), settings=settings,
-                                                  progress=progress)
-        reports = {m: reports[m] for m in COMPARED_MODELS}
+                reports[other] = sample_posterior(variant, settings=s, progress=progress)
+        reports = {m: reports[m] for m in compared}
     draw([])  # a figure of an earlier batch already failed: stop before planning
-    planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say)
+    planned, drawn = None, True
+    if PLAN_JOB in ahead:
+        planned, drawn = _planning(campaign, rep, drawing, batch=ahead[PLAN_JOB], say=say, listed=shown.listed,
+                                   planned_for=planned_for)
     figures = [] if drawn else [(name, lambda make=make: make(planned)) for name, make in PLAN_FIGURES]
     if compare_models:
-        figures[:0] = [("compare_forest.png",
-                        lambda: forest.forest_figure({m: r.summary for m, r in reports.items()}, rep.comparison)),
-                       ("compare_ppc.png", lambda: ppc.ppc_figure(
-                           {m: ppc.ppc_table(r.idata, campaign, analysis.ballbar_observations)
-                            for m, r in reports.items()}, campaign))]
+        figures[:0] = [("compare_forest.png", lambda: forest.forest_figure(
+                            {m: r.summary for m, r in reports.items()}, shown.reference, names=shown.listed))]
+        if campaign.ballbar.runs and data != "probe":
+            figures.append(("compare_ppc.png", lambda: ppc.ppc_figure(
+                {m: ppc.ppc_table(r.idata, campaign, analysis.ballbar_observations) for m, r in reports.items()},
+                campaign)))
     draw(figures)
-    missing = missing_data(campaign, analysis.identification)
-    effect = None if analysis.fix_dx_BT else thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
-    return _Rest(instruments, disputed, None, bb_rep, reports, missing, summary_table(rep),
-                 mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df)
+    missing = missing_data(campaign, ident)
+    effect = (thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
+              if ident is not None and not analysis.fix_dx_BT else None)
+    # the Jacobian's statement and the stated truth tabulated beside the least squares, where those are the
+    # deterministic values (the thesis machine's tables of Eqs 4.10–4.18 say what its campaign identifies)
+    machine_tables = ({} if shown.least_squares is None else
+                      machine_sections.tables(rep, shown.least_squares, campaign.truth))
+    return _Rest(instruments, disputed, None, reports, missing, summary_table(rep),
+                 mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df, machine_tables)
 
 
-def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: IdentificationResult, ppc_df: pd.DataFrame,
-                  loo: LooResult) -> list[str]:
+def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: IdentificationResult | None,
+                  ppc_df: pd.DataFrame | None, loo: LooResult, shown: Shown) -> list[str]:
     """Every CSV of the report into ``tmp``; returns their names in order."""
     files: list[str] = []
 
@@ -387,18 +476,23 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: Identific
         files.append(name)
 
     csv("summary.csv", c.summary)
-    csv("ppc.csv", ppc_df)
+    if ppc_df is not None:
+        csv("ppc.csv", ppc_df)
     csv("loo.csv", loo.table)
     csv("diagnostics.csv", c.diagnostics)
     csv("priors.csv", priors_table(rep.log_posterior))
-    csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
-    if ident.probe:
-        csv("identification_probe.csv", identification_table(ident.probe), index=False)
+    if ident is not None:
+        csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
+        if ident.probe:
+            csv("identification_probe.csv", identification_table(ident.probe), index=False)
+    for name, df in c.machine_tables.items():
+        csv(name, df, index=False)
     if c.effect is not None:
         csv("thesis_assumption_dx_BT.csv", c.effect)
     if len(c.reports) > 1:
-        csv("compare_models.csv", compare.model_comparison_table(c.reports), index=False)
-        csv("compare_fit.csv", compare.model_fit_table(c.reports, rep.log_posterior.campaign))
+        csv("compare_models.csv", compare.model_comparison_table(c.reports, shown.listed), index=False)
+        if ppc_df is not None and rep.data != "probe":  # the fit of each model's ball-bar predictions
+            csv("compare_fit.csv", compare.model_fit_table(c.reports, rep.log_posterior.campaign))
     if c.instruments is not None:
         csv("instruments.csv", c.instruments.intervals, index=False)
         csv("consistency.csv", c.instruments.consistency.groups, index=False)
@@ -406,7 +500,8 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: Identific
         if c.conflict is not None:
             csv("explanations.csv", c.conflict.table(), index=False)
     csv("budget.csv", budget_table(rep.summary))
-    csv("plan.csv", c.planned.table, index=False)
+    if c.planned is not None:
+        csv("plan.csv", c.planned.table, index=False)
     return files
 
 
@@ -428,9 +523,10 @@ def _console(rep, missing, *, out_dir, files, elapsed) -> str:
     return "\n".join(lines)
 
 
-def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
-    s = summary.loc[[n for n in IDENTIFIABLE if n in summary.index] +
-                    [n for n in summary.index if n not in IDENTIFIABLE]]
+def _results_table(summary: pd.DataFrame, listed: list[str]) -> pd.DataFrame:
+    """The results as the page shows them: the ``listed`` quantities first, then the others; the columns of
+    deterministic values only where the campaign has any."""
+    s = summary.loc[[n for n in listed if n in summary.index] + [n for n in summary.index if n not in listed]]
     unit = s["unit"].map({"arcsec": "″", "um": "µm"})
     out = pd.DataFrame({"ISO 230-7": s["iso"].fillna("—"), "unit": unit, "mean": s["mean"], "sd": s["sd"], "HDI 2.5 %": s["hdi_low"],
                         "HDI 97.5 %": s["hdi_high"], "ball bar": s["ballbar"], "in HDI": s["ballbar_in_hdi"],
@@ -438,6 +534,9 @@ def _results_table(summary: pd.DataFrame) -> pd.DataFrame:
                         "probe (recomputed)": s["probe_recomputed"], "in HDI  ": s["probe_recomputed_in_hdi"],
                         "R-hat": s["r_hat"], "bulk ESS": s["ess_bulk"].round(0).astype(int),
                         "identified by": s["identification"], "prior sensitivity": s["prior_sensitivity"]})
+    for value, inside in (("ball bar", "in HDI"), ("probe (thesis)", "in HDI "), ("probe (recomputed)", "in HDI  ")):
+        if out[value].isna().all():  # no such deterministic value in this campaign
+            out = out.drop(columns=[value, inside])
     if reading_choice.has_choice(s):  # the mark and the value under the best rejected reading
         out[reading_choice.HEAD] = [reading_choice.mark_cell(r) for _, r in s.iterrows()]
     return out
@@ -473,7 +572,7 @@ def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
     page.section("instruments", "Ball bar and touch probe: each alone and fused")
     cons = ins.consistency
     page.paragraph(
-        "The touch-probe readings (sphere centres at indexed B and C) enter the likelihood through the same "
+        "The touch-probe readings (sphere centres at indexed positions of the rotary axes) enter the likelihood through the same "
         "kinematic chain as the ball bar (docs/probe.md). Do the instruments agree? Each instrument's readings "
         "are predicted from the other's posterior (its own nuisance terms from their priors); per reading group "
         "a χ² of the standardised residuals gives the verdict (disagree: p < 0.01). "
@@ -596,63 +695,87 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
     page.table(pd.DataFrame(rows), digits={"P(nonconformance)": 3}, index=False)
 
 
-def _planning(campaign, rep, drawing: Drawing, *, batch: int, say) -> tuple[PlanResult, bool]:
-    """The plan for the quantities the data do not determine one by one (the Jacobian's statement: not at all, or
-    only in combination), else for all eight (that one begun before the sampling, in ``batch``: waited for here),
-    and whether its figures are drawn already (they are for that one)."""
-    targets = [n for n in IDENTIFIABLE if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
-    if not targets:
+def _planning(campaign, rep, drawing: Drawing, *, batch: int, say, listed: list[str],
+              planned_for: list[str]) -> tuple[PlanResult, bool]:
+    """The plan for the ``listed`` quantities the data do not determine one by one (the Jacobian's statement: not at
+    all, or only in combination), else for the planner's default targets (the one begun before the sampling for
+    ``planned_for``, in ``batch``, is waited for here when it was begun for these), and whether its figures are
+    drawn already (they are for that one)."""
+    targets = [n for n in listed if n in rep.summary.index and rep.summary.loc[n, "identified"] is False]
+    if targets == planned_for:
         return drawing.wait(batch)[PLAN_JOB], True
     drawing.cancel(batch)
     say("planning the next measurement for the quantities the data do not identify")
     return plan(campaign, targets, sigma_prior=rep.log_posterior.sigma_prior), False
 
 
+#: the page's title where the campaign names no machine description (the thesis' own campaign format)
+TITLE = "Bayesian calibration report — B and C axes of a turn-mill machine"
+
+
 def _page(c: ReportContent, tmp: Path) -> Page:
     campaign, model, rep, reports, ident = c.campaign, c.model, c.posterior, c.compared, c.ident
     summary, ppc_df, diag, effect, planned, sigma_um = c.summary, c.ppc, c.diagnostics, c.thesis_effect, c.planned, c.sigma_um
-    page = Page("Bayesian calibration report — B and C axes of a turn-mill machine")
+    shown, desc = c.shown, campaign.machine.description
+    page = Page(TITLE if desc is None else
+                f"Bayesian calibration report — {desc.name or desc.configuration} ({desc.configuration})")
     page.paragraph("What the intervals rest on (share of each posterior variance by source; section 'Uncertainty "
-                   "budget'): " + budget_plot.dominant_sentence(rep.summary, post=rep.log_posterior))
+                   "budget'): " + budget_plot.dominant_sentence(rep.summary, shown.listed, post=rep.log_posterior))
     page.box("missing", "Missing from this campaign", c.missing)
     page.box("warn", "Warnings", rep.warnings + rep.not_identified + rep.prior_notes)
 
+    if desc is not None:
+        machine_sections.machine_section(page, desc, rep, tmp)
+    if shown.least_squares is not None:
+        machine_sections.determined_section(page, rep)
     page.section("results", "Results")
-    page.paragraph(
-        f"Posterior of the eight quantities the thesis identifies (and the deviations sampled beside them) under the "
-        f"{model} model{' with the thesis assumption dx_BT = 0' if c.fix_dx_BT else ''}: mean, sd and 95 % highest-density "
-        "interval, beside the deterministic ball-bar values (thesis Eqs 4.10–4.18 recomputed from this campaign) and "
-        "the touch-probe values (as printed in Table 5.3 and as recomputed from Table 5.2). 'in HDI' says whether "
-        "that value lies inside the 95 % HDI. Angles in arc seconds, lengths in micrometres. Full table: summary.csv.")
-    page.table(_results_table(summary), digits={"R-hat": 3})
+    if ident is not None:
+        page.paragraph(
+            f"Posterior of the eight quantities the thesis identifies (and the deviations sampled beside them) under "
+            f"the {model} model{' with the thesis assumption dx_BT = 0' if c.fix_dx_BT else ''}: mean, sd and 95 % "
+            "highest-density interval, beside the deterministic ball-bar values (thesis Eqs 4.10–4.18 recomputed "
+            "from this campaign) and the touch-probe values (as printed in Table 5.3 and as recomputed from Table "
+            "5.2). 'in HDI' says whether that value lies inside the 95 % HDI. Angles in arc seconds, lengths in "
+            "micrometres. Full table: summary.csv.")
+    else:
+        page.paragraph(f"Posterior of the deviations under the {model} model ({DATA_LABELS[rep.data]}): mean, sd "
+                       "and 95 % highest-density interval; angles in arc seconds, lengths in micrometres. The "
+                       "least-squares values beside them: section 'Least-squares identification'. summary.csv.")
+    page.table(_results_table(summary, shown.listed), digits={"R-hat": 3})
     if rep.reading_choice_note:
         page.paragraph(rep.reading_choice_note)
+    if shown.least_squares is not None:
+        machine_sections.least_squares_section(page, rep, shown.least_squares)
+    if "truth.csv" in c.machine_tables:
+        machine_sections.truth_section(page, c.machine_tables["truth.csv"])
     _statement_section(page, rep)
 
-    _budget_section(page, rep, tmp)
+    _budget_section(page, rep, tmp, sigma_names=shown.joint)
 
     page.section("corner", "Joint posterior")
-    page.figure(tmp / "corner.png", corner_plot.CAPTION + (" Off scale, not drawn: " + "; ".join(c.off_scale) + "."
-                                                            if c.off_scale else ""), "corner plot")
+    page.figure(tmp / "corner.png", (corner_plot.CAPTION if ident is not None else machine_sections.CORNER_CAPTION)
+                + (" Off scale, not drawn: " + "; ".join(c.off_scale) + "." if c.off_scale else ""), "corner plot")
     page.section("forest", "Intervals against the deterministic methods")
-    page.figure(tmp / "forest.png", forest.CAPTION, "forest plot")
+    page.figure(tmp / "forest.png", forest.CAPTION if ident is not None else machine_sections.FOREST_CAPTION,
+                "forest plot")
 
     if c.instruments is not None:
         _instruments_section(page, c, tmp)
     _compensation_section(page, c)
 
     page.section("ppc", "Posterior predictive check")
-    page.figure(tmp / "ppc.png", ppc.CAPTION, "posterior predictive check")
-    n_out = int((~ppc_df["inside_95"]).sum())
-    q = len(rep.log_posterior.names)
-    page.paragraph(f"{n_out} of {len(ppc_df)} observed means fall outside their 95 % predictive interval. "
-                   f"σ_model (what the model leaves out), posterior median {sigma_um:.2f} µm. Table: ppc.csv."
-                   + (f" With {len(ppc_df)} observed means and {q} sampled parameters the model can match every "
-                      "mean, so this check has little power here: tension between measurements shows in the "
-                      "parameters (wide or shifted intervals, e.g. beta_XB against dx_BT) rather than in the "
-                      "residuals." if q >= len(ppc_df) else ""))
-    page.table(ppc_df[["observed_mean_um", "repeat_sd_um", "n_repeats", "predictive_mean_um", "predictive_sd_um",
-                       "z", "inside_95"]], digits={"z": 2})
+    if ppc_df is not None:
+        page.figure(tmp / "ppc.png", ppc.CAPTION, "posterior predictive check")
+        n_out = int((~ppc_df["inside_95"]).sum())
+        q = len(rep.log_posterior.names)
+        example = " (wide or shifted intervals, e.g. beta_XB against dx_BT)" if ident is not None else ""
+        page.paragraph(f"{n_out} of {len(ppc_df)} observed means fall outside their 95 % predictive interval. "
+                       f"σ_model (what the model leaves out), posterior median {sigma_um:.2f} µm. Table: ppc.csv."
+                       + (f" With {len(ppc_df)} observed means and {q} sampled parameters the model can match every "
+                          "mean, so this check has little power here: tension between measurements shows in the "
+                          f"parameters{example} rather than in the residuals." if q >= len(ppc_df) else ""))
+        page.table(ppc_df[["observed_mean_um", "repeat_sd_um", "n_repeats", "predictive_mean_um",
+                           "predictive_sd_um", "z", "inside_95"]], digits={"z": 2})
     if c.loo is not None:  # leave-one-out consistency, the second check
         page.paragraph(f"Leave-one-out consistency of the posterior ({DATA_LABELS[rep.data]}): does each observed "
                        "mean agree with what all the other measurements predict for it? " + c.loo.power_sentence()
@@ -662,19 +785,48 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         page.table(c.loo.table[["variable", "elpd_loo", "elpd_drop", "pareto_k", "note"]],
                    digits={"elpd_loo": 2, "elpd_drop": 2, "pareto_k": 2})
 
-    page.section("polar", "Ball-bar trajectories")
-    page.figure(tmp / "polar.png", polar.CAPTION, "polar trajectories")
+    if ppc_df is not None:
+        page.section("polar", "Ball-bar trajectories")
+        page.figure(tmp / "polar.png", polar.CAPTION, "polar trajectories")
 
     page.section("widths", "What the data taught")
     page.figure(tmp / "widths.png", widths.CAPTION, "prior and posterior widths")
     page.paragraph("Priors, each with its reason (priors.csv):")
     page.table(priors_table(rep.log_posterior))
 
+    if planned is not None:
+        _plan_section(page, planned, rep, shown=shown, tmp=tmp)
+
+    page.section("diagnostics", "Sampler diagnostics")
+    page.paragraph(sampler_paragraph(rep))
+    if rep.reference is not None:
+        page.paragraph(f"Accuracy {rep.reference.sentence()}. Per quantity, the difference of the sampled "
+                       "mean (in reference sd) and sd (in %):" + ("" if rep.reference.exact else
+                       " the kinematic posterior against its linearisation, i.e. what the nonlinearity of the "
+                       "model changes, not sampler error."))
+        page.table(reference_table(rep.reference), digits={"mean difference [sd]": 3, "sd difference [%]": 1})
+    page.table(diag.assign(ess_bulk=diag["ess_bulk"].round().astype(int), ess_tail=diag["ess_tail"].round().astype(int)),
+               digits={"r_hat": 3, "tau_steps": 0})
+    page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
+    page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
+
+    if ident is not None:
+        _thesis_section(page, ident, effect, sigma_um)
+    if reports is not None:
+        _models_section(page, reports, campaign, tmp, names=shown.listed, with_fit=ppc_df is not None and rep.data != "probe")
+    return page
+
+
+def _plan_section(page: Page, planned: PlanResult, rep: PosteriorResult, *, shown: Shown, tmp: Path) -> None:
+    """Which measurement next: the plan's targets, its best candidate, what would teach σ_model, its figures."""
+    summary = rep.summary
     page.section("plan", "Which measurement next")
+    unidentified = [n for n in shown.listed if summary.loc[n, "identified"] is False]
     best = planned.table.iloc[0]
     page.paragraph(
         f"Targets: {', '.join(planned.targets)}"
-        + (" (the quantities this campaign does not determine one by one)" if len(planned.targets) < len(IDENTIFIABLE) else "")
+        + (" (the quantities this campaign does not determine one by one)"
+           if unidentified and list(planned.targets) == unidentified else "")
         + f". Best candidate: {best['name']}, expected information gain {best['eig_bits']:.2f} bits"
         + (f", which identifies {best['newly_identified']}" if best["newly_identified"] else "")
         + ". Closed form for the linear model; the full ranking is in plan.csv, and mtmcal-bayes plan "
@@ -691,9 +843,9 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         + (" The planner weighs the assumed prior of σ_model, not the one learnt elsewhere that the posterior above "
            "uses." if rep.log_posterior.sigma_prior is not None else ""))
     page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
-    shown = planned.table.head(10)
+    ranked = planned.table.head(10)
     cols = ["name", "eig_bits", "verdict", "newly_identified"] + [f"{t} sd_after" for t in planned.targets[:4]]
-    page.table(shown[cols].rename(columns={"newly_identified": "identifies"}), digits=3, index=False)
+    page.table(ranked[cols].rename(columns={"newly_identified": "identifies"}), digits=3, index=False)
     page.figure(tmp / "plan_sweep.png", plan_figures.SWEEP_CAPTION, "tool-length sweep")
     if len(planned.check):
         page.paragraph("Monte-Carlo check of the closed form (data simulated from the posterior predictive, "
@@ -701,19 +853,9 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         page.table(planned.check[["candidate", "target", "sd_after_closed_form", "sd_after_monte_carlo",
                                   "relative_difference"]], digits=3, index=False)
 
-    page.section("diagnostics", "Sampler diagnostics")
-    page.paragraph(sampler_paragraph(rep))
-    if rep.reference is not None:
-        page.paragraph(f"Accuracy {rep.reference.sentence()}. Per quantity, the difference of the sampled "
-                       "mean (in reference sd) and sd (in %):" + ("" if rep.reference.exact else
-                       " the kinematic posterior against its linearisation, i.e. what the nonlinearity of the "
-                       "model changes, not sampler error."))
-        page.table(reference_table(rep.reference), digits={"mean difference [sd]": 3, "sd difference [%]": 1})
-    page.table(diag.assign(ess_bulk=diag["ess_bulk"].round().astype(int), ess_tail=diag["ess_tail"].round().astype(int)),
-               digits={"r_hat": 3, "tau_steps": 0})
-    page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
-    page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
 
+def _thesis_section(page: Page, ident: IdentificationResult, effect: pd.DataFrame | None, sigma_um: float) -> None:
+    """The thesis' deterministic identification beside its printed values, and the effect of its dx_BT = 0."""
     page.section("thesis", "Thesis values recomputed")
     page.paragraph("The deterministic identification of the thesis, recomputed from this campaign beside the values "
                    "printed in the thesis, with its flags (identification_ballbar.csv, identification_probe.csv).")
@@ -731,18 +873,20 @@ def _page(c: ReportContent, tmp: Path) -> Page:
                        f"at σ_model = {sigma_um:.2f} µm (thesis_assumption_dx_BT.csv):")
         page.table(effect)
 
-    if reports is not None:
-        page.section("models", "Model comparison")
-        page.figure(tmp / "compare_forest.png", compare.CAPTION_FOREST, "intervals under three models")
+
+def _models_section(page: Page, reports: dict, campaign, tmp: Path, *, names: list[str], with_fit: bool) -> None:
+    """The same campaign under every model of its machine: intervals and (where they saw the ball bar) their fit."""
+    page.section("models", "Model comparison")
+    page.figure(tmp / "compare_forest.png", compare.CAPTION_FOREST, f"intervals under {len(reports)} models")
+    page.box("warn", "Where the models disagree", compare.disagreements(reports, names))
+    if with_fit:
         fit = compare.model_fit_table(reports, campaign)
         page.table(fit, digits={"rms_z": 3, "max_abs_z": 3})
         worst = float(fit["max_abs_z"].max())
-        page.box("warn", "Where the models disagree", compare.disagreements(reports))
         if worst < 2:
             page.paragraph(f"Every model reproduces every measured mean (largest |z| {worst:.2f}), so the data "
                            "cannot tell the models apart: where their intervals differ, that difference is "
                            "model-form uncertainty the measurement does not resolve, and the choice of model "
                            "(which pivots the thesis relations assume, SPEC §3.2) decides the answer.")
-        page.figure(tmp / "compare_ppc.png", compare.CAPTION_PPC, "predictive fit under three models")
-        page.paragraph("All numbers: compare_models.csv, compare_fit.csv.")
-    return page
+        page.figure(tmp / "compare_ppc.png", compare.CAPTION_PPC, f"predictive fit under {len(reports)} models")
+    page.paragraph("All numbers: compare_models.csv" + (", compare_fit.csv." if with_fit else "."))

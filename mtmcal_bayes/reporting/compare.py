@@ -1,4 +1,4 @@
-"""The same campaign under the three forward models: intervals and predictive fit side by side (SPEC §9)."""
+"""The same campaign under every forward model its machine offers: intervals and predictive fit side by side (SPEC §9)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,12 @@ from ..parameters import IDENTIFIABLE
 from .ppc import ppc_table
 
 CAPTION_FOREST = (
-    "Model-form uncertainty: 95 % HDIs of each quantity when the same measurements are interpreted with the "
-    "thesis' linear relations (linear), the literal homogeneous-transform model of Eq 2.10 (htm-literal) "
-    "and the HTM model with pivots that reproduce the thesis relations (htm-thesis). Where the bars do not "
-    "overlap, the choice of model matters more than the measurement noise."
+    "Model-form uncertainty: 95 % HDIs of each quantity when the same measurements are interpreted with each "
+    "forward model the machine offers (docs/model.md): on the thesis machine its linear relations (linear), the "
+    "literal homogeneous-transform model of Eq 2.10 (htm-literal), the HTM model with pivots that reproduce the "
+    "thesis relations (htm-thesis) and the chain; on a machine described by its chain, the chain's first order "
+    "(linear) and the chain itself. Where the bars do not overlap, the choice of model matters more than the "
+    "measurement noise."
 )
 CAPTION_PPC = (
     "Posterior predictive fit of every eccentricity under each model (50 %/95 % intervals, one colour per model) "
@@ -20,11 +22,11 @@ CAPTION_PPC = (
 )
 
 
-def model_comparison_table(reports: dict) -> pd.DataFrame:
-    """Long table: one row per (quantity, model) with mean, sd, 95 % HDI, R-hat and bulk ESS."""
+def model_comparison_table(reports: dict, names=IDENTIFIABLE) -> pd.DataFrame:
+    """Long table: one row per (quantity of ``names``, model) with mean, sd, 95 % HDI, R-hat and bulk ESS."""
     rows = []
     for model, rep in reports.items():
-        for name in IDENTIFIABLE:
+        for name in names:
             if name in rep.summary.index:
                 r = rep.summary.loc[name]
                 rows.append({"quantity": name, "model": model, "unit": r["unit"], "mean": r["mean"], "sd": r["sd"],
@@ -44,11 +46,11 @@ def model_fit_table(reports: dict, campaign) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index("model")
 
 
-def disagreements(reports: dict) -> list[str]:
-    """Quantities whose 95 % HDIs under two models do not overlap, as sentences."""
+def disagreements(reports: dict, names=IDENTIFIABLE) -> list[str]:
+    """Quantities of ``names`` whose 95 % HDIs under two models do not overlap, as sentences."""
     out = []
     models = list(reports)
-    for name in IDENTIFIABLE:
+    for name in names:
         for i, a in enumerate(models):
             for b in models[i + 1:]:
                 ra, rb = reports[a].summary.loc[name], reports[b].summary.loc[name]

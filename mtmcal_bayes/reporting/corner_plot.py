@@ -54,7 +54,7 @@ def _ranges(x: np.ndarray, refs: dict[str, list], names) -> tuple[list, list[str
             if v is None:
                 continue
             if abs(v - mean[i]) > OFF_SCALE_SD * sd[i]:
-                off.append(f"{n}: {REFERENCE_LABELS[key]} {v:.2f} {unit_symbol(n)} "
+                off.append(f"{n}: {REFERENCE_LABELS.get(key, LEAST_SQUARES_LABEL)} {v:.2f} {unit_symbol(n)} "
                            f"({(v - mean[i]) / sd[i]:+.0f} sd, off scale)")
             else:
                 lo, hi = min(lo, v), max(hi, v)
@@ -63,10 +63,17 @@ def _ranges(x: np.ndarray, refs: dict[str, list], names) -> tuple[list, list[str
     return ranges, off
 
 
+#: the kinds of reference value a comparison table may hold (its columns): the thesis' deterministic values, or the
+#: least-squares identification of a machine whose plug-ins give none of their own
+REFERENCE_KINDS = ("ballbar", "probe_reported", "probe_recomputed", "least_squares")
+#: the label of the least-squares values (the thesis' labels: figure_style.REFERENCE_LABELS)
+LEAST_SQUARES_LABEL = "least squares (the chain's first order)"
+
+
 def reference_values(comparison: pd.DataFrame, names) -> dict[str, list]:
     """Per reference kind, a list aligned with ``names`` of values (display units) or None."""
     out = {}
-    for key in ("ballbar", "probe_reported", "probe_recomputed"):
+    for key in REFERENCE_KINDS:
         vals = []
         for n in names:
             v = comparison.loc[n, key] if n in comparison.index and key in comparison else None
@@ -132,11 +139,12 @@ def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
     x = _draws(idata, names)
     refs = reference_values(comparison, names)
     ranges, off = _ranges(x, refs, names)
+    line_key = "ballbar" if any(v is not None for v in refs["ballbar"]) else "least_squares"  # drawn as corner's truths
     K = len(names)
     cells = _LowerTriangle(figure(figsize=(_corner_size(K),) * 2), K)
     corner.corner(
         x, fig=cells, labels=[label(n) for n in names], range=ranges, bins=30, smooth=1.0, levels=LEVELS,
-        color=COLOURS["posterior"], truths=refs["ballbar"], truth_color=COLOURS["ballbar"],
+        color=COLOURS["posterior"], truths=refs[line_key], truth_color=COLOURS["ballbar"],
         plot_datapoints=False, label_kwargs={"fontsize": 13}, max_n_ticks=4, labelpad=0.08,
     )
     cells.remove_placeholder()
@@ -163,8 +171,9 @@ def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
                 if v[c] is not None and ranges[c][0] <= v[c] <= ranges[c][1]:
                     axes[i, c].plot(v[c], v[i], marker=st["marker"], color=st["color"], ms=6, mec="white")
     handles = [Line2D([], [], color=COLOURS["posterior"], lw=6, alpha=0.5, label="posterior (68 % / 95 % contours)")]
-    if len(comparison):  # a described machine has no thesis values to mark
-        handles.append(Line2D([], [], color=COLOURS["ballbar"], lw=1.5, label=REFERENCE_LABELS["ballbar"]))
+    if any(v is not None for v in refs[line_key]):
+        handles.append(Line2D([], [], color=COLOURS["ballbar"], lw=1.5,
+                              label=REFERENCE_LABELS.get(line_key, LEAST_SQUARES_LABEL)))
     for key, st in styles.items():
         if any(v is not None for v in refs[key]):
             handles.append(Line2D([], [], color=st["color"], ls=st["ls"], marker=st["marker"], lw=1.3,

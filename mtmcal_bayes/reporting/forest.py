@@ -1,4 +1,4 @@
-"""Forest plot: 95 % HDIs of the eight quantities beside the deterministic values."""
+"""Forest plot: 95 % HDIs of a machine's quantities beside the deterministic values."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from ..figure_style import (
     unit_symbol,
 )
 from ..parameters import IDENTIFIABLE
-from .corner_plot import OFF_SCALE_SD, reference_values
+from .corner_plot import LEAST_SQUARES_LABEL, OFF_SCALE_SD, reference_values
 from .widths import IDENTIFICATION_COLOUR
 
 CAPTION = (
@@ -39,11 +39,21 @@ CAPTION_DATA = (
 
 _REF_STYLE = {"ballbar": dict(marker="o", ms=9, mfc="none", mew=2),
               "probe_reported": dict(marker="s", ms=8, mfc="none", mew=2),
-              "probe_recomputed": dict(marker="D", ms=7, mfc="none", mew=1.5)}
+              "probe_recomputed": dict(marker="D", ms=7, mfc="none", mew=1.5),
+              "least_squares": dict(marker="o", ms=9, mfc="none", mew=2)}
+#: the colour of each reference kind (the least squares, a deterministic value, in the ball bar's)
+_REF_COLOUR = {**COLOURS, "least_squares": COLOURS["ballbar"]}
+#: a model the shared palette has no colour for (figure_style.MODEL_COLOURS: the thesis machine's first three)
+_MORE_MODEL_COLOURS = {"chain": "#CC79A7"}
+
+
+def model_colour(label: str) -> str:
+    """The colour of a model (or of a posterior's data) in a figure that compares several."""
+    return {**_MORE_MODEL_COLOURS, **MODEL_COLOURS, **DATA_COLOURS}.get(label, COLOURS["posterior"])
 
 
 def _colour(label: str, several: bool) -> str:
-    return {**MODEL_COLOURS, **DATA_COLOURS}.get(label, COLOURS["posterior"]) if several else COLOURS["posterior"]
+    return model_colour(label) if several else COLOURS["posterior"]
 
 
 def _label_colour(rows) -> str:
@@ -84,14 +94,14 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
             if v is None:
                 continue
             if xlim[0] <= v <= xlim[1]:
-                ax.plot(v, 0.0, color=COLOURS[key], ls="none", **st)
+                ax.plot(v, 0.0, color=_REF_COLOUR[key], ls="none", **st)
             else:
                 right = v > xlim[1]
                 row = -0.45 * beyond[right]  # a second one on the same side a row lower
                 beyond[right] += 1
                 ax.annotate(f"{v:.0f}", xy=(xlim[1] if right else xlim[0], row), xytext=(-30 if right else 30, 0),
-                            textcoords="offset points", ha="center", va="center", fontsize=8, color=COLOURS[key],
-                            arrowprops=dict(arrowstyle="->", color=COLOURS[key]))
+                            textcoords="offset points", ha="center", va="center", fontsize=8, color=_REF_COLOUR[key],
+                            arrowprops=dict(arrowstyle="->", color=_REF_COLOUR[key]))
         ax.set_xlim(xlim)
         ax.set_ylim(-0.6 - 0.45 * max(0, max(beyond.values()) - 1), ys[0] + 0.6)
         ax.set_yticks([])
@@ -106,7 +116,8 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
                       label=f"{lab}: mean, 95 % HDI" if k > 1 else "posterior: mean, 95 % HDI") for lab in summaries]
     for key, st in _REF_STYLE.items():
         if refs and any(v is not None for v in refs[key]):
-            handles.append(Line2D([], [], color=COLOURS[key], ls="none", label=REFERENCE_LABELS[key], **st))
+            handles.append(Line2D([], [], color=_REF_COLOUR[key], ls="none",
+                                  label=REFERENCE_LABELS.get(key, LEAST_SQUARES_LABEL), **st))
     tight_layout(fig, (0, 0.7 / fig.get_figheight(), 1, 1), h_pad=0.6)
     fig.legend(handles=handles, loc="lower center", ncol=2, fontsize=9.5, frameon=False)
     return fig

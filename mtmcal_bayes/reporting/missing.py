@@ -4,8 +4,9 @@ from __future__ import annotations
 
 
 def missing_data(campaign, ident) -> list[str]:
-    """Sentences naming the measurements the campaign does not have and what that costs
-    (``ident``: the campaign's :class:`~mtmcal_bayes.identification.IdentificationResult`).
+    """Sentences naming the measurements the campaign does not have and what that costs (``ident``: the campaign's
+    deterministic identification, :class:`~mtmcal_bayes.identification.IdentificationResult`, where its machine's
+    plug-ins give one; None: there are no deterministic values to miss).
 
     Empty for a complete campaign (the thesis campaign).
     """
@@ -13,16 +14,24 @@ def missing_data(campaign, ident) -> list[str]:
     probe = campaign.probe
     if probe is None:
         out.append("No touch-probe data in this campaign: no probe values are marked in the figures and the "
-                   "probe columns of summary.csv are empty.")
-    else:
+                   "probe columns of summary.csv are empty." if ident is not None else
+                   "No touch-probe data in this campaign: nothing checks the ball bar's deviations against a second "
+                   "instrument.")
+    elif ident is not None:
         if probe.c_axis is None:
             out.append("No C-axis touch-probe data: alpha_CZ, beta_CZ, dx_CZ and dy_CZ have no probe value.")
         if probe.b_axis is None or not probe.b_axis.styli:
             out.append("No B-axis touch-probe data: alpha_XB, beta_XB, gamma_XB, dx_BT and dz_BT have no probe value.")
+    if not campaign.ballbar.runs:
+        out.append("No ball-bar runs in this campaign: no ball-bar trajectories, no predictive check of "
+                   "eccentricities and no comparison of the instruments.")
+    if not campaign.ballbar.setups:
+        out.append("No ball-bar set-up in this campaign: the planner's catalogue of candidate measurements starts "
+                   "from one, so the report has no plan of the next measurement.")
     if campaign.has_probe_readings() and (gap := campaign.probe_gap()) is not None:
         out.append(gap.skipped("The comparison of the instruments (the ball-bar-only, probe-only and fused posteriors "
                                "side by side, the consistency check, the weighing of a conflict's explanations)"))
-    for name, v in ident.ballbar.items():
+    for name, v in (ident.ballbar.items() if ident is not None else ()):
         if v.value is None and v.missing:
             out.append(f"No ball-bar value for {name} (thesis Eq {v.equation}): it {v.missing}. "
                        "The posterior still reports it; see below whether the data identify it.")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from matplotlib.lines import Line2D
 
@@ -9,13 +11,15 @@ from .. import units
 from ..conventions import machine_repeats
 from ..figure_style import COLOURS, figure, tight_layout
 from ..observations import Observations
+from ..machines import patterns as described_patterns
 from ..patterns import B_ANGLES_DEG, B_PATTERNS, COMPONENTS, polar_basis
 
 CAPTION = (
     "Ball-bar trajectories as ball-bar software draws them: the change of bar length ΔL along the "
     "pattern, magnified radially (the dotted ring is ΔL = 0, radial ticks in µm) against the polar-plot "
     "angle: the B angle for B patterns over their 0–90° arc; for C patterns the direction of the bar over a "
-    "full turn (the C angle, or C + 180° for CR with the T ball inside the W ball). Only the eccentricity part "
+    "full turn (the C angle, or C + 180° for CR with the T ball inside the W ball); on a machine described by its "
+    "chain, the angle ψ of its eccentricity fit over the run's arc (docs/machines.md). Only the eccentricity part "
     "ΔL = e_a·u_a + e_b·u_b is drawn (the mean radius change is not modelled). Black: the eccentricity circle "
     "of the mean of the measured repeats; grey: each repeat; blue band: 95 % of the posterior's predicted "
     "trajectories (the model with the sampled deviations and mounting offsets, no measurement noise)."
@@ -33,11 +37,41 @@ def _runs(campaign):
     return [(i, campaign.ballbar.runs[i], comps) for i, comps in sorted(out.items())]
 
 
-def _dL(pattern: str, angles_rad: np.ndarray, comps: list[str], values: np.ndarray) -> np.ndarray:
-    """ΔL (..., k) from component values (..., len(comps)) over the pattern's polar angles."""
-    B = polar_basis(pattern, angles_rad)
-    cols = [1 + COMPONENTS[pattern].index(c) for c in comps]
-    return values @ B[:, cols].T
+@dataclass
+class _Geometry:
+    """How one run's ΔL is drawn: the polar angles ψ (k,) rad, ΔL's design matrix over them (k, 3) (columns 1 and
+    the two components in the order ``components``), whether the arc is a part of a turn, and the mount in words."""
+
+    psi: np.ndarray
+    basis: np.ndarray
+    components: tuple[str, str]
+    partial: bool
+    mount: str
+
+
+def _geometry(run, campaign) -> _Geometry:
+    """The polar geometry of ``run``: from the machine's description where it has one (the angle ψ of the
+    eccentricity fit over the run's arc, SPEC §19), else from the thesis' pattern table (Sec 2.3)."""
+    bb = campaign.ballbar
+    s, m = bb.setups[run.setup], bb.mounts[run.mount]
+    desc = campaign.machine.description
+    if desc is not None:
+        cmd = described_patterns.pattern_commands(desc, run.pattern, length=s.R_B, ball=m.position, bar=bb.length,
+                                                  arc_deg=run.arc_deg, hold_deg=run.hold_deg)
+        psi = cmd.psi if np.ptp(cmd.psi) < np.deg2rad(300.0) else np.deg2rad(C_GRID_DEG)
+        where = ", ".join(f"{v:g}" for v in m.position)
+        return _Geometry(psi, described_patterns.fit_basis(psi), described_patterns.components(desc, run.pattern),
+                         np.ptp(psi) < np.deg2rad(300.0), f"R_B {s.R_B:g} mm, W ball at ({where}) mm")
+    is_b = run.pattern in B_PATTERNS
+    psi = np.deg2rad(B_ANGLES_DEG if is_b else C_GRID_DEG)
+    return _Geometry(psi, polar_basis(run.pattern, psi), COMPONENTS[run.pattern], is_b,
+                     f"R_B {s.R_B:g} mm, R_C {m.R_C:g} mm")
+
+
+def _dL(g: _Geometry, comps: list[str], values: np.ndarray) -> np.ndarray:
+    """ΔL (..., k) from component values (..., len(comps)) over the run's polar angles."""
+    cols = [1 + g.components.index(c) for c in comps]
+    return values @ g.basis[:, cols].T
 
 
 def polar_figure(result, campaign, seed: int = 0):
@@ -55,14 +89,13 @@ def polar_figure(result, campaign, seed: int = 0):
         ax = fig.add_subplot(nrows, ncols, panel, projection="polar")
         idx = [j for j, _ in comps]
         names = [c for _, c in comps]
-        is_b = run.pattern in B_PATTERNS
-        deg = B_ANGLES_DEG if is_b else C_GRID_DEG
-        psi = np.deg2rad(deg)
+        g = _geometry(run, campaign)
+        psi = g.psi
         machine = machine_repeats(run, campaign.ballbar)
         reps = np.column_stack([units.from_internal(machine[c], "um") for c in names])  # (r, len(comps))
-        measured = _dL(run.pattern, psi, names, reps.mean(axis=0))
-        band = np.quantile(_dL(run.pattern, psi, names, pred[:, idx]), [0.025, 0.975], axis=0)
-        repeat_lines = _dL(run.pattern, psi, names, reps)
+        measured = _dL(g, names, reps.mean(axis=0))
+        band = np.quantile(_dL(g, names, pred[:, idx]), [0.025, 0.975], axis=0)
+        repeat_lines = _dL(g, names, reps)
         M = 1.15 * max(np.abs(measured).max(), np.abs(band).max(), np.abs(repeat_lines).max(), 1.0)
         ax.fill_between(psi, band[0], band[1], color=COLOURS["posterior"], alpha=0.35, lw=0)
         for r in repeat_lines:
@@ -73,15 +106,13 @@ def polar_figure(result, campaign, seed: int = 0):
         ax.set_rlim(-M, M)
         ticks = np.array([-1, 0, 1]) * float(f"{M * 0.7:.1g}")
         ax.set_rticks(ticks, [f"{t:+g} µm" if t else "0" for t in ticks], fontsize=8)
-        ax.set_rlabel_position(45 if is_b else 112.5)
-        if is_b:
-            ax.set_thetamin(0)
-            ax.set_thetamax(90)
+        ax.set_rlabel_position(np.rad2deg(psi.min()) + 45 if g.partial else 112.5)
+        if g.partial:
+            ax.set_thetamin(np.rad2deg(psi.min()))
+            ax.set_thetamax(np.rad2deg(psi.max()))
         ax.tick_params(axis="x", labelsize=8)
-        s = campaign.ballbar.setups[run.setup]
-        m_ = campaign.ballbar.mounts[run.mount]
         e = ", ".join(f"{c} {v:+.1f}" for c, v in zip(names, reps.mean(axis=0)))
-        ax.set_title(f"{run.pattern} @ {run.setup}/{run.mount}  (R_B {s.R_B:g} mm, R_C {m_.R_C:g} mm)\n"
+        ax.set_title(f"{run.pattern} @ {run.setup}/{run.mount}  ({g.mount})\n"
                      f"measured: {e} µm", fontsize=9.5, pad=12)
     handles = [Line2D([], [], color=COLOURS["observed"], lw=1.6, label="measured (mean of repeats)"),
                Line2D([], [], color="0.55", lw=0.7, label="each repeat"),

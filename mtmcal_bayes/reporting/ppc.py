@@ -8,8 +8,9 @@ from matplotlib.lines import Line2D
 
 from .. import units
 from ..conventions import machine_repeats
-from ..figure_style import COLOURS, MODEL_COLOURS, new_figure, tight_layout
+from ..figure_style import COLOURS, new_figure, tight_layout
 from ..observations import Observations
+from .forest import model_colour
 
 CAPTION = (
     "Posterior predictive check. Left: for each measured eccentricity component (component_pattern@setup/mount), "
@@ -58,7 +59,7 @@ def ppc_figure(tables: dict[str, pd.DataFrame], campaign):
     k = len(tables)
     offsets = np.linspace(0.2, -0.2, k) if k > 1 else np.zeros(1)  # first entry on top
     for (lab, t), dy in zip(tables.items(), offsets):
-        colour = MODEL_COLOURS.get(lab, COLOURS["posterior"]) if k > 1 else COLOURS["posterior"]
+        colour = model_colour(lab) if k > 1 else COLOURS["posterior"]
         ax.hlines(y + dy, t["predictive_2.5%_um"], t["predictive_97.5%_um"], color=colour, lw=1.5)
         ax.hlines(y + dy, t["predictive_25%_um"], t["predictive_75%_um"], color=colour, lw=5, alpha=0.8)
         az_.plot(t["z"], y + dy, "o", color=colour, ms=5)
@@ -75,7 +76,7 @@ def ppc_figure(tables: dict[str, pd.DataFrame], campaign):
     az_.set_xlim(-lim, lim)
     az_.set_xlabel("(observed − predicted) / predictive sd")
     az_.grid(axis="x", alpha=0.3)
-    handles = [Line2D([], [], color=MODEL_COLOURS.get(lab, COLOURS["posterior"]) if k > 1 else COLOURS["posterior"],
+    handles = [Line2D([], [], color=model_colour(lab) if k > 1 else COLOURS["posterior"],
                       lw=4, label=f"{lab}: predictive 50 % / 95 %" if k > 1 else "posterior predictive 50 % / 95 %")
                for lab in tables]
     handles += [Line2D([], [], color=COLOURS["observed"], marker=".", ls="none", label="repeats"),

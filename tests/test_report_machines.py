@@ -1,0 +1,245 @@
+"""One report for every machine (SPEC §8, §19, §20): on each built-in type every section the campaign and its machine
+have what it needs for is in the report, with its CSV; ``--compare-models`` and ``posterior=`` on a described machine.
+
+One report per type, shared by the tests (module scope); exact draws of the linear model keep them quick.
+"""
+
+from __future__ import annotations
+
+import re
+from html import unescape
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import mtmcal_bayes as mb
+from mtmcal_bayes.analysis import analysis_of
+from mtmcal_bayes.io.machine_reader import demo_campaign
+from mtmcal_bayes.machines.plugins import provided
+from mtmcal_bayes.models import models_of
+
+TYPES = ("thesis", "trunnion", "vertical-turn-mill", "head-head")
+#: a determined quantity's posterior mean lies within this many posterior sd of the demo's stated truth (seeded;
+#: 3 sd leaves a 0.3 % chance per quantity of a false alarm)
+Z_MAX = 3.0
+
+
+def _campaign(machine: str):
+    return mb.load_campaign() if machine == "thesis" else mb.load_campaign(demo_campaign(machine))
+
+
+def _first_angle(campaign) -> str:
+    """The first deviation of the machine's parameter space that is an angle (its name as the machine gives it)."""
+    space = analysis_of(campaign, data="ballbar").space
+    return next(p.name for p in space.parameters if p.group == "deviation" and p.unit == "arcsec")
+
+
+def _run(*argv) -> tuple[int, str, str]:
+    """The command line in this process: (exit status, stdout, stderr)."""
+    import contextlib
+    import io
+
+    from mtmcal_bayes.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([str(a) for a in argv])
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def reports(tmp_path_factory):
+    """``{type: (campaign, directory, stdout)}``: ``report`` of the thesis campaign and of each demo, exact draws,
+    seed 1, with a ±5″ tolerance on the machine's first angle (so that the conformity section has a verdict)."""
+    out = {}
+    for machine in TYPES:
+        c = _campaign(machine)
+        base = tmp_path_factory.mktemp(machine)
+        tol = base / "tolerances.toml"
+        tol.write_text(f"[tolerances]\n{_first_angle(c)}_arcsec = 5\n", encoding="utf-8")
+        where = [] if machine == "thesis" else ["--machine", machine]
+        code, stdout, err = _run("report", *where, "-o", base / "rep", "--sampler", "exact", "--seed", "1",
+                                           "--tolerances", tol, "--quiet")
+        assert code == 0, (machine, err)
+        out[machine] = (c, base / "rep", stdout)
+    return out
+
+
+def _expected(campaign) -> tuple[set[str], set[str]]:
+    """The sections (anchors) and CSVs a report of ``campaign`` must have, from what the campaign and its machine
+    provide."""
+    sections = {"results", "statement", "conformity", "budget", "corner", "forest", "compensation", "ppc", "widths",
+                "plan", "diagnostics"}
+    csvs = {"summary.csv", "loo.csv", "diagnostics.csv", "priors.csv", "budget.csv", "plan.csv"}
+    if campaign.ballbar.runs:
+        sections |= {"polar"}
+        csvs |= {"ppc.csv"}
+    if campaign.ballbar.runs and campaign.has_probe_readings() and campaign.probe_gap() is None:
+        sections |= {"instruments"}
+        csvs |= {"instruments.csv", "consistency.csv", "consistency_readings.csv"}
+    if campaign.machine.description is not None:
+        sections |= {"machine"}
+    if provided(campaign.machine, "identify") is not None:  # the plug-in's deterministic identification
+        sections |= {"thesis"}
+        csvs |= {"identification_ballbar.csv", "thesis_assumption_dx_BT.csv"}
+    else:  # the least squares beside the posterior, the Jacobian's identifiability
+        sections |= {"determined", "least-squares"}
+        csvs |= {"identifiability.csv", "combinations.csv", "least_squares.csv"}
+    if campaign.truth is not None:
+        sections |= {"truth"}
+        csvs |= {"truth.csv"}
+    return sections, csvs
+
+
+@pytest.mark.parametrize("machine", TYPES)
+def test_every_section_the_machine_supports(reports, machine):
+    """Each section the campaign has what it needs for is on the page, each CSV written and named in the file list,
+    each figure the page shows exists; the instruments, the plan, the compensation, the polar trajectories and the
+    widths are on every built-in type (each demo has both instruments)."""
+    campaign, rep, stdout = reports[machine]
+    html = unescape((rep / "index.html").read_text(encoding="utf-8"))
+    anchors = set(re.findall(r'<h2 id="([^"]+)">', html))
+    sections, csvs = _expected(campaign)
+    assert {"instruments", "plan", "compensation", "polar", "widths", "conformity"} <= sections
+    assert sections <= anchors, sections - anchors
+    for name in csvs:
+        assert (rep / name).stat().st_size > 0, name
+        assert name in stdout, name
+    for png in re.findall(r"<strong>([\w.-]+\.png)\.</strong>", html):
+        assert (rep / png).stat().st_size > 10_000, png
+    text = re.sub(r"<img[^>]*>", "", html)
+    assert not re.search(r"\bnan\b", text, re.IGNORECASE)
+
+
+@pytest.mark.parametrize("machine", TYPES)
+def test_the_deterministic_values_beside_the_posterior(reports, machine):
+    """The forest's deterministic values: the thesis' ball-bar values on the thesis machine, the least squares on a
+    described one, which agree with the posterior (weak priors: a fraction of a sd) on what the campaign determines,
+    and the demo's stated truth lies within Z_MAX sd of the posterior."""
+    campaign, rep, _ = reports[machine]
+    s = pd.read_csv(rep / "summary.csv", index_col="quantity")
+    if provided(campaign.machine, "identify") is not None:
+        assert s["ballbar"].notna().sum() >= 6
+        return
+    html = unescape((rep / "index.html").read_text(encoding="utf-8"))
+    combinations = pd.read_csv(rep / "combinations.csv")
+    assert all(name in html for name in combinations["name"])  # what the campaign determines only in combination
+    assert "Eqs 4.10" not in html  # no thesis number on a described machine
+    ls = pd.read_csv(rep / "least_squares.csv").set_index("quantity")
+    determined = [n for n in ls.index if n in s.index]
+    assert determined
+    assert (np.abs(ls.loc[determined, "estimate"] - s.loc[determined, "mean"]) <= 0.5 * s.loc[determined, "sd"]).all()
+    truth = pd.read_csv(rep / "truth.csv")
+    assert (np.abs(truth["z"]) <= Z_MAX).all(), truth
+
+
+@pytest.mark.parametrize("machine", TYPES)
+def test_the_conformity_verdict_is_tabulated(reports, machine):
+    campaign, rep, _ = reports[machine]
+    s = pd.read_csv(rep / "summary.csv", index_col="quantity")
+    name = _first_angle(campaign)
+    assert s.loc[name, "conformity"] in ("conforms", "does not conform", "undecided")
+    assert s["conformity"].notna().sum() == 1
+
+
+def test_compare_models_on_a_described_machine(tmp_path, run_cli):
+    """``--compare-models`` on a described machine: its two models (linear, chain) side by side, for every
+    deviation, with their fit to the ball bar; the chain's first order is the linear model, so on a demo simulated
+    at small deviations their means agree within a fraction of a sd."""
+    c = mb.load_campaign(demo_campaign("trunnion"))
+    code, out, err = run_cli("report", "--machine", "trunnion", "-o", tmp_path / "rep", "--compare-models",
+                             "--sampler", "exact", "--seed", "1", "--quiet")
+    assert code == 0, err
+    rep = tmp_path / "rep"
+    for name in ("compare_forest.png", "compare_ppc.png", "compare_models.csv", "compare_fit.csv"):
+        assert (rep / name).stat().st_size > 0, name
+    table = pd.read_csv(rep / "compare_models.csv")
+    assert set(table["model"]) == set(models_of(c.machine)) == {"linear", "chain"}
+    deviations = pd.read_csv(rep / "summary.csv", index_col="quantity").index.drop(["sigma_model", "sigma_model_probe"])
+    assert set(table["quantity"]) == set(deviations)
+    m = table.set_index(["quantity", "model"])
+    for q in deviations:
+        assert abs(m.loc[(q, "chain"), "mean"] - m.loc[(q, "linear"), "mean"]) <= 0.2 * m.loc[(q, "linear"), "sd"], q
+    fit = pd.read_csv(rep / "compare_fit.csv", index_col="model")
+    assert set(fit.index) == {"linear", "chain"}
+    html = unescape((rep / "index.html").read_text(encoding="utf-8"))
+    assert '<h2 id="models">' in html
+
+
+def test_a_described_machine_report_reuses_a_given_posterior(tmp_path):
+    """``report(posterior=...)`` on a described machine: the report is of that posterior (same draws, not sampled
+    again), its summary the posterior's own."""
+    c = mb.load_campaign(demo_campaign("head-head"))
+    post = mb.sample(c, sampler="exact", seed=3)
+    rep = mb.report(c, output=tmp_path / "rep", posterior=post)
+    assert rep.posterior is post
+    s = pd.read_csv(tmp_path / "rep" / "summary.csv", index_col="quantity")
+    for col in ("mean", "sd", "hdi_low", "hdi_high"):
+        np.testing.assert_allclose(s[col], post.summary.loc[s.index, col], rtol=1e-5, atol=1e-9)
+    import arviz as az
+
+    written = az.from_netcdf(tmp_path / "rep" / "posterior.nc")
+    q = s.index[0]
+    np.testing.assert_array_equal(np.asarray(written.posterior[q]), np.asarray(post.idata.posterior[q]))
+
+
+def test_a_described_machine_report_takes_a_learnt_sigma_model_prior(tmp_path):
+    """``report(sigma_model_prior=...)`` on a described machine: every posterior of the report (the main one and
+    the instruments' side posteriors) is sampled under the learnt prior, and the budget names its source."""
+    from mtmcal_bayes.sigma_prior import SigmaModelPrior
+
+    learnt = SigmaModelPrior({"sigma_model": (1.0, 0.1)}, "fleet of test trunnions")
+    c = mb.load_campaign(demo_campaign("trunnion"))
+    rep = mb.report(c, output=tmp_path / "rep", sigma_model_prior=learnt, sampler="exact", seed=1)
+    assert rep.posterior.log_posterior.sigma_prior == learnt
+    priors = pd.read_csv(tmp_path / "rep" / "priors.csv", index_col="parameter")
+    assert "fleet of test trunnions" in priors.loc["sigma_model", "reason"]
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    assert "fleet of test trunnions" in html.split('<h2 id="budget">')[1].split("<h2")[0]
+
+
+def test_a_probe_only_campaign_gets_the_sections_it_has_what_they_need_for(tmp_path):
+    """A described campaign with touch-probe runs and no ball bar (the trunnion demo without its [ballbar]): the
+    report is written without the sections that need ball-bar runs (trajectories, predictive check of
+    eccentricities, the instruments side by side) or a ball-bar set-up (the planner's catalogue), and says why."""
+    body = open(demo_campaign("trunnion"), encoding="utf-8").read()
+    kept, skip = [], False
+    for line in body.splitlines():
+        if line.startswith("["):
+            skip = line.strip("[] ").startswith(("ballbar", "truth.setups", "truth.mounts"))
+        if not skip:
+            kept.append(line)
+    path = tmp_path / "probe_only.toml"
+    path.write_text("\n".join(kept) + "\n", encoding="utf-8")
+    c = mb.load_campaign(path)
+    assert not c.ballbar.runs and c.has_probe_readings()
+    rep = mb.report(c, output=tmp_path / "rep", sampler="exact", seed=1)
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    anchors = set(re.findall(r'<h2 id="([^"]+)">', html))
+    assert {"machine", "determined", "results", "least-squares", "budget", "corner", "forest", "widths"} <= anchors
+    assert not anchors & {"polar", "instruments", "plan"}
+    assert not any((tmp_path / "rep" / f).exists() for f in ("ppc.csv", "polar.png", "plan.csv", "instruments.csv"))
+    assert any("No ball-bar runs" in m for m in rep.missing) and any("No ball-bar set-up" in m for m in rep.missing)
+
+
+def test_a_described_campaign_whose_probe_disagrees_gets_the_explanations(tmp_path):
+    """The trunnion demo with one group of probed positions (A = −30°) moved 60 µm along Z: the consistency check
+    finds the disagreement, and the report then weighs the explanations of the conflict (begun only once the
+    comparison finds it: the runs read as the thesis reads them) and shows them."""
+    import ast
+
+    text = open(demo_campaign("trunnion"), encoding="utf-8").read()
+    line = next(ln for ln in text.splitlines() if ln.startswith("centres_mm = "))
+    centres = ast.literal_eval(line.split("=", 1)[1].strip())
+    for repeat in centres:
+        for i in range(4, 8):  # the positions at A = −30°
+            repeat[i][2] += 0.060
+    path = tmp_path / "shifted.toml"
+    path.write_text(text.replace(line, "centres_mm = " + repr(centres)), encoding="utf-8")
+    rep = mb.report(path, output=tmp_path / "rep", sampler="exact", seed=1)
+    verdicts = pd.read_csv(tmp_path / "rep" / "consistency.csv").set_index("given")["verdict"]
+    assert (verdicts == "disagree").any()
+    assert "explanations.csv" in rep.files and len(pd.read_csv(tmp_path / "rep" / "explanations.csv")) > 1
+    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    assert "Where a conflict could come from" in html
