@@ -430,11 +430,16 @@ class Campaign:
         return [r for r in self.ballbar.runs if r.pattern == pattern]
 
     def primary_setup(self) -> Setup:
-        """The tool setup of the first BX run (the thesis' R_B), else the first setup."""
+        """The tool setup of the first BX run (the thesis' R_B), else the first setup; an
+        :class:`~mtmcal_bayes.errors.InputError` naming ``ballbar.setups`` when the campaign has none (a probe-only
+        campaign: the ball-bar runs a planner would add start from a set-up)."""
         bb = self.ballbar
         for run in bb.runs:
             if run.pattern == "BX":
                 return bb.setups[run.setup]
+        if not bb.setups:
+            raise InputError(self.source, "ballbar.setups", "no ball-bar set-up: the ball-bar runs to plan start from "
+                             "one; give [ballbar] length_mm, a [ballbar.setups.<id>] and a [ballbar.mounts.<id>]")
         return next(iter(bb.setups.values()))
 
     def mount_for(self, pattern: str) -> Mount:

@@ -19,8 +19,8 @@ from .version import __version__
 PROG = "mtmcal-bayes"
 #: API parameters set by something other than the flag of the same name
 FLAG_OF = {"start": "--x0/--y0/--z0", "steps": "--step", "ramps": "--ramp", "n": "--campaigns"}
-DATA_OPTION = dict(choices=DATA, default=None, help="measurements in the likelihood: ball bar (the default), probe, or "
-                   "both (the default on a described machine whose campaign has both)")
+DATA_OPTION = dict(choices=DATA, default=None, help="measurements in the likelihood: ball bar, probe, or both (default: "
+                   "every instrument the campaign has; the thesis machine: the ball bar, as the thesis identifies)")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -199,8 +199,9 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--candidates", metavar="FILE.toml", help="extra candidates of your own ([[candidate]] tables)")
     s.add_argument("--sigma-model-um", type=float, default=None,
                    help="fixed model-discrepancy sd of the closed form (default: rms of its prior, 2 µm)")
-    s.add_argument("--data", choices=DATA, default="ballbar", help="what the current posterior rests on: ball bar "
-                   "(default), probe, or both; probe runs are candidates whenever the campaign has a [probe]")
+    s.add_argument("--data", choices=DATA, default=None, help="what the current posterior rests on: ball bar, probe, "
+                   "or both (default: every instrument the campaign has; the thesis machine: the ball bar); probe runs "
+                   "are candidates whenever the campaign has a [probe]")
     s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
                    help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
     _sigma_prior_option(s, ": the closed form at its rms, the σ_model information and the Monte-Carlo check under it "
