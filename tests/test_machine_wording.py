@@ -105,16 +105,11 @@ def test_the_machine_figure_draws_and_names_the_campaigns_tool(tmp_path, machine
     text = "\n".join(t.get_text() for t in chain_figure(c.machine.description, campaign_tool(c)).texts)
     assert f"tool {setup.R_B:g} mm drawn (set-up {setup.id}'s tool length)" in text
     # a probe-only campaign: its first stylus
-    body = open(path, encoding="utf-8").read()
-    kept, skip = [], False
-    for line in body.splitlines():
-        if line.startswith("["):
-            skip = line.strip("[] ").startswith(("ballbar", "truth.setups", "truth.mounts"))
-        if not skip:
-            kept.append(line)
-    probe_only = tmp_path / "probe.toml"
-    probe_only.write_text("\n".join(kept) + "\n", encoding="utf-8")
-    p = mb.load_campaign(probe_only)
+    from tests.variants import probe_only
+
+    probe_only_file = tmp_path / "probe.toml"
+    probe_only_file.write_text(probe_only(open(path, encoding="utf-8").read()), encoding="utf-8")
+    p = mb.load_campaign(probe_only_file)
     sid, length = next(iter(p.probe.styli.items()))
     assert campaign_tool(p) == (length, f"stylus {sid}'s length")
     text = "\n".join(t.get_text() for t in chain_figure(p.machine.description, campaign_tool(p)).texts)

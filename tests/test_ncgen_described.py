@@ -18,6 +18,7 @@ from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, demo_campaign
 from mtmcal_bayes.io.nc_axes import axis_letters, read_axis_blocks
 from mtmcal_bayes.machines.patterns import placement_commands, tool_home
 from mtmcal_bayes.models.chain import Chain
+from tests.variants import probe_only, sections_dropped
 
 DESCRIBED = [t for t in BUILTIN_TYPES if t != "integrex-i200"]
 #: decimals of the programs checked to 1e-9 mm (the default 4 rounds each word to 0.05 µm)
@@ -147,17 +148,6 @@ def test_the_thesis_machine_refuses_the_described_options(run_cli):
     assert code == 2 and "--arc-deg: for a described machine's campaign only" in err, err
 
 
-def _sections_dropped(text: str, *prefixes: str) -> str:
-    """A campaign's TOML text without the tables whose names start with one of ``prefixes``."""
-    out, skip = [], False
-    for line in text.splitlines():
-        if line.startswith("["):
-            skip = line.strip("[] ").startswith(prefixes)
-        if not skip:
-            out.append(line)
-    return "\n".join(out) + "\n"
-
-
 def _demo_text(machine) -> str:
     with open(demo_campaign(machine), encoding="utf-8") as f:
         return f.read()
@@ -171,8 +161,8 @@ def test_ncgen_on_a_campaign_without_what_the_option_needs_is_one_line_naming_fi
     still gets its programs."""
     text = _demo_text(machine)
     no_probe, no_ballbar = tmp_path / "no-probe.toml", tmp_path / "no-ballbar.toml"
-    no_probe.write_text(_sections_dropped(text, "probe"), encoding="utf-8")
-    no_ballbar.write_text(_sections_dropped(text, "ballbar", "truth.setups", "truth.mounts"), encoding="utf-8")
+    no_probe.write_text(sections_dropped(text, "probe"), encoding="utf-8")
+    no_ballbar.write_text(probe_only(text), encoding="utf-8")
     pattern = mb.load_campaign(demo_campaign(machine)).ballbar.runs[0].pattern
     for argv, path, key in ((["--probe", "1"], no_probe, "probe.runs"), (["--run", "1"], no_ballbar, "ballbar.runs"),
                             ([pattern], no_ballbar, "ballbar.setups")):
@@ -192,7 +182,7 @@ def test_ncgen_run_counts_the_planned_runs_after_the_measured_ones(run_cli, tmp_
     ones in measuring order), the same program a measured run at that geometry gets."""
     import re
 
-    text = _sections_dropped(_demo_text(machine), "probe", "truth")
+    text = sections_dropped(_demo_text(machine), "probe", "truth")
     planned = tmp_path / "planned.toml"
     planned.write_text(re.sub(r"^(e[xyz]_um = \[.*\]\n)+", "planned = true\nrepeats = 3\n", text, flags=re.M),
                        encoding="utf-8")
@@ -213,7 +203,7 @@ def test_ncgen_on_a_thesis_campaign_without_runs_writes_from_its_setups(run_cli,
     """The thesis machine's programs need its set-ups and mounts only: a campaign with no runs yet gets them."""
     from mtmcal_bayes.datasets import builtin_campaign_text
 
-    text = _sections_dropped(builtin_campaign_text()[0], "ballbar.runs")
+    text = sections_dropped(builtin_campaign_text()[0], "ballbar.runs")
     path = tmp_path / "new.toml"
     path.write_text("\n".join(ln for ln in text.splitlines() if not ln.startswith("alternative_reason")),
                     encoding="utf-8")

@@ -52,3 +52,20 @@ def alternative_reading() -> str:
             continue
         out.append(ln)
     return "".join(out)
+
+
+def sections_dropped(text: str, *prefixes: str) -> str:
+    """A campaign's TOML text without the tables whose names start with one of ``prefixes``."""
+    out, skip = [], False
+    for line in text.splitlines():
+        if line.startswith("["):
+            skip = line.strip("[] ").startswith(prefixes)
+        if not skip:
+            out.append(line)
+    return "\n".join(out) + "\n"
+
+
+def probe_only(text: str) -> str:
+    """A campaign's TOML text without its ball bar (``[ballbar]`` and the truth of its set-ups and mounts): a
+    probe-only campaign."""
+    return sections_dropped(text, "ballbar", "truth.setups", "truth.mounts")

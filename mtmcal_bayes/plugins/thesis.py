@@ -220,34 +220,36 @@ class ThesisPlugin:
     """The contributions of the thesis plug-in (see the module's docstring)."""
 
     name = "thesis"
-    kinematic_model = "htm-thesis"
-    default_data = "ballbar"
+    # its names and campaign keys
     probe_sections = "[probe.c_axis] or [probe.b_axis.styli]"
-    make_model = staticmethod(make_model)
-    first_order_gap = staticmethod(first_order_gap)
-    identify = staticmethod(identify)
-    parameter_space = staticmethod(parameter_space)
-    probe_layout = staticmethod(probe_layout)
-    program = staticmethod(program)
+    selection_source = "the thesis' 13 deviations (Table 2.1)"
+    description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
+    description_label = "thesis machine"
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
+    probe_owners = staticmethod(probe_owners)
+    pattern_components = staticmethod(pattern_components)
+    # its models and likelihood
+    kinematic_model = "htm-thesis"
+    default_data = "ballbar"
+    make_model = staticmethod(make_model)
+    first_order_gap = staticmethod(first_order_gap)
+    parameter_space = staticmethod(parameter_space)
+    probe_layout = staticmethod(probe_layout)
+    # its published method, programs, compensation and simulation
+    identify = staticmethod(identify)
     sample_notes = staticmethod(sample_notes)
+    program = staticmethod(program)
+    compensation_program = staticmethod(compensation_program)
+    compensate = staticmethod(compensate)
+    simulate = staticmethod(simulate)
+    simulated_probe = staticmethod(simulated_probe)
+    sensitivity_table = staticmethod(sensitivity_table)
 
     @property
     def planning(self):
         """Its planning kit (:func:`planning`)."""
         return planning()
-
-    compensation_program = staticmethod(compensation_program)
-    compensate = staticmethod(compensate)
-    simulate = staticmethod(simulate)
-    sensitivity_table = staticmethod(sensitivity_table)
-    simulated_probe = staticmethod(simulated_probe)
-    pattern_components = staticmethod(pattern_components)
-    selection_source = "the thesis' 13 deviations (Table 2.1)"
-    description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
-    description_label = "thesis machine"
-    probe_owners = staticmethod(probe_owners)
 
     @property
     def aliases(self) -> tuple[tuple[str, str], ...]:
