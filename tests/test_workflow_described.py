@@ -24,9 +24,10 @@ TYPES = ("vertical-turn-mill", "trunnion", "head-head")
 
 @pytest.mark.parametrize("machine", TYPES)
 def test_plan_states_todays_sd_exactly(machine, run_cli):
-    """plan's sd before any new run: the Gaussian posterior of the linear model at plan's σ_model (to 1e-6 relative),
-    from the campaign's own design matrix, noise and priors."""
-    code, out, err = run_cli("plan", "--machine", machine, "--json")
+    """plan's sd before any new run on the ball bar's data: the Gaussian posterior of the linear model at plan's
+    σ_model (to 1e-6 relative), from the campaign's own ball-bar design matrix, noise and priors (the campaign's
+    default data, both instruments, is the next test's)."""
+    code, out, err = run_cli("plan", "--machine", machine, "--data", "ballbar", "--json")
     assert code == 0, err
     doc = json.loads(out)
     c = api.campaign_of(demo_campaign(machine))
@@ -41,6 +42,33 @@ def test_plan_states_todays_sd_exactly(machine, run_cli):
         i = model.space.index(t)
         want = units.from_internal(np.sqrt(cov[i, i]), quantities(c.machine.description)[t].unit)
         assert first[t]["sd_before"] == pytest.approx(want, rel=1e-6), t
+
+
+@pytest.mark.parametrize("machine", TYPES)
+def test_plan_rests_on_every_instrument_by_default(machine, run_cli):
+    """Without --data, plan rests on the campaign's default data, as sample does (one rule: every instrument the
+    campaign has): its sd today is the exact posterior's of both instruments at plan's σ_model scales, not the ball
+    bar's alone (to 1e-6 relative, against the closed form of the same log posterior)."""
+    from mtmcal_bayes.inference.analytic import gaussian_posterior
+    from mtmcal_bayes.inference.log_posterior import LogPosterior
+
+    code, out, err = run_cli("plan", "--machine", machine, "--json")
+    assert code == 0, err
+    doc = json.loads(out)
+    c = api.campaign_of(demo_campaign(machine))
+    assert api.data_of(None, c) == "both"
+    sigma = units.to_internal(doc["sigma_model_um"], "um")
+    post = LogPosterior(c, "linear", data="both", sigma_model=sigma)
+    g = gaussian_posterior(post, sigma)
+    g_bb = gaussian_posterior(LogPosterior(c, "linear", data="ballbar", sigma_model=sigma), sigma)
+    first = doc["candidates"][0]["targets"]
+    differs = 0
+    for t in doc["targets"]:
+        unit = quantities(c.machine.description)[t].unit
+        want = units.from_internal(g.linear_combination({t: 1.0})[1], unit)
+        assert first[t]["sd_before"] == pytest.approx(want, rel=1e-6), t
+        differs += abs(units.from_internal(g_bb.linear_combination({t: 1.0})[1], unit) / want - 1) > 1e-3
+    assert differs  # the probe's readings count: not the ball bar's posterior
 
 
 @pytest.mark.parametrize("machine", TYPES)
