@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING
 
 from .analysis import CampaignAnalysis
 from .campaign import Campaign
-from .errors import InputError
 from .io.campaign_reader import load_campaign
 from .io.machine_reader import demo_campaign  # noqa: F401  (the CLI's --machine TYPE)
 from .io.textfiles import check_writable

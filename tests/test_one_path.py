@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import copy
 
-import pytest
-
 import mtmcal_bayes as mb
 from mtmcal_bayes.datasets import builtin_text
 from mtmcal_bayes.machines.plugins import provided

@@ -22,7 +22,7 @@ from .. import units
 from ..errors import InputError, ParameterError
 from ..machine_time import TimeModel
 from .candidates import Candidate
-from .machine_kit import catalogue_of, feasibility_of, kit_of, planner_for
+from .machine_kit import catalogue_of, feasibility_of, kit_of
 from .design import Planner
 from .design_check import Preposterior, preposterior
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem

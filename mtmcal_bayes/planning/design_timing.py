@@ -17,7 +17,6 @@ class Timing:
     """
 
     def __init__(self, campaign, model: TimeModel):
-        bb = campaign.ballbar
         self.model = model
         self.clock = kit_of(campaign).clock(model, campaign)
 

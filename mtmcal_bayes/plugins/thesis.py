@@ -99,8 +99,6 @@ def sample_notes(result) -> list[str]:
 def planning():
     """The planning of the thesis' campaign format: its 12 patterns at its lever arms (R_B, Z_T, X_T, R_C, Z_C), its
     probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
-    import numpy as np
-
     from ..machine_time import MachineClock
     from ..parameters import IDENTIFIABLE
     from ..planning.candidates import Candidate, candidate_mount, catalogue, extended_setup, feasibility_check
