@@ -315,7 +315,6 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     from .errors import ParameterError
     from .models import check_data
     from .planning import plan as rank
-    from .planning import read_candidates
 
     c = campaign_of(campaign, measured=True)
     _check_planning_model(model, c, candidates)
@@ -324,7 +323,7 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
         raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a non-negative number")
     learnt = sigma_model_prior_of(sigma_model_prior, c)  # the closed form's fixed σ_model does not exclude a prior
-    extra = read_candidates(candidates, c) if isinstance(candidates, (str, os.PathLike)) else list(candidates or [])
+    extra = _user_candidates(candidates, c)
     result = rank(c, targets, extra=extra, sigma_model_um=sigma_model_um, sweep_pattern=sweep_pattern, model=model,
                   data=data, sigma_prior=learnt)
     if output is not None:
@@ -772,21 +771,18 @@ def _program(campaign, planned) -> str:
 
 
 def _check_planning_model(model: str, c: Campaign, candidates) -> None:
-    """The model checked for ``c``'s machine; a candidates file refused on a described machine (its catalogue is
-    generated from the description)."""
-    from .errors import ParameterError
+    """The model checked for ``c``'s machine."""
     from .models import check_model, models_of
 
     check_model(model, models_of(c.machine))
-    if c.machine.described and candidates is not None:
-        raise ParameterError("candidates", "a candidates file serves the thesis machine; on a described machine the "
-                             "catalogue is generated from its description (docs/design.md)")
 
 
 def _user_candidates(candidates, c: Campaign) -> list:
-    from .planning import read_candidates
+    """The user's candidates: a TOML file read in the machine's format (its planning kit), or a list."""
+    from .planning.machine_kit import kit_of
 
-    return read_candidates(candidates, c) if isinstance(candidates, (str, os.PathLike)) else list(candidates or [])
+    return kit_of(c).read_candidates(candidates, c) if isinstance(candidates, (str, os.PathLike)) else \
+        list(candidates or [])
 
 
 def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolerances=None,

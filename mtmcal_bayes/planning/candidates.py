@@ -190,18 +190,11 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
     ``length_mm`` (bar length, default the campaign's), ``repeats`` (default 3)
     and ``name``.
     """
-    doc = parse_toml(read_user_text(path, "candidates file"), str(path))
-    r = TomlReader(str(path))
-    r.check_keys(doc, {"candidate"}, "")
-    items = doc.get("candidate")
-    if not isinstance(items, list) or not items:
-        r.fail("candidate", "expected one or more [[candidate]] tables")
+    r, items = candidate_tables(path)
     bb = campaign.ballbar
     out = []
     for i, t in enumerate(items):
         path_i = f"candidate[{i}]"
-        if not isinstance(t, dict):
-            r.fail(path_i, "expected a table")
         r.check_keys(t, _USER_KEYS, path_i)
         pattern = r.string(t, "pattern", path_i, required=True)
         if pattern not in PATTERNS:
@@ -215,14 +208,37 @@ def read_candidates(path, campaign: Campaign) -> list[Candidate]:
             _length(r, t, "R_C_mm", path_i, nonnegative=True))
         if conflict := mount_conflict(pattern, t.get("mount"), mount.R_C):
             r.fail(f"{path_i}.mount" if "mount" in t else f"{path_i}.R_C_mm", conflict)
-        length = _length(r, t, "length_mm", path_i, required=False, positive=True, default=bb.length)
-        repeats = r.number(t, "repeats", path_i, required=False, positive=True, default=DEFAULT_REPEATS)
-        if repeats != int(repeats):
-            r.fail(f"{path_i}.repeats", f"must be a whole number, got {repeats:g}")
-        if repeats > MAX_REPEATS:
-            r.fail(f"{path_i}.repeats", f"{repeats:g} is more than {MAX_REPEATS}: beyond a few hundred repeats the "
-                   "instrument accuracy and the model discrepancy, which do not average out, set the uncertainty")
-        name = r.string(t, "name", path_i, default=f"{pattern} @ {setup.id}/{mount.id} (user)")
-        out.append(Candidate(name, "user", pattern, setup, mount, length, int(repeats),
+        length, repeats, name = candidate_run(r, t, path_i, campaign, pattern=pattern, setup=setup, mount=mount)
+        out.append(Candidate(name, "user", pattern, setup, mount, length, repeats,
                              extension=setup.R_B - campaign.primary_setup().R_B))
     return out
+
+
+def candidate_tables(path) -> tuple[TomlReader, list[dict]]:
+    """The reader and the ``[[candidate]]`` tables of a candidates file (one line naming the file and key when it
+    has none, or one is not a table)."""
+    doc = parse_toml(read_user_text(path, "candidates file"), str(path))
+    r = TomlReader(str(path))
+    r.check_keys(doc, {"candidate"}, "")
+    items = doc.get("candidate")
+    if not isinstance(items, list) or not items:
+        r.fail("candidate", "expected one or more [[candidate]] tables")
+    for i, t in enumerate(items):
+        if not isinstance(t, dict):
+            r.fail(f"candidate[{i}]", "expected a table")
+    return r, items
+
+
+def candidate_run(r: TomlReader, t: dict, path: str, campaign: Campaign, *, pattern: str, setup: Setup,
+                  mount: Mount) -> tuple[float, int, str]:
+    """``(bar length mm, repeats, name)`` of a candidate table, each checked (defaults: the campaign's bar, 3
+    repeats, a name from pattern, set-up and mount)."""
+    length = _length(r, t, "length_mm", path, required=False, positive=True, default=campaign.ballbar.length)
+    repeats = r.number(t, "repeats", path, required=False, positive=True, default=DEFAULT_REPEATS)
+    if repeats != int(repeats):
+        r.fail(f"{path}.repeats", f"must be a whole number, got {repeats:g}")
+    if repeats > MAX_REPEATS:
+        r.fail(f"{path}.repeats", f"{repeats:g} is more than {MAX_REPEATS}: beyond a few hundred repeats the "
+               "instrument accuracy and the model discrepancy, which do not average out, set the uncertainty")
+    name = r.string(t, "name", path, default=f"{pattern} @ {setup.id}/{mount.id} (user)")
+    return length, int(repeats), name

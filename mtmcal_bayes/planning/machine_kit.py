@@ -32,7 +32,8 @@ class PlanningKit:
     ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for; ``feasibility_note`` and
     ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
     ``run_records(design, programs)`` the design's runs as records; ``planned_geometry(planned, candidate,
-    campaign)`` what a planned run records beyond pattern, set-up and mount (the arc and held axes)."""
+    campaign)`` what a planned run records beyond pattern, set-up and mount (the arc and held axes);
+    ``read_candidates(path, campaign)`` the user's candidates from a ``--candidates`` file."""
 
     catalogue: Callable
     feasibility: Callable
@@ -50,6 +51,7 @@ class PlanningKit:
     run_columns: list
     run_records: Callable
     planned_geometry: Callable
+    read_candidates: Callable
 
 
 def kit_of(campaign) -> PlanningKit:
@@ -98,7 +100,7 @@ def engine_kit() -> PlanningKit:
                    "own stylus and sphere terms, readings with the probe's repeatability and sigma_model_probe = "
                    "{sigma_probe:.2f} µm (rms of its prior)",
         run_columns=DESCRIBED_RUN_COLUMNS, run_records=described_records,
-        planned_geometry=planned_geometry)
+        planned_geometry=planned_geometry, read_candidates=dc.read_chain_candidates)
 
 
 def catalogue_of(campaign) -> list:

@@ -101,7 +101,8 @@ def planning():
     probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
     from ..machine_time import MachineClock
     from ..parameters import IDENTIFIABLE
-    from ..planning.candidates import Candidate, candidate_mount, catalogue, extended_setup, feasibility_check
+    from ..planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
+                                       read_candidates)
     from ..iso import thesis_name
     from ..planning.design import Planner, check_targets
     from ..planning.run_records import RUN_COLUMNS, thesis_records
@@ -142,7 +143,8 @@ def planning():
                    "{sigma_probe:.2f} µm (rms of its prior); a B-axis run at 45° separates alpha_XB and gamma_XB, "
                    "which a B = 90° reading sees only as their sum",
         run_columns=RUN_COLUMNS,
-        run_records=thesis_records, planned_geometry=lambda planned, candidate, campaign: None)
+        run_records=thesis_records, planned_geometry=lambda planned, candidate, campaign: None,
+        read_candidates=read_candidates)
 
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
