@@ -251,8 +251,7 @@ class FleetResult:
             entry["tolerances_not_here"] = not_here
         entry["latest"] = _latest(campaigns, history, history_file=m.dated[-1].file if history else None,
                                   limits=limits, page=campaigns_page(entry))
-        if m.latest.machine.described:
-            entry["not_determined"] = _not_determined(entry, history)
+        entry["not_determined"] = _not_determined(entry, history)
         return entry, files
 
     # ------------------------------------------------------------------ outputs
