@@ -50,8 +50,8 @@ def campaign_of(campaign: CampaignLike, *, measured: bool = False) -> Campaign:
     """A :class:`Campaign` from a campaign, a :class:`~mtmcal_bayes.analysis.CampaignAnalysis` (its campaign), a path
     to a campaign TOML, or None (the built-in thesis campaign).
 
-    ``measured``: the command needs data, so a campaign without measured ball-bar runs (only planned ones, or
-    none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``."""
+    ``measured``: the command needs data, so a campaign without measured runs of either instrument (only planned
+    ones, or none) is an :class:`~mtmcal_bayes.errors.InputError` naming its file and ``ballbar.runs``."""
     if isinstance(campaign, CampaignAnalysis):
         campaign = campaign.campaign
     c = campaign if isinstance(campaign, Campaign) else load_campaign(campaign)
@@ -317,7 +317,7 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     from .planning import plan as rank
 
     c = campaign_of(campaign, measured=True)
-    _check_planning_model(model, c, candidates)
+    _check_planning_model(model, c)
     data = check_data(data_of(data, c), c)
     _writable(output, "plan")
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
@@ -770,7 +770,7 @@ def _program(campaign, planned) -> str:
     return ballbar_program(campaign, planned, feed=campaign.ballbar.feed_mm_per_min)
 
 
-def _check_planning_model(model: str, c: Campaign, candidates) -> None:
+def _check_planning_model(model: str, c: Campaign) -> None:
     """The model checked for ``c``'s machine."""
     from .models import check_model, models_of
 
@@ -809,7 +809,7 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     from .planning.next_run import planned_candidates
 
     c = campaign_of(campaign)
-    _check_planning_model(model, c, candidates)
+    _check_planning_model(model, c)
     _writable(output, "design")
     learnt = sigma_model_prior_of(sigma_model_prior, c)
     items = _time_items(c, times)
@@ -837,7 +837,7 @@ def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, cont
     from .planning.next_run import next_step
 
     c = campaign_of(campaign)
-    _check_planning_model(model, c, candidates)
+    _check_planning_model(model, c)
     _writable(output, "next")
     learnt = sigma_model_prior_of(sigma_model_prior, c)
     items = _time_items(c, times)
