@@ -15,6 +15,8 @@ import argparse
 import ast
 import contextlib
 import io
+import json
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -30,7 +32,9 @@ THESIS_PROGRAM = str(PACKAGE / "datasets" / "fig4_30a_bx_original.nc")
 
 
 def commands(machine: list[str], out: Path, program: str, pattern: str, history: list[list[str]]) -> list[list[str]]:
-    """The README's commands on one machine (``machine``: ``[]`` for the thesis campaign or ``["--machine", T]``)."""
+    """The README's commands on one machine (``machine``: ``[]`` for the thesis campaign or ``["--machine", T]``),
+    writing below ``out`` (made here)."""
+    out.mkdir(parents=True, exist_ok=True)
     return [
         ["identify", *machine, "--json"],
         ["sensitivity", *machine, "--json"],
@@ -50,14 +54,19 @@ def commands(machine: list[str], out: Path, program: str, pattern: str, history:
 
 
 def run_all(argvs: list[list[str]]) -> None:
+    """Run each command, its output swallowed; a command that fails is named on stderr with its last line."""
     from mtmcal_bayes.cli import main
 
     for argv in argvs:
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        err = io.StringIO()
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
             try:
-                main(argv)
-            except SystemExit:
-                pass
+                code = main(argv)
+            except SystemExit as exit_:
+                code = exit_.code
+        if code not in (0, None):
+            last = (err.getvalue().strip().splitlines() or ["(no message)"])[-1]
+            print(f"kind_coverage: {' '.join(argv)} exited {code}: {last}", file=sys.stderr)
 
 
 def body_lines(path: Path) -> set[int]:
@@ -77,37 +86,56 @@ def body_lines(path: Path) -> set[int]:
 
 
 def measure(name: str, argvs: list[list[str]], workdir: Path) -> dict[str, set[int]]:
-    rc = workdir / f"coveragerc.{name}"
+    """The lines run by ``argvs``, measured in a fresh interpreter of its own: worker processes the package keeps
+    (the report's drawing pool) would otherwise carry one kind's measurement into the other's."""
+    workdir = workdir / name
+    workdir.mkdir(parents=True, exist_ok=True)
+    (workdir / "argvs.json").write_text(json.dumps(argvs), encoding="utf-8")
+    subprocess.run([sys.executable, __file__, "--measure", str(workdir)], check=True)
+    lines: dict[str, set[int]] = {}
+    for path in workdir.glob(".coverage*"):  # one data file per process
+        data = coverage.CoverageData(basename=str(path))
+        data.read()
+        for f in data.measured_files():
+            lines.setdefault(f, set()).update(data.lines(f) or ())
+    return lines
+
+
+def measure_here(workdir: Path) -> None:
+    """Run the commands of ``workdir/argvs.json`` under coverage, each process' data in a file of its own there."""
+    argvs = json.loads((workdir / "argvs.json").read_text(encoding="utf-8"))
+    rc = workdir / "coveragerc"
     rc.write_text(f"[run]\nsource = {PACKAGE}\nconcurrency = thread, multiprocessing\nparallel = true\n"
-                  f"data_file = {workdir / f'.coverage.{name}'}\n", encoding="utf-8")
+                  f"data_file = {workdir / '.coverage'}\n", encoding="utf-8")
     cov = coverage.Coverage(config_file=str(rc))
     cov.start()
     run_all(argvs)
     cov.stop()
     cov.save()
-    cov.combine(data_paths=[str(workdir)])
-    data = cov.get_data()
-    return {f: set(data.lines(f) or ()) for f in data.measured_files()}
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--keep", type=Path, default=None, help="keep the outputs in DIR")
+    ap.add_argument("--measure", type=Path, default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.measure is not None:
+        measure_here(a.measure)
+        return 0
     work = Path(a.keep or tempfile.mkdtemp(prefix="kind-coverage-"))
     work.mkdir(parents=True, exist_ok=True)
     thesis_hist = [["simulate", "--history", str(work / "th"), "--serial", "M-1", "--campaigns", "3", "--step",
                     "beta_CZ=40@3", "--seed", "1"], ["history", str(work / "th"), "--json"],
                    ["fleet", str(work / "th"), "-o", str(work / "thf"), "--sampler", "exact", "--workers", "1",
                     "--json"]]
-    thesis = commands([], work / "thesis", THESIS_PROGRAM, "BX", thesis_hist)
+    thesis = commands([], work / "out" / "thesis", THESIS_PROGRAM, "BX", thesis_hist)
     described = []
     for t in TYPES:
         hist = [["simulate", "--history", str(work / t), "--machine", t, "--campaigns", "3", "--seed", "1"],
                 ["history", str(work / t), "--json"],
                 ["fleet", str(work / t), "-o", str(work / f"{t}-fleet"), "--sampler", "exact", "--workers", "1",
                  "--json"]]
-        described += commands(["--machine", t], work / t, str(ROOT / "examples" / "machines" / f"{t}-five-axis.nc"),
+        described += commands(["--machine", t], work / "out" / t, str(ROOT / "examples" / "machines" / f"{t}-five-axis.nc"),
                               "--run=1", hist)
     a_lines = measure("thesis", thesis, work)
     b_lines = measure("described", described, work)
