@@ -69,23 +69,22 @@ def reports(tmp_path_factory):
 def _expected(campaign) -> tuple[set[str], set[str]]:
     """The sections (anchors) and CSVs a report of ``campaign`` must have, from what the campaign and its machine
     provide."""
-    sections = {"results", "statement", "conformity", "budget", "corner", "forest", "compensation", "ppc", "widths",
-                "plan", "diagnostics"}
-    csvs = {"summary.csv", "loo.csv", "diagnostics.csv", "priors.csv", "budget.csv", "plan.csv"}
+    sections = {"machine", "determined", "results", "statement", "conformity", "budget", "corner", "forest",
+                "compensation", "ppc", "widths", "plan", "diagnostics"}  # the machine and its Jacobian: on every one
+    csvs = {"summary.csv", "loo.csv", "diagnostics.csv", "priors.csv", "budget.csv", "plan.csv", "identifiability.csv",
+            "combinations.csv"}
     if campaign.ballbar.runs:
         sections |= {"polar"}
         csvs |= {"ppc.csv"}
     if campaign.ballbar.runs and campaign.has_probe_readings() and campaign.probe_gap() is None:
         sections |= {"instruments"}
         csvs |= {"instruments.csv", "consistency.csv", "consistency_readings.csv"}
-    if campaign.machine.description is not None:
-        sections |= {"machine"}
     if provided(campaign.machine, "identify") is not None:  # the plug-in's deterministic identification
         sections |= {"thesis"}
         csvs |= {"identification_ballbar.csv", "thesis_assumption_dx_BT.csv"}
-    else:  # the least squares beside the posterior, the Jacobian's identifiability
-        sections |= {"determined", "least-squares"}
-        csvs |= {"identifiability.csv", "combinations.csv", "least_squares.csv"}
+    else:  # the least squares beside the posterior
+        sections |= {"least-squares"}
+        csvs |= {"least_squares.csv"}
     if campaign.truth is not None:
         sections |= {"truth"}
         csvs |= {"truth.csv"}

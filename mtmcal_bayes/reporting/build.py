@@ -29,6 +29,7 @@ from ..inference.budget import sigma_prior_sentence
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
 from ..inference.identifiability import DETERMINED, campaign_identifiability
 from ..inference.sampling import SamplerSettings
+from ..io.machine_reader import description_of
 from ..io.netcdf import write_netcdf_atomic
 from ..io.textfiles import atomic_directory
 from ..machines.plugins import provided
@@ -344,8 +345,7 @@ def _ahead(analysis, drawing: Drawing, say) -> tuple[dict[str, int], list[str]]:
     campaign = analysis.campaign
     ahead = {}
     targets = _expected_unidentified(analysis)
-    if campaign.machine.description is not None:
-        drawing.start(machine_sections.figure_jobs(campaign))
+    drawing.start(machine_sections.figure_jobs(campaign))
     if _plans(campaign):
         say("planning the next measurement (beside the sampling)")
         ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(
@@ -458,10 +458,9 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     missing = missing_data(campaign, ident)
     effect = (thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
               if ident is not None and not analysis.fix_dx_BT else None)
-    # the Jacobian's statement and the stated truth tabulated beside the least squares, where those are the
-    # deterministic values (the thesis machine's tables of Eqs 4.10–4.18 say what its campaign identifies)
-    machine_tables = ({} if shown.least_squares is None else
-                      machine_sections.tables(rep, shown.least_squares, campaign.truth))
+    # the Jacobian's statement on every machine; the least squares where those are the deterministic values; the
+    # stated truth of a simulated campaign
+    machine_tables = machine_sections.tables(rep, shown.least_squares, campaign.truth)
     return _Rest(instruments, disputed, None, reports, missing, summary_table(rep),
                  mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df, machine_tables)
 
@@ -710,24 +709,20 @@ def _planning(campaign, rep, drawing: Drawing, *, batch: int, say, listed: list[
 
 
 #: the page's title where the campaign names no machine description (the thesis' own campaign format)
-TITLE = "Bayesian calibration report — B and C axes of a turn-mill machine"
 
 
 def _page(c: ReportContent, tmp: Path) -> Page:
     campaign, model, rep, reports, ident = c.campaign, c.model, c.posterior, c.compared, c.ident
     summary, ppc_df, diag, effect, planned, sigma_um = c.summary, c.ppc, c.diagnostics, c.thesis_effect, c.planned, c.sigma_um
-    shown, desc = c.shown, campaign.machine.description
-    page = Page(TITLE if desc is None else
-                f"Bayesian calibration report — {desc.name or desc.configuration} ({desc.configuration})")
+    shown, desc = c.shown, description_of(campaign.machine)
+    page = Page(f"Bayesian calibration report — {desc.name or desc.configuration} ({desc.configuration})")
     page.paragraph("What the intervals rest on (share of each posterior variance by source; section 'Uncertainty "
                    "budget'): " + budget_plot.dominant_sentence(rep.summary, shown.listed, post=rep.log_posterior))
     page.box("missing", "Missing from this campaign", c.missing)
     page.box("warn", "Warnings", rep.warnings + rep.not_identified + rep.prior_notes)
 
-    if desc is not None:
-        machine_sections.machine_section(page, desc, rep, tmp)
-    if shown.least_squares is not None:
-        machine_sections.determined_section(page, rep)
+    machine_sections.machine_section(page, desc, rep, tmp)
+    machine_sections.determined_section(page, rep)
     page.section("results", "Results")
     if ident is not None:
         page.paragraph(

@@ -2,7 +2,8 @@
 its location errors drawn, the Jacobian's identifiability with each combination's posterior, the least-squares
 identification beside the posterior (the deterministic values of a machine whose plug-ins give no identification of
 their own) and, for a simulated campaign, its stated truth beside both.  Each section appears where the campaign and
-its posterior have what it needs: a description, an identifiability, a stated truth."""
+its posterior have what it needs: an identifiability, least-squares values, a stated truth; every machine has a
+description (the thesis campaign's is the built-in ``integrex-i200``)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import pandas as pd
 
 from .. import units
 from ..html_page import Page
+from ..io.machine_reader import description_of
 from ..posterior.least_squares import LeastSquares, least_squares
 from . import machine_figure
 
@@ -34,7 +36,7 @@ FOREST_CAPTION = ("One row per deviation, each with its own scale (″ for angle
 def figure_jobs(campaign) -> list:
     """The drawing jobs of the figures of the campaign's machine (``machine.png`` with the campaign's tool,
     ``deviations.png``)."""
-    description, tool = campaign.machine.description, machine_figure.campaign_tool(campaign)
+    description, tool = description_of(campaign.machine), machine_figure.campaign_tool(campaign)
     return [("machine.png", lambda: machine_figure.chain_figure(description, tool)),
             ("deviations.png", lambda: machine_figure.deviations_figure(description))]
 
@@ -103,9 +105,15 @@ def machine_section(page: Page, description, rep, tmp: Path) -> None:
     page.section("machine", "The machine")
     page.paragraph(f"{description.name or 'The machine'}: configuration {description.configuration} ({kind}; "
                    f"docs/machines.md), squareness in the {description.squareness} form. Deviations estimated (ISO "
-                   f"230-7): {', '.join(n for n in post.space.names if n in rep.summary.index)}.")
+                   f"230-7): {', '.join(_named(n, rep.summary) for n in post.space.names if n in rep.summary.index)}.")
     page.figure(tmp / "machine.png", CHAIN_CAPTION, "the machine's chain at the home pose")
     page.figure(tmp / "deviations.png", DEVIATIONS_CAPTION, "what each location error means")
+
+
+def _named(name: str, summary: pd.DataFrame) -> str:
+    """``name``, with its ISO 230-7 symbol where the machine names it otherwise (the thesis' aliases)."""
+    iso = summary.loc[name, "iso"] if "iso" in summary.columns else None
+    return f"{name} ({iso})" if isinstance(iso, str) and iso and iso != name else name
 
 
 def determined_section(page: Page, rep) -> None:
