@@ -34,11 +34,6 @@ class Machine:
     type: str = ""  # the machine's type (make and model): machines of one type share a σ_model hyper-distribution
     description: MachineDescription | None = None  # its kinematic description (SPEC §19); None: the thesis machine
 
-    @property
-    def described(self) -> bool:
-        """Whether the machine is one described by its chain, not the thesis' INTEGREX i-200 (thesis names, models)."""
-        return self.description is not None and not self.description.plugins
-
 
 @dataclass
 class Setup:

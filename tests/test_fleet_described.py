@@ -80,3 +80,22 @@ def test_mixed_fleet_names_both_types_and_refuses_one_serial_on_two_descriptions
     assert "trunnion" in page and "thesis machine" in page and "E<sub>B0C</sub>" in page
     csv = (out / "fleet_summary.csv").read_text()
     assert "trunnion" in csv and "thesis machine" in csv
+
+
+def test_one_type_is_one_description_whatever_the_kind(tmp_path):
+    """Machines of one ``[machine] type`` pool their σ_model, so the type must be one make and model on every
+    machine: a trunnion given the thesis machine's type is refused naming the file and ``machine.type``, and two
+    trunnions of one type pass."""
+    from mtmcal_bayes.errors import InputError
+    from mtmcal_bayes.fleets.discover import check_types, discover
+
+    api.simulate_history(None, truth=Truth({}), n=1, serial="M-1", seed=3, output=tmp_path / "M-1", machine_type="MTX")
+    for serial in ("T-1", "T-2"):
+        api.simulate_history(api.demo_campaign("trunnion"), n=1, serial=serial, seed=4, output=tmp_path / serial,
+                             machine_type="TRN-5")
+    check_types(discover(tmp_path))  # two trunnions of one type: one make and model
+    api.simulate_history(api.demo_campaign("trunnion"), n=1, serial="T-3", seed=5, output=tmp_path / "T-3",
+                         machine_type="MTX")
+    with pytest.raises(InputError) as err:
+        check_types(discover(tmp_path))
+    assert "machine.type" in str(err.value) and "T-3" in str(err.value) + str(getattr(err.value, "source", ""))

@@ -50,3 +50,17 @@ def test_a_probe_only_campaign_of_the_thesis_machine_is_a_campaign(tmp_path, run
     assert code == 0, err
     code, _, err = run_cli("sample", str(path), "--sampler", "exact")
     assert code == 2 and len(err.strip().splitlines()) == 1 and "use the probe data" in err, err
+
+
+def test_the_engine_never_asks_which_kind_of_machine_it_holds():
+    """No module of the package tests a machine's kind (issue 42 counted 82 such places: ``.described``,
+    ``is_described``, ``is_thesis``, ``names == "thesis"``); where behaviour differs it asks the machine's plug-ins
+    (``machines/plugins.py``, the one place that resolves them)."""
+    import re
+    from pathlib import Path
+
+    root = Path(mb.__file__).parent
+    idiom = re.compile(r"\.described\b|\bis_described\b|\bis_thesis\b|names\s*==\s*[\"']thesis[\"']")
+    found = [f"{p.relative_to(root)}:{i}" for p in root.rglob("*.py")
+             for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1) if idiom.search(line)]
+    assert found == []

@@ -66,35 +66,26 @@ class Machine:
         """Its latest campaign (dated ones first)."""
         return (self.dated or self.campaigns)[-1].campaign
 
-    @property
-    def type_key(self) -> str:
-        """Whose σ_model it pools with: its ``[machine] type`` on the thesis machine (as before described machines);
-        on a described machine the type with its description, ``"TYPE [LABEL #KEY]"`` (:mod:`~mtmcal_bayes.io.
-        machine_identity`), so two descriptions never pool whatever their type is called; "" without a type."""
-        m = self.latest.machine
-        if not m.type or not m.described:
-            return m.type
-        return f"{m.type} [{description_label(m)} #{description_key(m)[:8]}]"
-
 
 def check_types(found: Discovery) -> None:
     """Machines of one ``[machine] type`` share a σ_model hyper-distribution, so they must be one make and model:
-    the same configuration and axis travels.  Otherwise an :class:`~mtmcal_bayes.errors.InputError` naming the
-    file and ``machine.type``."""
+    the same description (:func:`~mtmcal_bayes.io.machine_identity.description_key`), configuration and axis
+    travels.  Otherwise an :class:`~mtmcal_bayes.errors.InputError` naming the file and ``machine.type``."""
     from .sigma_model import geometry
 
     first: dict[str, tuple] = {}
     for m in found.machines:
         for cf in m.campaigns:
             t = cf.campaign.machine.type
-            if not t or cf.campaign.machine.described:  # a described machine's type key holds its description
+            if not t:
                 continue
             g = geometry(cf.campaign.machine)
             if t not in first:
                 first[t] = (g, cf.file)
             elif first[t][0] != g:
                 raise InputError(cf.file, "machine.type", f"{t!r} is also the type of {first[t][1]}, whose machine has "
-                                 "another configuration or other travels; one type is one make and model "
+                                 "another description, configuration or other travels; one type is one make "
+                                 "and model "
                                  "(machines of a type share their σ_model)")
 
 

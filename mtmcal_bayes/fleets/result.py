@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..io.sigma_prior_file import write_sigma_model_prior
+from ..machines.plugins import provided
 from ..parameters import quantity_unit
 from ..sigma_prior import SigmaModelPrior, log_sd_problem, median_problem
 from ..version import __version__
@@ -104,18 +105,18 @@ def _latest(campaigns: list[dict], history: dict | None, *, history_file: str | 
 
 
 def machine_identity(m: Machine) -> dict:
-    """What the overview names of a machine: ``type`` (its ``[machine] type``), ``configuration``, ``description``
-    (the thesis machine, a built-in type's name, or "described <configuration>") and, on a described machine,
-    ``deviations`` (its own, ISO 230-7 name -> meaning) and ``type_key`` (whose σ_model it pools with)."""
+    """What the overview names of a machine: ``type`` (its ``[machine] type``: whose σ_model it pools with),
+    ``configuration``, ``description`` (the thesis machine, a built-in type's name, or "described <configuration>")
+    and, where its plug-ins state no quantities of their own to report (the thesis': Table 4.5's eight, the
+    overview's first columns), ``deviations`` (its description's, ISO 230-7 name -> meaning)."""
     from ..io.machine_identity import description_label
 
     machine = m.latest.machine
     out = {"type": machine.type, "configuration": machine.configuration, "description": description_label(machine)}
-    if machine.described:
+    if provided(machine, "reported_quantities") is None:
         from ..machines.deviations import selected
 
         out["deviations"] = {d.name: d.meaning for d in selected(machine.description)}
-        out["type_key"] = m.type_key
     return out
 
 
@@ -139,8 +140,8 @@ def pooled_types(found: Discovery, machines: list[dict], payloads: dict, of_mach
     each machine entry of the type gets it as ``"sigma_model"`` (None for the others)."""
     by_type: dict[str, list[int]] = {}
     for i, m in enumerate(found.machines):
-        if m.type_key:
-            by_type.setdefault(m.type_key, []).append(i)
+        if m.type:
+            by_type.setdefault(m.type, []).append(i)
     out = {}
     for name, members in sorted(by_type.items()):
         rows = [payloads[of_machine[found.machines[i].id]]["result"].get("sigma_model_loglik") for i in members
@@ -154,7 +155,7 @@ def pooled_types(found: Discovery, machines: list[dict], payloads: dict, of_mach
         out[name] = {"type": name, "machines": len(members), **pooled,
                      "prior_file": f"sigma_model_{slug(name)}.toml" if usable else None}
     for i, m in enumerate(found.machines):
-        machines[i]["sigma_model"] = out.get(m.type_key) if m.type_key else None
+        machines[i]["sigma_model"] = out.get(m.type) if m.type else None
     return out
 
 

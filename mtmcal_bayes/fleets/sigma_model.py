@@ -35,6 +35,7 @@ import numpy as np
 from scipy import stats
 
 from .. import units
+from ..io.machine_identity import description_key
 
 #: the grid of u = ln(σ / µm): 0.01 µm to 100 µm
 U_GRID = np.linspace(math.log(0.01), math.log(100.0), 185)
@@ -124,5 +125,5 @@ def _kernel(diff: np.ndarray, tau: float) -> np.ndarray:
 
 
 def geometry(machine) -> tuple:
-    """What machines of one type must share: their configuration and axis travels."""
-    return machine.configuration, tuple(sorted(machine.travel.items()))
+    """What machines of one type must share: their description (its key), configuration and axis travels."""
+    return description_key(machine), machine.configuration, tuple(sorted(machine.travel.items()))
