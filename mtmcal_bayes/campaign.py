@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import datetime
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -127,6 +128,9 @@ class Ballbar:
     convention: str = "thesis"  # how the runs' offsets were read (conventions.py), unless a run says otherwise
     planned: list[PlannedRun] = field(default_factory=list)  # runs without data yet, in measuring order
     alternative_reason: str = ""  # one line: why the runs' conventions were preferred to their alternative_convention
+    # the frames its runs are read against (conventions.run_frame): a described machine's, from its chain; None:
+    # the thesis' Tables 2.2/2.3 at the runs' lever arms
+    pattern_frames: Callable | None = None
 
     def reading_choices(self) -> list[Run]:
         """The measured runs whose reading was a choice (they name an ``alternative_convention``), in file order."""

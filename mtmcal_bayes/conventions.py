@@ -45,6 +45,8 @@ thesis' frame with its angle column as the angle, then converted by the run's co
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -56,11 +58,44 @@ CONVENTIONS = ("thesis", "machine")
 DEFAULT = "thesis"
 
 _AXES = {"X": 0, "Y": 1, "Z": 2}
-_GEOMETRY = re.compile(r"^\s*([BC])0\s*=\s*([+-][XYZ])\s*,\s*([BC])90\s*=\s*([+-][XYZ])\s*$")
+_GEOMETRY = re.compile(r"^\s*([A-Z])0\s*=\s*([+-][XYZ])\s*,\s*([A-Z])90\s*=\s*([+-][XYZ])\s*$")
 
 
 class ConventionError(ValueError):
     """A convention that cannot be used for a run: the message says why (the reader adds file and key)."""
+
+
+@dataclass(frozen=True)
+class PatternFrame:
+    """How the samples of one run stand in the machine frame: ``letter`` the axis whose angle they are drawn
+    against (``"B"``), ``components`` the pattern's two offsets (``("ex", "ez")``), ``axes`` the machine axes they
+    lie along (``("X", "Z")``), ``basis`` ``U`` (2, 2; rows the machine frame's directions of the samples at 0° and
+    90° of the motion, in ``axes`` coordinates) and ``programmed()`` the ``"machine"`` convention's ``D`` (2, 2).
+    The thesis' patterns have theirs from Tables 2.2/2.3 (:func:`thesis_frame`); a described machine's from its
+    chain (:mod:`mtmcal_bayes.pattern_frames`)."""
+
+    letter: str
+    components: tuple[str, str]
+    axes: tuple[str, str]
+    basis: np.ndarray
+    programmed: Callable[[], np.ndarray]
+
+
+def thesis_frame(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float,
+                 cr_geometry: str = "RC-LB") -> PatternFrame:
+    """The frame of a thesis pattern at its lever arms (mm)."""
+    return PatternFrame("B" if pattern in B_PATTERNS else "C", COMPONENTS[pattern], plane_axes(pattern),
+                        machine_basis(pattern, cr_geometry),
+                        lambda: machine_directions(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B,
+                                                   cr_geometry=cr_geometry))
+
+
+def _frame(pattern) -> PatternFrame:
+    """``pattern`` as a frame for what needs only its letter and axes (a thesis pattern's name, or a frame)."""
+    if isinstance(pattern, PatternFrame):
+        return pattern
+    return PatternFrame("B" if pattern in B_PATTERNS else "C", COMPONENTS[pattern], plane_axes(pattern),
+                        machine_basis(pattern), lambda: machine_basis(pattern))
 
 
 def plane_axes(pattern: str) -> tuple[str, str]:
@@ -68,9 +103,8 @@ def plane_axes(pattern: str) -> tuple[str, str]:
     return tuple(c[1].upper() for c in COMPONENTS[pattern])  # type: ignore[return-value]
 
 
-def _unit(direction: str, pattern: str) -> np.ndarray:
-    """``"+Z"`` as a 2-vector in the pattern's plane ``(first axis, second axis)``."""
-    axes = plane_axes(pattern)
+def _unit(direction: str, axes: tuple[str, str]) -> np.ndarray:
+    """``"+Z"`` as a 2-vector in a pattern's plane ``(first axis, second axis)``."""
     v = np.zeros(2)
     v[axes.index(direction[1])] = 1.0 if direction[0] == "+" else -1.0
     return v
@@ -98,58 +132,70 @@ def machine_directions(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B:
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
-def parse_geometry(text: str, pattern: str) -> np.ndarray:
-    """``D`` (2, 2) of a geometry string such as ``"B0=+X,B90=+Z"`` for ``pattern``; :class:`ConventionError`
-    when it is malformed, of the other axis, outside the pattern's plane or not a right angle."""
+def parse_geometry(text: str, pattern: str | PatternFrame) -> np.ndarray:
+    """``D`` (2, 2) of a geometry string such as ``"B0=+X,B90=+Z"`` for ``pattern`` (a thesis pattern's name or a
+    run's :class:`PatternFrame`); :class:`ConventionError` when it is malformed, of another axis, outside the
+    pattern's plane or not a right angle."""
+    frame = _frame(pattern)
     m = _GEOMETRY.match(text)
-    want = "B" if pattern in B_PATTERNS else "C"
-    axes = plane_axes(pattern)
-    example = f'"{want}0=+{axes[1 if want == "B" else 0]},{want}90=+{axes[0 if want == "B" else 1]}"'
+    want, axes = frame.letter, frame.axes
+    first = np.argmax(np.abs(frame.basis), axis=1)  # the machine frame's own reading, as the example
+    example = f'"{want}0=+{axes[first[0]]},{want}90=+{axes[first[1]]}"'
+    name = pattern if isinstance(pattern, str) else f"{want} pattern"
     if not m:
         raise ConventionError(f"unknown convention {text!r} (expected one of {', '.join(CONVENTIONS)} or where the "
                               f"samples at 0° and 90° were drawn, e.g. {example})")
     a0, d0, a90, d90 = m.groups()
     if a0 != want or a90 != want:
-        raise ConventionError(f"{text!r} names the {a0 if a0 != want else a90} angle, but pattern {pattern} turns "
+        raise ConventionError(f"{text!r} names the {a0 if a0 != want else a90} angle, but pattern {name} turns "
                               f"the {want} axis (e.g. {example})")
     for d in (d0, d90):
         if d[1] not in axes:
-            raise ConventionError(f"{text!r}: {d} is not in the {'/'.join(axes)} plane of pattern {pattern}")
+            raise ConventionError(f"{text!r}: {d} is not in the {'/'.join(axes)} plane of pattern {name}")
     if d0[1] == d90[1]:
         raise ConventionError(f"{text!r}: the samples at 0° and 90° cannot both be drawn along {d0[1]}")
-    return np.vstack([_unit(d0, pattern), _unit(d90, pattern)])
+    return np.vstack([_unit(d0, axes), _unit(d90, axes)])
 
 
-def geometry_string(D: np.ndarray, pattern: str) -> str:
+def geometry_string(D: np.ndarray, pattern: str | PatternFrame) -> str:
     """The geometry string of plot directions ``D`` (rows: 0°, 90°; each along one axis of the pattern's plane):
     the inverse of :func:`parse_geometry`."""
-    axes = plane_axes(pattern)
-    angle = "B" if pattern in B_PATTERNS else "C"
-    word = lambda v: ("+" if v[int(np.argmax(np.abs(v)))] > 0 else "-") + axes[int(np.argmax(np.abs(v)))]  # noqa: E731
-    return f"{angle}0={word(D[0])},{angle}90={word(D[1])}"
+    frame = _frame(pattern)
+    word = lambda v: ("+" if v[int(np.argmax(np.abs(v)))] > 0 else "-") + frame.axes[int(np.argmax(np.abs(v)))]  # noqa: E731
+    return f"{frame.letter}0={word(D[0])},{frame.letter}90={word(D[1])}"
+
+
+def frame_directions(convention: str, frame: PatternFrame) -> np.ndarray:
+    """``D`` (2, 2) of ``convention`` for a run of ``frame``."""
+    if convention == "thesis":
+        return frame.basis
+    if convention == "machine":
+        return frame.programmed()
+    return parse_geometry(convention, frame)
+
+
+def frame_matrix(convention: str, frame: PatternFrame) -> np.ndarray:
+    """``M`` (2, 2) with ``e_machine = M @ e_reported`` for a run of ``frame`` read in ``convention``."""
+    return np.linalg.solve(frame.basis, frame_directions(convention, frame))
 
 
 def directions(convention: str, pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float,
                cr_geometry: str = "RC-LB") -> np.ndarray:
-    """``D`` (2, 2) of ``convention`` for one run of ``pattern`` (lever arms in mm)."""
-    if convention == "thesis":
-        return machine_basis(pattern, cr_geometry)
-    if convention == "machine":
-        return machine_directions(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B, cr_geometry=cr_geometry)
-    return parse_geometry(convention, pattern)
+    """``D`` (2, 2) of ``convention`` for one run of thesis ``pattern`` (lever arms in mm)."""
+    return frame_directions(convention, thesis_frame(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B,
+                                                     cr_geometry=cr_geometry))
 
 
 def to_machine_matrix(convention: str, pattern: str, **geometry) -> np.ndarray:
-    """``M`` (2, 2) with ``e_machine = M @ e_reported`` (``geometry``: R_B, Z_C, R_C, L_B, cr_geometry)."""
-    U = machine_basis(pattern, geometry.get("cr_geometry", "RC-LB"))
-    return np.linalg.solve(U, directions(convention, pattern, **geometry))
+    """``M`` (2, 2) with ``e_machine = M @ e_reported`` (thesis ``pattern``; ``geometry``: R_B, Z_C, R_C, L_B,
+    cr_geometry)."""
+    geometry.setdefault("cr_geometry", "RC-LB")
+    return frame_matrix(convention, thesis_frame(pattern, **geometry))
 
 
-def describe(convention: str, pattern: str, **geometry) -> str:
-    """Where a convention draws the samples of ``pattern``, in words: ``"B = 0° at +Z, B = 90° at +X"``."""
-    D = directions(convention, pattern, **geometry)
-    axes = plane_axes(pattern)
-    angle = "B" if pattern in B_PATTERNS else "C"
+def frame_describe(convention: str, frame: PatternFrame) -> str:
+    """Where a convention draws the samples of a run of ``frame``, in words: ``"B = 0° at +Z, B = 90° at +X"``."""
+    D, axes, angle = frame_directions(convention, frame), frame.axes, frame.letter
 
     def word(v):
         k = int(np.argmax(np.abs(v)))
@@ -158,6 +204,12 @@ def describe(convention: str, pattern: str, **geometry) -> str:
         return f"{np.degrees(np.arctan2(v[1], v[0])):.1f}° from +{axes[0]} towards +{axes[1]}"
 
     return f"{angle} = 0° at {word(D[0])}, {angle} = 90° at {word(D[1])}"
+
+
+def describe(convention: str, pattern: str, **geometry) -> str:
+    """:func:`frame_describe` for thesis ``pattern`` at its lever arms."""
+    geometry.setdefault("cr_geometry", "RC-LB")
+    return frame_describe(convention, thesis_frame(pattern, **geometry))
 
 
 def run_geometry(run, ballbar) -> dict:
@@ -172,9 +224,17 @@ def run_convention(run, ballbar) -> str:
     return run.convention or ballbar.convention
 
 
+def run_frame(run, ballbar) -> PatternFrame:
+    """The frame of a run: its machine's (``ballbar.pattern_frames``, set when a described machine's campaign is
+    read), else the thesis' Tables 2.2/2.3 at the run's lever arms."""
+    if ballbar.pattern_frames is not None:
+        return ballbar.pattern_frames(run, ballbar)
+    return thesis_frame(run.pattern, **run_geometry(run, ballbar))
+
+
 def run_matrix(run, ballbar) -> np.ndarray:
     """``M`` (2, 2) of a run: machine-frame offsets = ``M @`` reported offsets."""
-    return to_machine_matrix(run_convention(run, ballbar), run.pattern, **run_geometry(run, ballbar))
+    return frame_matrix(run_convention(run, ballbar), run_frame(run, ballbar))
 
 
 def reads_as_thesis(ballbar) -> bool:
@@ -186,7 +246,7 @@ def check_run(run, ballbar) -> None:
     """:class:`ConventionError` when a run's convention cannot be applied to it: a malformed one, or one that
     mixes the two components of a run that gives only one of them."""
     M = run_matrix(run, ballbar)
-    comps = COMPONENTS[run.pattern]
+    comps = run_frame(run, ballbar).components
     if len(run.repeats) < 2 and not np.allclose(M, np.diag(np.diag(M))):
         have = next(iter(run.repeats), comps[0])
         raise ConventionError(f"convention {run_convention(run, ballbar)!r} mixes {comps[0]} and {comps[1]} of "
@@ -204,7 +264,7 @@ def machine_repeats(run, ballbar) -> dict[str, np.ndarray]:
     if reads_machine_frame(run, ballbar):
         return dict(run.repeats)
     M = run_matrix(run, ballbar)
-    comps = COMPONENTS[run.pattern]
+    comps = run_frame(run, ballbar).components
     if np.allclose(M, np.eye(2)):
         return dict(run.repeats)
     if np.allclose(M, np.diag(np.diag(M))):
@@ -220,7 +280,7 @@ def reported_values(run, ballbar, machine: dict[str, np.ndarray]) -> dict[str, n
     if reads_machine_frame(run, ballbar):
         return {c: np.asarray(v) for c, v in machine.items()}
     M = run_matrix(run, ballbar)
-    comps = COMPONENTS[run.pattern]
+    comps = run_frame(run, ballbar).components
     if np.allclose(M, np.diag(np.diag(M))):
         return {c: np.asarray(v) / M[comps.index(c), comps.index(c)] for c, v in machine.items()}
     out = np.linalg.solve(M, np.vstack([np.asarray(machine[c], dtype=float) for c in comps]))
@@ -234,4 +294,5 @@ def check_convention_name(value: str) -> None:
     m = _GEOMETRY.match(value)
     if not m or m.group(1) != m.group(3):
         raise ConventionError(f"unknown convention {value!r} (expected one of {', '.join(CONVENTIONS)}, or where a "
-                              "run's samples at 0° and 90° were drawn, e.g. \"B0=+X,B90=+Z\")")
+                              "run's samples at 0° and 90° were drawn, e.g. \"B0=+X,B90=+Z\" or, about a "
+                              "described machine's A axis, \"A0=+Y,A90=+Z\")")

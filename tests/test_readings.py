@@ -91,7 +91,7 @@ def test_a_reading_maps_what_the_software_reports_to_the_machine_frame(geometry,
     bb = type("BB", (), {})()
     bb.setups = {"S": type("S", (), {"R_B": GEO["R_B"]})()}
     bb.mounts = {"M": type("M", (), {"Z_C": GEO["Z_C"], "R_C": geo["R_C"]})()}
-    bb.length, bb.cr_geometry, bb.convention = GEO["L_B"], "RC-LB", "thesis"
+    bb.length, bb.cr_geometry, bb.convention, bb.pattern_frames = GEO["L_B"], "RC-LB", "thesis", None
     machine = cv.machine_repeats(run, bb)
     np.testing.assert_allclose([machine[c][0] for c in run.repeats], e_m, atol=1e-12)
     back = cv.reported_values(run, bb, machine)

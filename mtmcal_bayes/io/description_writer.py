@@ -58,16 +58,20 @@ def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
         b.update({"length_mm": bb.length, "accuracy_um": um(bb.accuracy)})
         if bb.feed_mm_per_min is not None:
             b["feed_mm_per_min"] = bb.feed_mm_per_min
+        if bb.convention != "thesis":
+            b["convention"] = bb.convention
         b["setups"] = {s.id: {"R_B_mm": s.R_B} for s in bb.setups.values()}
         b["mounts"] = {mt.id: {"position_mm": [float(x) for x in mt.position]} for mt in bb.mounts.values()}
         b["runs"] = []
         for run in bb.runs:
-            d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run)}
+            d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
+                 **({"convention": run.convention} if run.convention else {})}
             d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
             b["runs"].append(d)
         for run in bb.planned:  # after the measured runs, in measuring order
             d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
-                 "planned": True, "repeats": int(run.repeats)}
+                 **({"convention": run.convention} if run.convention else {}), "planned": True,
+                 "repeats": int(run.repeats)}
             d.update({k: v for k, v in (("minutes", run.minutes), ("order", run.order), ("why", run.why)) if v})
             b["runs"].append(d)
         if not b["runs"]:

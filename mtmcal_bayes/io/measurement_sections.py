@@ -4,7 +4,8 @@
 the spindle's ``point_mm``); ``[ballbar.mounts.<id>] position_mm`` (the W-ball centre at the home pose, on the
 workpiece side); ``[[ballbar.runs]]`` with ``pattern`` (``<axis><R|T|A|X|Y|Z>``), ``setup``, ``mount``, optional
 ``arc_deg`` (the swivelled axis' angles: ``[start, end]`` with ``step_deg``, default the axis' own grid) and
-``hold_deg`` (the other rotary axes, degrees), and the pattern's two components as arrays of repeats
+``hold_deg`` (the other rotary axes, degrees), ``convention`` (how its offsets were read, as ``[ballbar]
+convention`` says for every run: docs/conventions.md), and the pattern's two components as arrays of repeats
 (``ex_um``, ``ey_um`` for a pattern about Z) — or, for a run planned but not yet measured, ``planned = true`` with
 ``repeats`` (and optionally ``minutes``, ``why``, ``order``), as ``design`` writes them.
 
@@ -16,12 +17,16 @@ X, Y, Z at which the stylus centre reached the sphere's centre).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from .. import units
 from ..campaign import Ballbar, Mount, PlannedRun, Probe, ProbeRun, Run, Setup
 from ..machines.description import MachineDescription
+from ..conventions import CONVENTIONS, ConventionError, check_convention_name, check_run, run_matrix
 from ..machines.patterns import DIRECTIONS, axis_of, components, default_arc_deg
+from ..pattern_frames import chain_frame
 from .planned_runs import PLANNED_KEYS, planned_in_order, planned_run
 from .toml_reader import TomlReader, kind_of
 
@@ -34,7 +39,12 @@ def described_ballbar(r: TomlReader, t: dict | None, desc: MachineDescription) -
     P = "ballbar"
     if t is None:
         return Ballbar(*NO_BALLBAR)
-    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "setups", "mounts", "runs"}, P)
+    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "convention", "setups", "mounts",
+                     "runs"}, P)
+    convention = r.string(t, "convention", P, default="thesis")
+    if convention not in CONVENTIONS:
+        r.fail(f"{P}.convention", f"unknown convention {convention!r} (expected one of {', '.join(CONVENTIONS)}; "
+               "a run reads another way with its own convention, e.g. \"A0=+Y,A90=+Z\", docs/conventions.md)")
     length = r.number(t, "length_mm", P, positive=True)
     accuracy = units.to_internal(r.number(t, "accuracy_um", P, positive=True), "um")
     feed = r.number(t, "feed_mm_per_min", P, required=False, positive=True)
@@ -59,7 +69,14 @@ def described_ballbar(r: TomlReader, t: dict | None, desc: MachineDescription) -
         seen[key] = i
     runs = [x for x in items if isinstance(x, Run)]
     planned = planned_in_order(r, [(i, x) for i, x in enumerate(items) if isinstance(x, PlannedRun)], P)
-    return Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, planned=planned)
+    bb = Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, convention=convention,
+                 planned=planned, pattern_frames=functools.partial(chain_frame, desc))
+    for i, run in enumerate(items):
+        try:
+            check_run(run, bb) if isinstance(run, Run) else run_matrix(run, bb)
+        except ConventionError as err:
+            r.fail(f"{P}.runs[{i}].convention" if run.convention else f"{P}.convention", str(err))
+    return bb
 
 
 def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups, mounts) -> Run | PlannedRun:
@@ -69,8 +86,9 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
     except ValueError as err:
         r.fail(f"{path}.pattern", str(err))
     comps = components(desc, pattern)
-    r.check_keys(t, {"pattern", "setup", "mount", "arc_deg", "step_deg", "hold_deg", "planned", *PLANNED_KEYS,
-                     *(f"{c}_um" for c in comps)}, path)
+    r.check_keys(t, {"pattern", "setup", "mount", "arc_deg", "step_deg", "hold_deg", "convention", "planned",
+                     *PLANNED_KEYS, *(f"{c}_um" for c in comps)}, path)
+    convention = read_convention(r, t, path)
     planned = t.get("planned", False)
     if not isinstance(planned, bool):
         r.fail(f"{path}.planned", f"expected true (a run planned but not yet measured) or false, got {kind_of(planned)}")
@@ -89,7 +107,7 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
         if "length_mm" in t:
             r.fail(f"{path}.length_mm", "a described machine's campaign has one bar length ([ballbar] length_mm)")
         run = planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount)
-        run.arc_deg, run.hold_deg = arc, hold
+        run.arc_deg, run.hold_deg, run.convention = arc, hold, convention
         return run
     for key in PLANNED_KEYS:
         if key in t:
@@ -102,7 +120,18 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
     if len({len(v) for v in repeats.values()}) > 1:
         r.fail(f"{path}.{comps[1]}_um", f"has {len(repeats[comps[1]])} repeats, {comps[0]}_um "
                f"{len(repeats[comps[0]])}: give both components of every repeat")
-    return Run(pattern, setup, mount, repeats, arc_deg=arc, hold_deg=hold)
+    return Run(pattern, setup, mount, repeats, convention=convention, arc_deg=arc, hold_deg=hold)
+
+
+def read_convention(r: TomlReader, t: dict, path: str, key: str = "convention") -> str | None:
+    """A run's reading convention (``key``), checked as a name or a geometry string; None where it gives none."""
+    convention = r.string(t, key, path, default="") or None
+    if convention is not None:
+        try:
+            check_convention_name(convention)
+        except ConventionError as err:
+            r.fail(f"{path}.{key}", str(err))
+    return convention
 
 
 def _arc(r: TomlReader, t: dict, path: str, ax) -> np.ndarray:

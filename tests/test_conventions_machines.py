@@ -1,0 +1,84 @@
+"""Reading conventions on every machine (SPEC §17, issue 42: "reading conventions (a per-run map that any
+machine's runs may carry)"): a described machine's runs may say how their offsets were read, as the thesis
+campaign's do, and the engine reads them into its machine frame before any model sees them.
+
+The reference of the round trip is the demo campaign itself: each run's offsets are re-expressed as a software
+drawing its plot another way would report them (computed here from the run's frame, U and D, not by the code's
+inverse), written with that reading, read back, and must give the demo's machine-frame observations to 1e-12 mm.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+
+from mtmcal_bayes import api
+from mtmcal_bayes.conventions import frame_directions, run_frame
+from mtmcal_bayes.io import load_campaign, save_campaign
+from mtmcal_bayes.observations import Observations
+
+TYPES = ("trunnion", "vertical-turn-mill", "head-head")
+
+
+def _swapped(frame) -> str:
+    """The plot with the two axes of the run's plane swapped (a plane seen from the other side): a geometry string."""
+    a, b = frame.axes
+    return f"{frame.letter}0=+{b},{frame.letter}90=+{a}"
+
+
+@pytest.mark.parametrize("machine", TYPES)
+def test_offsets_read_another_way_give_the_same_machine_frame(machine, tmp_path):
+    c = load_campaign(api.demo_campaign(machine))
+    want = Observations.from_campaign(c)
+    other = copy.deepcopy(c)
+    for run in other.ballbar.runs:
+        frame = run_frame(run, other.ballbar)
+        run.convention = _swapped(frame)
+        D = frame_directions(run.convention, frame)
+        # e_m = U⁻¹ D e_r, so the software reports e_r = D⁻¹ U e_m (each repeat a column)
+        e_m = np.vstack([run.repeats[k] for k in frame.components])
+        e_r = np.linalg.solve(D, frame.basis @ e_m)
+        run.repeats = {k: e_r[i] for i, k in enumerate(frame.components)}
+    path = tmp_path / "read-otherwise.toml"
+    save_campaign(other, path)
+    assert 'convention = "' in path.read_text(encoding="utf-8")
+    back = load_campaign(path)
+    assert [r.convention for r in back.ballbar.runs] == [r.convention for r in other.ballbar.runs]
+    got = Observations.from_campaign(back)
+    assert got.labels == want.labels
+    np.testing.assert_allclose(got.mean, want.mean, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.sd, want.sd, rtol=0, atol=1e-12)
+    assert not np.allclose(np.concatenate([np.atleast_1d(r.mean(k)) for r in back.ballbar.runs for k in r.repeats]),
+                           np.concatenate([np.atleast_1d(r.mean(k)) for r in c.ballbar.runs for k in r.repeats]))
+
+
+def test_the_machine_reading_of_a_tangential_run_leads_by_the_bar_over_the_radius():
+    """``"machine"``: the programmed position of a tangential pattern leads the C angle by atan(L_B / r), r the W
+    ball's distance from the C axis line (the thesis' CT: atan(L_B/R_C)); on the vertical turn-mill's CT run,
+    L_B = 100 mm and r = 50 mm."""
+    c = load_campaign(api.demo_campaign("vertical-turn-mill"))
+    bb = c.ballbar
+    run = next(r for r in bb.runs if r.pattern == "CT")
+    frame = run_frame(run, bb)
+    D, U = frame_directions("machine", frame), frame.basis
+    ball = bb.mounts[run.mount].position
+    lead = math.atan2(bb.length, math.hypot(ball[0], ball[1]))
+    for k in range(2):
+        turned = math.atan2(U[k, 0] * D[k, 1] - U[k, 1] * D[k, 0], U[k] @ D[k])
+        assert abs(abs(turned) - lead) < 1e-9, (k, math.degrees(turned), math.degrees(lead))
+
+
+def test_a_reading_of_another_axis_is_refused_naming_the_run(tmp_path, run_cli):
+    src = api.demo_campaign("trunnion")
+    text = open(src, encoding="utf-8").read()
+    marker = "[[ballbar.runs]]\n"
+    i = text.index(marker) + len(marker)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text[:i] + 'convention = "B0=+X,B90=+Z"\n' + text[i:], encoding="utf-8")
+    code, out, err = run_cli("sample", str(bad), "--sampler", "exact", "--seed", "1")
+    assert code == 2 and "Traceback" not in err
+    line = err.strip().splitlines()[-1]
+    assert "ballbar.runs[0].convention" in line and "names the B angle" in line, line
