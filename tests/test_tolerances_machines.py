@@ -167,3 +167,22 @@ def test_a_described_machines_report_tabulates_its_verdicts(tmp_path):
     csv = (tmp_path / "report" / "summary.csv").read_text(encoding="utf-8")
     assert "conformity" in csv.splitlines()[0]
     assert "Conformity with the tolerances" in (tmp_path / "report" / "index.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("kind", [t[0] for t in TYPES])
+def test_no_verdict_on_a_quantity_the_data_do_not_determine(run_cli, tmp_path, kind):
+    """A tolerance on a quantity the campaign's Jacobian leaves undetermined gets no ISO 14253-1 verdict, however
+    wide: its interval is its prior's, so 'conforms' would certify the prior.  The tolerance is 100 posterior sds
+    wide each way, so the old rule said 'conforms'; a determined quantity beside it still gets its verdict."""
+    plain = _sample_json(run_cli, kind)["summary"]
+    undetermined = [q for q, v in plain.items() if v.get("identification") == "not identified"]
+    determined = [q for q, v in plain.items() if v.get("identification") == "data"]
+    assert undetermined and determined, plain.keys()
+    q, d = undetermined[0], determined[0]
+    wide = lambda v: _limits(v["mean"] - 100 * v["sd"], v["mean"] + 100 * v["sd"])  # noqa: E731
+    tol = tmp_path / "tol.toml"
+    tol.write_text("[tolerances]\n"
+                   f'"{q}_{plain[q]["unit"]}" = {wide(plain[q])}\n"{d}_{plain[d]["unit"]}" = {wide(plain[d])}\n')
+    s = _sample_json(run_cli, kind, "--tolerances", tol)["summary"]
+    assert s[q]["conformity"] == "not determined by the data" and s[q]["p_nonconformance"] < 0.01
+    assert s[d]["conformity"] == "conforms"

@@ -11,6 +11,12 @@ For each quantity with a tolerance ``[low, high]`` (either end may be open):
   the acceptance zone) to prove conformity, and outside the zone widened the same way to prove
   nonconformity.  A verdict of *conforms* thus carries a probability of nonconformance of at most about
   2.5 % per open side, *does not conform* a probability of conformance of at most about 2.5 %.
+
+A quantity the campaign's data do not determine one by one (the Jacobian's statement, the summary's
+``identification``: ``"not identified"``, or ``"combination"`` where only a combination with others is determined)
+gets no verdict: *not determined by the data*.  Its interval is its prior's (or the prior's share of a
+combination), and a verdict on it would certify an assumption, not the machine; ``p_nonconformance`` is still
+given, as what the prior says.
 """
 
 from __future__ import annotations
@@ -25,6 +31,9 @@ from ..campaign import tolerance_text
 from ..parameters import quantity_unit
 
 CONFORMS, DOES_NOT_CONFORM, UNDECIDED = "conforms", "does not conform", "undecided"
+NOT_DETERMINED = "not determined by the data"
+#: the summary's ``identification`` of a quantity the data determine one by one
+_DETERMINED = "data"
 CONFORMITY_COLUMNS = ["tolerance_low", "tolerance_high", "p_nonconformance", "conformity", "acceptance_low",
                       "acceptance_high"]
 
@@ -53,7 +62,8 @@ def conformity_table(idata, summary: pd.DataFrame, tolerances: dict) -> pd.DataF
         rows[name] = {"tolerance_low": low if tol.low is not None else math.nan,
                       "tolerance_high": high if tol.high is not None else math.nan,
                       "p_nonconformance": float(np.mean((draws < low) | (draws > high))),
-                      "conformity": _verdict(a, b, low, high),
+                      "conformity": (_verdict(a, b, low, high)
+                                     if r.get("identification", _DETERMINED) in (_DETERMINED, None) else NOT_DETERMINED),
                       "acceptance_low": low + (y - a) if tol.low is not None else math.nan,
                       "acceptance_high": high - (b - y) if tol.high is not None else math.nan}
     return pd.DataFrame.from_dict(rows, orient="index", columns=CONFORMITY_COLUMNS)

@@ -682,8 +682,10 @@ def _statement_section(page: Page, rep: PosteriorResult) -> None:
     page.paragraph(
         "ISO 14253-1 decision rule with guard bands equal to the uncertainty: conforms when the shortest 95 % "
         "coverage interval lies inside the tolerance, does not conform when it lies wholly outside, undecided when "
-        "it straddles a limit. P(nonconformance) is the posterior probability of lying outside the tolerance. For "
-        "an undecided quantity the planner names the next measurement that would make it most certain.")
+        "it straddles a limit; no verdict ('not determined by the data') where the campaign's data do not determine "
+        "the quantity one by one, whose interval is then its prior's. P(nonconformance) is the posterior probability "
+        "of lying outside the tolerance. For an undecided quantity the planner names the next measurement that would "
+        "make it most certain.")
     rows = []
     for n, r in rep.conformity.iterrows():
         unit = s.loc[n, "unit"]
