@@ -47,7 +47,8 @@ _HOME = {
     "identify_ballbar": "identification", "identify_probe": "identification",
     "load_campaign": "io", "parse_campaign": "io", "read_dprnt": "io", "save_campaign": "io",
     "read_sigma_model_prior": "io", "write_sigma_model_prior": "io", "SigmaModelPrior": "sigma_prior",
-    "MODELS": "models", "HTMModel": "models", "LinearModel": "models", "make_model": "models",
+    "MODELS": "models", "HTMModel": "plugins.thesis.kinematic", "LinearModel": "plugins.thesis.linear",
+    "make_model": "models",
     "Observations": "observations", "DEVIATIONS": "parameters", "IDENTIFIABLE": "parameters",
     "ParameterSpace": "parameters", "ProgressEvent": "progress", "fit_sphere": "sphere",
 }

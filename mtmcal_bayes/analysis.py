@@ -108,7 +108,7 @@ class CampaignAnalysis:
     @property
     def probe_layout(self):
         """The campaign's touch-probe readings and where they were taken, as its machine's plug-in lays them out for
-        its models (the thesis': :class:`~mtmcal_bayes.models.probe_model.ProbeLayout`), made once for every
+        its models (the thesis': :class:`~mtmcal_bayes.plugins.thesis.probe_model.ProbeLayout`), made once for every
         variant; None where the machine's models read the campaign's probe runs themselves."""
         from .machines.plugins import provided
 

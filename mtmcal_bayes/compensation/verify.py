@@ -7,7 +7,7 @@ import pandas as pd
 
 from .. import units
 from ..models.htm import nc_origin
-from ..models.kinematic import HTMModel
+from ..models import build_model
 from ..parameters import DEVIATIONS, ParameterSpace
 from ..patterns import Commands
 from .kinematics import compensate_exact
@@ -25,7 +25,7 @@ def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", meth
     theta = np.zeros((1, len(space)))
     for i, name in enumerate(DEVIATIONS):
         theta[0, space.index(name)] = theta13[i]
-    htm = HTMModel(campaign, model, space)
+    htm = build_model(model, campaign, space)  # the machine's kinematic model
     before = htm.predict(theta)[0]
     d = dict(zip(DEVIATIONS, theta13))
     for i, run in enumerate(htm.runs):

@@ -23,21 +23,21 @@ from __future__ import annotations
 def campaign_sections(r, doc: dict, machine, base_dir):
     """``[ballbar]`` and ``[probe]`` of a campaign in the thesis' format (lever arms R_B, Z_T, X_T, Z_C, R_C; the
     probe's ``[probe.c_axis]`` and ``[probe.b_axis]``)."""
-    from ..io.campaign_reader import thesis_sections
+    from ...io.campaign_reader import thesis_sections
 
     return thesis_sections(r, doc, machine, base_dir)
 
 
 def probe_owners(machine, probe) -> set[str]:
     """The owners of the probe's nuisance terms in the thesis' format: its styli, ``c_axis`` and ``b_axis``."""
-    from ..io.campaign_reader import thesis_probe_owners
+    from ...io.campaign_reader import thesis_probe_owners
 
     return thesis_probe_owners(machine, probe)
 
 
 def campaign_document(c, doc: dict, save_dir=None) -> dict:
     """``doc`` completed with the campaign in the thesis' format (the inverse of :func:`campaign_sections`)."""
-    from ..io.campaign_writer import thesis_to_dict
+    from ...io.campaign_writer import thesis_to_dict
 
     return thesis_to_dict(c, doc, save_dir)
 
@@ -45,28 +45,28 @@ def campaign_document(c, doc: dict, save_dir=None) -> dict:
 def simulate(campaign, truth, **options):
     """The eccentricities of a campaign in the thesis' format for ``truth`` (``model``, ``noise``, ``seed``,
     ``source``)."""
-    from ..simulation.result import thesis_simulation
+    from ...simulation.result import thesis_simulation
 
     return thesis_simulation(campaign, truth, **options)
 
 
 def simulated_probe(campaign, truth, model: str, **options):
     """The touch-probe readings of a campaign in the thesis' format simulated for ``truth``."""
-    from ..simulation.simulate import thesis_probe
+    from ...simulation.simulate import thesis_probe
 
     return thesis_probe(campaign, truth, model, **options)
 
 
 def pattern_components(pattern: str) -> tuple[str, ...]:
     """The eccentricity components of a thesis pattern (Tables 2.2/2.3)."""
-    from ..patterns import COMPONENTS
+    from ...patterns import COMPONENTS
 
     return COMPONENTS[pattern]
 
 
 def sensitivity_table(campaign, model: str):
     """Thesis Tables 2.4–2.6 as numbers: every pattern's eccentricity per unit deviation and offset."""
-    from ..simulation.sensitivity import sensitivity_table as table
+    from ...simulation.sensitivity import sensitivity_table as table
 
     return table(campaign, model)
 
@@ -74,8 +74,8 @@ def sensitivity_table(campaign, model: str):
 def compensation_program(c, program, *, method: str, model, values: str, mount, integer_unit):
     """``(parsed program, deviations the compensation uses)``: the thesis' X/Y/Z/B/C blocks and its sampled
     deviations (every option of its methods is taken)."""
-    from ..inference.log_posterior import SAMPLED_DEVIATIONS
-    from ..io.gcode import read_program
+    from ...inference.log_posterior import SAMPLED_DEVIATIONS
+    from ...io.gcode import read_program
 
     return read_program(program, integer_unit=integer_unit), SAMPLED_DEVIATIONS
 
@@ -83,7 +83,7 @@ def compensation_program(c, program, *, method: str, model, values: str, mount, 
 def compensate(c, parsed, *, method: str, model, values: str, posterior, point: str, setup, mount):
     """The thesis machine's compensation: exact inversion of its kinematic model (default ``htm-thesis``) or Eqs
     3.4–3.13 as printed (``method="thesis"``), with the posterior or the ball-bar values of Table 4.5."""
-    from ..compensation import compensate as rewrite_program
+    from ...compensation import compensate as rewrite_program
 
     return rewrite_program(c, parsed, method=method, model="htm-thesis" if model is None else model, values=values,
                            posterior=posterior, point=point, setup=setup, mount=mount)
@@ -91,7 +91,7 @@ def compensate(c, parsed, *, method: str, model, values: str, posterior, point: 
 
 def sample_notes(result) -> list[str]:
     """What ``sample`` adds on the thesis machine: the effect of the thesis assumption dx_BT = 0 (Eq 4.2)."""
-    from ..posterior.output import thesis_assumption_lines
+    from ...posterior.output import thesis_assumption_lines
 
     return thesis_assumption_lines(result)
 
@@ -99,15 +99,15 @@ def sample_notes(result) -> list[str]:
 def planning():
     """The planning of the thesis' campaign format: its 12 patterns at its lever arms (R_B, Z_T, X_T, R_C, Z_C), its
     probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
-    from ..machine_time import MachineClock
-    from ..parameters import IDENTIFIABLE
-    from ..planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
+    from ...machine_time import MachineClock
+    from ...parameters import IDENTIFIABLE
+    from ...planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
                                        read_candidates)
-    from ..iso import thesis_name
-    from ..planning.design import Planner, check_targets
-    from ..planning.run_records import RUN_COLUMNS, thesis_records
-    from ..planning.machine_kit import PlanningKit
-    from ..planning.probe_candidates import probe_catalogue, probe_feasibility
+    from ...iso import thesis_name
+    from ...planning.design import Planner, check_targets
+    from ...planning.run_records import RUN_COLUMNS, thesis_records
+    from ...planning.machine_kit import PlanningKit
+    from ...planning.probe_candidates import probe_catalogue, probe_feasibility
 
     def target_name(name, campaign):
         q = thesis_name(str(name))
@@ -149,12 +149,12 @@ def planning():
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
-    from ..models.chain_thesis import ThesisChainModel
-    from ..models.joint import JointModel
-    from ..models.kinematic import HTMModel
-    from ..models.linear import LinearModel
-    from ..models.probe_model import LinearProbeModel, ProbeModel
-    from ..parameters import ParameterSpace
+    from .chain_model import ThesisChainModel
+    from ...models.joint import JointModel
+    from .kinematic import HTMModel
+    from .linear import LinearModel
+    from .probe_model import LinearProbeModel, ProbeModel
+    from ...parameters import ParameterSpace
 
     if space is None:
         space = ParameterSpace.for_campaign(campaign, data=data)
@@ -176,8 +176,8 @@ def first_order_gap(campaign, theta, space=None, *, observations=None) -> float:
     """Largest difference, mm, between ``htm-thesis`` and its first order (``linear``) at ``theta`` (p,)."""
     import numpy as np
 
-    from ..models.kinematic import HTMModel
-    from ..models.linear import LinearModel
+    from .kinematic import HTMModel
+    from .linear import LinearModel
 
     linear = LinearModel(campaign, space, observations=observations)
     kinematic = HTMModel(campaign, "htm-thesis", linear.space, observations=linear.observations)
@@ -187,8 +187,8 @@ def first_order_gap(campaign, theta, space=None, *, observations=None) -> float:
 def parameter_space(campaign, fix_dx_BT: bool, data: str):
     """The thesis' sampled deviations (Table 2.1 without the linear axes' squareness; without dx_BT under the
     thesis assumption ``fix_dx_BT``, Eq 4.2) and the nuisance terms of its campaign format."""
-    from ..inference.log_posterior import SAMPLED_DEVIATIONS
-    from ..parameters import ParameterSpace
+    from ...inference.log_posterior import SAMPLED_DEVIATIONS
+    from ...parameters import ParameterSpace
 
     devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
     return ParameterSpace.for_campaign(campaign, devs, data=data)
@@ -196,7 +196,7 @@ def parameter_space(campaign, fix_dx_BT: bool, data: str):
 
 def probe_layout(campaign):
     """The touch-probe readings of the thesis' campaign format and where they were taken (Tables 5.1/5.2)."""
-    from ..models.probe_model import ProbeLayout
+    from .probe_model import ProbeLayout
 
     return ProbeLayout(campaign)
 
@@ -204,14 +204,14 @@ def probe_layout(campaign):
 def program(pattern: str, campaign=None, **options) -> str:
     """The measuring NC program of a thesis pattern in the format of Fig 4.30(a) (:func:`~mtmcal_bayes.compensation.
     measuring_program`: ``R_B_mm``, ``start``, ``step_deg``, ``feed``, ``n``, ``setup``, ``mount``)."""
-    from ..compensation import measuring_program
+    from ...compensation import measuring_program
 
     return measuring_program(pattern, campaign, **options)
 
 
 def identify(campaign):
     """Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch probe), each value beside the published one."""
-    from ..identification import identify as identify_campaign
+    from ...identification import identify as identify_campaign
 
     return identify_campaign(campaign)
 
@@ -254,42 +254,42 @@ class ThesisPlugin:
     @property
     def aliases(self) -> tuple[tuple[str, str], ...]:
         """The thesis' names of its deviations by ISO 230-7 symbol (SPEC §19: dx_CZ = E_X0C, ...)."""
-        from ..machines.deviations import THESIS_NAMES
+        from ...machines.deviations import THESIS_NAMES
 
         return tuple(THESIS_NAMES.items())
 
     @property
     def reported_quantities(self) -> tuple[str, ...]:
         """The eight quantities the thesis identifies (Table 4.5), the combination dx_CZ − dx_BT among them."""
-        from ..parameters import IDENTIFIABLE
+        from ...parameters import IDENTIFIABLE
 
         return IDENTIFIABLE
 
     @property
     def summary_quantities(self) -> tuple[str, ...]:
         """What a posterior summary reports: the eight, and dx_CZ, dx_BT and dz_BT apart."""
-        from ..inference.analytic import REPORTED
+        from ...inference.analytic import REPORTED
 
         return REPORTED
 
     @property
     def deviation_table(self) -> dict:
         """The thesis' 13 deviations by their thesis names (Table 2.1), each with its ISO 230-7 symbol."""
-        from ..parameters import DEVIATIONS
+        from ...parameters import DEVIATIONS
 
         return DEVIATIONS
 
     @property
     def quantity_table(self) -> dict:
         """The deviations and the derived quantity dx_CZ − dx_BT, which a design may target."""
-        from ..parameters import QUANTITIES
+        from ...parameters import QUANTITIES
 
         return QUANTITIES
 
     @property
     def models(self) -> tuple[str, ...]:
         """Every model of the registry (:data:`mtmcal_bayes.models.MODELS`): the thesis' and the chain."""
-        from ..models import MODELS
+        from ...models import MODELS
 
         return MODELS
 
