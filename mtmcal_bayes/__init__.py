@@ -44,7 +44,7 @@ _HOME = {
                      "next_run", "axis_lines", "isg_csv"), "api"),
     "CampaignAnalysis": "analysis", "Campaign": "campaign", "Truth": "campaign",
     "InputError": "errors", "MtmcalError": "errors", "ParameterError": "errors",
-    "identify_ballbar": "identification", "identify_probe": "identification",
+    "identify_ballbar": "plugins.thesis.identification", "identify_probe": "plugins.thesis.identification",
     "load_campaign": "io", "parse_campaign": "io", "read_dprnt": "io", "save_campaign": "io",
     "read_sigma_model_prior": "io", "write_sigma_model_prior": "io", "SigmaModelPrior": "sigma_prior",
     "MODELS": "models", "HTMModel": "plugins.thesis.kinematic", "LinearModel": "plugins.thesis.linear",

@@ -6,10 +6,10 @@ import numpy as np
 
 from .. import units
 from ..errors import InputError, MtmcalError
-from ..identification import identify
 from ..inference.analytic import gaussian_posterior
 from ..inference.log_posterior import LogPosterior
 from ..io.netcdf import read_posterior
+from ..machines.plugins import provided
 from ..parameters import DERIVED, DEVIATIONS
 
 N_DRAWS = 1000
@@ -24,7 +24,7 @@ def ballbar_values(campaign) -> np.ndarray:
     As the thesis: dx_BT = 0 (Eq 4.2), so a derived quantity is carried by its first deviation
     (dx_CZ = dx_CZ − dx_BT); dz_BT and the squareness terms 0.
     """
-    ident = identify(campaign).ballbar
+    ident = provided(campaign.machine, "identify")(campaign).ballbar  # the thesis plug-in's Eqs 4.10–4.18
     theta = np.zeros(len(DEVIATIONS))
     for name, v in ident.items():
         if v.value is None:

@@ -211,7 +211,7 @@ def program(pattern: str, campaign=None, **options) -> str:
 
 def identify(campaign):
     """Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch probe), each value beside the published one."""
-    from ...identification import identify as identify_campaign
+    from .identification import identify as identify_campaign
 
     return identify_campaign(campaign)
 

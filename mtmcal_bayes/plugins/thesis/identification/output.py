@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pandas as pd
 
-from .. import units
-from ..iso import iso_symbol
+from .... import units
+from ....iso import iso_symbol
 
 
 def identification_table(values: dict, *, reread: bool = False) -> pd.DataFrame:
