@@ -83,7 +83,7 @@ def compensation_program(c, program, *, method: str, model, values: str, mount, 
 def compensate(c, parsed, *, method: str, model, values: str, posterior, point: str, setup, mount):
     """The thesis machine's compensation: exact inversion of its kinematic model (default ``htm-thesis``) or Eqs
     3.4–3.13 as printed (``method="thesis"``), with the posterior or the ball-bar values of Table 4.5."""
-    from ...compensation import compensate as rewrite_program
+    from .compensation.compensate import compensate as rewrite_program
 
     return rewrite_program(c, parsed, method=method, model="htm-thesis" if model is None else model, values=values,
                            posterior=posterior, point=point, setup=setup, mount=mount)
@@ -202,9 +202,9 @@ def probe_layout(campaign):
 
 
 def program(pattern: str, campaign=None, **options) -> str:
-    """The measuring NC program of a thesis pattern in the format of Fig 4.30(a) (:func:`~mtmcal_bayes.compensation.
-    measuring_program`: ``R_B_mm``, ``start``, ``step_deg``, ``feed``, ``n``, ``setup``, ``mount``)."""
-    from ...compensation import measuring_program
+    """The measuring NC program of a thesis pattern in the format of Fig 4.30(a) (:func:`~mtmcal_bayes.plugins.thesis.
+    measuring.measuring_program`: ``R_B_mm``, ``start``, ``step_deg``, ``feed``, ``n``, ``setup``, ``mount``)."""
+    from .measuring import measuring_program
 
     return measuring_program(pattern, campaign, **options)
 

@@ -4,18 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import units
-from ..errors import InputError, MtmcalError
-from ..inference.analytic import gaussian_posterior
-from ..inference.log_posterior import LogPosterior
-from ..io.netcdf import read_posterior
-from ..machines.plugins import provided
-from ..parameters import DERIVED, DEVIATIONS
+from .... import units
+from ....errors import InputError, MtmcalError
+from ....inference.analytic import gaussian_posterior
+from ....inference.log_posterior import LogPosterior
+from ....io.netcdf import read_posterior
+from ....compensation.options import N_DRAWS, SIGMA_MODEL_UM
+from ..identification import identify
+from ....parameters import DERIVED, DEVIATIONS
 
-N_DRAWS = 1000
-SIGMA_MODEL_UM = 2.0
-#: where the deviations a program is compensated with come from
-VALUES = ("posterior", "ballbar")
 
 
 def ballbar_values(campaign) -> np.ndarray:
@@ -24,7 +21,7 @@ def ballbar_values(campaign) -> np.ndarray:
     As the thesis: dx_BT = 0 (Eq 4.2), so a derived quantity is carried by its first deviation
     (dx_CZ = dx_CZ − dx_BT); dz_BT and the squareness terms 0.
     """
-    ident = provided(campaign.machine, "identify")(campaign).ballbar  # the thesis plug-in's Eqs 4.10–4.18
+    ident = identify(campaign).ballbar
     theta = np.zeros(len(DEVIATIONS))
     for name, v in ident.items():
         if v.value is None:

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .. import units
-from ..models.htm import nc_origin
-from ..models import build_model
-from ..parameters import DEVIATIONS, ParameterSpace
-from ..patterns import Commands
+from .... import units
+from ....models.htm import nc_origin
+from ....parameters import DEVIATIONS, ParameterSpace
+from ....patterns import Commands
+from ..kinematic import HTMModel
 from .kinematics import compensate_exact
-from .thesis_method import compensate_thesis
+from .printed_method import compensate_thesis
 
 
 def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", method: str = "exact",
@@ -25,7 +25,7 @@ def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", meth
     theta = np.zeros((1, len(space)))
     for i, name in enumerate(DEVIATIONS):
         theta[0, space.index(name)] = theta13[i]
-    htm = build_model(model, campaign, space)  # the machine's kinematic model
+    htm = HTMModel(campaign, model, space)
     before = htm.predict(theta)[0]
     d = dict(zip(DEVIATIONS, theta13))
     for i, run in enumerate(htm.runs):
