@@ -23,23 +23,23 @@ from __future__ import annotations
 def campaign_sections(r, doc: dict, machine, base_dir):
     """``[ballbar]`` and ``[probe]`` of a campaign in the thesis' format (lever arms R_B, Z_T, X_T, Z_C, R_C; the
     probe's ``[probe.c_axis]`` and ``[probe.b_axis]``)."""
-    from ...io.campaign_reader import thesis_sections
+    from .campaign_keys import campaign_sections as sections
 
-    return thesis_sections(r, doc, machine, base_dir)
+    return sections(r, doc, machine, base_dir)
 
 
 def probe_owners(machine, probe) -> set[str]:
     """The owners of the probe's nuisance terms in the thesis' format: its styli, ``c_axis`` and ``b_axis``."""
-    from ...io.campaign_reader import thesis_probe_owners
+    from .campaign_keys import probe_owners as owners
 
-    return thesis_probe_owners(machine, probe)
+    return owners(machine, probe)
 
 
 def campaign_document(c, doc: dict, save_dir=None) -> dict:
     """``doc`` completed with the campaign in the thesis' format (the inverse of :func:`campaign_sections`)."""
-    from ...io.campaign_writer import thesis_to_dict
+    from .campaign_document import campaign_document as document
 
-    return thesis_to_dict(c, doc, save_dir)
+    return document(c, doc, save_dir)
 
 
 def simulate(campaign, truth, **options):
