@@ -254,7 +254,7 @@ class ThesisPlugin:
     @property
     def aliases(self) -> tuple[tuple[str, str], ...]:
         """The thesis' names of its deviations by ISO 230-7 symbol (SPEC §19: dx_CZ = E_X0C, ...)."""
-        from ...machines.deviations import THESIS_NAMES
+        from .names import THESIS_NAMES
 
         return tuple(THESIS_NAMES.items())
 
