@@ -14,7 +14,13 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 * **its compensation**: Eqs 3.4–3.13 as printed beside the exact inversion of its kinematic models, with the
   published ball-bar values as an option.
 
-Each contribution imports its code when asked for, so loading the plug-in costs nothing.
+The package holds the thesis' own code beside these contributions: :mod:`.linear`, :mod:`.kinematic`,
+:mod:`.probe_model` and :mod:`.chain_model` (its models), :mod:`.names`, :mod:`.campaign_keys` and
+:mod:`.campaign_document` (its names and keys), :mod:`.identification` (Eqs 4.10–4.18, 5.1–5.19),
+:mod:`.compensation` (Eqs 3.4–3.13 and the exact inversion of its models), :mod:`.program_format` and
+:mod:`.measuring` (Fig 4.30(a)).  No layer of the package imports them: the engine asks the machine
+(:func:`mtmcal_bayes.machines.plugins.provided`).  Each contribution imports its code when asked for, so loading the
+plug-in costs nothing.
 """
 
 from __future__ import annotations
