@@ -808,8 +808,9 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
     page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
 
-    if ident is not None:
-        _thesis_section(page, ident, effect, sigma_um)
+    thesis_section = provided(campaign.machine, "report_section")  # a plug-in's own section (the thesis')
+    if ident is not None and thesis_section is not None:
+        thesis_section(page, ident, effect, sigma_um)
     if reports is not None:
         _models_section(page, reports, campaign, tmp, names=shown.listed, with_fit=ppc_df is not None and rep.data != "probe")
     return page
@@ -850,26 +851,6 @@ def _plan_section(page: Page, planned: PlanResult, rep: PosteriorResult, *, show
                        "sigma_model learnt from them):")
         page.table(planned.check[["candidate", "target", "sd_after_closed_form", "sd_after_monte_carlo",
                                   "relative_difference"]], digits=3, index=False)
-
-
-def _thesis_section(page: Page, ident, effect: pd.DataFrame | None, sigma_um: float) -> None:
-    """The thesis' deterministic identification beside its printed values, and the effect of its dx_BT = 0."""
-    page.section("thesis", "Thesis values recomputed")
-    page.paragraph("The deterministic identification of the thesis, recomputed from this campaign beside the values "
-                   "printed in the thesis, with its flags (identification_ballbar.csv, identification_probe.csv).")
-    page.raw("<h3>Ball bar (Table 4.5, Eqs 4.10–4.18)</h3>")
-    page.table(ident.table("ballbar"), index=False)
-    page.raw("<h3>Touch probe (Table 5.3, Eqs 5.1–5.19)</h3>")
-    if ident.probe:
-        page.table(ident.table("probe"), index=False)
-    else:
-        page.paragraph("No touch-probe data in this campaign.")
-    page.box("missing", "Checks the deterministic method leaves out", ident.checks)
-    page.box("missing", "Assumptions", ident.assumptions)
-    if effect is not None:
-        page.paragraph("The thesis assumes dx_BT = 0 (Eq 4.2). Its effect on beta_XB and dx_CZ − dx_BT, closed form "
-                       f"at σ_model = {sigma_um:.2f} µm (thesis_assumption_dx_BT.csv):")
-        page.table(effect)
 
 
 def _models_section(page: Page, reports: dict, campaign, tmp: Path, *, names: list[str], with_fit: bool) -> None:

@@ -9,7 +9,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
   ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
-* **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3;
+* **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
+  section of them (thesis values recomputed);
 * **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them;
 * **its compensation**: Eqs 3.4–3.13 as printed beside the exact inversion of its kinematic models, with the
   published ball-bar values as an option.
@@ -18,7 +19,7 @@ The package holds the thesis' own code beside these contributions: :mod:`.linear
 :mod:`.probe_model` and :mod:`.chain_model` (its models), :mod:`.names`, :mod:`.campaign_keys` and
 :mod:`.campaign_document` (its names and keys), :mod:`.identification` (Eqs 4.10–4.18, 5.1–5.19),
 :mod:`.compensation` (Eqs 3.4–3.13 and the exact inversion of its models), :mod:`.program_format` and
-:mod:`.measuring` (Fig 4.30(a)).  No layer of the package imports them: the engine asks the machine
+:mod:`.measuring` (Fig 4.30(a)), :mod:`.report_section`.  No layer of the package imports them: the engine asks the machine
 (:func:`mtmcal_bayes.machines.plugins.provided`).  Each contribution imports its code when asked for, so loading the
 plug-in costs nothing.
 """
@@ -215,6 +216,14 @@ def program(pattern: str, campaign=None, **options) -> str:
     return measuring_program(pattern, campaign, **options)
 
 
+def report_section(page, ident, effect, sigma_um: float) -> None:
+    """The report's section "Thesis values recomputed": ``ident`` (its identification) beside the printed values,
+    its checks and assumptions, and ``effect`` (a DataFrame or ``None``), that of dx_BT = 0 at ``sigma_um`` µm."""
+    from .report_section import report_section as section
+
+    section(page, ident, effect, sigma_um)
+
+
 def identify(campaign):
     """Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch probe), each value beside the published one."""
     from .identification import identify as identify_campaign
@@ -245,6 +254,7 @@ class ThesisPlugin:
     # its published method, programs, compensation and simulation
     identify = staticmethod(identify)
     sample_notes = staticmethod(sample_notes)
+    report_section = staticmethod(report_section)
     program = staticmethod(program)
     compensation_program = staticmethod(compensation_program)
     compensate = staticmethod(compensate)
