@@ -7,7 +7,7 @@ in this process: the figures drawn in forked workers are not followed).  The wal
 (files) of those calls in call order; a *move* is a step to another module, a *climb* a move to a module of a
 higher layer (the layers of ``tests/test_architecture.py``).  It also counts how often the campaign is turned into
 a parameter space (``ParameterSpace.for_campaign``), into observations (``Observations.from_campaign``) and into the
-deterministic identification (``identification.identify``).
+deterministic identification (the thesis plug-in's ``identification.identify``).
 """
 
 from __future__ import annotations
@@ -59,7 +59,7 @@ def walk(campaign, data: str) -> tuple[list[tuple[str, str]], Counter]:
                 builds["parameter space"] += 1
             elif code.co_qualname in ("Observations.from_campaign", "ProbeLayout.__init__"):
                 builds["observations"] += 1
-            elif module.startswith("identification") and code.co_qualname == "identify":
+            elif module.startswith("plugins.thesis.identification") and code.co_qualname == "identify":
                 builds["identification"] += 1
 
     with tempfile.TemporaryDirectory() as tmp:

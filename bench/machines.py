@@ -55,8 +55,8 @@ def command_ratios(repeats: int) -> dict:
 
 def throughput(repeats: int) -> dict:
     from mtmcal_bayes.api import campaign_of
-    from mtmcal_bayes.models.chain_thesis import ThesisChainModel
-    from mtmcal_bayes.models.kinematic import HTMModel
+    from mtmcal_bayes.plugins.thesis.chain_model import ThesisChainModel
+    from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
     from mtmcal_bayes.parameters import ParameterSpace
 
     c = campaign_of(None)

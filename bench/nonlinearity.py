@@ -12,7 +12,7 @@ import argparse
 import numpy as np
 
 from mtmcal_bayes import LinearModel, load_campaign, units
-from mtmcal_bayes.models import HTMModel
+from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 
 
 def main():

@@ -12,8 +12,9 @@ Each of these is the function a command of ``mtmcal-bayes`` calls
 ``to_json()``, the command's two outputs.
 
 Forward models predict eccentricities from parameter batches ``(n, p)``
-(:class:`LinearModel`, :class:`HTMModel`; :func:`make_model` by name, the
-parameters ordered by :class:`ParameterSpace`).
+(:func:`make_model` by name, the parameters ordered by :class:`ParameterSpace`;
+the thesis machine's :class:`LinearModel` and :class:`HTMModel` are its plug-in's,
+``mtmcal_bayes.plugins.thesis``).
 
 Layers, each importing only those below it (``tests/test_architecture.py``)::
 
@@ -23,10 +24,12 @@ Layers, each importing only those below it (``tests/test_architecture.py``)::
     campaign, observations, machine_time                 the data of a calibration, its machine minutes
     io                                                   files in and out
     models                                               forward models
-    identification, inference, figure_style              thesis method, Bayesian engine, figure look
+    identification, inference, figure_style              DPRNT sphere fit, Bayesian engine, figure look
     posterior, planning, compensation, validation,       features
     simulation
     reporting                                            the report, built on posterior and planning
+    fleets                                               many machines at once
+    plugins                                              one machine's own code (the thesis'), imported by no layer
     api, cli                                             the Python API, the command line
 
 Units: internally mm and rad; files and displays use µm, ″, mm, °.
@@ -37,17 +40,19 @@ import importlib
 from .version import __version__
 
 #: each public name and the module it comes from, imported on first use (PEP 562): ``import mtmcal_bayes``
-#: loads no numpy, so the command line can choose the BLAS threads before numpy starts (:mod:`.cli`)
+#: loads no numpy, so the command line can choose the BLAS threads before numpy starts (:mod:`.cli`); the thesis
+#: machine's models and identification come from its plug-in, by module name (no layer imports a plug-in)
 _HOME = {
     **dict.fromkeys(("identify", "probe_fit", "simulate", "sensitivity", "sample", "closed_form", "report", "plan",
                      "ncgen", "instruments", "compensate", "sbc", "history", "simulate_history", "fleet", "design",
                      "next_run", "axis_lines", "isg_csv"), "api"),
     "CampaignAnalysis": "analysis", "Campaign": "campaign", "Truth": "campaign",
     "InputError": "errors", "MtmcalError": "errors", "ParameterError": "errors",
-    "identify_ballbar": "identification", "identify_probe": "identification",
+    "identify_ballbar": "plugins.thesis.identification", "identify_probe": "plugins.thesis.identification",
     "load_campaign": "io", "parse_campaign": "io", "read_dprnt": "io", "save_campaign": "io",
     "read_sigma_model_prior": "io", "write_sigma_model_prior": "io", "SigmaModelPrior": "sigma_prior",
-    "MODELS": "models", "HTMModel": "models", "LinearModel": "models", "make_model": "models",
+    "MODELS": "models", "HTMModel": "plugins.thesis.kinematic", "LinearModel": "plugins.thesis.linear",
+    "make_model": "models",
     "Observations": "observations", "DEVIATIONS": "parameters", "IDENTIFIABLE": "parameters",
     "ParameterSpace": "parameters", "ProgressEvent": "progress", "fit_sphere": "sphere",
 }

@@ -8,7 +8,7 @@ assumed prior or a prior learnt elsewhere, or fixed):
   space, the forward model, the priors and the likelihood;
 * the linearisation and the exact σ-marginal posterior of the linear model
   (:class:`~.inference.approximation.PosteriorApproximation`);
-* the deterministic identification of the thesis (:func:`~.identification.identify`).
+* the deterministic identification the machine's plug-in gives (the thesis': Eqs 4.10–4.18, 5.1–5.19).
 
 Each is built when first asked for and kept.  The other analyses of the same campaign — another data set, the
 linear model beside a kinematic one, dx_BT = 0, a fixed σ_model — come from :meth:`CampaignAnalysis.variant`
@@ -25,7 +25,6 @@ from functools import cached_property
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # imported where first used: ``import mtmcal_bayes`` loads no SciPy or ArviZ
-    from .identification import IdentificationResult
     from .inference.approximation import PosteriorApproximation
     from .inference.log_posterior import LogPosterior
     from .sigma_prior import SigmaModelPrior
@@ -108,7 +107,7 @@ class CampaignAnalysis:
     @property
     def probe_layout(self):
         """The campaign's touch-probe readings and where they were taken, as its machine's plug-in lays them out for
-        its models (the thesis': :class:`~mtmcal_bayes.models.probe_model.ProbeLayout`), made once for every
+        its models (the thesis': :class:`~mtmcal_bayes.plugins.thesis.probe_model.ProbeLayout`), made once for every
         variant; None where the machine's models read the campaign's probe runs themselves."""
         from .machines.plugins import provided
 
@@ -173,11 +172,14 @@ class CampaignAnalysis:
         return choice_columns(self.approximation.moments(names), other.approximation.moments(names))
 
     @property
-    def identification(self) -> IdentificationResult:
-        """The thesis' deterministic identification of the campaign (shared by every variant)."""
-        from .identification import identify
+    def identification(self):
+        """The deterministic identification the campaign's machine gives (its plug-in's ``identify``: the thesis',
+        Eqs 4.10–4.18 and 5.1–5.19 beside the published values), shared by every variant; ``None`` where its
+        plug-ins give none."""
+        from .machines.plugins import provided
 
-        return self._shared("identification", lambda: identify(self.campaign))
+        identify = provided(self.campaign.machine, "identify")
+        return None if identify is None else self._shared("identification", lambda: identify(self.campaign))
 
     def __repr__(self) -> str:
         sigma = "sampled" if self.sigma_model is None else f"{self.sigma_model:g} mm"

@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # the result types, for the signatures only
     from .compensation import CompensationResult
     from .fleets import FleetResult
     from .histories import HistoryResult
-    from .identification import IdentificationResult, ProbeFit
+    from .identification import ProbeFit
     from .planning import PlanResult
     from .planning.design_output import DesignResult, NextResult
     from .posterior import ClosedFormResult, PosteriorResult
@@ -147,7 +147,7 @@ def _writable(path, what: str) -> None:
 
 def identify(campaign: CampaignLike = None):
     """The thesis' deterministic identification: ball bar (Eqs 4.10–4.18) and touch probe (Eqs 5.1–5.19),
-    each value beside the published one (an :class:`IdentificationResult`).  On a described machine, which has no
+    each value beside the published one (the thesis plug-in's :class:`~mtmcal_bayes.plugins.thesis.identification.IdentificationResult`).  On a described machine, which has no
     thesis formulas: the linearised least-squares identification of what its campaign determines, from every
     instrument it has (:class:`~mtmcal_bayes.posterior.least_squares.DescribedIdentification`)."""
     from .machines.plugins import provided

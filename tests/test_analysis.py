@@ -15,7 +15,7 @@ from mtmcal_bayes.analysis import CampaignAnalysis, analysis_of
 from mtmcal_bayes.errors import StepFailure
 from mtmcal_bayes.inference import log_posterior
 from mtmcal_bayes.inference.marginal import GridProposal
-from mtmcal_bayes.models.probe_model import ProbeLayout
+from mtmcal_bayes.plugins.thesis.probe_model import ProbeLayout
 from mtmcal_bayes.observations import Observations
 from mtmcal_bayes.reporting import build
 from mtmcal_bayes.reporting.drawing import Drawing

@@ -28,12 +28,13 @@ LAYERS: tuple[tuple[str, ...], ...] = (
                                                                    # machine's reading frames
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models
-    ("identification", "inference", "figure_style", "html_page"),  # thesis method, Bayesian engine, figure and page look
+    ("identification", "inference", "figure_style", "html_page"),  # DPRNT sphere fit, Bayesian engine, figure and page look
     ("analysis",),                                                 # one campaign's analysis, built once, passed down
     ("posterior", "planning", "compensation", "validation", "simulation", "histories"),  # features
     ("reporting",),                                                # the report, built on posterior and planning
     ("fleets",),                                                   # many machines on Dask: posteriors, histories, overview
-    ("plugins",),                                                  # what is particular to one machine (SPEC §20), loaded by name
+    ("plugins",),                                                  # what is particular to one machine (SPEC §20), loaded by
+                                                                   # name; imported by no other unit (below)
     ("api",),                                                      # the Python API: one function per command
     ("cli_options",),                                              # the command line's flags
     ("cli", "__init__"),                                           # the command line; the package's public face
@@ -146,12 +147,26 @@ def test_named_sideways_imports_are_absent(importer, forbidden):
     assert not bad, bad
 
 
+def test_no_engine_layer_imports_the_plugins():
+    """A plug-in holds one machine's own code (the thesis': its models, identification, compensation, program format,
+    campaign keys) and is reached only through ``machines.plugins.provided``: no other unit imports it, neither the
+    layers below it nor ``api`` and the command line above it (``__init__`` re-exports a few of its public names by
+    module name, lazily, which is no import statement)."""
+    bad = [f"{m} imports {t}" for m, targets in GRAPH.items() if unit(m) != "plugins"
+           for t in targets if unit(t) == "plugins"]
+    assert not bad, "\n".join(bad)
+
+
 def test_layer_test_sees_real_imports():
     """The graph is read correctly: known downward imports are in it (a test that finds nothing proves nothing)."""
     assert "mtmcal_bayes.planning.plan" in GRAPH["mtmcal_bayes.reporting.build"]
     assert "mtmcal_bayes.inference.marginal" in GRAPH["mtmcal_bayes.validation.samplers"]
     assert "mtmcal_bayes.units" in GRAPH["mtmcal_bayes.parameters"]  # from . import units
     assert "mtmcal_bayes.api" in GRAPH["mtmcal_bayes.cli"]
+    # inside a plug-in, and from it down to the engine (relative imports three and four levels up)
+    assert "mtmcal_bayes.plugins.thesis.kinematic" in GRAPH["mtmcal_bayes.plugins.thesis.linear"]
+    assert "mtmcal_bayes.compensation.result" in GRAPH["mtmcal_bayes.plugins.thesis.compensation.compensate"]
+    assert "mtmcal_bayes.models.htm" in GRAPH["mtmcal_bayes.plugins.thesis.kinematic"]
 
 
 # --------------------------------------------------------------------------- the command line

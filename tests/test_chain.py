@@ -15,8 +15,8 @@ from mtmcal_bayes.io.campaign_reader import parse_campaign
 from mtmcal_bayes.io.machine_reader import builtin_description
 from mtmcal_bayes.machines.patterns import pattern_commands as described_commands
 from mtmcal_bayes.models import make_model
-from mtmcal_bayes.models.chain_thesis import ThesisChainModel
-from mtmcal_bayes.models.kinematic import HTMModel
+from mtmcal_bayes.plugins.thesis.chain_model import ThesisChainModel
+from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.parameters import ParameterSpace
 from mtmcal_bayes.patterns import pattern_commands as thesis_commands
 
@@ -345,7 +345,7 @@ def test_complex_step_first_order_against_finite_differences(relabelled):
     """The ``linear`` model of a described machine is the complex-step Jacobian of the chain; central finite
     differences (1 µm, 1″ steps) agree with it to their own truncation error, 1e-6 of the largest entry."""
     from mtmcal_bayes.models.chain_models import complex_step_jacobian
-    from mtmcal_bayes.models.kinematic import jacobian
+    from mtmcal_bayes.models import jacobian
 
     a, _ = relabelled
     for data in ("ballbar", "probe"):

@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from mtmcal_bayes.compensation.kinematics import compensate_exact, tool_point
-from mtmcal_bayes.compensation.thesis_method import compensate_thesis
-from mtmcal_bayes.compensation.values import ballbar_values
-from mtmcal_bayes.compensation.verify import resimulate
+from mtmcal_bayes.plugins.thesis.compensation.kinematics import compensate_exact, tool_point
+from mtmcal_bayes.plugins.thesis.compensation.printed_method import compensate_thesis
+from mtmcal_bayes.plugins.thesis.compensation.values import ballbar_values
+from mtmcal_bayes.plugins.thesis.compensation.verify import resimulate
 from mtmcal_bayes.datasets import data_path
 from mtmcal_bayes.io.gcode import parse_program, read_program, rewrite
 from mtmcal_bayes.models.htm import Geometry
@@ -79,7 +79,7 @@ def test_compensate_names_the_deviations_resting_on_the_choice_of_reading(thesis
     of the campaign read in its recorded alternative (exact draws of both, built from the file's text); the
     compensated program is the one of the campaign without the record."""
     import mtmcal_bayes as mb
-    from mtmcal_bayes.compensation import compensate
+    from mtmcal_bayes.plugins.thesis.compensation.compensate import compensate
 
     from . import variants
 

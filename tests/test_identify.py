@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import IDENTIFIABLE, LinearModel, identify, identify_ballbar, units
-from mtmcal_bayes.identification import in_machine_frame
+from mtmcal_bayes.plugins.thesis.identification import in_machine_frame
 from mtmcal_bayes.io import parse_campaign
 from mtmcal_bayes.observations import with_observations
 

@@ -8,8 +8,9 @@ import pytest
 
 from mtmcal_bayes import LinearModel, load_campaign, units
 from mtmcal_bayes.campaign import Run
-from mtmcal_bayes.models import HTMModel, jacobian, make_model
-from mtmcal_bayes.models.linear import LEFT_OUT
+from mtmcal_bayes.models import jacobian, make_model
+from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
+from mtmcal_bayes.plugins.thesis.linear import LEFT_OUT
 from mtmcal_bayes.patterns import (
     B_PATTERNS,
     C_PATTERNS,

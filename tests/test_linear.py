@@ -91,8 +91,9 @@ def test_only_the_runs_without_a_relation_are_simulated_and_their_rows_are_the_w
     (1e-12 of the largest coefficient).  test_properties checks the same on random campaigns through the
     small-scale limit."""
     from mtmcal_bayes.campaign import Run
-    from mtmcal_bayes.models.kinematic import HTMModel, jacobian
-    from mtmcal_bayes.models.linear import LEFT_OUT
+    from mtmcal_bayes.models import jacobian
+    from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
+    from mtmcal_bayes.plugins.thesis.linear import LEFT_OUT
     from mtmcal_bayes.patterns import COMPONENTS
 
     text = (DATA / "minimal_one_repeat.toml").read_text().replace('pattern = "BY"', 'pattern = "BZ"')

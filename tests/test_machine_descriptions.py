@@ -16,7 +16,8 @@ from mtmcal_bayes.io.machine_reader import (
     parse_description,
     referenced_description,
 )
-from mtmcal_bayes.machines import THESIS_NAMES, generated, redundant, selected
+from mtmcal_bayes.machines import generated, redundant, selected
+from mtmcal_bayes.plugins.thesis.names import THESIS_NAMES
 from mtmcal_bayes.models.chain import Chain
 
 #: a valid turn-mill in a campaign's [machine] table; each bad case below changes one thing of it

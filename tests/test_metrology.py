@@ -214,7 +214,7 @@ def test_without_the_record_of_the_choice_nothing_is_marked_and_no_number_moves(
 
 def test_compensating_with_a_sampled_posterior_names_what_rests_on_the_choice(thesis_posterior, thesis, tmp_path):
     """From the NetCDF file (its attributes say which posterior it is): the deviations the posterior marks."""
-    from mtmcal_bayes.compensation import compensate
+    from mtmcal_bayes.plugins.thesis.compensation.compensate import compensate
     from mtmcal_bayes.datasets import data_path
     from mtmcal_bayes.io.gcode import read_program
 

@@ -39,8 +39,10 @@ from mtmcal_bayes.errors import MtmcalError
 from mtmcal_bayes.io.dprnt import parse_dprnt
 from mtmcal_bayes.io.gcode import block_line, parse_program, rewrite
 from mtmcal_bayes.io.traces import read_trace
-from mtmcal_bayes.models import MODELS, HTMModel, LinearModel, jacobian, make_model
-from mtmcal_bayes.models.linear import LEFT_OUT
+from mtmcal_bayes.models import MODELS, jacobian, make_model
+from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
+from mtmcal_bayes.plugins.thesis.linear import LinearModel
+from mtmcal_bayes.plugins.thesis.linear import LEFT_OUT
 from mtmcal_bayes.parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
 from mtmcal_bayes.patterns import (
     B_ANGLES_DEG,

@@ -14,7 +14,7 @@ from scipy import stats
 
 from mtmcal_bayes import conventions as cv
 from mtmcal_bayes import units
-from mtmcal_bayes.identification import identify
+from mtmcal_bayes.plugins.thesis.identification import identify
 from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.inference.marginal import MarginalPosterior
 from mtmcal_bayes.io import load_campaign, parse_campaign

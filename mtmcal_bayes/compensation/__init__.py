@@ -1,22 +1,16 @@
-"""NC programs: measuring programs of the patterns, and compensation of programs for the identified deviations.
+"""Compensation of NC programs for the identified deviations (``compensate``), on any machine.
 
-* :func:`compensate` — rewrite X/Y/Z so the tool point reaches the programmed
-  point (exact Newton inversion of a kinematic model, or thesis Eqs 3.4–3.13),
-  with the residual error from posterior draws and the tool tilts that X/Y/Z
-  cannot correct (:class:`CompensationResult`).
-* :func:`measuring_program` — the NC program of a ball-bar pattern for a
-  campaign's setup (thesis Fig 4.30(a)).
+* :class:`CompensationResult` — the compensated program, per block the corrections, the residual error from
+  posterior draws and the tool tilts X/Y/Z cannot correct (:mod:`.result`; the options a compensation is
+  asked with, :mod:`.options`: :data:`METHODS`, :data:`VALUES`, :data:`POINTS`).
+* :func:`~.through_chain.compensate_described` — exact Newton inversion through a described machine's chain.
+
+The thesis machine's compensation (its kinematic models inverted exactly, Eqs 3.4–3.13 as printed, its ball-bar
+values) and its measuring programs (Fig 4.30(a)) are the thesis plug-in's (``mtmcal_bayes.plugins.thesis``): the
+engine asks a machine for its ``compensate`` and ``program``.
 """
 
-from .compensate import (
-           METHODS,
-           OFF_TOOL_MM,
-           CompensationResult,
-           compensate,
-           geometry_for,
-)
-from .measuring import measuring_program
-from .values import VALUES, ballbar_values, posterior_draws
+from .options import METHODS, N_DRAWS, OFF_TOOL_MM, POINTS, SIGMA_MODEL_UM, VALUES
+from .result import CompensationResult
 
-__all__ = ["METHODS", "OFF_TOOL_MM", "CompensationResult", "compensate", "geometry_for", "measuring_program",
-           "VALUES", "ballbar_values", "posterior_draws"]
+__all__ = ["METHODS", "VALUES", "POINTS", "OFF_TOOL_MM", "N_DRAWS", "SIGMA_MODEL_UM", "CompensationResult"]

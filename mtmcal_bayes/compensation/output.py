@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from .. import units
-from .kinematics import OFF_TOOL_MM
+from .options import OFF_TOOL_MM
 
 
 def format_compensation(result) -> str:
-    """What ``compensate`` prints for a :class:`~.compensate.CompensationResult`."""
+    """What ``compensate`` prints for a :class:`~.result.CompensationResult`."""
     j = result.summary()
     lines = [f"{result.program}: {j['blocks']} motion blocks compensated ({j['method']}, {j['model']}, "
              f"tool point {j['point']}, deviations = {j['values']}) -> {result.output}"]

@@ -17,7 +17,7 @@ from ..analysis import analysis_of
 from ..inference import reading_choice
 from ..io.netcdf import read_posterior_attrs
 from ..parameters import DEVIATIONS
-from .values import SIGMA_MODEL_UM
+from .options import SIGMA_MODEL_UM
 
 
 def _analysis(campaign, posterior):

@@ -25,9 +25,8 @@ from ..io.netcdf import read_posterior, read_posterior_attrs
 from ..machines.deviations import generated, redundant
 from ..models.chain import Chain
 from .chain_inverse import invert, tool_axis_tilt, work_tool_point
-from .compensate import CompensationResult
-from .kinematics import OFF_TOOL_MM
-from .values import N_DRAWS
+from .options import N_DRAWS, OFF_TOOL_MM
+from .result import CompensationResult
 
 #: why a deviation is not compensated with a measured value, by its class
 LEFT_AT_ZERO = "not determined by this campaign (its posterior is its prior): left at zero, its prior mean; its " \

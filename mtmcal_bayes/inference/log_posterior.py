@@ -63,7 +63,7 @@ class LogPosterior:
         names (log-normal) instead of the assumed default; None: the defaults (or the campaign's ``[priors]``)
     space, observations, probe_layout : the :func:`parameter_space` of these choices, the campaign's ball-bar
         :class:`~mtmcal_bayes.observations.Observations` and its probe readings
-        (:class:`~mtmcal_bayes.models.probe_model.ProbeLayout`), when already made (an analysis shares them between its
+        (:class:`~mtmcal_bayes.plugins.thesis.probe_model.ProbeLayout`), when already made (an analysis shares them between its
         variants); None: made here
 
     Attributes

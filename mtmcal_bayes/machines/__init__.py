@@ -1,7 +1,6 @@
 """Machines described, not coded (SPEC §19): descriptions, their location errors and their ISO 230-7 names."""
 
 from .description import Axis, MachineDescription, Spindle
-from .deviations import THESIS_NAMES, Deviation, generated, redundant, selected
+from .deviations import Deviation, generated, redundant, selected
 
-__all__ = ["Axis", "MachineDescription", "Spindle", "Deviation", "generated", "selected", "redundant",
-           "THESIS_NAMES"]
+__all__ = ["Axis", "MachineDescription", "Spindle", "Deviation", "generated", "selected", "redundant"]

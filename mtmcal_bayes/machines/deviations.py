@@ -20,14 +20,6 @@ from dataclasses import dataclass
 from ..parameters import Quantity
 from .description import FRAME, ROTARY_ABOUT, SPINDLE, MachineDescription
 
-#: the thesis names of the thesis machine's deviations, by ISO symbol (dz_BT: the spindle's offset along Z)
-THESIS_NAMES: dict[str, str] = {
-    "E_X0C": "dx_CZ", "E_Y0C": "dy_CZ", "E_A0C": "alpha_CZ", "E_B0C": "beta_CZ",
-    "E_A0B": "alpha_XB", "E_B0B": "beta_XB", "E_C0B": "gamma_XB",
-    "E_X(0C1)B": "dx_BT", "E_A(0C1)B": "alpha_BT", "E_Z(0C1)B": "dz_BT",
-    "E_C0X": "gamma_XY", "E_B0X": "beta_YZ", "E_A0Y": "alpha_YZ",
-}
-
 #: squareness errors: symbol -> (frame axis it turns about, the linear axis it tilts, the reference axis)
 SQUARENESS_ERRORS: dict[str, tuple[int, str, str]] = {
     "E_C0X": (2, "X", "Y"), "E_B0X": (1, "X", "Z"), "E_A0Y": (0, "Y", "Z"),

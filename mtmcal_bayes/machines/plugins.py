@@ -8,7 +8,9 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   ``make_model(name, campaign, space, data, observations=, probe_layout=)`` and ``first_order_gap(...)``;
 * ``default_data`` — which instruments a likelihood uses when none is asked for (the engine's rule: every
   instrument the campaign has);
-* ``identify(campaign)`` — a deterministic identification with the values its source published;
+* ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
+  its tables, ``table("ballbar")``), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
+  it;
 * and, while the engine still has two paths for them, the whole of a command (``report``, ``program``, ...):
   each one the engine takes over is one contribution fewer.
 

@@ -14,18 +14,17 @@ import numpy as np
 from ..errors import ParameterError
 from ..machines.plugins import provided
 from ..machines.space import described_space
-from .chain_thesis import ThesisChainModel
 from .chain_models import ChainBallbarModel, ChainProbeModel, FirstOrderModel
+from .jacobian import jacobian
 from .joint import JointModel
-from .kinematic import HTMModel, jacobian
-from .linear import LinearModel, linear_coefficients
-from .probe_model import LinearProbeModel, ProbeModel
 
-#: the kinematic (homogeneous-transform) models of the thesis machine, which can also compensate NC programs
+#: the kinematic (homogeneous-transform) models of the thesis machine, which can also compensate NC programs (their
+#: code is the thesis plug-in's: ``mtmcal_bayes.plugins.thesis``)
 KINEMATIC_MODELS = ("htm-literal", "htm-thesis")
 #: the kinematic chain of any described machine (SPEC §19); on the thesis machine, ``htm-literal``
 CHAIN = "chain"
-#: every forward model any machine offers, by name: the thesis relations first (the command line's choices)
+#: every forward model any machine offers, by name: the thesis relations first (the command line's choices; a
+#: machine offers its own, :func:`models_of`)
 MODELS = ("linear",) + KINEMATIC_MODELS + (CHAIN,)
 #: the engine's models, on every machine: its chain and the chain's first order (a plug-in may offer others)
 ENGINE_MODELS = ("linear", CHAIN)
@@ -71,10 +70,17 @@ def check_data(data: str, campaign=None, parameter: str = "data") -> str:
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The forward model ``name`` (one of the machine's :func:`models_of`) for ``campaign``'s ``data`` (one of
     :data:`DATA`); ``observations``, ``probe_layout``: the campaign's ball-bar
-    :class:`~mtmcal_bayes.observations.Observations` and its :class:`~.probe_model.ProbeLayout` (the probe's
-    readings), if already made.  A machine's plug-in may build its own models (the thesis' campaign format)."""
+    :class:`~mtmcal_bayes.observations.Observations` and its probe layout (the probe's readings, the plug-in's
+    ``probe_layout``), if already made.  A machine's plug-in may build its own models (the thesis' campaign
+    format)."""
     check_model(name, models_of(campaign.machine))
     check_data(data, campaign)
+    return build_model(name, campaign, space, data, observations=observations, probe_layout=probe_layout)
+
+
+def build_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
+    """:func:`make_model` without its checks of ``name`` and ``data``: for a caller that checked them against the
+    campaign it plans for and builds the rows of other campaigns (a planner's candidate runs)."""
     build = provided(campaign.machine, "make_model", _engine_model)
     return build(name, campaign, space, data, observations=observations, probe_layout=probe_layout)
 
@@ -111,7 +117,6 @@ def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -
     return float(np.abs(chain.predict(theta) - FirstOrderModel(chain).predict(theta)).max())
 
 
-__all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "ThesisChainModel",
-           "ChainBallbarModel", "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data",
-           "make_model", "models_of", "default_kinematic_model", "ProbeModel", "LinearProbeModel", "JointModel",
-           "first_order_gap", "LinearModel", "HTMModel", "jacobian", "linear_coefficients"]
+__all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "ChainBallbarModel",
+           "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
+           "models_of", "default_kinematic_model", "JointModel", "first_order_gap", "jacobian"]

@@ -48,9 +48,7 @@ from ..inference.analytic import NOT_IDENTIFIED_GROWTH, WIDEN
 from ..inference.likelihood import GaussianMeanLikelihood
 from ..inference.log_posterior import SAMPLED_DEVIATIONS
 from ..inference.priors import make_prior
-from ..models import check_data
-from ..models.linear import LinearModel
-from ..models.probe_model import LinearProbeModel, ProbeModel
+from ..models import build_model, check_data, jacobian
 from ..observations import Observations
 from ..parameters import IDENTIFIABLE, QUANTITIES, ParameterSpace, weights
 from ..patterns import COMPONENTS
@@ -209,8 +207,7 @@ class Planner:
 
     def _probe_now(self, campaign) -> tuple[np.ndarray, np.ndarray]:
         """The campaign's probe rows ``(k, P)`` and their noise without sigma_model_probe ``(k,)``, mm²."""
-        probe = (LinearProbeModel(campaign, self.space) if self.model == "linear"
-                 else ProbeModel(campaign, self.model, self.space))
+        probe = build_model(self.model, campaign, self.space, "probe")
         return (probe.design if self.model == "linear" else self._jacobian(probe)), \
             probe.observations.noise_variance()
 
@@ -255,10 +252,8 @@ class Planner:
         """Rows ``(m, P)`` of ``campaign``'s ball-bar runs over ``space``: the linear model, or a kinematic model
         linearised at zero."""
         if self.model == "linear":
-            return LinearModel(campaign, space).design
-        from ..models.kinematic import HTMModel
-
-        return self._jacobian(HTMModel(campaign, self.model, space))
+            return build_model("linear", campaign, space).design
+        return self._jacobian(build_model(self.model, campaign, space))
 
     def as_run(self, candidate: Candidate) -> Run:
         """A new-run candidate as a campaign run (zero readings, ``repeats`` each: rows do not depend on them)."""
@@ -272,8 +267,6 @@ class Planner:
 
     @staticmethod
     def _jacobian(model) -> np.ndarray:
-        from ..models.kinematic import jacobian
-
         return jacobian(model)
 
     def noise_var(self, repeats: int) -> float:

@@ -2,7 +2,7 @@
 
 A probe candidate is a new run of the touch probe: a sphere probed at indexed B angles with one stylus
 (a B-axis run) or at indexed C angles on the table (a C-axis run).  Its rows come from the linear probe
-model (:class:`~mtmcal_bayes.models.LinearProbeModel`, the first order of the kinematic probe model) of a
+model (the machine's ``linear`` probe model, the first order of the kinematic probe model) of a
 campaign holding only that run; the run brings its own nuisance terms — the stylus's ``xS, yS, dRS, rS``
 and the datum ``xD, yD, zD`` of its readings (a new session is zeroed anew), the sphere's placement ``xP,
 yP`` for a C-axis run — whose names carry the candidate's id (``xD[b_axis#P1]``), so they join the
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..campaign import BAxisProbe, CAxisProbe, Probe, Stylus
-from ..models.probe_model import LinearProbeModel
+from ..models import build_model
 from ..parameters import ParameterSpace
 
 #: repeats of each reading of a probe candidate
@@ -146,7 +146,7 @@ def probe_rows(candidate: ProbeCandidate, campaign, names: list[str], deviations
     one.probe = candidate.probe(campaign.probe.repeatability, X_T)
     own = one.probe.nuisance_terms()
     space = ParameterSpace([], [], deviations, own)
-    model = LinearProbeModel(one, space)
+    model = build_model("linear", one, space, "probe")  # the machine's first-order probe model
     index = {n: i for i, n in enumerate(names)}
     rename = {f"{b}[{o}]": f"{b}[{candidate.owner(o)}]" for o, b in own}
     A = np.zeros((model.design.shape[0], len(names)))

@@ -12,7 +12,7 @@ REFERENCES = ("ballbar", "probe_reported", "probe_recomputed")
 
 def comparison(summary: pd.DataFrame, ident) -> pd.DataFrame:
     """Each quantity's posterior against the ball-bar and touch-probe values of ``ident``
-    (an :class:`~mtmcal_bayes.identification.IdentificationResult`).
+    (an :class:`~mtmcal_bayes.plugins.thesis.identification.IdentificationResult`).
 
     Rows: the identifiable quantities, then any other deviation of the summary
     with a touch-probe value (dx_CZ, dx_BT, dz_BT).  For every reference value:

@@ -22,8 +22,6 @@ from ..conventions import reads_as_thesis
 from ..errors import MtmcalError
 from ..figure_style import save_png
 from ..html_page import Page
-from ..identification import IdentificationResult
-from ..identification.output import identification_table
 from ..inference import reading_choice
 from ..inference.budget import sigma_prior_sentence
 from ..inference.gum import GUM_COLUMNS, certificate_sentence
@@ -109,7 +107,7 @@ class ReportContent:
     model: str
     posterior: PosteriorResult
     compared: dict[str, PosteriorResult] | None  # all models, when they are compared
-    ident: IdentificationResult | None  # the deterministic identification, where the machine's plug-ins give one
+    ident: object | None  # the deterministic identification (an IdentificationResult), where the machine's plug-ins give one
     missing: list[str]
     summary: pd.DataFrame
     ppc: pd.DataFrame | None  # None: no posterior saw the ball bar
@@ -278,7 +276,7 @@ class Shown:
     least_squares: object | None = None
 
     @classmethod
-    def of(cls, rep: PosteriorResult, ident: IdentificationResult | None) -> Shown:
+    def of(cls, rep: PosteriorResult, ident) -> Shown:
         """The quantities the machine's plug-in reports (the thesis': its eight, Table 4.5 order), listed and drawn
         together, else every deviation of the machine, those its campaign determines drawn together; beside the
         plug-in's deterministic values (``ident``) where it gives them, else the least squares."""
@@ -465,7 +463,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                  mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df, machine_tables)
 
 
-def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: IdentificationResult | None,
+def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident,
                   ppc_df: pd.DataFrame | None, loo: LooResult, shown: Shown) -> list[str]:
     """Every CSV of the report into ``tmp``; returns their names in order."""
     files: list[str] = []
@@ -481,9 +479,9 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident: Identific
     csv("diagnostics.csv", c.diagnostics)
     csv("priors.csv", priors_table(rep.log_posterior))
     if ident is not None:
-        csv("identification_ballbar.csv", identification_table(ident.ballbar), index=False)
+        csv("identification_ballbar.csv", ident.table("ballbar"), index=False)
         if ident.probe:
-            csv("identification_probe.csv", identification_table(ident.probe), index=False)
+            csv("identification_probe.csv", ident.table("probe"), index=False)
     for name, df in c.machine_tables.items():
         csv(name, df, index=False)
     if c.effect is not None:
@@ -807,8 +805,9 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     page.figure(tmp / "rank.png", mcmc_plots.RANK_CAPTION, "rank plots")
     page.figure(tmp / "trace.png", mcmc_plots.TRACE_CAPTION, "trace plots")
 
-    if ident is not None:
-        _thesis_section(page, ident, effect, sigma_um)
+    thesis_section = provided(campaign.machine, "report_section")  # a plug-in's own section (the thesis')
+    if ident is not None and thesis_section is not None:
+        thesis_section(page, ident, effect, sigma_um)
     if reports is not None:
         _models_section(page, reports, campaign, tmp, names=shown.listed, with_fit=ppc_df is not None and rep.data != "probe")
     return page
@@ -849,26 +848,6 @@ def _plan_section(page: Page, planned: PlanResult, rep: PosteriorResult, *, show
                        "sigma_model learnt from them):")
         page.table(planned.check[["candidate", "target", "sd_after_closed_form", "sd_after_monte_carlo",
                                   "relative_difference"]], digits=3, index=False)
-
-
-def _thesis_section(page: Page, ident: IdentificationResult, effect: pd.DataFrame | None, sigma_um: float) -> None:
-    """The thesis' deterministic identification beside its printed values, and the effect of its dx_BT = 0."""
-    page.section("thesis", "Thesis values recomputed")
-    page.paragraph("The deterministic identification of the thesis, recomputed from this campaign beside the values "
-                   "printed in the thesis, with its flags (identification_ballbar.csv, identification_probe.csv).")
-    page.raw("<h3>Ball bar (Table 4.5, Eqs 4.10–4.18)</h3>")
-    page.table(identification_table(ident.ballbar), index=False)
-    page.raw("<h3>Touch probe (Table 5.3, Eqs 5.1–5.19)</h3>")
-    if ident.probe:
-        page.table(identification_table(ident.probe), index=False)
-    else:
-        page.paragraph("No touch-probe data in this campaign.")
-    page.box("missing", "Checks the deterministic method leaves out", ident.checks)
-    page.box("missing", "Assumptions", ident.assumptions)
-    if effect is not None:
-        page.paragraph("The thesis assumes dx_BT = 0 (Eq 4.2). Its effect on beta_XB and dx_CZ − dx_BT, closed form "
-                       f"at σ_model = {sigma_um:.2f} µm (thesis_assumption_dx_BT.csv):")
-        page.table(effect)
 
 
 def _models_section(page: Page, reports: dict, campaign, tmp: Path, *, names: list[str], with_fit: bool) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 def missing_data(campaign, ident) -> list[str]:
     """Sentences naming the measurements the campaign does not have and what that costs (``ident``: the campaign's
-    deterministic identification, :class:`~mtmcal_bayes.identification.IdentificationResult`, where its machine's
+    deterministic identification, :class:`~mtmcal_bayes.plugins.thesis.identification.IdentificationResult`, where its machine's
     plug-ins give one; None: there are no deterministic values to miss).
 
     Empty for a complete campaign (the thesis campaign).

@@ -166,7 +166,7 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
     """The campaign's ``[probe]`` with sphere centres simulated for ``truth`` (``None`` without probe readings, or
     where a gap of the campaign keeps the probe model from running: :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
 
-    The readings are those of the probe model (:class:`~mtmcal_bayes.models.ProbeModel`; ``linear``: its
+    The readings are those of the probe model (:class:`~mtmcal_bayes.plugins.thesis.probe_model.ProbeModel`; ``linear``: its
     first order) in the campaign's reading frame.  Noise-free: one repeat equal to the prediction.  With
     ``noise``: as many repeats as measured (or ``repeats``), each scattered by the probe's repeatability.
     DPRNT file names and fit covariances are dropped: the readings are centres now.

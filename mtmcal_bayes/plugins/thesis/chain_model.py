@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..io.machine_reader import description_of
-from ..machines.deviations import generated
-from ..parameters import MOUNT_NUISANCE
-from .chain import Chain
-from .htm import HTM_LITERAL, _column
+from ...io.machine_reader import description_of
+from ...machines.deviations import generated
+from ...parameters import MOUNT_NUISANCE
+from ...models.chain import Chain
+from ...models.htm import HTM_LITERAL, _column
 from .kinematic import HTMModel
 
 

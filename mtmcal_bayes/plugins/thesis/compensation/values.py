@@ -4,18 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import units
-from ..errors import InputError, MtmcalError
+from .... import units
+from ....errors import InputError, MtmcalError
+from ....inference.analytic import gaussian_posterior
+from ....inference.log_posterior import LogPosterior
+from ....io.netcdf import read_posterior
+from ....compensation.options import N_DRAWS, SIGMA_MODEL_UM
 from ..identification import identify
-from ..inference.analytic import gaussian_posterior
-from ..inference.log_posterior import LogPosterior
-from ..io.netcdf import read_posterior
-from ..parameters import DERIVED, DEVIATIONS
+from ....parameters import DERIVED, DEVIATIONS
 
-N_DRAWS = 1000
-SIGMA_MODEL_UM = 2.0
-#: where the deviations a program is compensated with come from
-VALUES = ("posterior", "ballbar")
 
 
 def ballbar_values(campaign) -> np.ndarray:

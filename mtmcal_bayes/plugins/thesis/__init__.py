@@ -9,12 +9,19 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
   ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
-* **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3;
+* **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
+  section of them (thesis values recomputed);
 * **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them;
 * **its compensation**: Eqs 3.4–3.13 as printed beside the exact inversion of its kinematic models, with the
   published ball-bar values as an option.
 
-Each contribution imports its code when asked for, so loading the plug-in costs nothing.
+The package holds the thesis' own code beside these contributions: :mod:`.linear`, :mod:`.kinematic`,
+:mod:`.probe_model` and :mod:`.chain_model` (its models), :mod:`.names`, :mod:`.campaign_keys` and
+:mod:`.campaign_document` (its names and keys), :mod:`.identification` (Eqs 4.10–4.18, 5.1–5.19),
+:mod:`.compensation` (Eqs 3.4–3.13 and the exact inversion of its models), :mod:`.program_format` and
+:mod:`.measuring` (Fig 4.30(a)), :mod:`.report_section`.  No layer of the package imports them: the engine asks the machine
+(:func:`mtmcal_bayes.machines.plugins.provided`).  Each contribution imports its code when asked for, so loading the
+plug-in costs nothing.
 """
 
 from __future__ import annotations
@@ -23,50 +30,50 @@ from __future__ import annotations
 def campaign_sections(r, doc: dict, machine, base_dir):
     """``[ballbar]`` and ``[probe]`` of a campaign in the thesis' format (lever arms R_B, Z_T, X_T, Z_C, R_C; the
     probe's ``[probe.c_axis]`` and ``[probe.b_axis]``)."""
-    from ..io.campaign_reader import thesis_sections
+    from .campaign_keys import campaign_sections as sections
 
-    return thesis_sections(r, doc, machine, base_dir)
+    return sections(r, doc, machine, base_dir)
 
 
 def probe_owners(machine, probe) -> set[str]:
     """The owners of the probe's nuisance terms in the thesis' format: its styli, ``c_axis`` and ``b_axis``."""
-    from ..io.campaign_reader import thesis_probe_owners
+    from .campaign_keys import probe_owners as owners
 
-    return thesis_probe_owners(machine, probe)
+    return owners(machine, probe)
 
 
 def campaign_document(c, doc: dict, save_dir=None) -> dict:
     """``doc`` completed with the campaign in the thesis' format (the inverse of :func:`campaign_sections`)."""
-    from ..io.campaign_writer import thesis_to_dict
+    from .campaign_document import campaign_document as document
 
-    return thesis_to_dict(c, doc, save_dir)
+    return document(c, doc, save_dir)
 
 
 def simulate(campaign, truth, **options):
     """The eccentricities of a campaign in the thesis' format for ``truth`` (``model``, ``noise``, ``seed``,
     ``source``)."""
-    from ..simulation.result import thesis_simulation
+    from ...simulation.result import thesis_simulation
 
     return thesis_simulation(campaign, truth, **options)
 
 
 def simulated_probe(campaign, truth, model: str, **options):
     """The touch-probe readings of a campaign in the thesis' format simulated for ``truth``."""
-    from ..simulation.simulate import thesis_probe
+    from ...simulation.simulate import thesis_probe
 
     return thesis_probe(campaign, truth, model, **options)
 
 
 def pattern_components(pattern: str) -> tuple[str, ...]:
     """The eccentricity components of a thesis pattern (Tables 2.2/2.3)."""
-    from ..patterns import COMPONENTS
+    from ...patterns import COMPONENTS
 
     return COMPONENTS[pattern]
 
 
 def sensitivity_table(campaign, model: str):
     """Thesis Tables 2.4–2.6 as numbers: every pattern's eccentricity per unit deviation and offset."""
-    from ..simulation.sensitivity import sensitivity_table as table
+    from ...simulation.sensitivity import sensitivity_table as table
 
     return table(campaign, model)
 
@@ -74,8 +81,8 @@ def sensitivity_table(campaign, model: str):
 def compensation_program(c, program, *, method: str, model, values: str, mount, integer_unit):
     """``(parsed program, deviations the compensation uses)``: the thesis' X/Y/Z/B/C blocks and its sampled
     deviations (every option of its methods is taken)."""
-    from ..inference.log_posterior import SAMPLED_DEVIATIONS
-    from ..io.gcode import read_program
+    from ...inference.log_posterior import SAMPLED_DEVIATIONS
+    from ...io.gcode import read_program
 
     return read_program(program, integer_unit=integer_unit), SAMPLED_DEVIATIONS
 
@@ -83,7 +90,7 @@ def compensation_program(c, program, *, method: str, model, values: str, mount, 
 def compensate(c, parsed, *, method: str, model, values: str, posterior, point: str, setup, mount):
     """The thesis machine's compensation: exact inversion of its kinematic model (default ``htm-thesis``) or Eqs
     3.4–3.13 as printed (``method="thesis"``), with the posterior or the ball-bar values of Table 4.5."""
-    from ..compensation import compensate as rewrite_program
+    from .compensation.compensate import compensate as rewrite_program
 
     return rewrite_program(c, parsed, method=method, model="htm-thesis" if model is None else model, values=values,
                            posterior=posterior, point=point, setup=setup, mount=mount)
@@ -91,7 +98,7 @@ def compensate(c, parsed, *, method: str, model, values: str, posterior, point: 
 
 def sample_notes(result) -> list[str]:
     """What ``sample`` adds on the thesis machine: the effect of the thesis assumption dx_BT = 0 (Eq 4.2)."""
-    from ..posterior.output import thesis_assumption_lines
+    from ...posterior.output import thesis_assumption_lines
 
     return thesis_assumption_lines(result)
 
@@ -99,15 +106,15 @@ def sample_notes(result) -> list[str]:
 def planning():
     """The planning of the thesis' campaign format: its 12 patterns at its lever arms (R_B, Z_T, X_T, R_C, Z_C), its
     probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
-    from ..machine_time import MachineClock
-    from ..parameters import IDENTIFIABLE
-    from ..planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
+    from ...machine_time import MachineClock
+    from ...parameters import IDENTIFIABLE
+    from ...planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
                                        read_candidates)
-    from ..iso import thesis_name
-    from ..planning.design import Planner, check_targets
-    from ..planning.run_records import RUN_COLUMNS, thesis_records
-    from ..planning.machine_kit import PlanningKit
-    from ..planning.probe_candidates import probe_catalogue, probe_feasibility
+    from ...iso import thesis_name
+    from ...planning.design import Planner, check_targets
+    from ...planning.run_records import RUN_COLUMNS, thesis_records
+    from ...planning.machine_kit import PlanningKit
+    from ...planning.probe_candidates import probe_catalogue, probe_feasibility
 
     def target_name(name, campaign):
         q = thesis_name(str(name))
@@ -149,12 +156,12 @@ def planning():
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
-    from ..models.chain_thesis import ThesisChainModel
-    from ..models.joint import JointModel
-    from ..models.kinematic import HTMModel
-    from ..models.linear import LinearModel
-    from ..models.probe_model import LinearProbeModel, ProbeModel
-    from ..parameters import ParameterSpace
+    from .chain_model import ThesisChainModel
+    from ...models.joint import JointModel
+    from .kinematic import HTMModel
+    from .linear import LinearModel
+    from .probe_model import LinearProbeModel, ProbeModel
+    from ...parameters import ParameterSpace
 
     if space is None:
         space = ParameterSpace.for_campaign(campaign, data=data)
@@ -176,8 +183,8 @@ def first_order_gap(campaign, theta, space=None, *, observations=None) -> float:
     """Largest difference, mm, between ``htm-thesis`` and its first order (``linear``) at ``theta`` (p,)."""
     import numpy as np
 
-    from ..models.kinematic import HTMModel
-    from ..models.linear import LinearModel
+    from .kinematic import HTMModel
+    from .linear import LinearModel
 
     linear = LinearModel(campaign, space, observations=observations)
     kinematic = HTMModel(campaign, "htm-thesis", linear.space, observations=linear.observations)
@@ -187,8 +194,8 @@ def first_order_gap(campaign, theta, space=None, *, observations=None) -> float:
 def parameter_space(campaign, fix_dx_BT: bool, data: str):
     """The thesis' sampled deviations (Table 2.1 without the linear axes' squareness; without dx_BT under the
     thesis assumption ``fix_dx_BT``, Eq 4.2) and the nuisance terms of its campaign format."""
-    from ..inference.log_posterior import SAMPLED_DEVIATIONS
-    from ..parameters import ParameterSpace
+    from ...inference.log_posterior import SAMPLED_DEVIATIONS
+    from ...parameters import ParameterSpace
 
     devs = [d for d in SAMPLED_DEVIATIONS if not (fix_dx_BT and d == "dx_BT")]
     return ParameterSpace.for_campaign(campaign, devs, data=data)
@@ -196,22 +203,30 @@ def parameter_space(campaign, fix_dx_BT: bool, data: str):
 
 def probe_layout(campaign):
     """The touch-probe readings of the thesis' campaign format and where they were taken (Tables 5.1/5.2)."""
-    from ..models.probe_model import ProbeLayout
+    from .probe_model import ProbeLayout
 
     return ProbeLayout(campaign)
 
 
 def program(pattern: str, campaign=None, **options) -> str:
-    """The measuring NC program of a thesis pattern in the format of Fig 4.30(a) (:func:`~mtmcal_bayes.compensation.
-    measuring_program`: ``R_B_mm``, ``start``, ``step_deg``, ``feed``, ``n``, ``setup``, ``mount``)."""
-    from ..compensation import measuring_program
+    """The measuring NC program of a thesis pattern in the format of Fig 4.30(a) (:func:`~mtmcal_bayes.plugins.thesis.
+    measuring.measuring_program`: ``R_B_mm``, ``start``, ``step_deg``, ``feed``, ``n``, ``setup``, ``mount``)."""
+    from .measuring import measuring_program
 
     return measuring_program(pattern, campaign, **options)
 
 
+def report_section(page, ident, effect, sigma_um: float) -> None:
+    """The report's section "Thesis values recomputed": ``ident`` (its identification) beside the printed values,
+    its checks and assumptions, and ``effect`` (a DataFrame or ``None``), that of dx_BT = 0 at ``sigma_um`` µm."""
+    from .report_section import report_section as section
+
+    section(page, ident, effect, sigma_um)
+
+
 def identify(campaign):
     """Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch probe), each value beside the published one."""
-    from ..identification import identify as identify_campaign
+    from .identification import identify as identify_campaign
 
     return identify_campaign(campaign)
 
@@ -239,6 +254,7 @@ class ThesisPlugin:
     # its published method, programs, compensation and simulation
     identify = staticmethod(identify)
     sample_notes = staticmethod(sample_notes)
+    report_section = staticmethod(report_section)
     program = staticmethod(program)
     compensation_program = staticmethod(compensation_program)
     compensate = staticmethod(compensate)
@@ -254,42 +270,42 @@ class ThesisPlugin:
     @property
     def aliases(self) -> tuple[tuple[str, str], ...]:
         """The thesis' names of its deviations by ISO 230-7 symbol (SPEC §19: dx_CZ = E_X0C, ...)."""
-        from ..machines.deviations import THESIS_NAMES
+        from .names import THESIS_NAMES
 
         return tuple(THESIS_NAMES.items())
 
     @property
     def reported_quantities(self) -> tuple[str, ...]:
         """The eight quantities the thesis identifies (Table 4.5), the combination dx_CZ − dx_BT among them."""
-        from ..parameters import IDENTIFIABLE
+        from ...parameters import IDENTIFIABLE
 
         return IDENTIFIABLE
 
     @property
     def summary_quantities(self) -> tuple[str, ...]:
         """What a posterior summary reports: the eight, and dx_CZ, dx_BT and dz_BT apart."""
-        from ..inference.analytic import REPORTED
+        from ...inference.analytic import REPORTED
 
         return REPORTED
 
     @property
     def deviation_table(self) -> dict:
         """The thesis' 13 deviations by their thesis names (Table 2.1), each with its ISO 230-7 symbol."""
-        from ..parameters import DEVIATIONS
+        from ...parameters import DEVIATIONS
 
         return DEVIATIONS
 
     @property
     def quantity_table(self) -> dict:
         """The deviations and the derived quantity dx_CZ − dx_BT, which a design may target."""
-        from ..parameters import QUANTITIES
+        from ...parameters import QUANTITIES
 
         return QUANTITIES
 
     @property
     def models(self) -> tuple[str, ...]:
         """Every model of the registry (:data:`mtmcal_bayes.models.MODELS`): the thesis' and the chain."""
-        from ..models import MODELS
+        from ...models import MODELS
 
         return MODELS
 

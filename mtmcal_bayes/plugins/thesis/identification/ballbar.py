@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import units
-from ..campaign import Campaign
-from ..parameters import IDENTIFIABLE
+from .... import units
+from ....campaign import Campaign
+from ....parameters import IDENTIFIABLE
 from .result import Identified
 
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pandas as pd
 
-from .. import units
-from ..iso import iso_symbol
+from .... import units
+from ....iso import iso_symbol
 
 
 def identification_table(values: dict, *, reread: bool = False) -> pd.DataFrame:
@@ -43,7 +43,7 @@ def text_table(df: pd.DataFrame) -> str:
 
 
 def format_identification(result) -> str:
-    """Human-readable text of an :class:`~mtmcal_bayes.identification.IdentificationResult`."""
+    """Human-readable text of an :class:`~.result.IdentificationResult`."""
     out = [f"Campaign: {result.source}", "",
            "Ball bar, thesis Eqs 4.10–4.18 on the means of the repeats, beside [reported.ballbar] (thesis: Table 4.5)"]
     out.append(text_table(identification_table(result.ballbar)))

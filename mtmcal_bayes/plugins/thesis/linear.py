@@ -29,8 +29,8 @@ import copy
 
 import numpy as np
 
-from ..observations import Observations
-from ..parameters import ParameterSpace, nuisance_name
+from ...observations import Observations
+from ...parameters import ParameterSpace, nuisance_name
 
 
 def linear_coefficients(pattern: str, component: str, setup, mount) -> dict[str, float] | None:
@@ -67,7 +67,8 @@ def _kinematic_rows(campaign, space: ParameterSpace, runs: set[int]) -> dict[tup
     htm-thesis model linearised at zero, for the patterns the thesis gives no relation for.  Only those runs are
     simulated, with the run that places each of their mounts' W ball (:func:`~.kinematic.placing_runs`): the rows
     are then those of the whole campaign's Jacobian."""
-    from .kinematic import HTMModel, jacobian, placing_runs
+    from ...models.jacobian import jacobian
+    from .kinematic import HTMModel, placing_runs
 
     first = placing_runs(campaign.ballbar)
     chosen = sorted(set(runs) | {first[campaign.ballbar.runs[r].mount] for r in runs})

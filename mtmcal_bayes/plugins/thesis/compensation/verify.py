@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .. import units
-from ..models.htm import nc_origin
-from ..models.kinematic import HTMModel
-from ..parameters import DEVIATIONS, ParameterSpace
-from ..patterns import Commands
+from .... import units
+from ....models.htm import nc_origin
+from ....parameters import DEVIATIONS, ParameterSpace
+from ....patterns import Commands
+from ..kinematic import HTMModel
 from .kinematics import compensate_exact
-from .thesis_method import compensate_thesis
+from .printed_method import compensate_thesis
 
 
 def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", method: str = "exact",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..campaign import Campaign
+from ....campaign import Campaign
 from .result import Identified
 
 

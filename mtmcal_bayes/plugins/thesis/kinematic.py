@@ -12,16 +12,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MtmcalError
-from ..observations import Observations
-from ..parameters import (
+from ...errors import MtmcalError
+from ...observations import Observations
+from ...parameters import (
     DEVIATIONS,
     MOUNT_NUISANCE,
     SETUP_NUISANCE,
     ParameterSpace,
     nuisance_name,
 )
-from ..patterns import (
+from ...patterns import (
     B_PATTERNS,
     COMPONENTS,
     Commands,
@@ -29,7 +29,7 @@ from ..patterns import (
     mount_conflict,
     pattern_commands,
 )
-from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
+from ...models.htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
 
 #: rows of a parameter batch evaluated at once (memory: a few MB per temporary)
 CHUNK = 256
@@ -191,16 +191,3 @@ class HTMModel:
         return out[0] if single else out
 
     __call__ = predict
-
-
-def jacobian(model, theta0: np.ndarray | None = None, steps: np.ndarray | None = None) -> np.ndarray:
-    """Central finite-difference Jacobian ``(m, p)`` of ``model.predict`` at ``theta0`` (default zero).
-
-    Default steps: 1″ for angles, 1 µm for lengths; all 2p evaluations in one batch.
-    """
-    p = len(model.space)
-    theta0 = np.zeros(p) if theta0 is None else np.asarray(theta0, float)
-    h = model.space.display_scale() if steps is None else np.asarray(steps, float)
-    batch = np.concatenate([theta0 + np.diag(h), theta0 - np.diag(h)])
-    pred = model.predict(batch)
-    return ((pred[:p] - pred[p:]) / (2 * h)[:, None]).T

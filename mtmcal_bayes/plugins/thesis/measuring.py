@@ -1,6 +1,6 @@
 """Measuring NC programs of the ball-bar patterns for a campaign's tool setup and mount (``ncgen``).
 
-:func:`~mtmcal_bayes.io.ncgen.pattern_program` writes the blocks from plain
+:func:`~.program_format.pattern_program` writes the blocks from plain
 numbers; this module takes them from a campaign: R_B of the setup (default the
 primary one, that of BX), Z_C and R_C of the mount the campaign uses for the
 pattern's axis, the bar length and the CR geometry, and the NC origin
@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import math
 
-from ..errors import ParameterError
-from ..io.ncgen import pattern_program
-from ..models.htm import nc_origin
-from ..patterns import PATTERNS
-from .compensate import geometry_for
+from ...errors import ParameterError
+from ...models.htm import nc_origin
+from ...patterns import PATTERNS
+from .compensation.compensate import geometry_for
+from .program_format import pattern_program
 
 
 def measuring_program(pattern: str, campaign=None, *, R_B_mm: float | None = None, start: tuple | None = None,

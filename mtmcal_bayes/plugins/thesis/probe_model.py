@@ -36,17 +36,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
-from ..observations import ProbeKey, ProbeObservations
-from ..parameters import (
+from ...errors import InputError
+from ...observations import ProbeKey, ProbeObservations
+from ...parameters import (
     DEVIATIONS,
     PROBE_NUISANCE,
     STYLUS_NUISANCE,
     ParameterSpace,
     nuisance_name,
 )
-from ..patterns import Commands
-from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
+from ...patterns import Commands
+from ...models.htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
 
 COMPONENTS = ("X", "Y", "Z")
 
@@ -257,7 +257,7 @@ class LinearProbeModel:
     name = "linear"
 
     def __init__(self, campaign, space: ParameterSpace | None = None, layout: ProbeLayout | None = None):
-        from .kinematic import jacobian
+        from ...models.jacobian import jacobian
 
         kin = ProbeModel(campaign, "htm-thesis", space, layout)
         self.campaign, self.space, self.layout = campaign, kin.space, kin.layout

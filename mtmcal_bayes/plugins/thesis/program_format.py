@@ -1,4 +1,4 @@
-"""Measuring NC programs of the ball-bar patterns (thesis Tables 2.2/2.3, Fig 4.30(a)).
+"""The thesis' program format: measuring NC programs of its ball-bar patterns (Tables 2.2/2.3, Fig 4.30(a)).
 
 The pattern commands (B-axis centre in the C-table frame, :mod:`mtmcal_bayes.patterns`)
 are shifted into the NC frame so that the first block sits at ``(x0, y0, z0)``;
@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..patterns import B_PATTERNS, PATTERNS, pattern_commands
-from .gcode import block_line
+from ...errors import ParameterError
+from ...patterns import B_PATTERNS, PATTERNS, pattern_commands
+from ...io.gcode import block_line
 
 
 def pattern_program(pattern: str, R_B: float, step_deg: float, n: int | None = None, *, L_B: float = 100.0,

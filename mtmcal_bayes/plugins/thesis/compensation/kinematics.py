@@ -14,13 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..models.htm import PIVOTS, CAxis, Geometry, t_ball
-from ..parameters import DEVIATIONS
-from ..patterns import Commands
+from ....models.htm import PIVOTS, CAxis, Geometry, t_ball
+from ....parameters import DEVIATIONS
+from ....patterns import Commands
 
-POINTS = ("tcp", "nose")
-#: distance along the tool from the compensated point at which the tilt's position error is stated, mm
-OFF_TOOL_MM = 100.0
 
 
 def deviation_dict(theta: np.ndarray) -> dict[str, np.ndarray]:

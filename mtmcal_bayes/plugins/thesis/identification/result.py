@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .. import units
-from ..campaign import ReportedValue
-from ..iso import iso_symbol
-from ..parameters import QUANTITIES
+from .... import units
+from ....campaign import ReportedValue
+from ....iso import iso_symbol
+from ....parameters import QUANTITIES
 
 
 @dataclass
@@ -97,3 +97,10 @@ class IdentificationResult:
         from .output import format_identification
 
         return format_identification(self)
+
+    def table(self, which: str = "ballbar"):
+        """The ``ballbar`` or ``probe`` values as a table, one row per quantity (recomputed and published value in
+        display units, difference, flag): what the report shows and writes as ``identification_<which>.csv``."""
+        from .output import identification_table
+
+        return identification_table(getattr(self, which))

@@ -1,0 +1,16 @@
+"""The options a machine's compensation is asked with, and the constants of every compensation's result."""
+
+#: how X/Y/Z are found: exact inversion of a kinematic model, or thesis Eqs 3.4–3.13 as printed (the thesis
+#: machine's only)
+METHODS = ("exact", "thesis")
+#: where the deviations a program is compensated with come from: the posterior, or the deterministic ball-bar values
+#: (the thesis machine's only)
+VALUES = ("posterior", "ballbar")
+#: which point of the tool is put on the programmed point: the tool centre, or the spindle nose
+POINTS = ("tcp", "nose")
+#: distance along the tool from the compensated point at which the tilt's position error is stated, mm
+OFF_TOOL_MM = 100.0
+#: posterior draws for the residual error of a compensated program
+N_DRAWS = 1000
+#: σ_model, µm, of the closed-form posterior a compensation uses when it is given none
+SIGMA_MODEL_UM = 2.0
