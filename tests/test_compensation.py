@@ -11,7 +11,7 @@ from mtmcal_bayes.plugins.thesis.compensation.values import ballbar_values
 from mtmcal_bayes.plugins.thesis.compensation.verify import resimulate
 from mtmcal_bayes.datasets import data_path
 from mtmcal_bayes.io.gcode import parse_program, read_program, rewrite
-from mtmcal_bayes.models.htm import Geometry
+from mtmcal_bayes.plugins.thesis.htm import Geometry
 from mtmcal_bayes.parameters import DEVIATIONS
 
 FIG = data_path("fig4_30a_bx_original.nc")

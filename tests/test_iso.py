@@ -17,7 +17,7 @@ from mtmcal_bayes.campaign import Truth
 from mtmcal_bayes.inference.analytic import gaussian_posterior
 from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.iso import ISO_SYMBOL, NO_SYMBOL, iso_symbol, thesis_name
-from mtmcal_bayes.models.htm import HTM_LITERAL, CAxis, Geometry, t_ball
+from mtmcal_bayes.plugins.thesis.htm import HTM_LITERAL, CAxis, Geometry, t_ball
 from mtmcal_bayes.parameters import DEVIATIONS, QUANTITIES
 from mtmcal_bayes.patterns import Commands
 

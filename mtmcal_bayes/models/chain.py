@@ -31,7 +31,7 @@ import numpy as np
 from ..machines.description import LINEAR, SPINDLE, MachineDescription
 from ..machines.deviations import SQUARENESS_ERRORS, Deviation
 from ..machines.patterns import turn
-from .htm import _apply, rotation
+from .rotations import _apply, rotation
 
 
 def _step(command: np.ndarray, direction: np.ndarray) -> np.ndarray:

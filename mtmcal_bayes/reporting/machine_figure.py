@@ -25,7 +25,7 @@ from ..machines.description import FRAME, SPINDLE, MachineDescription
 from ..machines.deviations import SQUARENESS_ERRORS, Deviation, generated, redundant, selected
 from ..machines.plugins import provided
 from ..models.chain import Chain
-from ..models.htm import rotation
+from ..models.rotations import rotation
 
 WORK = "#0072B2"  # what moves the workpiece
 TOOL = "#D55E00"  # what moves the tool

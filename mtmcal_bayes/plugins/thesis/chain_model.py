@@ -14,7 +14,7 @@ from ...io.machine_reader import description_of
 from ...machines.deviations import generated
 from ...parameters import MOUNT_NUISANCE
 from ...models.chain import Chain
-from ...models.htm import HTM_LITERAL, _column
+from .htm import HTM_LITERAL, _column
 from .kinematic import HTMModel
 
 

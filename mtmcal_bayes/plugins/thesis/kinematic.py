@@ -29,7 +29,7 @@ from ...patterns import (
     mount_conflict,
     pattern_commands,
 )
-from ...models.htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
+from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
 
 #: rows of a parameter batch evaluated at once (memory: a few MB per temporary)
 CHUNK = 256

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from ...errors import ParameterError
-from ...models.htm import nc_origin
+from .htm import nc_origin
 from ...patterns import PATTERNS
 from .compensation.compensate import geometry_for
 from .program_format import pattern_program

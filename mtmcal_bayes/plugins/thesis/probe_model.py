@@ -46,7 +46,7 @@ from ...parameters import (
     nuisance_name,
 )
 from ...patterns import Commands
-from ...models.htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
+from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
 
 COMPONENTS = ("X", "Y", "Z")
 

@@ -23,7 +23,7 @@ from ....compensation.options import METHODS, OFF_TOOL_MM, POINTS, SIGMA_MODEL_U
 from ....compensation.result import CompensationResult
 from ....io.gcode import Program, rewrite
 from ....models import KINEMATIC_MODELS, check_model
-from ....models.htm import Geometry, nc_origin
+from ..htm import Geometry, nc_origin
 from ....parameters import DEVIATIONS
 from .kinematics import compensate_exact, tool_axis_tilt, tool_point
 from .printed_method import compensate_thesis

@@ -1,6 +1,6 @@
 """Where the tool centre point actually is, relative to the workpiece, and the exact X/Y/Z inversion.
 
-The tool point is followed through the kinematic chain of :mod:`~mtmcal_bayes.models.htm`
+The tool point is followed through the kinematic chain of :mod:`~mtmcal_bayes.plugins.thesis.htm`
 (spindle side, ``t_ball``) and expressed in the frame of the C table (the
 workpiece), turned back by C: what a cutting tool would leave on the part.
 Commands are in the model frame (the B-axis centre in the C-table frame,
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ....models.htm import PIVOTS, CAxis, Geometry, t_ball
+from ..htm import PIVOTS, CAxis, Geometry, t_ball
 from ....parameters import DEVIATIONS
 from ....patterns import Commands
 

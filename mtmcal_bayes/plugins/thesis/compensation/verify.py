@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from .... import units
-from ....models.htm import nc_origin
+from ..htm import nc_origin
 from ....parameters import DEVIATIONS, ParameterSpace
 from ....patterns import Commands
 from ..kinematic import HTMModel

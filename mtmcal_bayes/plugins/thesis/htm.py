@@ -11,7 +11,9 @@ C-axis frame, offset by (xW, yW, zW), and turned with C::
 
     W(θ) = M_CZ E_C(θ) (M_CZ⁻¹ P0 + w),      ΔL = |T − W| − L_B
 
-Rotations are exact (``expm([ε]×)``, Rodrigues' formula).
+Rotations are exact (``expm([ε]×)``, Rodrigues' formula: :mod:`mtmcal_bayes.models.rotations`, which the chain
+shares).  This is the thesis' own model (its Eq 2.10 and pivots), the thesis plug-in's; on the thesis machine the
+chain equals ``htm-literal`` to 1e-9 mm (``tests/test_kinematic.py``).
 Where each angular deviation pivots is an explicit :class:`Pivots`
 configuration; two are named:
 
@@ -36,7 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..patterns import Commands
+from ...models.rotations import _apply, rotation
+from ...patterns import Commands
 
 
 @dataclass(frozen=True)
@@ -80,31 +83,6 @@ class Geometry:
 def nc_origin(geo: Geometry) -> np.ndarray:
     """The NC origin in the model frame, ``(X_T, 0, Z_C + R_B + Z_T)`` mm."""
     return np.array([geo.X_T, 0.0, geo.Z_C + geo.R_B + geo.Z_T])
-
-
-def rotation(rotvec: np.ndarray) -> np.ndarray:
-    """Exact rotation matrices ``expm([ε]×)`` for rotation vectors ``(n, 3)`` -> ``(n, 3, 3)`` (Rodrigues).
-
-    ``R = I + sinc(θ)·K + ½·sinc²(θ/2)·K²`` with ``K = [ε]×`` and ``θ = |ε|``: no cancellation for small θ.
-    """
-    v = np.atleast_2d(np.asarray(rotvec))
-    v = v if np.iscomplexobj(v) else v.astype(float)  # complex: a complex-step derivative goes through
-    K = np.zeros((len(v), 3, 3), dtype=v.dtype)
-    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
-    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
-    with np.errstate(invalid="ignore", over="ignore"):  # absurd angles give NaN, which the callers report
-        theta = np.sqrt(np.einsum("ni,ni->n", v, v))
-        a = np.sinc(theta / np.pi)[:, None, None]
-        b = 0.5 * np.sinc(theta / (2 * np.pi))[:, None, None] ** 2
-        return np.eye(3) + a * K + b * (K @ K)
-
-
-def _apply(R: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Apply per-draw rotations ``(n,3,3)`` to vectors ``(n,3)`` or ``(n,k,3)``."""
-    Rt = np.transpose(R, (0, 2, 1))
-    if v.ndim == 2:
-        return (v[:, None, :] @ Rt)[:, 0, :]
-    return v @ Rt  # batched matmul: far faster than einsum here
 
 
 def _rotate(angles: list[np.ndarray], v: np.ndarray) -> np.ndarray:
