@@ -29,7 +29,8 @@ from ..machines.deviations import quantities as deviation_table
 from ..machines.plugins import provided
 from ..machines.probe_terms import probe_terms
 from .measurement_sections import described_ballbar, described_probe
-from .machine_reader import BUILTIN_TYPES, DESCRIPTION_KEYS, parse_description, referenced_description
+from .machine_reader import (BUILTIN_TYPES, DESCRIPTION_KEYS, THESIS_TYPE, builtin_description, parse_description,
+                             referenced_description)
 from .textfiles import read_user_text
 from .tolerances import machine_names, parse_tolerances
 from .toml_reader import TomlReader, kind_of, parse_toml
@@ -139,7 +140,9 @@ def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:
         r.fail("machine.configuration", f"{configuration!r} is not the thesis machine's ({THESIS_CONFIGURATION}) and "
                "nothing describes it: add [machine.axes.<letter>] and [machine.spindle] (docs/machines.md) or name a "
                f"built-in type with description = \"...\" ({', '.join(BUILTIN_TYPES)})")
-    return Machine(r.string(t, "name", "machine"), configuration, travel, serial, mtype)
+    # a campaign in the thesis' own format is of the thesis machine: its built-in description and plug-in
+    return Machine(r.string(t, "name", "machine"), configuration, travel, serial, mtype,
+                   builtin_description(THESIS_TYPE))
 
 
 def deviation_quantities(machine: Machine) -> dict:

@@ -12,7 +12,7 @@ from ..conventions import machine_repeats
 from ..figure_style import COLOURS, figure, tight_layout
 from ..observations import Observations
 from ..machines import patterns as described_patterns
-from ..patterns import B_ANGLES_DEG, B_PATTERNS, COMPONENTS, polar_basis
+from ..machines.plugins import provided
 
 CAPTION = (
     "Ball-bar trajectories as ball-bar software draws them: the change of bar length ΔL along the "
@@ -50,22 +50,21 @@ class _Geometry:
 
 
 def _geometry(run, campaign) -> _Geometry:
-    """The polar geometry of ``run``: from the machine's description where it has one (the angle ψ of the
-    eccentricity fit over the run's arc, SPEC §19), else from the thesis' pattern table (Sec 2.3)."""
+    """The polar geometry of ``run``: its machine's plug-in's where it draws its own campaign format (the thesis':
+    its pattern table, Sec 2.3), else from the machine's description (the angle ψ of the eccentricity fit over the
+    run's arc, SPEC §19)."""
+    own = provided(campaign.machine, "polar_geometry")
+    if own is not None:
+        return _Geometry(*own(run, campaign))
     bb = campaign.ballbar
     s, m = bb.setups[run.setup], bb.mounts[run.mount]
     desc = campaign.machine.description
-    if desc is not None:
-        cmd = described_patterns.pattern_commands(desc, run.pattern, length=s.R_B, ball=m.position, bar=bb.length,
-                                                  arc_deg=run.arc_deg, hold_deg=run.hold_deg)
-        psi = cmd.psi if np.ptp(cmd.psi) < np.deg2rad(300.0) else np.deg2rad(C_GRID_DEG)
-        where = ", ".join(f"{v:g}" for v in m.position)
-        return _Geometry(psi, described_patterns.fit_basis(psi), described_patterns.components(desc, run.pattern),
-                         np.ptp(psi) < np.deg2rad(300.0), f"R_B {s.R_B:g} mm, W ball at ({where}) mm")
-    is_b = run.pattern in B_PATTERNS
-    psi = np.deg2rad(B_ANGLES_DEG if is_b else C_GRID_DEG)
-    return _Geometry(psi, polar_basis(run.pattern, psi), COMPONENTS[run.pattern], is_b,
-                     f"R_B {s.R_B:g} mm, R_C {m.R_C:g} mm")
+    cmd = described_patterns.pattern_commands(desc, run.pattern, length=s.R_B, ball=m.position, bar=bb.length,
+                                              arc_deg=run.arc_deg, hold_deg=run.hold_deg)
+    psi = cmd.psi if np.ptp(cmd.psi) < np.deg2rad(300.0) else np.deg2rad(C_GRID_DEG)
+    where = ", ".join(f"{v:g}" for v in m.position)
+    return _Geometry(psi, described_patterns.fit_basis(psi), described_patterns.components(desc, run.pattern),
+                     np.ptp(psi) < np.deg2rad(300.0), f"R_B {s.R_B:g} mm, W ball at ({where}) mm")
 
 
 def _dL(g: _Geometry, comps: list[str], values: np.ndarray) -> np.ndarray:
