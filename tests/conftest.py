@@ -23,6 +23,14 @@ def thesis():
     return load_campaign()
 
 
+@pytest.fixture(scope="session")
+def thesis_posterior():
+    """``sample(seed=1)`` of the built-in campaign (the default run), read by several modules' tests (read only)."""
+    from mtmcal_bayes import sample
+
+    return sample(seed=1)
+
+
 @pytest.fixture
 def run_cli():
     """Run the CLI in-process: returns (exit status, stdout, stderr).
