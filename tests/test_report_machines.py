@@ -31,19 +31,22 @@ def _campaign(machine: str):
     return mb.load_campaign() if machine == "thesis" else mb.load_campaign(demo_campaign(machine))
 
 
-@pytest.fixture(scope="module")
-def reports(thesis_report_run, demo_report):
-    """``{type: (campaign, directory, stdout, toleranced)}``: the shared report of the thesis campaign
-    (conftest.thesis_report_run) and of each demo (conftest.demo_report: exact draws, seed 1), each with tolerances
-    on some of its quantities (``toleranced``: their ISO symbols) so that the conformity section has verdicts."""
-    out = {}
-    for machine in TYPES:
-        rep, stdout = thesis_report_run if machine == "thesis" else demo_report(machine)
-        text = SHARED_REPORT_TOLERANCES if machine == "thesis" else DEMO_REPORT_TOLERANCES[machine]
+@pytest.fixture
+def reports(request, demo_report):
+    """``reports(type)`` → ``(campaign, directory, stdout, toleranced)``: the shared report of the thesis campaign
+    (conftest.thesis_report_run) or of a demo (conftest.demo_report: exact draws, seed 1), each with tolerances on
+    some of its quantities (``toleranced``: their ISO symbols) so that the conformity section has verdicts.  Made
+    when first asked for, so that the workers of ``pytest -n`` make different ones at once."""
+
+    def get(machine: str):
+        thesis = machine == "thesis"
+        rep, stdout = request.getfixturevalue("thesis_report_run") if thesis else demo_report(machine)
+        text = SHARED_REPORT_TOLERANCES if thesis else DEMO_REPORT_TOLERANCES[machine]
         names = (line.split("=")[0].strip().rsplit("_", 1)[0] for line in text.splitlines()[1:] if line)
         toleranced = {iso_symbol(n) or n for n in names}  # a thesis name given: its ISO symbol
-        out[machine] = (_campaign(machine), rep, stdout, toleranced)
-    return out
+        return _campaign(machine), rep, stdout, toleranced
+
+    return get
 
 
 def _expected(campaign) -> tuple[set[str], set[str]]:
@@ -77,7 +80,7 @@ def test_every_section_the_machine_supports(reports, machine):
     """Each section the campaign has what it needs for is on the page, each CSV written and named in the file list,
     each figure the page shows exists; the instruments, the plan, the compensation, the polar trajectories and the
     widths are on every built-in type (each demo has both instruments)."""
-    campaign, rep, stdout, _ = reports[machine]
+    campaign, rep, stdout, _ = reports(machine)
     html = unescape((rep / "index.html").read_text(encoding="utf-8"))
     anchors = set(re.findall(r'<h2 id="([^"]+)">', html))
     sections, csvs = _expected(campaign)
@@ -97,7 +100,7 @@ def test_the_deterministic_values_beside_the_posterior(reports, machine):
     """The forest's deterministic values: the thesis' ball-bar values on the thesis machine, the least squares on a
     described one, which agree with the posterior (weak priors: a fraction of a sd) on what the campaign determines,
     and the demo's stated truth lies within Z_MAX sd of the posterior."""
-    campaign, rep, _, _ = reports[machine]
+    campaign, rep, _, _ = reports(machine)
     s = pd.read_csv(rep / "summary.csv", index_col="quantity")
     if provided(campaign.machine, "identify") is not None:
         assert s["ballbar"].notna().sum() >= 6
@@ -118,7 +121,7 @@ def test_the_deterministic_values_beside_the_posterior(reports, machine):
 def test_the_conformity_verdict_is_tabulated(reports, machine):
     """A verdict for each quantity given a tolerance (by its ISO symbol, or its alias on the thesis machine), and
     for no other."""
-    _, rep, _, toleranced = reports[machine]
+    _, rep, _, toleranced = reports(machine)
     s = pd.read_csv(rep / "summary.csv", index_col="quantity")
     assert set(s["conformity"].dropna()) <= {"conforms", "does not conform", "undecided"}
     judged = {iso_symbol(q) or q for q in s.index[s["conformity"].notna()]}
