@@ -64,12 +64,13 @@ def test_html_is_self_contained_with_captions(thesis_report):
 
 
 def test_unconverged_report_says_so(run_cli, tmp_path):
-    code, _out, err = run_cli("report", "-o", tmp_path / "rep", "--max-steps", "60", "--target-ess", "1e6",
+    """The smallest step budget (the first check's, 50 steps) and an ESS target no run meets."""
+    code, _out, err = run_cli("report", "-o", tmp_path / "rep", "--max-steps", "50", "--target-ess", "1e6",
                               "--seed", "2", "--quiet")
     assert code == 0, err
     html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
-    assert "step budget of 60 reached" in html and "NOT converged" in html
-    assert "WARNING: step budget of 60 reached" in err
+    assert "step budget of 50 reached" in html and "NOT converged" in html
+    assert "WARNING: step budget of 50 reached" in err
 
 
 def test_corner_lists_reference_values_it_cannot_draw(thesis_report, tmp_path):
