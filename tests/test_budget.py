@@ -155,36 +155,31 @@ def test_thesis_budget_states_what_docs_metrology_prints(thesis_post):
     assert printed(sd1["dz_BT"], 10.1, 1) and printed(100 * _share(v1, "dz_BT", ["prior:dRB"]), 96, 0)
 
 
-@pytest.fixture(scope="module")
-def thesis_sample():
-    return mb.sample(seed=1)
-
-
-def test_sampled_budget_adds_up_to_the_sampled_variance(thesis_sample, thesis_post):
+def test_sampled_budget_adds_up_to_the_sampled_variance(thesis_posterior, thesis_post):
     """Law of total variance over the sigma_model draws: E[Var|σ] + Var(E|σ) is the posterior variance the sampler
     found, within 5 % (the sampler's sd is within ~2 % of the exact one; the quantile grid adds ~1 %)."""
-    sigma = units.to_internal(np.asarray(thesis_sample.idata.posterior["sigma_model"]).ravel(), "um")
+    sigma = units.to_internal(np.asarray(thesis_posterior.idata.posterior["sigma_model"]).ravel(), "um")
     grid = np.quantile(sigma, (np.arange(64) + 0.5) / 64)
     parts = [conditional_budget(thesis_post, s, REPORTED) for s in grid]
     total = sum(v for v, _ in parts).sum(axis=1) / 64 + np.var(np.stack([m.to_numpy() for _, m in parts]), axis=0)
     for n in REPORTED:
-        sd = thesis_sample.summary.loc[n, "sd"]
-        sd_budget = units.from_internal(np.sqrt(total[n]), thesis_sample.summary.loc[n, "unit"])
+        sd = thesis_posterior.summary.loc[n, "sd"]
+        sd_budget = units.from_internal(np.sqrt(total[n]), thesis_posterior.summary.loc[n, "unit"])
         assert sd_budget == pytest.approx(sd, rel=0.05), n
     shares = variance_budget(thesis_post, sigma)
     assert np.allclose(shares.sum(axis=1), 1.0, atol=1e-9)
     assert shares["sigma_model_uncertainty"].max() > 0.02  # beta_XB's mean moves with σ_model
 
 
-def test_budget_in_json_console_and_fixed_sigma(thesis_sample, run_cli):
-    s = thesis_sample.to_json()["summary"]
+def test_budget_in_json_console_and_fixed_sigma(thesis_posterior, run_cli):
+    s = thesis_posterior.to_json()["summary"]
     for n in REPORTED:
         b = s[n]["budget"]
         assert sum(b.values()) == pytest.approx(1.0, abs=1e-6)
         assert {"repeatability", "instrument", "sigma_model", "sigma_model_uncertainty", "prior:deviations",
                 "prior:T-ball centring", "prior:dRB", "prior:W-ball clamping"} <= set(b)
     assert "budget" not in s["sigma_model"]
-    assert "Uncertainty budget: % of each posterior variance by source" in thesis_sample.to_text()
+    assert "Uncertainty budget: % of each posterior variance by source" in thesis_posterior.to_text()
 
     code, out, err = run_cli("sample", "--json", "--quiet", "--seed", "1", "--sigma-model-um", "1.32")
     assert code == 0, err

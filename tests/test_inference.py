@@ -229,7 +229,7 @@ def test_fix_dx_BT_recovers_thesis_beta_XB(thesis):
 
 def test_cli_sample_json(run_cli, tmp_path):
     out_nc = tmp_path / "post.nc"
-    code, out, err = run_cli("sample", "--seed", "2", "--max-steps", "100", "--target-ess", "1e7", "--quiet", "--json",
+    code, out, err = run_cli("sample", "--seed", "2", "--max-steps", "50", "--target-ess", "1e7", "--quiet", "--json",
                              "-o", out_nc)
     assert code == 0, err
     data = json.loads(out)

@@ -64,11 +64,6 @@ def synthetic(thesis, seed: int, error_um: float = 0.0):
     return c
 
 
-@pytest.fixture(scope="module")
-def thesis_posterior():
-    return mb.sample(seed=1)
-
-
 def _expected_loglik(idata, post):
     """scipy's Normal log density of every observed mean (µm) for every draw of ``idata``'s posterior."""
     theta = np.stack([units.to_internal(np.asarray(idata.posterior[n]), quantity_unit(n)) for n in post.names],

@@ -77,13 +77,11 @@ def test_the_sigma_model_caption_and_figure_follow_the_quantities_drawn(samples)
             assert a.x1 <= b.x0 or b.x1 <= a.x0 or a.y1 <= b.y0 or b.y1 <= a.y0, "two panels overlap"
 
 
-def test_a_described_report_counts_its_own_quantities(tmp_path, run_cli):
+def test_a_described_report_counts_its_own_quantities(demo_report):
     """The head-head demo determines six deviations one by one or in combination: the report's sigma_model.png
-    caption says six, as its identifiability.csv and combinations.csv list them."""
-    out = tmp_path / "rep"
-    code, _, err = run_cli("report", "--machine", "head-head", "--sampler", "exact", "--seed", "1", "-o", out,
-                           "--quiet")
-    assert code == 0, err
+    caption says six, as its identifiability.csv and combinations.csv list them (the demo's shared report,
+    conftest.demo_report)."""
+    out, _ = demo_report("head-head")
     ident = pd.read_csv(out / "identifiability.csv")
     drawn = set(ident.loc[ident["kind"] == "determined", "quantity"])
     for weights in ident.loc[ident["kind"] == "combination", "weights"]:

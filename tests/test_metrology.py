@@ -135,11 +135,6 @@ def test_campaign_tolerances_section_round_trips(tmp_path, thesis):
     assert back.tolerances["beta_CZ"].low is None
 
 
-@pytest.fixture(scope="module")
-def thesis_posterior():
-    return mb.sample(seed=1)
-
-
 def test_dz_BT_rests_on_nuisance_priors(thesis_posterior):
     """dz_BT is confounded with the tool-length error: the Jacobian leaves it undetermined (``identified`` False,
     ``identification`` "not identified"), and the separate prior-sensitivity diagnostic names the dRB and zT priors

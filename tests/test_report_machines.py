@@ -1,7 +1,8 @@
 """One report for every machine (SPEC §8, §19, §20): on each built-in type every section the campaign and its machine
 have what it needs for is in the report, with its CSV; ``--compare-models`` and ``posterior=`` on a described machine.
 
-One report per type, shared by the tests (module scope); exact draws of the linear model keep them quick.
+One report per type, shared by the whole test run (conftest.thesis_report_run, conftest.demo_report); exact draws of
+the linear model keep the demos' quick.
 """
 
 from __future__ import annotations
@@ -14,10 +15,11 @@ import pandas as pd
 import pytest
 
 import mtmcal_bayes as mb
-from mtmcal_bayes.analysis import analysis_of
 from mtmcal_bayes.io.machine_reader import demo_campaign
+from mtmcal_bayes.iso import iso_symbol
 from mtmcal_bayes.machines.plugins import provided
 from mtmcal_bayes.models import models_of
+from tests.conftest import DEMO_REPORT_TOLERANCES, SHARED_REPORT_TOLERANCES
 
 TYPES = ("thesis", "trunnion", "vertical-turn-mill", "head-head")
 #: a determined quantity's posterior mean lies within this many posterior sd of the demo's stated truth (seeded;
@@ -29,41 +31,22 @@ def _campaign(machine: str):
     return mb.load_campaign() if machine == "thesis" else mb.load_campaign(demo_campaign(machine))
 
 
-def _first_angle(campaign) -> str:
-    """The first deviation of the machine's parameter space that is an angle (its name as the machine gives it)."""
-    space = analysis_of(campaign, data="ballbar").space
-    return next(p.name for p in space.parameters if p.group == "deviation" and p.unit == "arcsec")
+@pytest.fixture
+def reports(request, demo_report):
+    """``reports(type)`` → ``(campaign, directory, stdout, toleranced)``: the shared report of the thesis campaign
+    (conftest.thesis_report_run) or of a demo (conftest.demo_report: exact draws, seed 1), each with tolerances on
+    some of its quantities (``toleranced``: their ISO symbols) so that the conformity section has verdicts.  Made
+    when first asked for, so that the workers of ``pytest -n`` make different ones at once."""
 
+    def get(machine: str):
+        thesis = machine == "thesis"
+        rep, stdout = request.getfixturevalue("thesis_report_run") if thesis else demo_report(machine)
+        text = SHARED_REPORT_TOLERANCES if thesis else DEMO_REPORT_TOLERANCES[machine]
+        names = (line.split("=")[0].strip().rsplit("_", 1)[0] for line in text.splitlines()[1:] if line)
+        toleranced = {iso_symbol(n) or n for n in names}  # a thesis name given: its ISO symbol
+        return _campaign(machine), rep, stdout, toleranced
 
-def _run(*argv) -> tuple[int, str, str]:
-    """The command line in this process: (exit status, stdout, stderr)."""
-    import contextlib
-    import io
-
-    from mtmcal_bayes.cli import main
-
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in argv])
-    return code, out.getvalue(), err.getvalue()
-
-
-@pytest.fixture(scope="module")
-def reports(tmp_path_factory):
-    """``{type: (campaign, directory, stdout)}``: ``report`` of the thesis campaign and of each demo, exact draws,
-    seed 1, with a ±5″ tolerance on the machine's first angle (so that the conformity section has a verdict)."""
-    out = {}
-    for machine in TYPES:
-        c = _campaign(machine)
-        base = tmp_path_factory.mktemp(machine)
-        tol = base / "tolerances.toml"
-        tol.write_text(f"[tolerances]\n{_first_angle(c)}_arcsec = 5\n", encoding="utf-8")
-        where = [] if machine == "thesis" else ["--machine", machine]
-        code, stdout, err = _run("report", *where, "-o", base / "rep", "--sampler", "exact", "--seed", "1",
-                                           "--tolerances", tol, "--quiet")
-        assert code == 0, (machine, err)
-        out[machine] = (c, base / "rep", stdout)
-    return out
+    return get
 
 
 def _expected(campaign) -> tuple[set[str], set[str]]:
@@ -96,7 +79,7 @@ def test_every_section_the_machine_supports(reports, machine):
     """Each section the campaign has what it needs for is on the page, each CSV written and named in the file list,
     each figure the page shows exists; the instruments, the plan, the compensation, the polar trajectories and the
     widths are on every built-in type (each demo has both instruments)."""
-    campaign, rep, stdout = reports[machine]
+    campaign, rep, stdout, _ = reports(machine)
     html = unescape((rep / "index.html").read_text(encoding="utf-8"))
     anchors = set(re.findall(r'<h2 id="([^"]+)">', html))
     sections, csvs = _expected(campaign)
@@ -116,7 +99,7 @@ def test_the_deterministic_values_beside_the_posterior(reports, machine):
     """The forest's deterministic values: the thesis' ball-bar values on the thesis machine, the least squares on a
     described one, which agree with the posterior (weak priors: a fraction of a sd) on what the campaign determines,
     and the demo's stated truth lies within Z_MAX sd of the posterior."""
-    campaign, rep, _ = reports[machine]
+    campaign, rep, _, _ = reports(machine)
     s = pd.read_csv(rep / "summary.csv", index_col="quantity")
     if provided(campaign.machine, "identify") is not None:
         assert s["ballbar"].notna().sum() >= 6
@@ -135,22 +118,22 @@ def test_the_deterministic_values_beside_the_posterior(reports, machine):
 
 @pytest.mark.parametrize("machine", TYPES)
 def test_the_conformity_verdict_is_tabulated(reports, machine):
-    campaign, rep, _ = reports[machine]
+    """A verdict for each quantity given a tolerance (by its ISO symbol, or its alias on the thesis machine), and
+    for no other."""
+    _, rep, _, toleranced = reports(machine)
     s = pd.read_csv(rep / "summary.csv", index_col="quantity")
-    name = _first_angle(campaign)
-    assert s.loc[name, "conformity"] in ("conforms", "does not conform", "undecided")
-    assert s["conformity"].notna().sum() == 1
+    assert set(s["conformity"].dropna()) <= {"conforms", "does not conform", "undecided"}
+    judged = {iso_symbol(q) or q for q in s.index[s["conformity"].notna()]}
+    assert judged == toleranced
 
 
-def test_compare_models_on_a_described_machine(tmp_path, run_cli):
-    """``--compare-models`` on a described machine: its two models (linear, chain) side by side, for every
-    deviation, with their fit to the ball bar; the chain's first order is the linear model, so on a demo simulated
-    at small deviations their means agree within a fraction of a sd."""
+def test_compare_models_on_a_described_machine(demo_report):
+    """``--compare-models`` on a described machine (the trunnion's shared report, conftest.DEMO_REPORT_COMPARES):
+    its two models (linear, chain) side by side, for every deviation, with their fit to the ball bar; the chain's
+    first order is the linear model, so on a demo simulated at small deviations their means agree within a
+    fraction of a sd."""
     c = mb.load_campaign(demo_campaign("trunnion"))
-    code, out, err = run_cli("report", "--machine", "trunnion", "-o", tmp_path / "rep", "--compare-models",
-                             "--sampler", "exact", "--seed", "1", "--quiet")
-    assert code == 0, err
-    rep = tmp_path / "rep"
+    rep, _ = demo_report("trunnion")
     for name in ("compare_forest.png", "compare_ppc.png", "compare_models.csv", "compare_fit.csv"):
         assert (rep / name).stat().st_size > 0, name
     table = pd.read_csv(rep / "compare_models.csv")
