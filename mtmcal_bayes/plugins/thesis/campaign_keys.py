@@ -17,10 +17,11 @@ import numpy as np
 
 from ... import units
 from ...campaign import Ballbar, BAxisProbe, CAxisProbe, Machine, Mount, PlannedRun, Probe, Run, Setup, Stylus
-from ...conventions import CONVENTIONS, ConventionError, check_convention_name, check_run, run_convention, run_matrix
+from ...conventions import CONVENTIONS, ConventionError, check_run, run_convention, run_matrix
 from ...datasets import data_path
 from ...errors import InputError, MtmcalError
 from ...io.dprnt import read_dprnt
+from ...io.measurement_sections import read_convention
 from ...io.planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
 from ...io.planned_runs import planned_in_order, planned_run
 from ...io.toml_reader import TomlReader, kind_of
@@ -213,18 +214,8 @@ def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: fl
     if not repeats:
         r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])} "
                "or trace_csv")
-    return Run(pattern, setup, mount, repeats, traces, rms, _convention_of(r, t, path),
-               _convention_of(r, t, path, "alternative_convention"))
-
-
-def _convention_of(r: TomlReader, t: dict, path: str, key: str = "convention") -> str | None:
-    convention = r.string(t, key, path, default="") or None
-    if convention is not None:
-        try:
-            check_convention_name(convention)
-        except ConventionError as err:
-            r.fail(f"{path}.{key}", str(err))
-    return convention
+    return Run(pattern, setup, mount, repeats, traces, rms, read_convention(r, t, path),
+               read_convention(r, t, path, "alternative_convention"))
 
 
 def _planned_run(r: TomlReader, t: dict, path: str, *, pattern: str, setup: str, mount: str,
@@ -237,7 +228,7 @@ def _planned_run(r: TomlReader, t: dict, path: str, *, pattern: str, setup: str,
                "delete planned and repeats")
     run = planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount)
     length = r.number(t, "length_mm", path, required=False, positive=True)
-    run.convention = _convention_of(r, t, path)
+    run.convention = read_convention(r, t, path)
     run.length = None if length == L_B else length
     return run
 
