@@ -118,6 +118,8 @@ def same(a: Path, b: Path, root_a: Path, root_b: Path) -> bool:
 
 
 def compare(out: Path, before: Path) -> int:
+    """Print each file of ``before``'s commands that ``out`` lacks or has otherwise, and each file a command now
+    writes that it did not (only the commands both snapshots ran); returns 1 when any is found."""
     bad = 0
     for d in sorted(p for p in before.iterdir() if p.is_dir()):
         for f in sorted(p for p in d.rglob("*") if p.is_file() and ".cache" not in p.parts):
@@ -128,6 +130,11 @@ def compare(out: Path, before: Path) -> int:
             elif not same(f, g, before, out):
                 print(f"differs  {f.relative_to(before)}")
                 bad += 1
+        if (out / d.name).is_dir():
+            for g in sorted(p for p in (out / d.name).rglob("*") if p.is_file() and ".cache" not in p.parts):
+                if not (before / g.relative_to(out)).exists():
+                    print(f"new      {g.relative_to(out)}")
+                    bad += 1
     print(f"{bad} difference(s)")
     return 1 if bad else 0
 
