@@ -175,7 +175,6 @@ def simulate(campaign: CampaignLike = None, *, truth, model: str | None = None, 
     scattered like a real measurement when ``noise``."""
     from .campaign import Truth
     from .io.campaign_reader import load_truth
-    from .models import check_model
     from .simulation import simulate_truth
 
     from .errors import ParameterError
@@ -803,7 +802,6 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     (docs/design.md).
     """
     from .machine_time import TimeModel
-    from .models import check_model
     from .planning.design_make import make_design
     from .planning.design_output import DesignResult, write_design
     from .planning.next_run import planned_candidates
@@ -832,7 +830,6 @@ def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, cont
     campaign's ``[design]``; ``output`` receives the re-planned campaign and programs; ``sigma_model_prior`` as for
     :func:`design` (the campaign does not record it: give the one it was designed under)."""
     from .machine_time import TimeModel
-    from .models import check_model
     from .planning.design_output import NextResult, write_next
     from .planning.next_run import next_step
 

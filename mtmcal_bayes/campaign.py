@@ -72,6 +72,7 @@ class Run:
     alternative_convention: str | None = None  # the best reading rejected for it, where its reading was a choice
     arc_deg: np.ndarray | None = None  # a described machine's: the swivelled axis' angles, degrees (None: default)
     hold_deg: dict[str, float] | None = None  # a described machine's: the other rotary axes' positions, degrees
+    reversed: bool = False  # a described machine's: the T ball on the other side of the W ball (machines/patterns)
 
     def mean(self, component: str) -> float:
         """Mean of the repeats of ``component``, mm."""
@@ -100,6 +101,7 @@ class PlannedRun:
     length: float | None = None  # bar length, mm, when not the campaign's [ballbar] length_mm
     arc_deg: np.ndarray | None = None  # a described machine's: the swivelled axis' angles, degrees (None: default)
     hold_deg: dict[str, float] | None = None  # a described machine's: the other rotary axes' positions, degrees
+    reversed: bool = False  # a described machine's: the T ball on the other side of the W ball (machines/patterns)
 
     @property
     def label(self) -> str:

@@ -27,10 +27,12 @@ class ObservationKey:
     mount: str
     component: str  # "ex", "ey" or "ez"
     held: str = ""  # a described machine's run with other rotary axes held off zero: "A-45"
+    reversed: bool = False  # its bar reversed (the T ball on the other side of the W ball)
 
     @property
     def label(self) -> str:
-        return f"{self.component}_{self.pattern}{f'({self.held})' if self.held else ''}@{self.setup}/{self.mount}"
+        how = "; ".join(x for x in ("reversed" if self.reversed else "", self.held) if x)
+        return f"{self.component}_{self.pattern}{f'({how})' if how else ''}@{self.setup}/{self.mount}"
 
 
 @dataclass(frozen=True)
@@ -60,7 +62,7 @@ class Observations:
         for i, run in enumerate(campaign.ballbar.runs):
             held = ",".join(f"{a}{v:g}" for a, v in (run.hold_deg or {}).items() if v != 0)
             for comp, rep in machine_repeats(run, campaign.ballbar).items():
-                keys.append(ObservationKey(i, run.pattern, run.setup, run.mount, comp, held))
+                keys.append(ObservationKey(i, run.pattern, run.setup, run.mount, comp, held, run.reversed))
                 mean.append(float(np.mean(rep)))
                 sd.append(float(np.std(rep, ddof=1)) if len(rep) > 1 else np.nan)
                 n.append(len(rep))

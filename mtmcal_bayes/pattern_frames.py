@@ -31,7 +31,7 @@ def chain_frame(desc: MachineDescription, run, ballbar) -> PatternFrame:
     def commands():
         try:
             return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.position, bar=ballbar.length,
-                                    arc_deg=_ANGLES, hold_deg=run.hold_deg)
+                                    arc_deg=_ANGLES, hold_deg=run.hold_deg, reverse=run.reversed)
         except ValueError as err:
             raise ConventionError(str(err)) from None
 

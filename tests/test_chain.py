@@ -4,6 +4,7 @@ those of thesis Tables 2.2/2.3 where they are the same bar."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 
 import numpy as np
@@ -15,9 +16,10 @@ from mtmcal_bayes.io.campaign_reader import parse_campaign
 from mtmcal_bayes.io.machine_reader import builtin_description
 from mtmcal_bayes.machines.patterns import pattern_commands as described_commands
 from mtmcal_bayes.models import make_model
-from mtmcal_bayes.plugins.thesis.chain_model import ThesisChainModel
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.parameters import ParameterSpace
+from mtmcal_bayes.campaign import Run
+from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS
 from mtmcal_bayes.patterns import pattern_commands as thesis_commands
 
 
@@ -26,18 +28,32 @@ def thesis():
     return campaign_of(None)
 
 
-def test_chain_is_htm_literal_on_the_thesis_machine(thesis):
-    """Every run, setup and mount of the thesis campaign, all 13 deviations and every nuisance term at random sizes
-    up to ~150 µm / 150″: the chain's eccentricities and traces equal htm-literal's to 1e-9 mm."""
-    space = ParameterSpace.for_campaign(thesis)
+def _every_pattern(thesis, cr_geometry: str = "RC-LB"):
+    """The thesis campaign with a run of each of its 12 patterns at each set-up (its own mounts), no probe."""
+    c = copy.deepcopy(thesis)
+    c.ballbar.runs = [Run(p, s, "B" if p in B_PATTERNS else "C", {k: np.zeros(1) for k in COMPONENTS[p]})
+                      for s in c.ballbar.setups for p in PATTERNS]
+    c.ballbar.cr_geometry, c.probe = cr_geometry, None
+    return c
+
+
+@pytest.mark.parametrize("cr_geometry", ["RC-LB", "RC+LB"])
+def test_chain_is_htm_literal_on_the_thesis_machine(thesis, cr_geometry):
+    """Every one of the 12 patterns at both set-ups (CR in both of the thesis' geometries), all 13 deviations and
+    every nuisance term at random sizes up to ~150 µm / 150″: the thesis machine's ``chain`` (the engine's chain on
+    its campaign translated into W-ball positions, arcs and bar sides) equals htm-literal's eccentricities and
+    traces to 1e-9 mm."""
+    c = _every_pattern(thesis, cr_geometry)
+    space = ParameterSpace.for_campaign(c)
     rng = np.random.default_rng(7)
     theta = rng.normal(size=(32, len(space))) * space.display_scale() * 50
-    literal, chain = HTMModel(thesis, "htm-literal", space), ThesisChainModel(thesis, space)
+    literal, chain = HTMModel(c, "htm-literal", space), make_model("chain", c, space)
+    assert type(chain).__name__ == "ChainBallbarModel"  # the engine's, not a model of the plug-in's own
     assert np.abs(chain.predict(theta) - literal.predict(theta)).max() < 1e-9
-    for (_, a), (_, b) in zip(literal.traces(theta), chain.traces(theta)):
+    for (_, a), b in zip(literal.traces(theta), chain.traces(theta)):
         assert np.abs(a - b).max() < 1e-9
     # and it is not the thesis' own pivots: htm-thesis differs at these sizes
-    assert np.abs(HTMModel(thesis, "htm-thesis", space).predict(theta) - literal.predict(theta)).max() > 1e-4
+    assert np.abs(HTMModel(c, "htm-thesis", space).predict(theta) - literal.predict(theta)).max() > 1e-4
 
 
 def test_chain_is_a_model_of_every_command(thesis):
@@ -45,17 +61,19 @@ def test_chain_is_a_model_of_every_command(thesis):
     assert m.name == "chain" and m.predict(np.zeros(len(m.space))).shape == (len(m.observations),)
 
 
-@pytest.mark.parametrize("pattern", ["BR", "BA", "BX", "BY", "BZ", "CR", "CT", "CA", "CX", "CY", "CZ"])
-def test_described_patterns_are_the_thesis_tables(pattern):
+@pytest.mark.parametrize("pattern,cr_geometry", [(p, "RC-LB") for p in PATTERNS] + [("CR", "RC+LB")])
+def test_described_patterns_are_the_thesis_tables(pattern, cr_geometry):
     """The generalised pattern ``<K><d>`` on the thesis machine's description gives the commands of thesis Tables
-    2.2/2.3 (CR in the Table 2.3 geometry); BT is the exception, its T ball on the other side (docs/machines.md)."""
+    2.2/2.3; the thesis' BT, and its CR in the geometry of Fig 2.6, with the bar reversed (the T ball on the other
+    side of the W ball, docs/machines.md)."""
     desc = builtin_description("integrex-i200")
     R_B, Z_C, R_C, L_B = 356.3945, 65.5348, 50.0, 100.0
     b = pattern[0] == "B"
     ball = np.array([0.0 if b else R_C, 0.0, Z_C])
     arc = np.linspace(0.0, 90.0, 91) if b else np.arange(0.0, 360.0, 5.0)
-    ours = described_commands(desc, pattern, length=R_B, ball=ball, bar=L_B, arc_deg=arc)
-    ref = thesis_commands(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B, angles_deg=arc)
+    reverse = pattern == "BT" or cr_geometry == "RC+LB"
+    ours = described_commands(desc, pattern, length=R_B, ball=ball, bar=L_B, arc_deg=arc, reverse=reverse)
+    ref = thesis_commands(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B, angles_deg=arc, cr_geometry=cr_geometry)
     for axis in "XYZBC":
         assert np.allclose(ours.q[axis], getattr(ref, axis), atol=1e-9), axis
     assert np.allclose(np.cos(ours.psi), np.cos(ref.psi)) and np.allclose(np.sin(ours.psi), np.sin(ref.psi))
@@ -324,21 +342,6 @@ def test_each_built_in_type_relabelled_is_the_same_machine(machine):
     assert sorted(map(_mapped, ia.undetermined)) == sorted(ib.undetermined)
     wa = sorted(tuple(sorted((_mapped(k), round(v, 9)) for k, v in c.weights.items())) for c in ia.combinations)
     assert wa == sorted(tuple(sorted((k, round(v, 9)) for k, v in c.weights.items())) for c in ib.combinations)
-
-
-def test_chain_is_htm_literal_for_all_twelve_patterns(thesis):
-    """All 12 patterns of thesis Tables 2.2/2.3 (the sensitivity table's campaign), with each tool setup: the chain
-    equals htm-literal to 1e-9 mm at random deviations and nuisance terms."""
-    from mtmcal_bayes.simulation.sensitivity import _all_patterns_campaign
-
-    for setup in thesis.ballbar.setups:
-        c = _all_patterns_campaign(thesis)
-        for run in c.ballbar.runs:
-            run.setup = setup
-        space = ParameterSpace.for_campaign(c)
-        theta = np.random.default_rng(11).normal(size=(16, len(space))) * space.display_scale() * 50
-        diff = ThesisChainModel(c, space).predict(theta) - HTMModel(c, "htm-literal", space).predict(theta)
-        assert np.abs(diff).max() < 1e-9, setup
 
 
 def test_complex_step_first_order_against_finite_differences(relabelled):

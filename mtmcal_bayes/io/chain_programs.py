@@ -183,9 +183,10 @@ def ballbar_commands(campaign, run, *, step_deg: float | None = None):
 def _pattern_commands(campaign, desc, run, *, setup, mount, arc, held):
     try:
         return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.position,
-                                bar=campaign.ballbar.length, arc_deg=arc, hold_deg=held)
-    except ValueError as err:  # a ball on the swivelled axis' line: no radial direction
-        raise ParameterError("mount", str(err)) from None
+                                bar=campaign.ballbar.length, arc_deg=arc, hold_deg=held,
+                                reverse=getattr(run, "reversed", False))
+    except ValueError as err:  # a pattern the description does not have
+        raise ParameterError("pattern", str(err)) from None
 
 
 def ballbar_program(campaign, run, *, feed: float | None = None, step_deg: float | None = None,

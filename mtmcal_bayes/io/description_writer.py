@@ -65,11 +65,13 @@ def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
         b["runs"] = []
         for run in bb.runs:
             d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
+                 **({"reversed": True} if run.reversed else {}),
                  **({"convention": run.convention} if run.convention else {})}
             d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
             b["runs"].append(d)
         for run in bb.planned:  # after the measured runs, in measuring order
             d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
+                 **({"reversed": True} if run.reversed else {}),
                  **({"convention": run.convention} if run.convention else {}), "planned": True,
                  "repeats": int(run.repeats)}
             d.update({k: v for k, v in (("minutes", run.minutes), ("order", run.order), ("why", run.why)) if v})

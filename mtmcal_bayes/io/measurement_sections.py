@@ -4,7 +4,8 @@
 the spindle's ``point_mm``); ``[ballbar.mounts.<id>] position_mm`` (the W-ball centre at the home pose, on the
 workpiece side); ``[[ballbar.runs]]`` with ``pattern`` (``<axis><R|T|A|X|Y|Z>``), ``setup``, ``mount``, optional
 ``arc_deg`` (the swivelled axis' angles: ``[start, end]`` with ``step_deg``, default the axis' own grid) and
-``hold_deg`` (the other rotary axes, degrees), ``convention`` (how its offsets were read, as ``[ballbar]
+``hold_deg`` (the other rotary axes, degrees), ``reversed`` (the T ball on the other side of the W ball),
+``convention`` (how its offsets were read, as ``[ballbar]
 convention`` says for every run: docs/conventions.md), and the pattern's two components as arrays of repeats
 (``ex_um``, ``ey_um`` for a pattern about Z) — or, for a run planned but not yet measured, ``planned = true`` with
 ``repeats`` (and optionally ``minutes``, ``why``, ``order``), as ``design`` writes them.
@@ -61,7 +62,7 @@ def described_ballbar(r: TomlReader, t: dict | None, desc: MachineDescription) -
     seen: dict[tuple, int] = {}
     for i, run in enumerate(items):
         key = (run.pattern, run.setup, run.mount, tuple(np.round(run.arc_deg, 9)),
-               tuple(sorted((run.hold_deg or {}).items())))
+               tuple(sorted((run.hold_deg or {}).items())), run.reversed)
         if key in seen:
             both = "plan one run with all its repeats (repeats = N)" if isinstance(run, PlannedRun) else \
                 "put all repeats of one measurement in one run's arrays"
@@ -86,9 +87,13 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
     except ValueError as err:
         r.fail(f"{path}.pattern", str(err))
     comps = components(desc, pattern)
-    r.check_keys(t, {"pattern", "setup", "mount", "arc_deg", "step_deg", "hold_deg", "convention", "planned",
-                     *PLANNED_KEYS, *(f"{c}_um" for c in comps)}, path)
+    r.check_keys(t, {"pattern", "setup", "mount", "arc_deg", "step_deg", "hold_deg", "reversed", "convention",
+                     "planned", *PLANNED_KEYS, *(f"{c}_um" for c in comps)}, path)
     convention = read_convention(r, t, path)
+    reversed_bar = t.get("reversed", False)
+    if not isinstance(reversed_bar, bool):
+        r.fail(f"{path}.reversed", f"expected true (the T ball on the other side of the W ball) or false, got "
+               f"{kind_of(reversed_bar)}")
     planned = t.get("planned", False)
     if not isinstance(planned, bool):
         r.fail(f"{path}.planned", f"expected true (a run planned but not yet measured) or false, got {kind_of(planned)}")
@@ -107,7 +112,7 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
         if "length_mm" in t:
             r.fail(f"{path}.length_mm", "a described machine's campaign has one bar length ([ballbar] length_mm)")
         run = planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount)
-        run.arc_deg, run.hold_deg, run.convention = arc, hold, convention
+        run.arc_deg, run.hold_deg, run.convention, run.reversed = arc, hold, convention, reversed_bar
         return run
     for key in PLANNED_KEYS:
         if key in t:
@@ -120,7 +125,8 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
     if len({len(v) for v in repeats.values()}) > 1:
         r.fail(f"{path}.{comps[1]}_um", f"has {len(repeats[comps[1]])} repeats, {comps[0]}_um "
                f"{len(repeats[comps[0]])}: give both components of every repeat")
-    return Run(pattern, setup, mount, repeats, convention=convention, arc_deg=arc, hold_deg=hold)
+    return Run(pattern, setup, mount, repeats, convention=convention, arc_deg=arc, hold_deg=hold,
+               reversed=reversed_bar)
 
 
 def read_convention(r: TomlReader, t: dict, path: str, key: str = "convention") -> str | None:

@@ -5,12 +5,16 @@ the tool-side (T) ball stays ``L_B`` from the workpiece-side (W) ball along the 
 rotary axes are held (``hold``, default 0).  ``d`` is the bar's sensitive direction:
 
 * ``R`` radial: ``T − W = −L_B·r̂``, r̂ the outward radial from K's line through the ball on K's side (the T
-  ball for an axis carrying the tool, the W ball for one carrying the workpiece); on the thesis machine
-  BR and CR (Table 2.3's geometry, T inside W);
+  ball for an axis carrying the tool, the W ball for one carrying the workpiece; a ball on K's line: r̂ along
+  the frame axis of the pattern's first component at the home pose, +X for a C axis, as the thesis' CR at
+  R_C = 0); on the thesis machine BR and CR (Table 2.3's geometry, T inside W);
 * ``T`` tangential: ``T − W = L_B·(k × r̂)``, along the way that ball moves as K turns positively (CT; the
-  thesis' BT has the opposite side, the same sensitivity);
+  thesis' BT is this bar reversed, below);
 * ``A`` axial: ``T − W = L_B·k`` (BA, CA);
 * ``X``, ``Y``, ``Z``: along the machine axis, fixed while K turns (BX, CY, ...).
+
+A run may have its bar *reversed*, the T ball on the other side of the W ball: ``u`` turned (for R the T ball
+outside, for T trailing: the thesis' BT, and its CR in the geometry of its Fig 2.6).
 
 ``u`` turns with K and the axes below it (for R, T, A).  The W ball is placed at the mount's ``position``
 (at the home pose, on the workpiece side) the thesis way: where the actual tool ball (the dummy sphere) is
@@ -128,10 +132,12 @@ def linear_commands(desc: MachineDescription, q_rot: dict, tool: np.ndarray, tar
 
 
 def pattern_commands(desc: MachineDescription, pattern: str, *, length: float, ball: np.ndarray, bar: float,
-                     arc_deg=None, hold_deg: dict | None = None) -> PatternCommands:
+                     arc_deg=None, hold_deg: dict | None = None, reverse: bool = False) -> PatternCommands:
     """Nominal commands of ``pattern`` for a tool of programmed ``length`` (mm), the W ball at ``ball`` (3,) (home
     pose, workpiece side), bar length ``bar`` (mm), over ``arc_deg`` (default :func:`default_arc_deg`) with the
-    other rotary axes at ``hold_deg`` (degrees, default 0)."""
+    other rotary axes at ``hold_deg`` (degrees, default 0); ``reverse``: the T ball on the other side of the W
+    ball (the bar direction ``u`` turned: outside for R, trailing for T, ``−k`` for A, the negative axis for X, Y,
+    Z)."""
     ax = axis_of(desc, pattern)
     d = pattern[1]
     theta_deg = default_arc_deg(ax) if arc_deg is None else np.asarray(arc_deg, dtype=float)
@@ -156,13 +162,15 @@ def pattern_commands(desc: MachineDescription, pattern: str, *, length: float, b
             rel = b[0] - ax.point
             radial = rel - (rel @ kvec) * kvec
             norm = float(np.linalg.norm(radial))
-            if norm < 1e-9:
-                which = "W ball" if ax.work_side else "tool ball"
-                raise ValueError(f"pattern {pattern}: the {which} lies on the {ax.letter} axis line, so the bar has "
-                                 "no radial or tangential direction; move it off the axis")
-            r_hat = radial / norm
+            if norm < 1e-9:  # the ball on K's line: r̂ along the first component's frame axis at the home pose
+                r_hat = np.zeros(3)
+                r_hat[(ax.frame_axis + 1) % 3] = 1.0
+            else:
+                r_hat = radial / norm
             u0 = -r_hat if d == "R" else np.cross(kvec, r_hat)
         u = nominal_down(np.broadcast_to(u0, (k, 3)), side, q, above=ax, directions=True)
+    if reverse:
+        u = -u
     q.update(linear_commands(desc, q, tool, w + bar * u))
     if d == "R":
         kf = ax.frame_axis

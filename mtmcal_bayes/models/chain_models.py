@@ -79,7 +79,7 @@ class ChainBallbarModel:
         self.chain = Chain(self.desc, generated(self.desc))
         self.observations = observations or Observations.from_campaign(campaign)
         bb = campaign.ballbar
-        q_parts, lengths, setups, mounts, dummy, place, self.runs = [], [], [], [], [], [], []
+        q_parts, lengths, setups, mounts, dummy, self.runs = [], [], [], [], [], []
         first_run: dict[str, int] = {}
         for i, run in enumerate(bb.runs):
             first_run.setdefault(run.mount, i)
@@ -95,7 +95,8 @@ class ChainBallbarModel:
         for run in bb.runs:
             s = bb.setups[run.setup]
             cmd = pattern_commands(self.desc, run.pattern, length=s.R_B, ball=bb.mounts[run.mount].position,
-                                   bar=bb.length, arc_deg=run.arc_deg, hold_deg=run.hold_deg)
+                                   bar=bb.length, arc_deg=run.arc_deg, hold_deg=run.hold_deg,
+                                   reverse=getattr(run, "reversed", False))
             k = len(cmd.psi)
             q_parts.append(cmd.q)
             lengths.append([s.R_B] * k); setups.append([run.setup] * k); mounts.append([run.mount] * k)

@@ -127,18 +127,7 @@ def described_catalogue(campaign) -> list[Candidate]:
         if L_B != L:
             for p in pats:
                 add(_label(p, base, mount, length=L_B), "bar length", p, base, m=mount, length=L_B)
-    return [c for c in out if _measurable(c, desc)]
-
-
-def _measurable(c: Candidate, desc) -> bool:
-    """Whether the pattern has a bar direction at all (not the ball on the swivelled axis' line): a geometry that is
-    no measurement, left out of the catalogue rather than listed as infeasible."""
-    try:
-        pattern_commands(desc, c.pattern, length=c.setup.R_B, ball=c.mount.position, bar=c.length,
-                         arc_deg=arc_of(c, desc)[:1], hold_deg=dict(c.hold_deg) or None)
-    except ValueError:
-        return False
-    return True
+    return out
 
 
 def described_feasibility_check(campaign):

@@ -50,7 +50,7 @@ class Timing:
         if start[1] in setups:
             setups.remove(start[1])
             setups.insert(0, start[1])
-        m, clock = self.model, self.clock
+        m = self.model
         mounted, setup, mount = start
         t = 0.0
         for s in setups:

@@ -60,7 +60,7 @@ def _geometry(run, campaign) -> _Geometry:
     s, m = bb.setups[run.setup], bb.mounts[run.mount]
     desc = campaign.machine.description
     cmd = described_patterns.pattern_commands(desc, run.pattern, length=s.R_B, ball=m.position, bar=bb.length,
-                                              arc_deg=run.arc_deg, hold_deg=run.hold_deg)
+                                              arc_deg=run.arc_deg, hold_deg=run.hold_deg, reverse=run.reversed)
     psi = cmd.psi if np.ptp(cmd.psi) < np.deg2rad(300.0) else np.deg2rad(C_GRID_DEG)
     where = ", ".join(f"{v:g}" for v in m.position)
     return _Geometry(psi, described_patterns.fit_basis(psi), described_patterns.components(desc, run.pattern),

@@ -105,27 +105,21 @@ def described_sensitivity_table(campaign: Campaign, model: str = "chain") -> pd.
     """A described machine's table (SPEC §19, the generalised Tables 2.4–2.6): every pattern ``<K><d>`` of the
     machine, each on the campaign's first tool setup and, per swivelled axis, the mount and held positions of the
     campaign's first run of that axis (else its first mount, the other axes at 0); columns every generated
-    deviation and the setup and mount nuisance bases.  A pattern the geometry does not allow (its ball on the
-    swivelled axis' line) is left out and named in ``attrs["skipped"]``."""
+    deviation and the setup and mount nuisance bases (a ball on the swivelled axis' line takes the radial direction of
+    :func:`~mtmcal_bayes.machines.patterns.pattern_commands`)."""
     from ..machines import generated
-    from ..machines.patterns import axis_of, components, patterns_of, pattern_commands
+    from ..machines.patterns import axis_of, components, patterns_of
     from ..machines.space import described_space
     from ..models.chain_models import complex_step_jacobian
 
     desc = campaign.machine.description
     bb = campaign.ballbar
     setup = next(iter(bb.setups))
-    runs, skipped = [], []
+    runs = []
     for pattern in patterns_of(desc):
         first = next((r for r in bb.runs if r.pattern[0] == pattern[0]), None)
         mount = first.mount if first is not None else next(iter(bb.mounts))
         hold = first.hold_deg if first is not None else None
-        try:
-            pattern_commands(desc, pattern, length=bb.setups[setup].R_B, ball=bb.mounts[mount].position,
-                             bar=bb.length, hold_deg=hold)
-        except ValueError as err:
-            skipped.append(f"{pattern}: {err}")
-            continue
         from ..machines.patterns import default_arc_deg
 
         runs.append(Run(pattern, setup, mount, {c: np.zeros(1) for c in components(desc, pattern)},
@@ -147,7 +141,6 @@ def described_sensitivity_table(campaign: Campaign, model: str = "chain") -> pd.
     df[np.abs(df) < 5e-7] = 0.0
     df.attrs["geometry"] = (f"{desc.configuration}; tool setup {setup} (R_B = {bb.setups[setup].R_B:g} mm), "
                             f"L_B = {bb.length:g} mm; mounts and held axes of the campaign's runs")
-    df.attrs["skipped"] = skipped
     return df
 
 

@@ -171,8 +171,10 @@ def planning():
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
-    from .chain_model import ThesisChainModel
+    from ...models.chain_models import ChainBallbarModel
     from ...models.joint import JointModel
+    from ...observations import Observations
+    from .translation import translated
     from .kinematic import HTMModel
     from .linear import LinearModel
     from .probe_model import LinearProbeModel, ProbeModel
@@ -183,7 +185,9 @@ def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observ
     parts = []
     if data in ("ballbar", "both"):
         parts.append(LinearModel(campaign, space, observations=observations) if name == "linear"
-                     else ThesisChainModel(campaign, space, observations=observations) if name == "chain"
+                     else ChainBallbarModel(translated(campaign), space,
+                                            observations=observations or Observations.from_campaign(campaign))
+                     if name == "chain"
                      else HTMModel(campaign, name, space, observations=observations))
     if data in ("probe", "both"):
         probe = (LinearProbeModel(campaign, space, probe_layout) if name == "linear"
