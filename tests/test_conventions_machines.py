@@ -82,3 +82,31 @@ def test_a_reading_of_another_axis_is_refused_naming_the_run(tmp_path, run_cli):
     assert code == 2 and "Traceback" not in err
     line = err.strip().splitlines()[-1]
     assert "ballbar.runs[0].convention" in line and "names the B angle" in line, line
+
+
+@pytest.mark.parametrize("cr_geometry", ["RC-LB", "RC+LB"])
+def test_the_chains_frames_read_the_thesis_patterns_as_its_tables_do(cr_geometry):
+    """Every thesis pattern at both set-ups, its campaign translated into W-ball positions, arcs and bar sides
+    (plugins/thesis/translation.py): the chain's pattern frames give the reading matrices of the thesis' own frames
+    (Tables 2.2/2.3) under the thesis reading, the programmed one and a geometry string, to 1e-9 (the components
+    matched by name: (ex, ez) in the thesis, (ez, ex) in the chain) — the thesis' frames can become the chain's."""
+    from mtmcal_bayes.campaign import Run
+    from mtmcal_bayes.conventions import frame_matrix, run_geometry, thesis_frame
+    from mtmcal_bayes.pattern_frames import chain_frame
+    from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS
+    from mtmcal_bayes.plugins.thesis.translation import translated
+
+    c = load_campaign(None)
+    c.ballbar.runs = [Run(p, s, "B" if p in B_PATTERNS else "C", {k: np.zeros(1) for k in COMPONENTS[p]})
+                      for s in c.ballbar.setups for p in PATTERNS]
+    c.ballbar.cr_geometry = cr_geometry
+    t = translated(c)
+    for run, moved in zip(c.ballbar.runs, t.ballbar.runs):
+        own = thesis_frame(run.pattern, **run_geometry(run, c.ballbar))
+        chain = chain_frame(t.machine.description, moved, t.ballbar)
+        order = [chain.components.index(k) for k in own.components]
+        geometry = "B0=+X,B90=+Z" if run.pattern in B_PATTERNS else "C0=-Y,C90=+X"
+        for convention in ("thesis", "machine", geometry):
+            np.testing.assert_allclose(frame_matrix(convention, chain)[np.ix_(order, order)],
+                                       frame_matrix(convention, own), rtol=0, atol=1e-9,
+                                       err_msg=f"{run.pattern}@{run.setup} {convention}")
