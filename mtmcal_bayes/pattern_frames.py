@@ -28,18 +28,15 @@ def chain_frame(desc: MachineDescription, run, ballbar) -> PatternFrame:
     axes = tuple(c[1].upper() for c in comps)
     setup, mount = ballbar.setups[run.setup], ballbar.mounts[run.mount]
 
-    def commands():
-        try:
-            return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.position, bar=ballbar.length,
-                                    arc_deg=_ANGLES, hold_deg=run.hold_deg, reverse=run.reversed)
-        except ValueError as err:
-            raise ConventionError(str(err)) from None
-
-    psi = commands().psi[:2]
-    basis = np.c_[np.cos(psi), np.sin(psi)]
+    try:
+        cmd = pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.position, bar=ballbar.length,
+                               arc_deg=_ANGLES, hold_deg=run.hold_deg, reverse=run.reversed)
+    except ValueError as err:
+        raise ConventionError(str(err)) from None
+    basis = np.c_[np.cos(cmd.psi[:2]), np.sin(cmd.psi[:2])]
 
     def programmed() -> np.ndarray:
-        q = commands().q
+        q = cmd.q
         pts = np.c_[q[axes[0]], q[axes[1]]]
         centre = 0.5 * (pts[0] + pts[2])  # the commands are circles in the angle: half a turn apart
         d = pts[:2] - centre

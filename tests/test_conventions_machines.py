@@ -19,6 +19,7 @@ from mtmcal_bayes import api
 from mtmcal_bayes.conventions import frame_directions, run_frame
 from mtmcal_bayes.io import load_campaign, save_campaign
 from mtmcal_bayes.observations import Observations
+from tests.variants import demo_with_first_run_key
 
 TYPES = ("trunnion", "vertical-turn-mill", "head-head")
 
@@ -72,12 +73,8 @@ def test_the_machine_reading_of_a_tangential_run_leads_by_the_bar_over_the_radiu
 
 
 def test_a_reading_of_another_axis_is_refused_naming_the_run(tmp_path, run_cli):
-    src = api.demo_campaign("trunnion")
-    text = open(src, encoding="utf-8").read()
-    marker = "[[ballbar.runs]]\n"
-    i = text.index(marker) + len(marker)
     bad = tmp_path / "bad.toml"
-    bad.write_text(text[:i] + 'convention = "B0=+X,B90=+Z"\n' + text[i:], encoding="utf-8")
+    bad.write_text(demo_with_first_run_key("trunnion", 'convention = "B0=+X,B90=+Z"'), encoding="utf-8")
     code, out, err = run_cli("sample", str(bad), "--sampler", "exact", "--seed", "1")
     assert code == 2 and "Traceback" not in err
     line = err.strip().splitlines()[-1]

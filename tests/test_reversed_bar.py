@@ -12,6 +12,7 @@ import pytest
 from mtmcal_bayes import api
 from mtmcal_bayes.io import load_campaign, save_campaign
 from mtmcal_bayes.models.chain_models import ChainBallbarModel
+from tests.variants import demo_with_first_run_key
 
 TYPES = ("trunnion", "vertical-turn-mill", "head-head")
 
@@ -41,11 +42,8 @@ def test_a_reversed_run_is_read_written_and_seen_otherwise(machine, tmp_path):
 
 
 def test_reversed_must_be_true_or_false(tmp_path, run_cli):
-    text = open(api.demo_campaign("trunnion"), encoding="utf-8").read()
-    marker = "[[ballbar.runs]]\n"
-    i = text.index(marker) + len(marker)
     bad = tmp_path / "bad.toml"
-    bad.write_text(text[:i] + 'reversed = "yes"\n' + text[i:], encoding="utf-8")
+    bad.write_text(demo_with_first_run_key("trunnion", 'reversed = "yes"'), encoding="utf-8")
     code, _, err = run_cli("sample", str(bad), "--sampler", "exact", "--seed", "1")
     assert code == 2 and "Traceback" not in err
     assert "ballbar.runs[0].reversed" in err.strip().splitlines()[-1]

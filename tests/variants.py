@@ -69,3 +69,14 @@ def probe_only(text: str) -> str:
     """A campaign's TOML text without its ball bar (``[ballbar]`` and the truth of its set-ups and mounts): a
     probe-only campaign."""
     return sections_dropped(text, "ballbar", "truth.setups", "truth.mounts")
+
+
+def demo_with_first_run_key(machine: str, line: str) -> str:
+    """The demo campaign of built-in type ``machine`` as TOML text, ``line`` (``key = value``) added to its first
+    ``[[ballbar.runs]]`` table."""
+    from mtmcal_bayes.io.machine_reader import demo_campaign
+
+    text = open(demo_campaign(machine), encoding="utf-8").read()
+    marker = "[[ballbar.runs]]\n"
+    i = text.index(marker) + len(marker)
+    return text[:i] + line + "\n" + text[i:]

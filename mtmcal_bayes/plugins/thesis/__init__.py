@@ -4,7 +4,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 
 * **its published models**: ``linear`` (the thesis relations, Eqs 4.1–4.9 and Table 2.6, with the nuisance terms)
   and ``htm-thesis`` (the thesis' pivots), beside ``htm-literal`` (Eq 2.10 as printed, the test oracle of the chain)
-  and ``chain`` on the thesis' campaign format; ``htm-thesis`` is its default kinematic model;
+  and ``chain``, the engine's chain on its campaign translated into W-ball positions, arcs and bar sides
+  (:mod:`.translation`); ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
@@ -16,7 +17,7 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   published ball-bar values as an option.
 
 The package holds the thesis' own code beside these contributions: :mod:`.linear`, :mod:`.kinematic`,
-:mod:`.probe_model` and :mod:`.chain_model` (its models), :mod:`.names`, :mod:`.campaign_keys` and
+:mod:`.probe_model`, :mod:`.htm` (its models) and :mod:`.translation`, :mod:`.names`, :mod:`.campaign_keys` and
 :mod:`.campaign_document` (its names and keys), :mod:`.identification` (Eqs 4.10–4.18, 5.1–5.19),
 :mod:`.compensation` (Eqs 3.4–3.13 and the exact inversion of its models), :mod:`.program_format` and
 :mod:`.measuring` (Fig 4.30(a)), :mod:`.report_section`.  No layer of the package imports them: the engine asks the machine
