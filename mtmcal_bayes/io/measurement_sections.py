@@ -42,10 +42,7 @@ def described_ballbar(r: TomlReader, t: dict | None, desc: MachineDescription) -
         return Ballbar(*NO_BALLBAR)
     r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "convention", "setups", "mounts",
                      "runs"}, P)
-    convention = r.string(t, "convention", P, default="thesis")
-    if convention not in CONVENTIONS:
-        r.fail(f"{P}.convention", f"unknown convention {convention!r} (expected one of {', '.join(CONVENTIONS)}; "
-               "a run reads another way with its own convention, e.g. \"A0=+Y,A90=+Z\", docs/conventions.md)")
+    convention = read_campaign_convention(r, t, P, example="A0=+Y,A90=+Z")
     length = r.number(t, "length_mm", P, positive=True)
     accuracy = units.to_internal(r.number(t, "accuracy_um", P, positive=True), "um")
     feed = r.number(t, "feed_mm_per_min", P, required=False, positive=True)
@@ -127,6 +124,16 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, setups,
                f"{len(repeats[comps[0]])}: give both components of every repeat")
     return Run(pattern, setup, mount, repeats, convention=convention, arc_deg=arc, hold_deg=hold,
                reversed=reversed_bar)
+
+
+def read_campaign_convention(r: TomlReader, t: dict, path: str, *, example: str) -> str:
+    """``[ballbar] convention``, the reading of every run that names none: a named one (default ``"thesis"``);
+    ``example`` the geometry string the message shows for a run's own."""
+    convention = r.string(t, "convention", path, default="thesis")
+    if convention not in CONVENTIONS:
+        r.fail(f"{path}.convention", f"unknown convention {convention!r} (expected one of {', '.join(CONVENTIONS)}; "
+               f"a run reads another way with its own convention = \"{example}\", docs/conventions.md)")
+    return convention
 
 
 def read_convention(r: TomlReader, t: dict, path: str, key: str = "convention") -> str | None:

@@ -17,11 +17,11 @@ import numpy as np
 
 from ... import units
 from ...campaign import Ballbar, BAxisProbe, CAxisProbe, Machine, Mount, PlannedRun, Probe, Run, Setup, Stylus
-from ...conventions import CONVENTIONS, ConventionError, check_run, run_convention, run_matrix
+from ...conventions import ConventionError, check_run, run_convention, run_matrix
 from ...datasets import data_path
 from ...errors import InputError, MtmcalError
 from ...io.dprnt import read_dprnt
-from ...io.measurement_sections import read_convention
+from ...io.measurement_sections import read_campaign_convention, read_convention
 from ...io.planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
 from ...io.planned_runs import planned_in_order, planned_run
 from ...io.toml_reader import TomlReader, kind_of
@@ -49,10 +49,7 @@ def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
     P = "ballbar"
     r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry", "convention",
                      "alternative_reason", "setups", "mounts", "runs"}, P)
-    convention = r.string(t, "convention", P, default="thesis")
-    if convention not in CONVENTIONS:
-        r.fail(f"{P}.convention", f"unknown convention {convention!r} (expected one of {', '.join(CONVENTIONS)}; "
-               "a run reads another way with its own convention = \"B0=+X,B90=+Z\", docs/conventions.md)")
+    convention = read_campaign_convention(r, t, P, example="B0=+X,B90=+Z")
     cr_geometry = r.string(t, "cr_geometry", P, default="RC-LB")
     if cr_geometry not in CR_GEOMETRIES:
         r.fail(f"{P}.cr_geometry", f"unknown CR geometry {cr_geometry!r} (expected {' or '.join(CR_GEOMETRIES)})")
