@@ -184,7 +184,7 @@ def _pattern_commands(campaign, desc, run, *, setup, mount, arc, held):
     try:
         return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.position,
                                 bar=campaign.ballbar.length, arc_deg=arc, hold_deg=held,
-                                reverse=getattr(run, "reversed", False))
+                                reverse=run.reversed)
     except ValueError as err:  # a pattern the description does not have
         raise ParameterError("pattern", str(err)) from None
 

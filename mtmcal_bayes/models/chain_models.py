@@ -96,7 +96,7 @@ class ChainBallbarModel:
             s = bb.setups[run.setup]
             cmd = pattern_commands(self.desc, run.pattern, length=s.R_B, ball=bb.mounts[run.mount].position,
                                    bar=bb.length, arc_deg=run.arc_deg, hold_deg=run.hold_deg,
-                                   reverse=getattr(run, "reversed", False))
+                                   reverse=run.reversed)
             k = len(cmd.psi)
             q_parts.append(cmd.q)
             lengths.append([s.R_B] * k); setups.append([run.setup] * k); mounts.append([run.mount] * k)

@@ -6,7 +6,7 @@ X = 0 for a B pattern and X = R_C for a C pattern, Y = 0, Z = Z_C (the home pose
 on the trailing side of the W ball and, in the geometry of Fig 2.6 (``cr_geometry = "RC+LB"``), its CR bar outside
 it: both *reversed* against the engine's patterns (:mod:`mtmcal_bayes.machines.patterns`).  Through these the
 engine's chain (:class:`~mtmcal_bayes.models.chain_models.ChainBallbarModel`) gives the thesis machine's ``chain``
-model (``bench/thesis_translation.py``, ``tests/test_chain.py``).
+model (``tests/test_chain.py``; its reading frames too, ``tests/test_conventions_machines.py``).
 """
 
 from __future__ import annotations
