@@ -53,7 +53,12 @@ class Mount:
     id: str
     Z_C: float
     R_C: float
-    position: np.ndarray | None = None  # a described machine's: the W-ball centre (3,) at the home pose, mm
+    position: np.ndarray | None = None  # the W-ball centre (3,) at the home pose, mm (None: from R_C and Z_C)
+
+    def centre(self) -> np.ndarray:
+        """The W-ball centre (3,) at the home pose, mm: ``position``, or where the thesis' keys place it, at radius
+        R_C along X from the C axis at height Z_C above the table (a B pattern's mount has R_C = 0, Table 2.2)."""
+        return self.position if self.position is not None else np.array([self.R_C, 0.0, self.Z_C])
 
 
 @dataclass
@@ -72,7 +77,7 @@ class Run:
     alternative_convention: str | None = None  # the best reading rejected for it, where its reading was a choice
     arc_deg: np.ndarray | None = None  # a described machine's: the swivelled axis' angles, degrees (None: default)
     hold_deg: dict[str, float] | None = None  # a described machine's: the other rotary axes' positions, degrees
-    reversed: bool = False  # a described machine's: the T ball on the other side of the W ball (machines/patterns)
+    reversed: bool = False  # the T ball on the other side of the W ball (machines/patterns) from where its pattern puts it
 
     def mean(self, component: str) -> float:
         """Mean of the repeats of ``component``, mm."""
@@ -101,7 +106,7 @@ class PlannedRun:
     length: float | None = None  # bar length, mm, when not the campaign's [ballbar] length_mm
     arc_deg: np.ndarray | None = None  # a described machine's: the swivelled axis' angles, degrees (None: default)
     hold_deg: dict[str, float] | None = None  # a described machine's: the other rotary axes' positions, degrees
-    reversed: bool = False  # a described machine's: the T ball on the other side of the W ball (machines/patterns)
+    reversed: bool = False  # the T ball on the other side of the W ball (machines/patterns) from where its pattern puts it
 
     @property
     def label(self) -> str:
@@ -130,9 +135,25 @@ class Ballbar:
     convention: str = "thesis"  # how the runs' offsets were read (conventions.py), unless a run says otherwise
     planned: list[PlannedRun] = field(default_factory=list)  # runs without data yet, in measuring order
     alternative_reason: str = ""  # one line: why the runs' conventions were preferred to their alternative_convention
-    # the frames its runs are read against (conventions.run_frame): a described machine's, from its chain; None:
-    # the thesis' Tables 2.2/2.3 at the runs' lever arms
+    # the frames its runs are read against (conventions.run_frame), from its machine's chain; set when the campaign
+    # is read (a campaign built in Python whose runs are read in another convention than "thesis" sets it)
     pattern_frames: Callable | None = None
+    # the patterns whose bar the campaign's format puts on the other side of the W ball from the engine's patterns
+    # (machines/patterns): the thesis' BT, and its CR in the geometry of Fig 2.6 (its campaign keys)
+    reversed_patterns: frozenset[str] = frozenset()
+    # the arc (k,) degrees of a run of a pattern that gives none, where the campaign's format fixes it (the thesis'
+    # grids: B 0–90° by 1°, C 0–355° by 5°); elsewhere the swivelled axis' default (machines/patterns)
+    pattern_arcs: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def bar_reversed(self, run) -> bool:
+        """Whether ``run``'s T ball is on the other side of the W ball from where the engine's pattern puts it: the
+        run's own ``reversed``, turned over where its campaign's format names the pattern reversed."""
+        return run.reversed != (run.pattern in self.reversed_patterns)
+
+    def arc_of(self, run) -> np.ndarray | None:
+        """The swivelled axis' angles of ``run`` (k,) degrees: its own, else its campaign format's for its pattern;
+        None: the axis' default grid."""
+        return run.arc_deg if run.arc_deg is not None else self.pattern_arcs.get(run.pattern)
 
     def reading_choices(self) -> list[Run]:
         """The measured runs whose reading was a choice (they name an ``alternative_convention``), in file order."""

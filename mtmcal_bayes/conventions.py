@@ -32,7 +32,7 @@ conventions (:data:`CONVENTIONS`):
   arc's centre, of the programmed position (what a ball-bar software shows when it is given the programmed
   arc).  For ten patterns this is the thesis' reading; for the tangential patterns BT and CT the programmed
   position leads the B/C angle by ``atan(L_B/R_B)`` / ``atan(L_B/R_C)``, and so do the offsets
-  (:func:`machine_directions` computes it from :func:`~mtmcal_bayes.patterns.pattern_commands`).
+  (:func:`mtmcal_bayes.pattern_frames.chain_frame` computes it from the machine's chain).
 * a geometry string, ``"B0=+X,B90=+Z"`` for a B pattern or ``"C0=-Y,C90=+X"`` for a C pattern: where the
   sample at 0° and at 90° of the motion was drawn.  A bar on the other side of the W ball than Tables 2.2/2.3
   reverses ΔL: both directions turned, e.g. ``"B0=-Z,B90=-X"`` for BY with the T ball at Y = −L_B.
@@ -50,7 +50,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .patterns import B_PATTERNS, COMPONENTS, pattern_commands, polar_angle
 
 #: the named conventions: the thesis' reading of Table 4.4, and the one derived from the programmed motion
 CONVENTIONS = ("thesis", "machine")
@@ -71,36 +70,15 @@ class PatternFrame:
     against (``"B"``), ``components`` the pattern's two offsets (``("ex", "ez")``), ``axes`` the machine axes they
     lie along (``("X", "Z")``), ``basis`` ``U`` (2, 2; rows the machine frame's directions of the samples at 0° and
     90° of the motion, in ``axes`` coordinates) and ``programmed()`` the ``"machine"`` convention's ``D`` (2, 2).
-    The thesis' patterns have theirs from Tables 2.2/2.3 (:func:`thesis_frame`); a described machine's from its
-    chain (:mod:`mtmcal_bayes.pattern_frames`)."""
+    Every machine's come from its chain (:mod:`mtmcal_bayes.pattern_frames`; the thesis' are those of Tables
+    2.2/2.3)."""
 
     letter: str
     components: tuple[str, str]
     axes: tuple[str, str]
     basis: np.ndarray
     programmed: Callable[[], np.ndarray]
-
-
-def thesis_frame(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float,
-                 cr_geometry: str = "RC-LB") -> PatternFrame:
-    """The frame of a thesis pattern at its lever arms (mm)."""
-    return PatternFrame("B" if pattern in B_PATTERNS else "C", COMPONENTS[pattern], plane_axes(pattern),
-                        machine_basis(pattern, cr_geometry),
-                        lambda: machine_directions(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B,
-                                                   cr_geometry=cr_geometry))
-
-
-def _frame(pattern) -> PatternFrame:
-    """``pattern`` as a frame for what needs only its letter and axes (a thesis pattern's name, or a frame)."""
-    if isinstance(pattern, PatternFrame):
-        return pattern
-    return PatternFrame("B" if pattern in B_PATTERNS else "C", COMPONENTS[pattern], plane_axes(pattern),
-                        machine_basis(pattern), lambda: machine_basis(pattern))
-
-
-def plane_axes(pattern: str) -> tuple[str, str]:
-    """The machine axes of a pattern's two components: ``("X", "Z")`` for B patterns, ``("X", "Y")`` for C."""
-    return tuple(c[1].upper() for c in COMPONENTS[pattern])  # type: ignore[return-value]
+    pattern: str = ""  # the run's pattern, for messages
 
 
 def _unit(direction: str, axes: tuple[str, str]) -> np.ndarray:
@@ -110,38 +88,14 @@ def _unit(direction: str, axes: tuple[str, str]) -> np.ndarray:
     return v
 
 
-def machine_basis(pattern: str, cr_geometry: str = "RC-LB") -> np.ndarray:
-    """``U`` (2, 2): rows the machine frame's directions ``u_m(0°)`` and ``u_m(90°)`` of the pattern."""
-    if pattern in B_PATTERNS:
-        phi = np.radians([0.0, 90.0])
-        return np.c_[np.sin(phi), np.cos(phi)]
-    psi = polar_angle(pattern, np.radians([0.0, 90.0]), cr_geometry)
-    return np.c_[np.cos(psi), np.sin(psi)]
-
-
-def machine_directions(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float,
-                       cr_geometry: str = "RC-LB") -> np.ndarray:
-    """``D`` (2, 2) of the ``"machine"`` convention: rows the directions, from the programmed arc's centre, of the
-    programmed position at 0° and at 90° of the motion (thesis Tables 2.2/2.3), in the pattern's plane."""
-    cmd = pattern_commands(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B, angles_deg=np.array([0.0, 90.0, 180.0, 270.0]),
-                           cr_geometry=cr_geometry)
-    pts = np.c_[cmd.X, cmd.Z] if pattern in B_PATTERNS else np.c_[cmd.X, cmd.Y]
-    # the arc's centre: midpoint of the positions half a turn apart (the commands are circles in the angle)
-    centre = 0.5 * (pts[0] + pts[2])
-    d = pts[:2] - centre
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
-def parse_geometry(text: str, pattern: str | PatternFrame) -> np.ndarray:
-    """``D`` (2, 2) of a geometry string such as ``"B0=+X,B90=+Z"`` for ``pattern`` (a thesis pattern's name or a
-    run's :class:`PatternFrame`); :class:`ConventionError` when it is malformed, of another axis, outside the
-    pattern's plane or not a right angle."""
-    frame = _frame(pattern)
+def parse_geometry(text: str, frame: PatternFrame) -> np.ndarray:
+    """``D`` (2, 2) of a geometry string such as ``"B0=+X,B90=+Z"`` for a run of ``frame``; :class:`ConventionError`
+    when it is malformed, of another axis, outside the pattern's plane or not a right angle."""
     m = _GEOMETRY.match(text)
     want, axes = frame.letter, frame.axes
     first = np.argmax(np.abs(frame.basis), axis=1)  # the machine frame's own reading, as the example
     example = f'"{want}0=+{axes[first[0]]},{want}90=+{axes[first[1]]}"'
-    name = pattern if isinstance(pattern, str) else f"{want} pattern"
+    name = frame.pattern or f"of axis {want}"
     if not m:
         raise ConventionError(f"unknown convention {text!r} (expected one of {', '.join(CONVENTIONS)} or where the "
                               f"samples at 0° and 90° were drawn, e.g. {example})")
@@ -151,16 +105,15 @@ def parse_geometry(text: str, pattern: str | PatternFrame) -> np.ndarray:
                               f"the {want} axis (e.g. {example})")
     for d in (d0, d90):
         if d[1] not in axes:
-            raise ConventionError(f"{text!r}: {d} is not in the {'/'.join(axes)} plane of pattern {name}")
+            raise ConventionError(f"{text!r}: {d} is not in the {'/'.join(sorted(axes))} plane of pattern {name}")
     if d0[1] == d90[1]:
         raise ConventionError(f"{text!r}: the samples at 0° and 90° cannot both be drawn along {d0[1]}")
     return np.vstack([_unit(d0, axes), _unit(d90, axes)])
 
 
-def geometry_string(D: np.ndarray, pattern: str | PatternFrame) -> str:
-    """The geometry string of plot directions ``D`` (rows: 0°, 90°; each along one axis of the pattern's plane):
-    the inverse of :func:`parse_geometry`."""
-    frame = _frame(pattern)
+def geometry_string(D: np.ndarray, frame: PatternFrame) -> str:
+    """The geometry string of plot directions ``D`` (rows: 0°, 90°; each along one axis of the pattern's plane)
+    for a run of ``frame``: the inverse of :func:`parse_geometry`."""
     word = lambda v: ("+" if v[int(np.argmax(np.abs(v)))] > 0 else "-") + frame.axes[int(np.argmax(np.abs(v)))]  # noqa: E731
     return f"{frame.letter}0={word(D[0])},{frame.letter}90={word(D[1])}"
 
@@ -179,20 +132,6 @@ def frame_matrix(convention: str, frame: PatternFrame) -> np.ndarray:
     return np.linalg.solve(frame.basis, frame_directions(convention, frame))
 
 
-def directions(convention: str, pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float,
-               cr_geometry: str = "RC-LB") -> np.ndarray:
-    """``D`` (2, 2) of ``convention`` for one run of thesis ``pattern`` (lever arms in mm)."""
-    return frame_directions(convention, thesis_frame(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B,
-                                                     cr_geometry=cr_geometry))
-
-
-def to_machine_matrix(convention: str, pattern: str, **geometry) -> np.ndarray:
-    """``M`` (2, 2) with ``e_machine = M @ e_reported`` (thesis ``pattern``; ``geometry``: R_B, Z_C, R_C, L_B,
-    cr_geometry)."""
-    geometry.setdefault("cr_geometry", "RC-LB")
-    return frame_matrix(convention, thesis_frame(pattern, **geometry))
-
-
 def frame_describe(convention: str, frame: PatternFrame) -> str:
     """Where a convention draws the samples of a run of ``frame``, in words: ``"B = 0° at +Z, B = 90° at +X"``."""
     D, axes, angle = frame_directions(convention, frame), frame.axes, frame.letter
@@ -206,30 +145,20 @@ def frame_describe(convention: str, frame: PatternFrame) -> str:
     return f"{angle} = 0° at {word(D[0])}, {angle} = 90° at {word(D[1])}"
 
 
-def describe(convention: str, pattern: str, **geometry) -> str:
-    """:func:`frame_describe` for thesis ``pattern`` at its lever arms."""
-    geometry.setdefault("cr_geometry", "RC-LB")
-    return frame_describe(convention, thesis_frame(pattern, **geometry))
-
-
-def run_geometry(run, ballbar) -> dict:
-    """The lever arms a run's convention may depend on (:func:`directions`' keyword arguments)."""
-    setup, mount = ballbar.setups[run.setup], ballbar.mounts[run.mount]
-    return {"R_B": setup.R_B, "Z_C": mount.Z_C, "R_C": mount.R_C, "L_B": ballbar.length,
-            "cr_geometry": ballbar.cr_geometry}
-
-
 def run_convention(run, ballbar) -> str:
     """The convention a run is read in: its own, else the campaign's ``[ballbar] convention``."""
     return run.convention or ballbar.convention
 
 
 def run_frame(run, ballbar) -> PatternFrame:
-    """The frame of a run: its machine's (``ballbar.pattern_frames``, set when a described machine's campaign is
-    read), else the thesis' Tables 2.2/2.3 at the run's lever arms."""
-    if ballbar.pattern_frames is not None:
-        return ballbar.pattern_frames(run, ballbar)
-    return thesis_frame(run.pattern, **run_geometry(run, ballbar))
+    """The frame of a run: its machine's (``ballbar.pattern_frames``, from its chain: set when a campaign is read);
+    :class:`ConventionError` for a ball bar without frames (built in Python, its runs read otherwise than in the
+    machine frame: give it ``pattern_frames``, e.g. ``functools.partial(pattern_frames.chain_frame, description)``)."""
+    if ballbar.pattern_frames is None:
+        raise ConventionError(f"run {run.label} is read in convention {run_convention(run, ballbar)!r}, and its "
+                              "ball bar has no pattern frames to read it against (a ball bar built in Python: set "
+                              "its pattern_frames to its machine's chain frames, pattern_frames.chain_frame)")
+    return ballbar.pattern_frames(run, ballbar)
 
 
 def run_matrix(run, ballbar) -> np.ndarray:
@@ -249,7 +178,8 @@ def check_run(run, ballbar) -> None:
     comps = run_frame(run, ballbar).components
     if len(run.repeats) < 2 and not np.allclose(M, np.diag(np.diag(M))):
         have = next(iter(run.repeats), comps[0])
-        raise ConventionError(f"convention {run_convention(run, ballbar)!r} mixes {comps[0]} and {comps[1]} of "
+        first, second = sorted(comps)
+        raise ConventionError(f"convention {run_convention(run, ballbar)!r} mixes {first} and {second} of "
                               f"pattern {run.pattern}, and the run gives only {have}: give both components")
 
 
@@ -271,7 +201,7 @@ def machine_repeats(run, ballbar) -> dict[str, np.ndarray]:
         return {c: M[comps.index(c), comps.index(c)] * np.asarray(v) for c, v in run.repeats.items()}
     reported = np.vstack([np.asarray(run.repeats[c], dtype=float) for c in comps])  # (2, r)
     machine = M @ reported
-    return {c: machine[i] for i, c in enumerate(comps)}
+    return {c: machine[comps.index(c)] for c in run.repeats}  # in the run's own order of its components
 
 
 def reported_values(run, ballbar, machine: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -284,7 +214,7 @@ def reported_values(run, ballbar, machine: dict[str, np.ndarray]) -> dict[str, n
     if np.allclose(M, np.diag(np.diag(M))):
         return {c: np.asarray(v) / M[comps.index(c), comps.index(c)] for c, v in machine.items()}
     out = np.linalg.solve(M, np.vstack([np.asarray(machine[c], dtype=float) for c in comps]))
-    return {c: out[i] for i, c in enumerate(comps)}
+    return {c: out[comps.index(c)] for c in machine}
 
 
 def check_convention_name(value: str) -> None:

@@ -29,8 +29,8 @@ def chain_frame(desc: MachineDescription, run, ballbar) -> PatternFrame:
     setup, mount = ballbar.setups[run.setup], ballbar.mounts[run.mount]
 
     try:
-        cmd = pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.position, bar=ballbar.length,
-                               arc_deg=_ANGLES, hold_deg=run.hold_deg, reverse=run.reversed)
+        cmd = pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.centre(), bar=ballbar.length,
+                               arc_deg=_ANGLES, hold_deg=run.hold_deg, reverse=ballbar.bar_reversed(run))
     except ValueError as err:
         raise ConventionError(str(err)) from None
     basis = np.c_[np.cos(cmd.psi[:2]), np.sin(cmd.psi[:2])]
@@ -47,7 +47,7 @@ def chain_frame(desc: MachineDescription, run, ballbar) -> PatternFrame:
                                   f"samples at 0° and 90° were drawn (\"{run.pattern[0]}0=...,{run.pattern[0]}90=...\")")
         return d / norm
 
-    return PatternFrame(run.pattern[0], comps, axes, basis, programmed)
+    return PatternFrame(run.pattern[0], comps, axes, basis, programmed, run.pattern)
 
 
 __all__ = ["chain_frame"]

@@ -81,26 +81,50 @@ def test_a_reading_of_another_axis_is_refused_naming_the_run(tmp_path, run_cli):
     assert "ballbar.runs[0].convention" in line and "names the B angle" in line, line
 
 
+def _tables_frame(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float, cr_geometry: str):
+    """The reading frame of thesis ``pattern`` written from Tables 2.2/2.3 alone (the reference the chain's frames
+    are held to): components ``(ex, ez)`` / ``(ex, ey)``, basis rows the sample directions at 0° and 90° (B: φ →
+    (sin φ, cos φ); C: ψ → (cos ψ, sin ψ), ψ = θ, θ + 180° for CR with its T ball inside the W ball) and the
+    programmed directions from the Tables' commands about the arc's centre."""
+    from mtmcal_bayes.conventions import PatternFrame
+    from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, pattern_commands, polar_angle
+
+    is_b = pattern in B_PATTERNS
+    if is_b:
+        basis = np.c_[np.sin(np.radians([0.0, 90.0])), np.cos(np.radians([0.0, 90.0]))]
+    else:
+        psi = polar_angle(pattern, np.radians([0.0, 90.0]), cr_geometry)
+        basis = np.c_[np.cos(psi), np.sin(psi)]
+    cmd = pattern_commands(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B, angles_deg=np.array([0.0, 90.0, 180.0, 270.0]),
+                           cr_geometry=cr_geometry)
+    pts = np.c_[cmd.X, cmd.Z] if is_b else np.c_[cmd.X, cmd.Y]
+    d = pts[:2] - 0.5 * (pts[0] + pts[2])
+    programmed = d / np.linalg.norm(d, axis=1, keepdims=True)
+    comps = COMPONENTS[pattern]
+    return PatternFrame("B" if is_b else "C", comps, tuple(c[1].upper() for c in comps), basis, lambda: programmed)
+
+
 @pytest.mark.parametrize("cr_geometry", ["RC-LB", "RC+LB"])
 def test_the_chains_frames_read_the_thesis_patterns_as_its_tables_do(cr_geometry):
-    """Every thesis pattern at both set-ups, its campaign translated into W-ball positions, arcs and bar sides
-    (plugins/thesis/translation.py): the chain's pattern frames give the reading matrices of the thesis' own frames
-    (Tables 2.2/2.3) under the thesis reading, the programmed one and a geometry string, to 1e-9 (the components
-    matched by name: (ex, ez) in the thesis, (ez, ex) in the chain) — the thesis' frames can become the chain's."""
+    """Every thesis pattern at both set-ups, on the thesis campaign read into the engine's terms (W balls from R_C
+    and Z_C, arcs, the bar sides of BT and CR: plugins/thesis/translation.py): the frames its runs are read against
+    (the chain's) give the reading matrices of frames written from Tables 2.2/2.3 in this test, under the thesis
+    reading, the programmed one and a geometry string, to 1e-9 (the components matched by name: (ex, ez) in the
+    thesis, (ez, ex) in the chain)."""
     from mtmcal_bayes.campaign import Run
-    from mtmcal_bayes.conventions import frame_matrix, run_geometry, thesis_frame
-    from mtmcal_bayes.pattern_frames import chain_frame
+    from mtmcal_bayes.conventions import frame_matrix
     from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS
-    from mtmcal_bayes.plugins.thesis.translation import translated
+    from mtmcal_bayes.plugins.thesis.translation import reversed_patterns
 
     c = load_campaign(None)
-    c.ballbar.runs = [Run(p, s, "B" if p in B_PATTERNS else "C", {k: np.zeros(1) for k in COMPONENTS[p]})
-                      for s in c.ballbar.setups for p in PATTERNS]
-    c.ballbar.cr_geometry = cr_geometry
-    t = translated(c)
-    for run, moved in zip(c.ballbar.runs, t.ballbar.runs):
-        own = thesis_frame(run.pattern, **run_geometry(run, c.ballbar))
-        chain = chain_frame(t.machine.description, moved, t.ballbar)
+    bb = c.ballbar
+    bb.runs = [Run(p, s, "B" if p in B_PATTERNS else "C", {k: np.zeros(1) for k in COMPONENTS[p]})
+               for s in bb.setups for p in PATTERNS]
+    bb.cr_geometry, bb.reversed_patterns = cr_geometry, reversed_patterns(cr_geometry)
+    for run in bb.runs:
+        s, m = bb.setups[run.setup], bb.mounts[run.mount]
+        own = _tables_frame(run.pattern, R_B=s.R_B, Z_C=m.Z_C, R_C=m.R_C, L_B=bb.length, cr_geometry=cr_geometry)
+        chain = run_frame(run, bb)
         order = [chain.components.index(k) for k in own.components]
         geometry = "B0=+X,B90=+Z" if run.pattern in B_PATTERNS else "C0=-Y,C90=+X"
         for convention in ("thesis", "machine", geometry):

@@ -40,6 +40,23 @@ def as_thesis_reads():
 
 
 # --------------------------------------------------------------------------- the conventions
+def _thesis_run(pattern: str, convention: str | None = None):
+    """One run of thesis ``pattern`` at RB1 (R_B 356.3945 mm) on the thesis campaign's mount for it (B: R_C = 0; C:
+    R_C = 50 mm; Z_C 65.5348 mm; L_B 100 mm), with that campaign's ball bar, and the run's frame (from the chain)."""
+    from mtmcal_bayes.campaign import Run
+
+    c = load_campaign(None)
+    run = Run(pattern, "RB1", "B" if pattern in B_PATTERNS else "C", {}, convention=convention)
+    c.ballbar.runs = [run]
+    return run, c.ballbar, cv.run_frame(run, c.ballbar)
+
+
+def _in_order(D: np.ndarray, frame, axes: tuple[str, str]) -> np.ndarray:
+    """``D`` (2, 2) of ``frame``'s plane axes, its columns put in the order ``axes``."""
+    k = [frame.axes.index(a) for a in axes]
+    return D[:, k]
+
+
 @pytest.mark.parametrize("pattern", PATTERNS)
 def test_machine_reading_is_derived_from_the_programmed_motion(pattern):
     """The "machine" convention draws each sample where the programmed position is, seen from the programmed arc's
@@ -47,15 +64,20 @@ def test_machine_reading_is_derived_from_the_programmed_motion(pattern):
     at R·(sin φ, cos φ) from the T ball, so B = 0° at +Z and B = 90° at +X; C patterns: the position at R·(cos θ,
     sin θ), for CR at (R_C − L_B)·(cos θ, sin θ) with R_C − L_B < 0, i.e. θ + 180°).  BT programs
     R_BT·(sin(φ + a), cos(φ + a)) with a = atan(L_B/R_B), and CT R_CT·(cos(θ + a′), sin(θ + a′)) with
-    a′ = atan(L_B/R_C): their samples lead the B/C angle by a, a′."""
-    geo = {**GEO, "R_C": 0.0 if pattern in B_PATTERNS else 50.0}
-    M = cv.to_machine_matrix("machine", pattern, **geo)
+    a′ = atan(L_B/R_C): their samples lead the B/C angle by a, a′.  The frames are the chain's, the expectations
+    by hand."""
+    _, _, frame = _thesis_run(pattern)
+    axes = ("X", "Z") if pattern in B_PATTERNS else ("X", "Y")
     if pattern not in ("BT", "CT"):
-        np.testing.assert_allclose(M, np.eye(2), atol=1e-12)
-        np.testing.assert_allclose(cv.to_machine_matrix("thesis", pattern, **geo), np.eye(2), atol=1e-12)
+        np.testing.assert_allclose(cv.frame_matrix("machine", frame), np.eye(2), atol=1e-12)
+        if pattern in B_PATTERNS:  # B = 0° at +Z, B = 90° at +X
+            want = [[0.0, 1.0], [1.0, 0.0]]
+        else:  # C = 0° at +X, 90° at +Y; CR with its T ball inside the W ball: θ + 180°
+            want = [[-1.0, 0.0], [0.0, -1.0]] if pattern == "CR" else [[1.0, 0.0], [0.0, 1.0]]
+        np.testing.assert_allclose(_in_order(frame.basis, frame, axes), want, atol=1e-12)
         return
-    a = math.atan2(geo["L_B"], geo["R_B"] if pattern == "BT" else geo["R_C"])
-    D = cv.directions("machine", pattern, **geo)
+    a = math.atan2(GEO["L_B"], GEO["R_B"] if pattern == "BT" else 50.0)
+    D = _in_order(cv.frame_directions("machine", frame), frame, axes)
     if pattern == "BT":  # (X, Z) components; B = 0 at angle a from +Z towards +X
         np.testing.assert_allclose(D, [[math.sin(a), math.cos(a)], [math.cos(a), -math.sin(a)]], atol=1e-12)
     else:  # (X, Y); C = 0 at angle a′ from +X towards +Y
@@ -71,9 +93,9 @@ def test_a_reading_maps_what_the_software_reports_to_the_machine_frame(geometry,
     :func:`machine_repeats` turns it back into ``e_m`` and :func:`reported_values` inverts that."""
     if pattern[0] == "C":
         geometry = geometry.replace("B0", "C0").replace("B90", "C90").replace("Z", "Y")
-    geo = {**GEO, "R_C": 0.0 if pattern in B_PATTERNS else 50.0}
-    D = cv.directions(geometry, pattern, **geo)
-    U = cv.machine_basis(pattern)
+    run, bb, frame = _thesis_run(pattern, geometry)
+    D = cv.frame_directions(geometry, frame)
+    U = frame.basis
     rng = np.random.default_rng(3)
     e_m = rng.normal(size=2)
     angle = np.radians(np.linspace(0.0, 90.0, 31))
@@ -81,21 +103,11 @@ def test_a_reading_maps_what_the_software_reports_to_the_machine_frame(geometry,
     dL = u_m @ e_m
     drawn = np.outer(np.cos(angle), D[0]) + np.outer(np.sin(angle), D[1])
     e_r = np.linalg.lstsq(drawn, dL, rcond=None)[0]
-
-    class Run:  # the attributes a run's reading needs
-        pass
-
-    run = Run()
-    run.pattern, run.setup, run.mount, run.convention = pattern, "S", "M", geometry
-    run.repeats = {c: np.array([v]) for c, v in zip(("ex", "ez") if pattern in B_PATTERNS else ("ex", "ey"), e_r)}
-    bb = type("BB", (), {})()
-    bb.setups = {"S": type("S", (), {"R_B": GEO["R_B"]})()}
-    bb.mounts = {"M": type("M", (), {"Z_C": GEO["Z_C"], "R_C": geo["R_C"]})()}
-    bb.length, bb.cr_geometry, bb.convention, bb.pattern_frames = GEO["L_B"], "RC-LB", "thesis", None
+    run.repeats = {c: np.array([v]) for c, v in zip(frame.components, e_r)}
     machine = cv.machine_repeats(run, bb)
-    np.testing.assert_allclose([machine[c][0] for c in run.repeats], e_m, atol=1e-12)
+    np.testing.assert_allclose([machine[c][0] for c in frame.components], e_m, atol=1e-12)
     back = cv.reported_values(run, bb, machine)
-    np.testing.assert_allclose([back[c][0] for c in run.repeats], e_r, atol=1e-12)
+    np.testing.assert_allclose([back[c][0] for c in frame.components], e_r, atol=1e-12)
 
 
 def test_a_trace_is_read_in_its_convention(tmp_path):

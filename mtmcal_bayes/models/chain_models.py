@@ -88,15 +88,15 @@ class ChainBallbarModel:
         for mount, i in first_run.items():  # the dummy sphere of each mount: one point each, first
             run = bb.runs[i]
             s = bb.setups[run.setup]
-            q_parts.append(placement_commands(self.desc, length=s.R_B, ball=bb.mounts[mount].position))
+            q_parts.append(placement_commands(self.desc, length=s.R_B, ball=bb.mounts[mount].centre()))
             lengths.append([s.R_B]); setups.append([run.setup]); mounts.append([mount]); dummy.append([True])
             placed[mount] = start
             start += 1
         for run in bb.runs:
             s = bb.setups[run.setup]
-            cmd = pattern_commands(self.desc, run.pattern, length=s.R_B, ball=bb.mounts[run.mount].position,
-                                   bar=bb.length, arc_deg=run.arc_deg, hold_deg=run.hold_deg,
-                                   reverse=run.reversed)
+            cmd = pattern_commands(self.desc, run.pattern, length=s.R_B, ball=bb.mounts[run.mount].centre(),
+                                   bar=bb.length, arc_deg=bb.arc_of(run), hold_deg=run.hold_deg,
+                                   reverse=bb.bar_reversed(run))
             k = len(cmd.psi)
             q_parts.append(cmd.q)
             lengths.append([s.R_B] * k); setups.append([run.setup] * k); mounts.append([run.mount] * k)

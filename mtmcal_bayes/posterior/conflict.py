@@ -41,7 +41,7 @@ import numpy as np
 import pandas as pd
 
 from .. import units
-from ..conventions import geometry_string, parse_geometry, run_matrix
+from ..conventions import geometry_string, parse_geometry, run_frame, run_matrix
 from ..errors import ParameterError
 from ..analysis import CampaignAnalysis
 from ..inference.log_posterior import LogPosterior
@@ -130,15 +130,17 @@ def reread(campaign, orientation: str, y_reversed: bool):
     for run in out.ballbar.runs:
         if run.pattern in B_PATTERNS:
             any_b = True
-            D = parse_geometry(orientation, run.pattern)
-            run.convention = geometry_string(-D if y_reversed and run.pattern in Y_BARS else D, run.pattern)
+            frame = run_frame(run, out.ballbar)
+            D = parse_geometry(orientation, frame)
+            run.convention = geometry_string(-D if y_reversed and run.pattern in Y_BARS else D, frame)
     return out if any_b else None
 
 
 def _reads_alike(a, b) -> bool:
     """Whether two campaigns' ball-bar observations are the same (a campaign whose observations do not follow its
     runs' conventions reads every reading alike)."""
-    return bool(np.array_equal(Observations.from_campaign(a).mean, Observations.from_campaign(b).mean))
+    oa, ob = Observations.from_campaign(a), Observations.from_campaign(b)
+    return oa.keys == ob.keys and bool(np.array_equal(oa.mean, ob.mean))
 
 
 def _same_reading(a, b) -> bool:

@@ -10,9 +10,9 @@ from matplotlib.lines import Line2D
 from .. import units
 from ..conventions import machine_repeats
 from ..figure_style import COLOURS, figure, tight_layout
+from ..io.machine_reader import description_of
 from ..observations import Observations
 from ..machines import patterns as described_patterns
-from ..machines.plugins import provided
 
 CAPTION = (
     "Ball-bar trajectories as ball-bar software draws them: the change of bar length ΔL along the "
@@ -50,19 +50,16 @@ class _Geometry:
 
 
 def _geometry(run, campaign) -> _Geometry:
-    """The polar geometry of ``run``: its machine's plug-in's where it draws its own campaign format (the thesis':
-    its pattern table, Sec 2.3), else from the machine's description (the angle ψ of the eccentricity fit over the
-    run's arc, SPEC §19)."""
-    own = provided(campaign.machine, "polar_geometry")
-    if own is not None:
-        return _Geometry(*own(run, campaign))
+    """The polar geometry of ``run`` from its machine's description (SPEC §19): the angle ψ of the eccentricity fit
+    over the run's arc (the B angle over a part turn; for a pattern over a turn, the direction of the bar, C or
+    C + 180°), its components in the machine frame, the W ball and the tool length in words."""
     bb = campaign.ballbar
     s, m = bb.setups[run.setup], bb.mounts[run.mount]
-    desc = campaign.machine.description
-    cmd = described_patterns.pattern_commands(desc, run.pattern, length=s.R_B, ball=m.position, bar=bb.length,
-                                              arc_deg=run.arc_deg, hold_deg=run.hold_deg, reverse=run.reversed)
+    desc = description_of(campaign.machine)
+    cmd = described_patterns.pattern_commands(desc, run.pattern, length=s.R_B, ball=m.centre(), bar=bb.length,
+                                              arc_deg=bb.arc_of(run), hold_deg=run.hold_deg, reverse=bb.bar_reversed(run))
     psi = cmd.psi if np.ptp(cmd.psi) < np.deg2rad(300.0) else np.deg2rad(C_GRID_DEG)
-    where = ", ".join(f"{v:g}" for v in m.position)
+    where = ", ".join(f"{v:g}" for v in m.centre())
     return _Geometry(psi, described_patterns.fit_basis(psi), described_patterns.components(desc, run.pattern),
                      np.ptp(psi) < np.deg2rad(300.0), f"R_B {s.R_B:g} mm, W ball at ({where}) mm")
 

@@ -65,21 +65,6 @@ def simulated_probe(campaign, truth, model: str, **options):
     return thesis_probe(campaign, truth, model, **options)
 
 
-def polar_geometry(run, campaign) -> tuple:
-    """How the report draws a run of its campaign format: ``(ψ (k,) rad, design matrix (k, 3), components, part of a
-    turn, the set-up in words)`` from its pattern table (Sec 2.3): the B angle over 0–90° for B patterns, the bar's
-    direction over a turn for C patterns (C + 180° for CR with the T ball inside the W ball)."""
-    import numpy as np
-
-    from ...patterns import B_ANGLES_DEG, B_PATTERNS, COMPONENTS, polar_basis
-    from ...reporting.polar import C_GRID_DEG
-
-    s, m = campaign.ballbar.setups[run.setup], campaign.ballbar.mounts[run.mount]
-    is_b = run.pattern in B_PATTERNS
-    psi = np.deg2rad(B_ANGLES_DEG if is_b else C_GRID_DEG)
-    return psi, polar_basis(run.pattern, psi), COMPONENTS[run.pattern], is_b, f"R_B {s.R_B:g} mm, R_C {m.R_C:g} mm"
-
-
 def pattern_components(pattern: str) -> tuple[str, ...]:
     """The eccentricity components of a thesis pattern (Tables 2.2/2.3)."""
     from ...patterns import COMPONENTS
@@ -264,7 +249,6 @@ class ThesisPlugin:
     campaign_document = staticmethod(campaign_document)
     probe_owners = staticmethod(probe_owners)
     pattern_components = staticmethod(pattern_components)
-    polar_geometry = staticmethod(polar_geometry)
     # its models and likelihood
     kinematic_model = "htm-thesis"
     default_data = "ballbar"

@@ -21,6 +21,7 @@ from ...conventions import ConventionError, check_run, run_convention, run_matri
 from ...datasets import data_path
 from ...errors import InputError, MtmcalError
 from ...io.dprnt import read_dprnt
+from ...io.machine_reader import description_of
 from ...io.measurement_sections import read_campaign_convention, read_convention
 from ...io.planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
 from ...io.planned_runs import planned_in_order, planned_run
@@ -28,6 +29,7 @@ from ...io.toml_reader import TomlReader, kind_of
 from ...io.traces import read_trace
 from ...patterns import COMPONENTS, CR_GEOMETRIES, PATTERNS, mount_conflict
 from ...sphere import fit_sphere
+from .translation import complete
 
 #: the keys of a run's data: a planned run has none of them
 DATA_KEYS = ("ex_um", "ey_um", "ez_um", "trace_csv")
@@ -41,11 +43,11 @@ def campaign_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path
     """``[ballbar]`` and ``[probe]`` in the thesis' campaign format (its lever arms R_B, Z_T, X_T, Z_C, R_C; the
     probe's ``[probe.c_axis]`` and ``[probe.b_axis]``, thesis Tables 4.2–4.4, 5.1–5.2)."""
     probe_t = r.table(doc, "probe", "", required=False)
-    ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir)
+    ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir, description_of(machine))
     return ballbar, _probe(r, probe_t, base_dir) if probe_t is not None else None
 
 
-def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
+def _ballbar(r: TomlReader, t: dict, base_dir: Path | None, desc) -> Ballbar:
     P = "ballbar"
     r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry", "convention",
                      "alternative_reason", "setups", "mounts", "runs"}, P)
@@ -78,6 +80,7 @@ def _ballbar(r: TomlReader, t: dict, base_dir: Path | None) -> Ballbar:
     planned = planned_in_order(r, [(i, x) for i, x in enumerate(items) if isinstance(x, PlannedRun)], P)
     bb = Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry, convention,
                  planned)
+    complete(bb, desc)
     for i, run in enumerate(items):
         try:
             check_run(run, bb) if isinstance(run, Run) else run_matrix(run, bb)
