@@ -55,6 +55,11 @@ class Mount:
     R_C: float
     position: np.ndarray | None = None  # a described machine's: the W-ball centre (3,) at the home pose, mm
 
+    def centre(self) -> np.ndarray:
+        """The W-ball centre (3,) at the home pose, mm: its ``position``, else where its radius and height put it
+        (R_C along +X from the C axis, Z_C above the table: thesis Tables 2.2/2.3)."""
+        return np.asarray(self.position, float) if self.position is not None else np.array([self.R_C, 0.0, self.Z_C])
+
 
 @dataclass
 class Run:
