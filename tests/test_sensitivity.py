@@ -160,7 +160,9 @@ def test_a_w_ball_on_the_swivelled_axis_line_is_passed_over():
     t = table_campaign(c)
     at = {run.pattern[0]: (run.mount, run.hold_deg) for run in t.ballbar.runs}
     assert at == {"A": ("W1", None), "C": ("W1", None)}
-    assert np.isfinite(sensitivity_table(c).to_numpy()).all()
+    df = sensitivity_table(c)
+    assert np.isfinite(df.to_numpy()).all()
+    assert df.attrs["geometry"].endswith("; the C patterns at mount W1 (its first run's W ball lies on the axis line)")
 
 
 def test_no_mount_off_the_line_is_refused_by_name():
@@ -181,3 +183,13 @@ def test_probe_only_campaign_is_refused_by_name(run_cli, machine):
     code, out, err = run_cli("sensitivity", str(f))
     assert code == 2 and not out.strip() and len(err.strip().splitlines()) == 1, (code, err)
     assert f"{machine}-cycle.toml: ballbar.setups:" in err and "Traceback" not in err
+
+
+def test_an_axis_without_runs_takes_the_first_mount():
+    """The trunnion demo without its A runs: the A patterns at its first mount, the other axes at 0, and the
+    geometry line says so."""
+    c = copy.deepcopy(campaign_of(demo_campaign("trunnion")))
+    c.ballbar.runs = [run for run in c.ballbar.runs if run.pattern[0] != "A"]
+    t = table_campaign(c)
+    assert {(run.mount, run.hold_deg) for run in t.ballbar.runs if run.pattern[0] == "A"} == {("W1", None)}
+    assert sensitivity_table(c).attrs["geometry"].endswith("; the A patterns at mount W1 (no run of the axis)")

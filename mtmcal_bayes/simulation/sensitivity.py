@@ -87,12 +87,25 @@ def table_campaign(campaign: Campaign) -> Campaign:
     return out
 
 
-def _geometry(c: Campaign) -> str:
-    """The engine's geometry line of a table campaign ``c``: the configuration, the set-up and the bar."""
+def _geometry(c: Campaign, campaign: Campaign) -> str:
+    """The engine's geometry line of the table campaign ``c`` of ``campaign``: the configuration, the set-up and the
+    bar, and each axis whose patterns are not where the campaign's first run of that axis is (:func:`_placement`)."""
     bb = c.ballbar
     setup = bb.runs[0].setup
-    return (f"{description_of(c.machine).configuration}; tool setup {setup} (R_B = {bb.setups[setup].R_B:g} mm), "
+    text = (f"{description_of(c.machine).configuration}; tool setup {setup} (R_B = {bb.setups[setup].R_B:g} mm), "
             f"L_B = {bb.length:g} mm; mounts and held axes of the campaign's runs")
+    first: dict[str, Run] = {}
+    for run in campaign.ballbar.runs:
+        first.setdefault(run.pattern[0], run)
+    moved = {}
+    for run in bb.runs:
+        was = first.get(run.pattern[0])
+        if was is None or (was.mount, was.hold_deg) != (run.mount, run.hold_deg):
+            held = ", ".join(f"{a} = {v:g}°" for a, v in (run.hold_deg or {}).items())
+            why = "no run of the axis" if was is None else "its first run's W ball lies on the axis line"
+            moved.setdefault(run.pattern[0], f"the {run.pattern[0]} patterns at mount {run.mount}"
+                                            f"{f' ({held})' if held else ''} ({why})")
+    return "; ".join([text, *moved.values()])
 
 
 def sensitivity_table(campaign: Campaign, model: str | None = None) -> pd.DataFrame:
@@ -121,7 +134,8 @@ def sensitivity_table(campaign: Campaign, model: str | None = None) -> pd.DataFr
         rows[f"{key.pattern} {key.component}"] = row
     df = pd.DataFrame.from_dict(rows, orient="index")[cols]
     df[np.abs(df) < 5e-7] = 0.0
-    df.attrs["geometry"] = provided(machine, "sensitivity_geometry", _geometry)(c)
+    own = provided(machine, "sensitivity_geometry")
+    df.attrs["geometry"] = own(c) if own is not None else _geometry(c, campaign)
     df.attrs["model"] = model
     return df
 
