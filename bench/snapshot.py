@@ -42,6 +42,8 @@ def commands() -> dict[str, list]:
     c["thesis-axes"] = ["axes", "--json"]
     c["thesis-report"] = ["report", "-o", "{out}/report", "--seed", "1", "--json"]
     c["thesis-sensitivity"] = ["sensitivity", "--json"]
+    c["thesis-sensitivity-text"] = ["sensitivity"]
+    c["thesis-sensitivity-markdown"] = ["sensitivity", "--markdown"]
     for t in TYPES:
         m = ["--machine", t]
         c[f"{t}-identify"] = ["identify", *m, "--json"]
@@ -57,6 +59,9 @@ def commands() -> dict[str, list]:
                                 "-o", "{out}/comp.nc", "--json"]
         c[f"{t}-axes"] = ["axes", *m, "--json"]
         c[f"{t}-report"] = ["report", *m, "-o", "{out}/report", "--seed", "1", "--json"]
+        c[f"{t}-sensitivity"] = ["sensitivity", *m, "--json"]
+        c[f"{t}-sensitivity-text"] = ["sensitivity", *m]
+        c[f"{t}-sensitivity-markdown"] = ["sensitivity", *m, "--markdown"]
     # the README's history and fleet lines (each step after the first runs in the same folder)
     c["readme-history"] = [["simulate", "--history", "plant/M-1", "--serial", "M-1", "--type", "MTX", "--campaigns",
                             "4", "--step", "beta_CZ=40@3", "--seed", "1"],

@@ -194,8 +194,9 @@ def simulate(campaign: CampaignLike = None, *, truth, model: str | None = None, 
 
 
 def sensitivity(campaign: CampaignLike = None, *, model: str | None = None) -> SensitivityTable:
-    """Eccentricity of all 12 patterns per ″ / µm of every deviation and mounting offset (thesis Tables 2.4–2.6); on
-    a described machine every pattern of its rotary axes per ″ / µm of each of its location errors."""
+    """Eccentricity of every pattern of the machine per ″ / µm of every deviation it names and every mounting offset
+    (thesis Tables 2.4–2.6, generalised: :func:`mtmcal_bayes.simulation.sensitivity.sensitivity_table`), under
+    ``model`` (default the machine's kinematic model)."""
     from .simulation import sensitivity as table
 
     c = campaign_of(campaign)

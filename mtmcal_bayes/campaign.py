@@ -58,7 +58,7 @@ class Mount:
     def centre(self) -> np.ndarray:
         """The W-ball centre (3,) at the home pose, mm: ``position``, or where the thesis' keys place it, at radius
         R_C along X from the C axis at height Z_C above the table (a B pattern's mount has R_C = 0, Table 2.2)."""
-        return self.position if self.position is not None else np.array([self.R_C, 0.0, self.Z_C])
+        return np.asarray(self.position, float) if self.position is not None else np.array([self.R_C, 0.0, self.Z_C])
 
 
 @dataclass

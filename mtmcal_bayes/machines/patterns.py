@@ -187,6 +187,16 @@ def _below(side, letter: str, ax: Axis) -> bool:
     return letter in letters and letters.index(letter) < letters.index(ax.letter)
 
 
+def ball_radius(desc: MachineDescription, ax: Axis, ball: np.ndarray, hold_deg: dict | None = None) -> float:
+    """Distance, mm, of a W ball at ``ball`` (3,) (home pose, workpiece side) from the line of the workpiece-side axis
+    ``ax``, the axes it carries at ``hold_deg`` (degrees, default 0): the radius ``ax``'s patterns swivel the ball
+    on (below 1e-9 the ball is on the line, where :func:`pattern_commands` takes r̂ by convention)."""
+    q = {a.letter: np.full(1, 0.0 if a.letter == ax.letter or _below(desc.work_chain, a.letter, ax)
+                           else np.deg2rad((hold_deg or {}).get(a.letter, 0.0))) for a in desc.rotary_axes}
+    rel = nominal_down(np.asarray(ball, float)[None, :], desc.work_chain, q)[0] - ax.point
+    return float(np.linalg.norm(rel - (rel @ ax.direction) * ax.direction))
+
+
 def placement_commands(desc: MachineDescription, *, length: float, ball: np.ndarray) -> dict:
     """Commands (each (1,)) of the pose at which a mount's W ball is placed on the dummy sphere: rotary axes at 0,
     the linear axes bringing the nominal tool point onto ``ball``."""

@@ -8,6 +8,9 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   ``make_model(name, campaign, space, data, observations=, probe_layout=)`` and ``first_order_gap(...)``;
 * ``default_data`` — which instruments a likelihood uses when none is asked for (the engine's rule: every
   instrument the campaign has);
+* ``patterns``, ``pattern_components(pattern)``, ``mount_conflict(pattern, mount)`` — its patterns in its own
+  order, their eccentricity components, why a mount cannot serve a pattern in its campaign format (the engine's:
+  every ``<K><d>``, :mod:`mtmcal_bayes.machines.patterns`; any mount serves);
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
   its tables, ``table("ballbar")``), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
   it;

@@ -3,7 +3,8 @@
 Every model has ``name``, ``campaign``, ``space`` (:class:`~mtmcal_bayes.parameters.ParameterSpace`),
 ``observations`` (:class:`~mtmcal_bayes.observations.Observations`) and
 ``predict(theta)`` taking ``(n, p)`` in internal units (mm, rad) and returning
-``(n, m)`` in mm, in one vectorised call.  :func:`make_model` builds one by
+``(n, m)`` in mm, in one vectorised call; a model whose ``predict`` also carries complex parameters (a
+complex-step derivative) says so with ``complex_step = True``.  :func:`make_model` builds one by
 name; :data:`MODELS` is the one list of names every command offers.
 """
 
@@ -15,7 +16,7 @@ from ..errors import ParameterError
 from ..machines.plugins import provided
 from ..machines.space import described_space
 from .chain_models import ChainBallbarModel, ChainProbeModel, FirstOrderModel
-from .jacobian import jacobian
+from .jacobian import jacobian, jacobian_at_zero
 from .joint import JointModel
 
 #: the kinematic (homogeneous-transform) models of the thesis machine, which can also compensate NC programs (their
@@ -119,4 +120,5 @@ def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -
 
 __all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "ChainBallbarModel",
            "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
-           "models_of", "default_kinematic_model", "JointModel", "first_order_gap", "jacobian"]
+           "models_of", "default_kinematic_model", "JointModel", "first_order_gap", "jacobian",
+           "jacobian_at_zero"]

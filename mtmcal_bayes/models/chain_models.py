@@ -32,6 +32,7 @@ from ..machines.space import described_space
 from ..observations import DescribedProbeKey, Observations, ProbeObservations
 from ..parameters import MOUNT_NUISANCE, SETUP_NUISANCE, nuisance_name
 from .chain import Chain
+from .jacobian import complex_step_jacobian
 
 #: rows of a parameter batch evaluated at once (memory: a few MB per temporary)
 CHUNK = 256
@@ -43,14 +44,6 @@ def _numbers(theta) -> np.ndarray:
     """A parameter batch as floats, or as complex numbers where it is (a complex-step derivative)."""
     theta = np.asarray(theta)
     return theta if np.iscomplexobj(theta) else theta.astype(float)
-
-
-def complex_step_jacobian(model, step: float = 1e-20) -> np.ndarray:
-    """The Jacobian ``(m, p)`` of ``model.predict`` at zero by the complex step: ``Im f(i·h·e_j) / h`` per column,
-    exact to rounding (no difference of nearly equal numbers), all p columns in one batch.  The chain is analytic
-    in the deviations and nuisance terms (rotations, translations, a Euclidean length, a least-squares fit)."""
-    h = step * model.space.display_scale()
-    return (model.predict(1j * np.diag(h)).imag / h[:, None]).T
 
 
 def _columns(space, names_of_points) -> dict:
@@ -71,6 +64,7 @@ class ChainBallbarModel:
     """Ball-bar eccentricities of a described machine's campaign: ``(n, p)`` -> ``(n, m)``, mm."""
 
     name = "chain"
+    complex_step = True  # predict carries complex parameters: its Jacobian by the complex step
 
     def __init__(self, campaign, space=None, *, observations: Observations | None = None):
         self.campaign = campaign
@@ -154,6 +148,7 @@ class ChainProbeModel:
     """Touch-probe readings of a described machine's campaign: ``(n, p)`` -> ``(n, m)``, m = 3 per position, mm."""
 
     name = "chain"
+    complex_step = True
 
     def __init__(self, campaign, space=None):
         self.campaign = campaign
@@ -248,6 +243,7 @@ class FirstOrderModel:
     """The ``linear`` model of a described machine: ``θ ↦ J θ`` with ``J`` the chain's Jacobian at zero."""
 
     name = "linear"
+    complex_step = True
 
     def __init__(self, chain_model):
         self.campaign, self.space = chain_model.campaign, chain_model.space
@@ -256,6 +252,6 @@ class FirstOrderModel:
         self.design = complex_step_jacobian(chain_model)
 
     def predict(self, theta: np.ndarray) -> np.ndarray:
-        return np.asarray(theta, dtype=float) @ self.design.T
+        return _numbers(theta) @ self.design.T
 
     __call__ = predict

@@ -2,8 +2,8 @@
 
 * :func:`simulate_truth` — predicted eccentricities of a truth, and synthetic
   campaigns with realistic scatter (:class:`Simulation`).
-* :func:`sensitivity` — the Jacobian of a model at zero for all 12 patterns
-  (thesis Tables 2.4–2.6 as numbers).
+* :func:`sensitivity` — the Jacobian of a model at zero for every pattern of any machine
+  (thesis Tables 2.4–2.6 as numbers, generalised).
 """
 
 from .result import Simulation, simulate_truth

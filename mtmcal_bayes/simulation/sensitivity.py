@@ -1,9 +1,11 @@
-"""Sensitivity of every pattern's eccentricities to every deviation and mounting offset.
+"""Sensitivity of every pattern's eccentricities to every deviation and mounting offset, on any machine.
 
-The numbers behind thesis Tables 2.4–2.6 (which show them only as plots): the
-Jacobian of a forward model at zero, in µm of eccentricity per ″ (angles) or per
-µm (lengths), for all 12 patterns with the geometry of a campaign (its first
-tool setup; a mount with R_C = 0 for B patterns and R_C > 0 for C patterns).
+The numbers behind thesis Tables 2.4–2.6 (which show them only as plots), generalised to every machine (SPEC §19):
+the Jacobian of a forward model at zero, in µm of eccentricity per ″ (angles) or per µm (lengths), for one run of
+every pattern of the machine in one geometry of a campaign (:func:`table_campaign`).  What differs between machines
+is asked of the machine: its patterns and their components, which mounts its campaign format lets a pattern use,
+its default model, its deviations, and how its geometry is written (a plug-in may state each; the thesis': its 12
+patterns in the order of Tables 2.2/2.3, B patterns only with the W ball on the C axis, its lever arms).
 """
 
 from __future__ import annotations
@@ -17,51 +19,123 @@ import pandas as pd
 from .. import units
 from ..campaign import Campaign, Run
 from ..errors import InputError
+from ..io.campaign_reader import deviation_quantities
+from ..io.machine_reader import description_of
+from ..machines.patterns import axis_of, ball_radius, components, patterns_of
 from ..machines.plugins import provided
-from ..models import jacobian, make_model
-from ..parameters import DEVIATIONS, MOUNT_NUISANCE, SETUP_NUISANCE
-from ..patterns import B_PATTERNS, C_PATTERNS, COMPONENTS
+from ..models import default_kinematic_model, jacobian_at_zero, make_model
+from ..parameters import MOUNT_NUISANCE, SETUP_NUISANCE, ParameterSpace
+
+#: below this distance, mm, a W ball lies on the line of the axis that swivels it (machines.patterns)
+ON_LINE_MM = 1e-9
 
 
-def _all_patterns_campaign(campaign: Campaign) -> Campaign:
-    bb = campaign.ballbar
+def _no_conflict(pattern: str, mount) -> None:
+    """The engine's own rule: any mount serves any pattern (no reason against it)."""
+
+
+def _placement(campaign: Campaign, pattern: str, conflict) -> tuple[str, dict | None]:
+    """``(mount id, held positions)`` of the runs of ``pattern``'s axis K: those of the campaign's first run of K,
+    else of its first mount (the other axes at 0), taking only a mount the campaign's format lets the pattern use
+    (``conflict``) and, for a workpiece-side K, whose W ball lies off K's line (on it, K's patterns do not move the
+    ball: K's tilts show only beside its position, and the R and T directions are a convention).  None: an
+    :class:`InputError` naming ``ballbar.mounts``."""
+    desc, bb = description_of(campaign.machine), campaign.ballbar
+    ax = axis_of(desc, pattern)
+    tried = [(r.mount, r.hold_deg) for r in bb.runs if r.pattern[0] == ax.letter] + [(m, None) for m in bb.mounts]
+    conflicts, on_line = {}, {}
+    for mount, hold in tried:
+        why = conflict(pattern, bb.mounts[mount])
+        if why is not None:
+            conflicts.setdefault(mount, why)
+            continue
+        radius = ball_radius(desc, ax, bb.mounts[mount].centre(), hold) if ax.work_side else np.inf
+        if radius > ON_LINE_MM:
+            return mount, hold
+        on_line.setdefault(mount, radius)
+    need = f"the sensitivity table needs a mount for the {ax.letter} patterns"
+    if ax.work_side:
+        need += f" whose W ball lies off the {ax.letter} axis line (R_{ax.letter}_mm > 0, its distance from that line)"
+    parts = [need, *(conflicts[m] for m in bb.mounts if m in conflicts)]
+    if on_line:
+        parts.append("have " + ", ".join(f"{m} R_{ax.letter}_mm = {on_line[m]:g}" for m in bb.mounts if m in on_line))
+    raise InputError(campaign.source, "ballbar.mounts", "; ".join(parts))
+
+
+def table_campaign(campaign: Campaign) -> Campaign:
+    """A copy of ``campaign`` whose runs are one of every pattern of its machine (its plug-in's ``patterns`` where it
+    states them, else ``<K><d>`` of every rotary axis), each with one zero repeat of every component, on the
+    campaign's first tool setup, at the mount and held positions of :func:`_placement`, over its axis' default arc;
+    no planned runs and no probe."""
+    machine, bb = campaign.machine, campaign.ballbar
+    desc = description_of(machine)
+    if not bb.setups:
+        raise InputError(campaign.source, "ballbar.setups", "the sensitivity table needs a ball-bar set-up: give "
+                         "[ballbar] length_mm, a [ballbar.setups.<id>] and a [ballbar.mounts.<id>]")
+    patterns = provided(machine, "patterns") or patterns_of(desc)
+    comps = provided(machine, "pattern_components") or (lambda p: components(desc, p))
+    conflict = provided(machine, "mount_conflict", _no_conflict)
     setup = next(iter(bb.setups))
-    b_mount = next((m.id for m in bb.mounts.values() if m.R_C == 0), None)
-    c_mount = next((m.id for m in bb.mounts.values() if m.R_C > 0), None)
-    if b_mount is None or c_mount is None:
-        have = ", ".join(f"{m.id} R_C_mm = {m.R_C:g}" for m in bb.mounts.values())
-        raise InputError(campaign.source, "ballbar.mounts", "the sensitivity table needs a mount with R_C_mm = 0 "
-                         f"(B patterns) and one with R_C_mm > 0 (C patterns); have {have}")
+    placed = {}
+    for p in patterns:
+        if p[0] not in placed:
+            placed[p[0]] = _placement(campaign, p, conflict)
     out = copy.deepcopy(campaign)
-    out.ballbar.runs = [Run(p, setup, b_mount if p in B_PATTERNS else c_mount,
-                            {c: np.zeros(1) for c in COMPONENTS[p]}) for p in B_PATTERNS + C_PATTERNS]
+    out.ballbar.runs = [Run(p, setup, placed[p[0]][0], {c: np.zeros(1) for c in comps(p)}, hold_deg=placed[p[0]][1])
+                        for p in patterns]
+    out.ballbar.planned, out.probe = [], None
     return out
 
 
-def sensitivity_table(campaign: Campaign, model: str = "htm-thesis") -> pd.DataFrame:
-    """DataFrame: rows ``"<pattern> <component>"``, columns deviations and nuisance bases.
+def _geometry(c: Campaign, campaign: Campaign) -> str:
+    """The engine's geometry line of the table campaign ``c`` of ``campaign``: the configuration, the set-up and the
+    bar, and each axis whose patterns are not where the campaign's first run of that axis is (:func:`_placement`)."""
+    bb = c.ballbar
+    setup = bb.runs[0].setup
+    text = (f"{description_of(c.machine).configuration}; tool setup {setup} (R_B = {bb.setups[setup].R_B:g} mm), "
+            f"L_B = {bb.length:g} mm; mounts and held axes of the campaign's runs")
+    first: dict[str, Run] = {}
+    for run in campaign.ballbar.runs:
+        first.setdefault(run.pattern[0], run)
+    moved = {}
+    for run in bb.runs:
+        was = first.get(run.pattern[0])
+        if was is None or (was.mount, was.hold_deg) != (run.mount, run.hold_deg):
+            held = ", ".join(f"{a} = {v:g}°" for a, v in (run.hold_deg or {}).items())
+            why = "no run of the axis" if was is None else "its first run's W ball lies on the axis line"
+            moved.setdefault(run.pattern[0], f"the {run.pattern[0]} patterns at mount {run.mount}"
+                                            f"{f' ({held})' if held else ''} ({why})")
+    return "; ".join([text, *moved.values()])
 
-    Values in µm per ″ for angles and µm per µm for lengths; index names the
-    geometry used in ``attrs["geometry"]``.
+
+def sensitivity_table(campaign: Campaign, model: str | None = None) -> pd.DataFrame:
+    """DataFrame: rows ``"<pattern> <component>"``, columns every deviation the machine names (its plug-in's names
+    where it has them, else its generated ISO symbols) and the setup and mount nuisance bases.
+
+    Values in µm per ″ for angles and µm per µm for lengths, from ``model`` (default the machine's kinematic model:
+    ``htm-thesis`` on the thesis machine, else ``chain``) by the complex step where the model allows it, else by
+    central differences (:func:`~mtmcal_bayes.models.jacobian_at_zero`); ``attrs["geometry"]`` says which geometry
+    (the plug-in's ``sensitivity_geometry`` where it states one), ``attrs["model"]`` the model.
     """
-    c = _all_patterns_campaign(campaign)
-    fm = make_model(model, c)
-    J = units.from_internal(jacobian(fm) * fm.space.display_scale(), "um")  # µm per display unit
-    cols = list(DEVIATIONS) + list(SETUP_NUISANCE) + list(MOUNT_NUISANCE)
+    machine = campaign.machine
+    model = default_kinematic_model(machine) if model is None else model
+    c = table_campaign(campaign)
+    deviations = deviation_quantities(machine)
+    space = ParameterSpace(list(c.ballbar.setups), list(c.ballbar.mounts), table=deviations)
+    fm = make_model(model, c, space)
+    J = units.from_internal(jacobian_at_zero(fm) * space.display_scale(), "um")  # µm per display unit
+    cols = list(deviations) + list(SETUP_NUISANCE) + list(MOUNT_NUISANCE)
     rows = {}
     for i, key in enumerate(fm.observations.keys):
         row = dict.fromkeys(cols, 0.0)
-        for j, p in enumerate(fm.space.parameters):
+        for j, p in enumerate(space.parameters):
             if p.owner in (None, key.setup, key.mount):
                 row[p.base] = J[i, j]
         rows[f"{key.pattern} {key.component}"] = row
     df = pd.DataFrame.from_dict(rows, orient="index")[cols]
     df[np.abs(df) < 5e-7] = 0.0
-    s = c.ballbar.setups[c.ballbar.runs[0].setup]
-    cm = c.ballbar.mounts[c.ballbar.runs[-1].mount]
-    df.attrs["geometry"] = (f"R_B = {s.R_B:g} mm, Z_T = {s.Z_T:g} mm, X_T = {s.X_T:g} mm, "
-                            f"Z_C = {cm.Z_C:g} mm, R_C = {cm.R_C:g} mm, L_B = {c.ballbar.length:g} mm, "
-                            f"CR geometry {c.ballbar.cr_geometry}")
+    own = provided(machine, "sensitivity_geometry")
+    df.attrs["geometry"] = own(c) if own is not None else _geometry(c, campaign)
     df.attrs["model"] = model
     return df
 
@@ -101,55 +175,7 @@ class SensitivityTable:
             self.table.to_string(float_format=lambda v: "." if v == 0 else f"{v:.3f}")])
 
 
-def described_sensitivity_table(campaign: Campaign, model: str = "chain") -> pd.DataFrame:
-    """A described machine's table (SPEC §19, the generalised Tables 2.4–2.6): every pattern ``<K><d>`` of the
-    machine, each on the campaign's first tool setup and, per swivelled axis, the mount and held positions of the
-    campaign's first run of that axis (else its first mount, the other axes at 0); columns every generated
-    deviation and the setup and mount nuisance bases (a ball on the swivelled axis' line takes the radial direction of
-    :func:`~mtmcal_bayes.machines.patterns.pattern_commands`)."""
-    from ..machines import generated
-    from ..machines.patterns import axis_of, components, patterns_of
-    from ..machines.space import described_space
-    from ..models.chain_models import complex_step_jacobian
-
-    desc = campaign.machine.description
-    bb = campaign.ballbar
-    setup = next(iter(bb.setups))
-    runs = []
-    for pattern in patterns_of(desc):
-        first = next((r for r in bb.runs if r.pattern[0] == pattern[0]), None)
-        mount = first.mount if first is not None else next(iter(bb.mounts))
-        hold = first.hold_deg if first is not None else None
-        from ..machines.patterns import default_arc_deg
-
-        runs.append(Run(pattern, setup, mount, {c: np.zeros(1) for c in components(desc, pattern)},
-                        arc_deg=default_arc_deg(axis_of(desc, pattern)), hold_deg=hold))
-    c = copy.deepcopy(campaign)
-    c.ballbar.runs, c.probe = runs, None
-    space = described_space(c, [d.name for d in generated(desc)], data="ballbar")
-    fm = make_model(model, c, space)
-    J = units.from_internal(complex_step_jacobian(fm) * space.display_scale(), "um")
-    cols = [d.name for d in generated(desc)] + list(SETUP_NUISANCE) + list(MOUNT_NUISANCE)
-    rows = {}
-    for i, key in enumerate(fm.observations.keys):
-        row = dict.fromkeys(cols, 0.0)
-        for j, p in enumerate(space.parameters):
-            if p.owner in (None, key.setup, key.mount):
-                row[p.base] = J[i, j]
-        rows[f"{key.pattern} {key.component}"] = row
-    df = pd.DataFrame.from_dict(rows, orient="index")[cols]
-    df[np.abs(df) < 5e-7] = 0.0
-    df.attrs["geometry"] = (f"{desc.configuration}; tool setup {setup} (R_B = {bb.setups[setup].R_B:g} mm), "
-                            f"L_B = {bb.length:g} mm; mounts and held axes of the campaign's runs")
-    return df
-
-
-def sensitivity(campaign: Campaign, *, model: str = "htm-thesis") -> SensitivityTable:
-    """:func:`sensitivity_table` (a described machine's: :func:`described_sensitivity_table`, model ``chain`` or
-    ``linear``, the same numbers) as a result with its text, Markdown and JSON forms."""
-    own = provided(campaign.machine, "sensitivity_table")  # the thesis' Tables 2.4–2.6 in its campaign format
-    if own is None:
-        df = described_sensitivity_table(campaign, "linear" if model == "linear" else "chain")
-        return SensitivityTable(df, df.attrs.get("model", "chain"), df.attrs["geometry"])
-    df = own(campaign, model)
-    return SensitivityTable(df, model, df.attrs["geometry"])
+def sensitivity(campaign: Campaign, *, model: str | None = None) -> SensitivityTable:
+    """:func:`sensitivity_table` as a result with its text, Markdown and JSON forms."""
+    df = sensitivity_table(campaign, model)
+    return SensitivityTable(df, df.attrs["model"], df.attrs["geometry"])

@@ -10,6 +10,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
   ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
+* **its patterns**: its 12 in the order of Tables 2.2/2.3 (B before C), their components, B patterns only with the
+  W ball on the C axis (Table 2.2), and the geometry line of its sensitivity table (Tables 2.4–2.6);
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
   section of them (thesis values recomputed);
 * **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them;
@@ -72,11 +74,21 @@ def pattern_components(pattern: str) -> tuple[str, ...]:
     return COMPONENTS[pattern]
 
 
-def sensitivity_table(campaign, model: str):
-    """Thesis Tables 2.4–2.6 as numbers: every pattern's eccentricity per unit deviation and offset."""
-    from ...simulation.sensitivity import sensitivity_table as table
+def mount_conflict(pattern: str, mount) -> str | None:
+    """Why its campaign format cannot measure ``pattern`` on ``mount`` (a B pattern puts the W ball on the C axis,
+    Table 2.2: R_C = 0), or None."""
+    from ...patterns import mount_conflict as conflict
 
-    return table(campaign, model)
+    return conflict(pattern, mount.id, mount.R_C)
+
+
+def sensitivity_geometry(c) -> str:
+    """The geometry line of its sensitivity table (Tables 2.4–2.6) of a campaign ``c`` with one run of every pattern,
+    B before C: the first run's set-up and the C patterns' mount by their lever arms, the bar, the CR geometry."""
+    bb = c.ballbar
+    s, m = bb.setups[bb.runs[0].setup], bb.mounts[bb.runs[-1].mount]
+    return (f"R_B = {s.R_B:g} mm, Z_T = {s.Z_T:g} mm, X_T = {s.X_T:g} mm, Z_C = {m.Z_C:g} mm, R_C = {m.R_C:g} mm, "
+            f"L_B = {bb.length:g} mm, CR geometry {bb.cr_geometry}")
 
 
 def compensation_program(c, program, *, method: str, model, values: str, mount, integer_unit):
@@ -249,6 +261,7 @@ class ThesisPlugin:
     campaign_document = staticmethod(campaign_document)
     probe_owners = staticmethod(probe_owners)
     pattern_components = staticmethod(pattern_components)
+    mount_conflict = staticmethod(mount_conflict)
     # its models and likelihood
     kinematic_model = "htm-thesis"
     default_data = "ballbar"
@@ -265,7 +278,14 @@ class ThesisPlugin:
     compensate = staticmethod(compensate)
     simulate = staticmethod(simulate)
     simulated_probe = staticmethod(simulated_probe)
-    sensitivity_table = staticmethod(sensitivity_table)
+    sensitivity_geometry = staticmethod(sensitivity_geometry)
+
+    @property
+    def patterns(self) -> tuple[str, ...]:
+        """Its 12 patterns in the order of Tables 2.2/2.3 (B before C; its description's axes give C first)."""
+        from ...patterns import PATTERNS
+
+        return PATTERNS
 
     @property
     def planning(self):
