@@ -8,7 +8,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   (:mod:`.translation`); ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
-* **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
+* **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C (a run's W ball, arc and bar side in the
+  engine's terms: ``run_placement``, :mod:`.translation`) and the touch probe's ``[probe.c_axis]`` and
   ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
   section of them (thesis values recomputed);
@@ -41,6 +42,14 @@ def probe_owners(machine, probe) -> set[str]:
     from .campaign_keys import probe_owners as owners
 
     return owners(machine, probe)
+
+
+def run_placement(campaign, pattern: str, mount) -> tuple:
+    """A run of ``pattern`` on ``mount`` (Z_C, R_C) in the engine's terms: ``(W-ball position (3,) mm, arc (k,)
+    degrees, bar reversed)`` (Tables 2.2/2.3, :mod:`.translation`)."""
+    from .translation import run_placement as placement
+
+    return placement(campaign, pattern, mount)
 
 
 def campaign_document(c, doc: dict, save_dir=None) -> dict:
@@ -263,6 +272,7 @@ class ThesisPlugin:
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
     probe_owners = staticmethod(probe_owners)
+    run_placement = staticmethod(run_placement)
     pattern_components = staticmethod(pattern_components)
     polar_geometry = staticmethod(polar_geometry)
     # its models and likelihood
