@@ -141,6 +141,12 @@ def test_feasibility_uses_the_axis_travels(thesis):
                                                                      "travel_Z_mm = 1077.0\n", ""), "t.toml")
     ok, why = feasibility(by_name["CA @ RB1, R_C 150 mm"], thesis_no_travel)
     assert ok and "not checked" in why
+    # the span rule places a run as the machine's plug-in does; a described machine has its own check
+    from mtmcal_bayes.api import campaign_of, demo_campaign
+    from mtmcal_bayes.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="description's travels"):
+        feasibility(by_name["CR @ R_B+150 mm"], campaign_of(demo_campaign("trunnion")))
 
 
 def test_user_candidates(run_cli, tmp_path):

@@ -16,10 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..campaign import Campaign, Mount, Setup
+from ..errors import ParameterError
 from ..io.machine_reader import description_of
 from ..io.textfiles import read_user_text
 from ..io.toml_reader import TomlReader, parse_toml
-from ..machines.patterns import axis_of, default_arc_deg, pattern_commands
+from ..machines.patterns import pattern_commands
 from ..machines.plugins import provided
 from ..patterns import PATTERNS, mount_conflict
 
@@ -138,7 +139,11 @@ def feasibility_check(campaign: Campaign):
     """
     travel = dict(campaign.machine.travel or {})
     desc = description_of(campaign.machine)
-    place = provided(campaign.machine, "run_placement", _own_placement)
+    place = provided(campaign.machine, "run_placement")
+    if place is None:
+        raise ParameterError("campaign", "the span rule checks runs of a campaign format whose plug-in places them "
+                             "(the thesis' lever arms); a described machine's candidates are checked against its "
+                             "description's travels (planning.machine_kit.feasibility_of)")
 
     def check(candidate: Candidate) -> tuple[bool, str]:
         if not travel:
@@ -154,12 +159,6 @@ def feasibility_check(campaign: Campaign):
         return (not over), ("; ".join(over) if over else "within the axis travels")
 
     return check
-
-
-def _own_placement(campaign: Campaign, pattern: str, mount: Mount):
-    """The engine's placement of a run: the mount's W-ball position, the swivelled axis' default grid, the bar on
-    the pattern's side (what a plug-in's ``run_placement`` gives for its campaign format)."""
-    return mount.position, default_arc_deg(axis_of(description_of(campaign.machine), pattern)), False
 
 
 def feasibility(candidate: Candidate, campaign: Campaign) -> tuple[bool, str]:
