@@ -55,7 +55,7 @@ def test_every_thesis_program_moves_as_tables_2_2_and_2_3(pattern, cr_geometry):
         for mid, m in bb.mounts.items():
             for step in (2.5, 9.0):
                 got = _blocks(api.ncgen(pattern, campaign=c, setup=sid, mount=mid, step_deg=step))
-                n = int(round((90.0 if pattern[0] == "B" else 360.0) / step)) + (pattern[0] == "B")
+                n = round((90.0 if pattern[0] == "B" else 360.0) / step) + (pattern[0] == "B")
                 angle = step * np.arange(n)
                 xyz = _table(pattern, angle, R_B=s.R_B, Z_C=m.Z_C, R_C=m.R_C, L_B=bb.length, cr_geometry=cr_geometry)
                 xyz = xyz - np.array([s.X_T, 0.0, m.Z_C + s.R_B + s.Z_T])

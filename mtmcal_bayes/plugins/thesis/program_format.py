@@ -25,7 +25,8 @@ def pattern_program(pattern: str, R_B: float, step_deg: float, n: int | None = N
                     feed: float | None = None, cr_geometry: str = "RC-LB", desc=None) -> list[str]:
     """Motion blocks of ``pattern``: ``n`` blocks from angle 0 in steps of ``step_deg`` (deg).
 
-    ``desc`` the machine's description (default the built-in ``integrex-i200``); ``start`` (x0, y0, z0) places the first block; else ``origin`` (model-frame NC origin, mm) is subtracted.
+    ``desc`` the machine's description (default the built-in ``integrex-i200``); ``start`` (x0, y0, z0) places the
+    first block; else ``origin`` (model-frame NC origin, mm) is subtracted.
     Default ``n`` covers the pattern's range: 0–90° for B patterns, one turn for C patterns.
     """
     if pattern not in PATTERNS:
