@@ -31,12 +31,9 @@ The measuring motion of a run takes ``repeats × directions × max(path / feed, 
 ``index_rotary_min`` when it holds another rotary axis off 0: ``path`` is the length of the linear-axis commands
 (X, Y, Z) of the engine's pattern (:func:`mtmcal_bayes.machines.patterns.pattern_commands`) over the grid of the
 run's :class:`Motion`, ``span`` that grid's range in degrees.  One :class:`MachineClock` times every machine; the
-motion a run is timed over is what the machine's planning kit gives: a designed run of the engine's catalogue over
-its own arc (:mod:`mtmcal_bayes.planning.chain_clock`); a thesis pattern over its whole range (90° for B, a closed
-turn for C), densely, with the W ball and bar side of Tables 2.2/2.3 (:mod:`mtmcal_bayes.plugins.thesis.timing`):
-the B-axis centre's path in the C-table frame, an arc of radius R_B for the B patterns, a circle of radius R_C
-(R_C ∓ L_B for CR, ``hypot(R_C, L_B)`` for CT) for the C patterns, the path the feed word of the measuring program
-(thesis Fig 4.30(a)) is programmed along.
+motion a run is timed over is what the machine's planning kit gives: the engine's, a designed run over its own arc
+(:mod:`mtmcal_bayes.planning.chain_clock`); a plug-in's, e.g. the thesis' patterns over their whole range, densely,
+the path the feed word of their measuring programs is programmed along (:mod:`mtmcal_bayes.plugins.thesis.timing`).
 
 A schedule measures the runs in the given order from a start state (ball bar mounted or not, the
 current set-up and placement): a run at another set-up than the previous costs a tool change (the

@@ -3,7 +3,10 @@
 A thesis run's motion is its pattern as Tables 2.2/2.3 place it (the W ball, the bar side: :mod:`.translation`) at
 the campaign's bar length, over the pattern's whole range sampled densely (:data:`TIMED_POINTS` angles over 0–90°
 for a B pattern, over a closed turn 0–360° for a C pattern): the path the feed word of its measuring program
-(Fig 4.30(a)) is programmed along, not the 5° polygon of its readings.
+(Fig 4.30(a)) is programmed along, not the 5° polygon of its readings: the B-axis centre's path in the C-table
+frame, an arc of radius R_B (R_B + L_B for BR, ``hypot(R_B, L_B)`` for BT) for the B patterns, a circle of radius
+R_C (R_C ∓ L_B for CR, ``hypot(R_C, L_B)`` for CT) for the C patterns.  The bar is the campaign's, also for a
+candidate with another bar length (as the thesis clock has always timed it).
 """
 
 from __future__ import annotations
