@@ -29,12 +29,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import mtmcal_bayes as mb  # noqa: E402
 from mtmcal_bayes import units  # noqa: E402
 from mtmcal_bayes.campaign import PlannedRun, Probe  # noqa: E402
-from mtmcal_bayes.machine_time import MachineClock, TimeModel  # noqa: E402
+from mtmcal_bayes.machine_time import TimeModel  # noqa: E402
 from mtmcal_bayes.parameters import IDENTIFIABLE, weights  # noqa: E402
 from mtmcal_bayes.planning.design import Planner  # noqa: E402
 from mtmcal_bayes.planning.design_output import designed_campaign  # noqa: E402
 from mtmcal_bayes.planning.design_problem import MAX_INSTANCES  # noqa: E402
 from mtmcal_bayes.planning.design_search import Goal, Search, exhaustive  # noqa: E402
+from mtmcal_bayes.plugins.thesis.timing import campaign_clock  # noqa: E402
 from tests.machines import SimulatedMachine, measure_sequentially, realised_sd, small_problem  # noqa: E402
 
 
@@ -61,7 +62,7 @@ def thesis_minutes(thesis) -> float:
             self.pattern, self.setup, self.mount = r.pattern, bb.setups[r.setup], bb.mounts[r.mount]
             self.repeats = len(next(iter(r.repeats.values())))
 
-    clock = MachineClock(TimeModel(), L_B=bb.length, cr_geometry=bb.cr_geometry, feed=bb.feed_mm_per_min)
+    clock = campaign_clock(TimeModel(), thesis)
     return clock.schedule([R(r) for r in bb.runs]).total_min
 
 

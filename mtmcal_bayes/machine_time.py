@@ -27,16 +27,13 @@ index_rotary_min       0.5      a described machine's run with other rotary axes
                                 them to the held position and clamp before the arc (estimate)
 =====================  =======  ===================================================================
 
-A described machine's run (docs/design.md) is timed alike, ``path`` the length of its linear-axis commands over
-its arc and ``span`` the arc, plus ``index_rotary_min`` when it holds another rotary axis off 0
-(:class:`mtmcal_bayes.planning.design_timing.DescribedClock`).
-
-The measuring motion of a run takes ``repeats × directions × max(path / feed, span / rotary)``; ``span``
-is the pattern's rotary range (90° for B, 360° for C patterns); ``path`` is the length of
-the programmed relative motion — the B-axis centre's path in the C-table frame of thesis Tables
-2.2/2.3 (:func:`mtmcal_bayes.patterns.pattern_commands`): an arc of radius R_B over 0–90° for the B
-patterns, a circle of radius R_C (R_C ∓ L_B for CR, ``hypot(R_C, L_B)`` for CT) for the C patterns,
-the path the feed word of the measuring program (thesis Fig 4.30(a)) is programmed along.
+The measuring motion of a run takes ``repeats × directions × max(path / feed, span / rotary)``, plus
+``index_rotary_min`` when it holds another rotary axis off 0: ``path`` is the length of the linear-axis commands
+(X, Y, Z) of the engine's pattern (:func:`mtmcal_bayes.machines.patterns.pattern_commands`) over the grid of the
+run's :class:`Motion`, ``span`` that grid's range in degrees.  One :class:`MachineClock` times every machine; the
+motion a run is timed over is what the machine's planning kit gives: the engine's, a designed run over its own arc
+(:mod:`mtmcal_bayes.planning.chain_clock`); a plug-in's, e.g. the thesis' patterns over their whole range, densely,
+the path the feed word of their measuring programs is programmed along (:mod:`mtmcal_bayes.plugins.thesis.timing`).
 
 A schedule measures the runs in the given order from a start state (ball bar mounted or not, the
 current set-up and placement): a run at another set-up than the previous costs a tool change (the
@@ -47,13 +44,12 @@ then by placement, so that each change happens once.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .patterns import B_PATTERNS, pattern_commands
+from .machines.patterns import pattern_commands
 
 #: default ball-bar feed when neither the time model nor the campaign gives one, mm/min
 DEFAULT_FEED = 1000.0
@@ -63,8 +59,6 @@ MAX_STEP_MIN = 480.0
 MAX_FEED = 50_000.0
 #: rotary speeds outside these bounds are unit slips (°/min): a turn in 6 h, or 100 rev/min
 MIN_ROTARY, MAX_ROTARY = 1.0, 36_000.0
-#: points of the path-length grid over a pattern's range
-PATH_POINTS = 721
 
 
 @dataclass(frozen=True)
@@ -117,13 +111,29 @@ class TimeModel:
 TIME_KEYS = tuple(f.name for f in fields(TimeModel))
 
 
-@functools.lru_cache(maxsize=4096)
-def path_length(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float, cr_geometry: str = "RC-LB") -> float:
-    """Length of the programmed relative path of one direction of ``pattern``, mm (module docstring)."""
-    span = 90.0 if pattern in B_PATTERNS else 360.0
-    cmd = pattern_commands(pattern, R_B=R_B, Z_C=Z_C, R_C=R_C, L_B=L_B,
-                           angles_deg=np.linspace(0.0, span, PATH_POINTS), cr_geometry=cr_geometry)
-    xyz = np.c_[cmd.X, cmd.Y, cmd.Z]
+@dataclass(frozen=True)
+class Motion:
+    """What one run makes the axes do, as the clock times it: ``pattern`` over ``arc_deg`` (k,) degrees, tool length
+    ``length`` and bar ``bar`` (mm), the W ball at ``ball`` (3,) mm (home pose), the other rotary axes at
+    ``hold_deg`` ((letter, degrees), ...), the bar on the other side if ``reverse``
+    (:func:`~mtmcal_bayes.machines.patterns.pattern_commands`).  Tuples throughout: a motion is its own cache key."""
+
+    pattern: str
+    length: float
+    ball: tuple[float, float, float]
+    bar: float
+    arc_deg: tuple[float, ...]
+    hold_deg: tuple[tuple[str, float], ...] = ()
+    reverse: bool = False
+
+
+def path_length(desc, motion: Motion) -> float:
+    """Length of the linear-axis commands (X, Y, Z) of ``motion`` on the machine ``desc``, mm: the polygon through
+    its grid's points."""
+    cmd = pattern_commands(desc, motion.pattern, length=motion.length, ball=np.array(motion.ball), bar=motion.bar,
+                           arc_deg=np.array(motion.arc_deg), hold_deg=dict(motion.hold_deg) or None,
+                           reverse=motion.reverse)
+    xyz = np.stack([cmd.q[a] for a in "XYZ"], axis=-1)
     return float(np.sum(np.linalg.norm(np.diff(xyz, axis=0), axis=1)))
 
 
@@ -157,27 +167,32 @@ class Schedule:
 
 
 class MachineClock:
-    """The time model applied to a campaign's geometry (``setups``/``mounts`` by id, bar length, CR geometry, feed).
+    """The time model applied to runs on the machine ``desc`` (module docstring); ``motion(run) ->`` :class:`Motion`
+    what a run makes the axes do, ``feed`` the campaign's feed (mm/min; the time model's wins).
 
     A run is any object with ``pattern``, ``setup`` and ``mount`` ids (or ``Setup``/``Mount`` objects) and
-    ``repeats``.  ``start`` = (ball bar mounted, current setup id, current mount id).
+    ``repeats`` (and whatever ``motion`` reads).  ``start`` = (ball bar mounted, current setup id, current mount id).
     """
 
-    def __init__(self, model: TimeModel, *, L_B: float, cr_geometry: str = "RC-LB", feed: float | None = None):
-        self.model, self.L_B, self.cr_geometry = model, L_B, cr_geometry
+    def __init__(self, model: TimeModel, desc, motion, *, feed: float | None = None):
+        self.model, self.desc, self.motion = model, desc, motion
         self.feed_mm_per_min = model.feed(feed)
+        self._one: dict[Motion, tuple[float, float]] = {}
 
-    def measure_minutes(self, pattern: str, setup, mount, repeats: int) -> float:
-        """Dwell plus the measuring motion of one run, min."""
-        path = path_length(pattern, R_B=float(setup.R_B), Z_C=float(mount.Z_C), R_C=float(mount.R_C),
-                           L_B=float(self.L_B), cr_geometry=self.cr_geometry)
-        span = 90.0 if pattern in B_PATTERNS else 360.0
-        one = max(path / self.feed_mm_per_min, span / self.model.rotary_deg_per_min)
-        return self.model.dwell_min + repeats * self.model.directions * one
+    def one_direction(self, motion: Motion) -> tuple[float, float]:
+        """``(minutes of one direction of the measuring motion, minutes of indexing before it)``."""
+        if motion not in self._one:
+            m = self.model
+            span = float(motion.arc_deg[-1] - motion.arc_deg[0])
+            one = max(path_length(self.desc, motion) / self.feed_mm_per_min, span / m.rotary_deg_per_min)
+            index = m.index_rotary_min if any(v != 0 for _, v in motion.hold_deg) else 0.0
+            self._one[motion] = one, index
+        return self._one[motion]
 
     def run_minutes(self, run) -> float:
-        """Minutes of one run of a schedule (:meth:`measure_minutes` of its pattern, set-up, mount, repeats)."""
-        return self.measure_minutes(run.pattern, run.setup, run.mount, run.repeats)
+        """Dwell, indexing and the measuring motion of one run of a schedule, min."""
+        one, index = self.one_direction(self.motion(run))
+        return self.model.dwell_min + index + run.repeats * self.model.directions * one
 
     def _steps(self, runs, start):
         """``(run index, kind, minutes)`` of every step of ``runs`` measured in the given order from ``start``."""
@@ -236,5 +251,5 @@ def canonical_order(runs, start_setup: str | None = None, start_mount: str | Non
     return out
 
 
-__all__ = ["TimeModel", "TIME_KEYS", "MachineClock", "Schedule", "Event", "canonical_order", "path_length",
+__all__ = ["TimeModel", "TIME_KEYS", "Motion", "MachineClock", "Schedule", "Event", "canonical_order", "path_length",
            "DEFAULT_FEED", "MAX_STEP_MIN", "MAX_FEED"]

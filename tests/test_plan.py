@@ -1,5 +1,6 @@
 """Measurement planning: ranking, sweep, closed form against independent computations and Monte Carlo."""
 
+import copy
 import json
 
 import numpy as np
@@ -141,6 +142,23 @@ def test_feasibility_uses_the_axis_travels(thesis):
                                                                      "travel_Z_mm = 1077.0\n", ""), "t.toml")
     ok, why = feasibility(by_name["CA @ RB1, R_C 150 mm"], thesis_no_travel)
     assert ok and "not checked" in why
+    # the span rule places a run as the machine's plug-in does; a described machine has its own check
+    from mtmcal_bayes.api import campaign_of, demo_campaign
+    from mtmcal_bayes.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="description's travels"):
+        feasibility(by_name["CR @ R_B+150 mm"], campaign_of(demo_campaign("trunnion")))
+
+
+def test_feasibility_follows_the_bar_side_of_the_cr_geometry(thesis):
+    """CR's T ball inside the W ball (Table 2.3) circles at R_C − L_B = 50 mm, outside it (Fig 2.6) at R_C + L_B =
+    150 mm: a Y span of 300 mm, beyond the 250 mm travel."""
+    outside = copy.deepcopy(thesis)
+    outside.ballbar.cr_geometry = "RC+LB"
+    for campaign, fits in ((thesis, True), (outside, False)):
+        cr = next(c for c in catalogue(campaign) if c.name == "CR @ R_B+150 mm")
+        ok, why = feasibility(cr, campaign)
+        assert ok == fits and (fits or "Y span 300 mm > travel 250 mm" in why), why
 
 
 def test_user_candidates(run_cli, tmp_path):

@@ -16,9 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..campaign import Campaign, Mount, Setup
+from ..errors import ParameterError
+from ..io.machine_reader import description_of
 from ..io.textfiles import read_user_text
 from ..io.toml_reader import TomlReader, parse_toml
-from ..patterns import PATTERNS, mount_conflict, pattern_commands
+from ..machines.patterns import pattern_commands
+from ..machines.plugins import provided
+from ..patterns import PATTERNS, mount_conflict
 
 #: extension bars of the catalogue, mm
 EXTENSIONS_MM = (25.0, 50.0, 75.0, 100.0, 125.0, 150.0)
@@ -129,20 +133,27 @@ def feasibility_check(campaign: Campaign):
 
     The campaign gives each axis' travel, not where the C axis sits inside it,
     so a pattern is feasible when the span of each linear-axis command fits the
-    travel (the B-axis centre path of thesis Tables 2.2/2.3).  The campaign is read once, here, for every
-    candidate checked.
+    travel.  The commands are the engine's (:func:`~mtmcal_bayes.machines.patterns.pattern_commands`) with the run
+    placed as the machine's plug-in places it (``run_placement``: on the thesis machine the B-axis centre path of
+    Tables 2.2/2.3).  The campaign is read once, here, for every candidate checked.
     """
     travel = dict(campaign.machine.travel or {})
-    cr_geometry = campaign.ballbar.cr_geometry
+    desc = description_of(campaign.machine)
+    place = provided(campaign.machine, "run_placement")
+    if place is None:
+        raise ParameterError("campaign", "the span rule checks runs of a campaign format whose plug-in places them "
+                             "(the thesis' lever arms); a described machine's candidates are checked against its "
+                             "description's travels (planning.machine_kit.feasibility_of)")
 
     def check(candidate: Candidate) -> tuple[bool, str]:
         if not travel:
             return True, "no axis travels in [machine]: not checked"
-        cmd = pattern_commands(candidate.pattern, R_B=candidate.setup.R_B, Z_C=candidate.mount.Z_C,
-                               R_C=candidate.mount.R_C, L_B=candidate.length, cr_geometry=cr_geometry)
+        ball, arc, reverse = place(campaign, candidate.pattern, candidate.mount)
+        cmd = pattern_commands(desc, candidate.pattern, length=candidate.setup.R_B, ball=ball, bar=candidate.length,
+                               arc_deg=arc, reverse=reverse)
         over = []
-        for axis, values in (("X", cmd.X), ("Y", cmd.Y), ("Z", cmd.Z)):
-            span = float(np.ptp(values))
+        for axis in "XYZ":
+            span = float(np.ptp(cmd.q[axis]))
             if axis in travel and span > travel[axis] + 1e-9:
                 over.append(f"{axis} span {span:.0f} mm > travel {travel[axis]:g} mm")
         return (not over), ("; ".join(over) if over else "within the axis travels")

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..machine_time import TimeModel, canonical_order
-from .chain_clock import DescribedClock  # noqa: F401  (the clock of a machine from its description)
 from .machine_kit import kit_of
 
 

@@ -64,7 +64,7 @@ def engine_kit() -> PlanningKit:
     from . import chain_candidates as dc
     from .chain_planner import DescribedPlanner, described_targets
     from .chain_probe_candidates import described_probe_catalogue, described_probe_feasibility
-    from .chain_clock import DescribedClock
+    from .chain_clock import engine_clock
     from .run_records import DESCRIBED_RUN_COLUMNS, described_records
 
     def reported(campaign, planner_of):
@@ -91,7 +91,7 @@ def engine_kit() -> PlanningKit:
         probe_catalogue=described_probe_catalogue, probe_feasibility=described_probe_feasibility,
         planner=DescribedPlanner, reported=reported,
         target_name=lambda name, campaign: described_targets([name], campaign.machine.description)[0],
-        clock=lambda model, campaign: DescribedClock(model, campaign), where=where, sweep=dc.sweep_candidates,
+        clock=engine_clock, where=where, sweep=dc.sweep_candidates,
         sweep_pattern=sweep_pattern,
         feasibility_note="feasible = every command of every point (the arc, the held axes, the linear axes) lies "
                          "within the travels of the machine's description",

@@ -8,7 +8,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   (:mod:`.translation`); ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
-* **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C and the touch probe's ``[probe.c_axis]`` and
+* **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C (a run's W ball, arc and bar side in the
+  engine's terms: ``run_placement``, :mod:`.translation`) and the touch probe's ``[probe.c_axis]`` and
   ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its patterns**: its 12 in the order of Tables 2.2/2.3 (B before C), their components, B patterns only with the
   W ball on the C axis (Table 2.2), and the geometry line of its sensitivity table (Tables 2.4–2.6);
@@ -43,6 +44,14 @@ def probe_owners(machine, probe) -> set[str]:
     from .campaign_keys import probe_owners as owners
 
     return owners(machine, probe)
+
+
+def run_placement(campaign, pattern: str, mount) -> tuple:
+    """A run of ``pattern`` on ``mount`` (Z_C, R_C) in the engine's terms: ``(W-ball position (3,) mm, arc (k,)
+    degrees, bar reversed)`` (Tables 2.2/2.3, :mod:`.translation`)."""
+    from .translation import run_placement as placement
+
+    return placement(campaign, pattern, mount)
 
 
 def campaign_document(c, doc: dict, save_dir=None) -> dict:
@@ -119,7 +128,6 @@ def sample_notes(result) -> list[str]:
 def planning():
     """The planning of the thesis' campaign format: its 12 patterns at its lever arms (R_B, Z_T, X_T, R_C, Z_C), its
     probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
-    from ...machine_time import MachineClock
     from ...parameters import IDENTIFIABLE
     from ...planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
                                        read_candidates)
@@ -128,15 +136,12 @@ def planning():
     from ...planning.run_records import RUN_COLUMNS, thesis_records
     from ...planning.machine_kit import PlanningKit
     from ...planning.probe_candidates import probe_catalogue, probe_feasibility
+    from .timing import campaign_clock
 
     def target_name(name, campaign):
         q = thesis_name(str(name))
         check_targets([q])
         return q
-
-    def clock(model, campaign):
-        bb = campaign.ballbar
-        return MachineClock(model, L_B=bb.length, cr_geometry=bb.cr_geometry, feed=bb.feed_mm_per_min)
 
     def where(c) -> dict:
         return {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "mount": c.mount.id,
@@ -155,7 +160,7 @@ def planning():
         catalogue=catalogue, feasibility=feasibility_check, probe_catalogue=probe_catalogue,
         probe_feasibility=probe_feasibility, planner=Planner,
         reported=lambda campaign, planner_of: planner_of(list(IDENTIFIABLE)), target_name=target_name,
-        clock=clock, where=where, sweep=sweep, sweep_pattern=sweep_pattern,
+        clock=campaign_clock, where=where, sweep=sweep, sweep_pattern=sweep_pattern,
         feasibility_note="feasible = the span of each linear-axis command fits the axis travel of [machine] (the "
                          "campaign does not give where the C axis sits within the travels)",
         probe_note="touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its "
@@ -260,6 +265,7 @@ class ThesisPlugin:
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
     probe_owners = staticmethod(probe_owners)
+    run_placement = staticmethod(run_placement)
     pattern_components = staticmethod(pattern_components)
     mount_conflict = staticmethod(mount_conflict)
     # its models and likelihood

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 from ...errors import ParameterError
+from ...io.machine_reader import description_of
 from .htm import nc_origin
 from ...patterns import PATTERNS
 from .compensation.compensate import geometry_for
@@ -28,8 +29,9 @@ def measuring_program(pattern: str, campaign=None, *, R_B_mm: float | None = Non
     """
     if start is not None and not all(math.isfinite(v) for v in start):
         raise ParameterError("start", "must be finite numbers")
-    origin = None
+    origin, desc = None, None
     if campaign is not None:
+        desc = description_of(campaign.machine)
         mount = mount or (campaign.mount_for(pattern).id if pattern in PATTERNS else None)
         geo = geometry_for(campaign, setup, mount)
         R_B = R_B_mm if R_B_mm is not None else geo.R_B
@@ -40,5 +42,5 @@ def measuring_program(pattern: str, campaign=None, *, R_B_mm: float | None = Non
     else:
         R_B, L_B, Z_C, R_C, cr = R_B_mm, 100.0, 0.0, 0.0, "RC-LB"
     lines = pattern_program(pattern, R_B, step_deg, n, L_B=L_B, Z_C=Z_C, R_C=R_C, start=start, origin=origin,
-                            feed=feed, cr_geometry=cr)
+                            feed=feed, cr_geometry=cr, desc=desc)
     return "\n".join(lines) + "\n"

@@ -1,12 +1,16 @@
-"""The thesis campaign format in the engine's terms: its runs' arcs and the bar sides of its patterns.
+"""The thesis campaign format in the engine's terms: its W balls as positions, its runs as arcs and bar sides.
 
-A mount's W ball is where the thesis' keys place it (:meth:`~mtmcal_bayes.campaign.Mount.centre`: at radius R_C
-along X from the C axis at height Z_C; a B pattern's mount has R_C = 0, Table 2.2).  A run's arc is the thesis' grid
-(B 0–90° by 1°, C 0–355° by 5°).  Its BT bar is on the trailing side of the W ball and, in the geometry of Fig 2.6
-(``cr_geometry = "RC+LB"``), its CR bar outside it: both *reversed* against the engine's patterns
-(:mod:`mtmcal_bayes.machines.patterns`), which the campaign states as its ``reversed_patterns``.  Through these the
-engine's chain (:class:`~mtmcal_bayes.models.chain_models.ChainBallbarModel`) is the thesis machine's ``chain``
-model (``tests/test_chain.py``) and its reading frames are the thesis' (``tests/test_conventions_machines.py``).
+A run's W ball is where the thesis places it (Tables 2.2/2.3): at the dummy sphere, at X = 0 for a B pattern and
+X = R_C for a C pattern, Y = 0, Z = Z_C (the home pose, the C axis at the origin of the ``integrex-i200``
+description; a mount of a campaign's B runs has R_C = 0, so :meth:`~mtmcal_bayes.campaign.Mount.centre` is its W
+ball).  A run's arc is the thesis' grid (B 0–90° by 1°, C 0–355° by 5°).  Its BT bar is on the trailing side of the
+W ball and, in the geometry of Fig 2.6 (``cr_geometry = "RC+LB"``), its CR bar outside it: both *reversed* against
+the engine's patterns (:mod:`mtmcal_bayes.machines.patterns`), which a campaign read in this format states as its
+``pattern_arcs`` and ``reversed_patterns`` (:func:`complete`).  Through these the engine's chain
+(:class:`~mtmcal_bayes.models.chain_models.ChainBallbarModel`) is the thesis machine's ``chain`` model
+(``tests/test_chain.py``), its reading frames are those of Tables 2.2/2.3 (``tests/test_conventions_machines.py``),
+and the engine's :func:`~mtmcal_bayes.machines.patterns.pattern_commands` gives the commands of Tables 2.2/2.3
+(:func:`commands`: the programs of Fig 4.30(a), the planner's feasibility and clock).
 """
 
 from __future__ import annotations
@@ -15,21 +19,56 @@ import copy
 import dataclasses
 import functools
 
+import numpy as np
+
 from ...io.machine_reader import description_of
+from ...machines.patterns import PatternCommands, pattern_commands
 from ...pattern_frames import chain_frame
 from ...patterns import B_ANGLES_DEG, B_PATTERNS, C_ANGLES_DEG, PATTERNS
 
 
+def w_ball(mount, pattern: str) -> np.ndarray:
+    """The W-ball position (3,) mm at the home pose of a run of ``pattern`` on ``mount`` (``Z_C``, ``R_C`` mm):
+    ``(0, 0, Z_C)`` for a B pattern, ``(R_C, 0, Z_C)`` for a C pattern (Tables 2.2/2.3)."""
+    return np.array([0.0 if pattern in B_PATTERNS else mount.R_C, 0.0, mount.Z_C])
+
+
+def arc_deg(pattern: str) -> np.ndarray:
+    """The thesis' grid of a pattern's angles (k,), degrees: B 0–90° by 1°, C 0–355° by 5°."""
+    return B_ANGLES_DEG if pattern in B_PATTERNS else C_ANGLES_DEG
+
+
 def reversed_patterns(cr_geometry: str) -> frozenset[str]:
     """The thesis patterns whose bar is on the other side of the W ball from the engine's: BT, and CR in the
-    geometry of Fig 2.6 (``"RC+LB"``)."""
+    geometry of Fig 2.6 (``"RC+LB"``, the T ball outside)."""
     return frozenset({"BT", "CR"} if cr_geometry == "RC+LB" else {"BT"})
+
+
+def bar_reversed(pattern: str, cr_geometry: str) -> bool:
+    """Whether a run of ``pattern`` has its bar on the other side of the W ball than the engine's pattern puts it."""
+    return pattern in reversed_patterns(cr_geometry)
+
+
+def run_placement(campaign, pattern: str, mount) -> tuple[np.ndarray, np.ndarray, bool]:
+    """A run of ``pattern`` on ``mount`` of a thesis-format ``campaign`` in the engine's terms: ``(W-ball position
+    (3,) mm, arc (k,) degrees, bar reversed)``."""
+    return w_ball(mount, pattern), arc_deg(pattern), bar_reversed(pattern, campaign.ballbar.cr_geometry)
+
+
+def commands(desc, pattern: str, *, R_B: float, mount, L_B: float, cr_geometry: str = "RC-LB",
+             angles_deg=None) -> PatternCommands:
+    """The engine's commands of a thesis pattern (those of Tables 2.2/2.3): tool length ``R_B``, W ball on ``mount``,
+    bar ``L_B`` (mm), over ``angles_deg`` (default the thesis' grid, :func:`arc_deg`) on the thesis machine's
+    description ``desc``."""
+    return pattern_commands(desc, pattern, length=R_B, ball=w_ball(mount, pattern), bar=L_B,
+                            arc_deg=arc_deg(pattern) if angles_deg is None else angles_deg,
+                            reverse=bar_reversed(pattern, cr_geometry))
 
 
 def complete(ballbar, desc) -> None:
     """Give a thesis-format ``ballbar`` (in place) the engine's terms: its patterns' arcs and bar sides and its runs'
     reading frames through the chain of ``desc``."""
-    ballbar.pattern_arcs = {p: B_ANGLES_DEG if p in B_PATTERNS else C_ANGLES_DEG for p in PATTERNS}
+    ballbar.pattern_arcs = {p: arc_deg(p) for p in PATTERNS}
     ballbar.reversed_patterns = reversed_patterns(ballbar.cr_geometry)
     ballbar.pattern_frames = functools.partial(chain_frame, desc)
 
