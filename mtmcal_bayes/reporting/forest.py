@@ -79,6 +79,12 @@ def _label_colour(rows) -> str:
     return IDENTIFICATION_COLOUR.get(verdicts.pop(), "black") if len(verdicts) == 1 else "black"
 
 
+def _legend_height(entries: int) -> float:
+    """Inches below the axes for the legend of ``entries`` entries in two columns (0.7 up to two rows, then about
+    0.2 per row: a row of 9.5 pt text and its spacing)."""
+    return max(0.7, 0.25 + 0.2 * -(-entries // 2))
+
+
 def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame | None, names=IDENTIFIABLE):
     """One row per quantity, one interval per entry of ``summaries`` (label → summary table).
 
@@ -88,7 +94,10 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
     names = [n for n in names if all(n in s.index for s in summaries.values())]
     refs = reference_values(comparison, names) if comparison is not None else {}
     k = len(summaries)
-    fig, axes = new_figure(len(names), 1, figsize=(10, (0.55 + 0.22 * k) * len(names) + 1.3), squeeze=False)
+    kinds = [key for key in _REF_STYLE if refs and any(v is not None for v in refs[key])]
+    legend_in = _legend_height(k + len(kinds))
+    fig, axes = new_figure(len(names), 1, figsize=(10, (0.55 + 0.22 * k) * len(names) + 0.6 + legend_in),
+                           squeeze=False)
     for i, (ax, n) in enumerate(zip(axes[:, 0], names)):
         rows = {lab: s.loc[n] for lab, s in summaries.items()}
         ys = 1.0 + np.arange(k)[::-1] * 0.6
@@ -130,10 +139,9 @@ def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame |
         ax.tick_params(axis="x", labelsize=9)
     handles = [Line2D([], [], color=_colour(lab, k > 1), lw=5, marker="o", mfc="white",
                       label=f"{lab}: mean, 95 % HDI" if k > 1 else "posterior: mean, 95 % HDI") for lab in summaries]
-    for key, st in _REF_STYLE.items():
-        if refs and any(v is not None for v in refs[key]):
-            handles.append(Line2D([], [], color=_REF_COLOUR[key], ls="none",
-                                  label=REFERENCE_LABELS[key], **st))
-    tight_layout(fig, (0, 0.7 / fig.get_figheight(), 1, 1), h_pad=0.6)
+    for key in kinds:
+        handles.append(Line2D([], [], color=_REF_COLOUR[key], ls="none", label=REFERENCE_LABELS[key],
+                              **_REF_STYLE[key]))
+    tight_layout(fig, (0, legend_in / fig.get_figheight(), 1, 1), h_pad=0.6)
     fig.legend(handles=handles, loc="lower center", ncol=2, fontsize=9.5, frameon=False)
     return fig
