@@ -146,19 +146,16 @@ def _writable(path, what: str) -> None:
 
 
 def identify(campaign: CampaignLike = None):
-    """The thesis' deterministic identification: ball bar (Eqs 4.10–4.18) and touch probe (Eqs 5.1–5.19),
-    each value beside the published one (the thesis plug-in's :class:`~mtmcal_bayes.plugins.thesis.identification.IdentificationResult`).  On a described machine, which has no
-    thesis formulas: the linearised least-squares identification of what its campaign determines, from every
-    instrument it has (:class:`~mtmcal_bayes.posterior.least_squares.DescribedIdentification`)."""
-    from .machines.plugins import provided
+    """The deterministic identification, on every machine the linearised least-squares identification of what its
+    campaign determines, from the machine's default data (:func:`data_of`), and where the machine's plug-in has a
+    method of its own, that beside it: on the thesis machine its Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch
+    probe), each value beside the published one (:class:`~mtmcal_bayes.posterior.least_squares.Identification`; its
+    ``ballbar``, ``probe``, ``table()`` are the plug-in result's).  A campaign without ball-bar runs gets the least
+    squares of its touch-probe readings whatever the machine's default data."""
+    from .posterior.least_squares import identify as identify_campaign
 
     c = campaign_of(campaign, measured=True)
-    deterministic = provided(c.machine, "identify")
-    if deterministic is not None:
-        return deterministic(c)
-    from .posterior.least_squares import identify_described
-
-    return identify_described(c, data_of(None, c))
+    return identify_campaign(c, data_of(None, c) if c.ballbar.runs else "probe")
 
 
 def probe_fit(path, *, stylus_radius_mm: float | None = None) -> ProbeFit:

@@ -33,10 +33,13 @@ MODEL_COLOURS = dict(zip(MODELS, ("#0072B2", "#E69F00", "#009E73")))
 #: the ball-bar-only, probe-only and fused posteriors
 DATA_COLOURS = {"ball bar only": "#0072B2", "probe only": "#CC79A7", "fused": "#000000"}
 
+#: the label of each kind of deterministic value (:data:`~mtmcal_bayes.posterior.comparison.REFERENCES`): the thesis
+#: plug-in's three, and the least squares of every machine
 REFERENCE_LABELS = {
     "ballbar": "ball bar, deterministic (Eqs 4.10–4.18)",
     "probe_reported": "touch probe, as printed (Table 5.3)",
     "probe_recomputed": "touch probe, recomputed (Eqs 5.1–5.19)",
+    "least_squares": "least squares (the kinematic model's first order)",
 }
 
 _GREEK = {"alpha": r"\alpha", "beta": r"\beta", "gamma": r"\gamma"}

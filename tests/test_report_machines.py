@@ -52,10 +52,11 @@ def reports(request, demo_report):
 def _expected(campaign) -> tuple[set[str], set[str]]:
     """The sections (anchors) and CSVs a report of ``campaign`` must have, from what the campaign and its machine
     provide."""
-    sections = {"machine", "determined", "results", "statement", "conformity", "budget", "corner", "forest",
-                "compensation", "ppc", "widths", "plan", "diagnostics"}  # the machine and its Jacobian: on every one
+    sections = {"machine", "determined", "results", "least-squares", "statement", "conformity", "budget", "corner",
+                "forest", "compensation", "ppc", "widths", "plan", "diagnostics"}  # the machine, its Jacobian, the
+    # least squares: on every one
     csvs = {"summary.csv", "loo.csv", "diagnostics.csv", "priors.csv", "budget.csv", "plan.csv", "identifiability.csv",
-            "combinations.csv"}
+            "combinations.csv", "least_squares.csv"}
     if campaign.ballbar.runs:
         sections |= {"polar"}
         csvs |= {"ppc.csv"}
@@ -65,9 +66,6 @@ def _expected(campaign) -> tuple[set[str], set[str]]:
     if provided(campaign.machine, "identify") is not None:  # the plug-in's deterministic identification
         sections |= {"thesis"}
         csvs |= {"identification_ballbar.csv", "thesis_assumption_dx_BT.csv"}
-    else:  # the least squares beside the posterior
-        sections |= {"least-squares"}
-        csvs |= {"least_squares.csv"}
     if campaign.truth is not None:
         sections |= {"truth"}
         csvs |= {"truth.csv"}
@@ -96,11 +94,16 @@ def test_every_section_the_machine_supports(reports, machine):
 
 @pytest.mark.parametrize("machine", TYPES)
 def test_the_deterministic_values_beside_the_posterior(reports, machine):
-    """The forest's deterministic values: the thesis' ball-bar values on the thesis machine, the least squares on a
-    described one, which agree with the posterior (weak priors: a fraction of a sd) on what the campaign determines,
-    and the demo's stated truth lies within Z_MAX sd of the posterior."""
+    """The deterministic values beside the posterior: the least squares of what the campaign determines on every
+    machine (each deviation the report's identifiability.csv determines one by one), and the thesis' ball-bar values
+    on the thesis machine; on a described one the least squares agree with the posterior (weak priors: a fraction of
+    a sd) on what the campaign determines, and the demo's stated truth lies within Z_MAX sd of the posterior."""
     campaign, rep, _, _ = reports(machine)
     s = pd.read_csv(rep / "summary.csv", index_col="quantity")
+    ls = pd.read_csv(rep / "least_squares.csv").set_index("quantity")
+    ident = pd.read_csv(rep / "identifiability.csv")
+    assert set(ident.loc[ident["kind"] == "determined", "quantity"]) <= set(ls.index)
+    assert (ls["u"] > 0).all()
     if provided(campaign.machine, "identify") is not None:
         assert s["ballbar"].notna().sum() >= 6
         return
@@ -108,7 +111,6 @@ def test_the_deterministic_values_beside_the_posterior(reports, machine):
     combinations = pd.read_csv(rep / "combinations.csv")
     assert all(name in html for name in combinations["name"])  # what the campaign determines only in combination
     assert "Eqs 4.10" not in html  # no thesis number on a described machine
-    ls = pd.read_csv(rep / "least_squares.csv").set_index("quantity")
     determined = [n for n in ls.index if n in s.index]
     assert determined
     assert (np.abs(ls.loc[determined, "estimate"] - s.loc[determined, "mean"]) <= 0.5 * s.loc[determined, "sd"]).all()

@@ -22,7 +22,6 @@ from ..inference.results import (
 )
 from ..inference.sampling import SamplerSettings, SamplingResult, run_ensembles
 from ..io.netcdf import write_netcdf_atomic
-from ..machines.plugins import provided
 from ..progress import Progress
 from .checks import (
     ReferenceCheck,
@@ -30,7 +29,7 @@ from .checks import (
     reference_check,
     reference_warnings,
 )
-from .comparison import comparison
+from .comparison import comparison, references
 from .conformity import conformity_table
 
 
@@ -86,7 +85,8 @@ class PosteriorResult:
         ball-bar runs was a choice, the estimate under the alternative reading and whether the quantity rests on the
         choice (:data:`~mtmcal_bayes.inference.reading_choice.COLUMNS`).
     comparison : pandas.DataFrame
-        each quantity's posterior beside the ball-bar and touch-probe values.
+        each quantity's posterior beside the published deterministic values of its machine's plug-in (the thesis':
+        ball bar and touch probe; :func:`~mtmcal_bayes.posterior.comparison.comparison`), empty where it has none.
     sampling : SamplingResult
         the chains of every ensemble in internal units, and the sampler's own facts.
     warnings, not_identified : sentences to heed; ``not_identified`` what the campaign's Jacobian leaves
@@ -217,8 +217,9 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     choice = analysis.reading_choice(summary.index) if statement else None  # a reading chosen over another
     if choice is not None:
         summary = summary.join(choice)
-    has_own = provided(campaign.machine, "identify") is not None  # published values to set beside (the thesis')
-    comp = comparison(summary, analysis.identification) if has_own else pd.DataFrame()
+    # the machine's published deterministic values (its plug-in's; the least squares, which wants the posterior's
+    # σ_model, joins them in the report)
+    comp = comparison(summary, references(analysis.identification))
     ref = None if beside else reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + ([] if beside else diagnostics_warnings(summary))
     warn += reference_warnings(ref, summary)

@@ -36,6 +36,7 @@ from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.checks import thesis_assumption_effect
+from ..posterior.comparison import comparison, references
 from ..posterior.conflict import ConflictAnalysis, explain_conflict
 from ..posterior.conformity import (
     CONFORMITY_COLUMNS,
@@ -48,6 +49,7 @@ from ..posterior.consistency import (
     compare_instruments,
 )
 from ..posterior.instrument_check import blame, disputed_deviations
+from ..posterior.least_squares import LeastSquares
 from ..posterior.loo import LooResult, loo_check
 from ..posterior.output import format_posterior, posterior_json
 from ..posterior.sample import PosteriorResult, sample_posterior
@@ -200,9 +202,9 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     analysis = analysis_of(campaign, model=model, data=data, fix_dx_BT=fix_dx_BT, sigma_model=sigma_model,
                            sigma_prior=sigma_prior)
     campaign = analysis.campaign
-    # the deterministic values beside the posterior: the plug-in's identification where it gives one (the thesis'),
-    # else the least squares of the chain's first order (after the sampling: at its σ_model)
-    ident = analysis.identification if provided(campaign.machine, "identify") is not None else None
+    # the plug-in's own deterministic identification where it gives one (the thesis': its tables and section); the
+    # least squares beside it on every machine come after the sampling (at its σ_model: Shown.of)
+    ident = analysis.identification
     with atomic_directory(out_dir) as tmp:
         drawing = Drawing(tmp)
         try:
@@ -266,20 +268,21 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
 @dataclass
 class Shown:
     """Which quantities the report lists and draws: ``listed`` one by one (results, forest, widths, the plan's
-    targets), ``joint`` in the corner, trace and rank plots, with the deterministic values beside them
-    (``reference``: a comparison table, :func:`~mtmcal_bayes.inference.results.comparison`, or the least squares');
-    ``least_squares`` where those are the deterministic values."""
+    targets), ``joint`` in the corner, trace and rank plots, with every deterministic value of the machine beside
+    them (``reference``: :func:`~mtmcal_bayes.posterior.comparison.comparison` of the posterior with the least
+    squares and the plug-in's own values); ``least_squares`` the least-squares identification."""
 
     listed: list[str]
     joint: list[str]
     reference: pd.DataFrame
-    least_squares: object | None = None
+    least_squares: LeastSquares
 
     @classmethod
     def of(cls, rep: PosteriorResult, ident) -> Shown:
         """The quantities the machine's plug-in reports (the thesis': its eight, Table 4.5 order), listed and drawn
         together, else every deviation of the machine, those its campaign determines drawn together; beside the
-        plug-in's deterministic values (``ident``) where it gives them, else the least squares."""
+        least squares at the posterior's σ_model and the values of the plug-in's own identification (``ident``)
+        where it gives one."""
         post = rep.log_posterior
         own = provided(post.campaign.machine, "reported_quantities")
         if own is not None:
@@ -287,10 +290,8 @@ class Shown:
         else:
             listed = [p.name for p in post.space.parameters if p.group == "deviation"]
             joint = machine_sections.shown_together(rep)
-        if ident is not None:
-            return cls(listed, joint, rep.comparison)
         ls = machine_sections.least_squares_of(rep)
-        return cls(listed, joint, machine_sections.reference(ls), ls)
+        return cls(listed, joint, comparison(rep.summary, references(ident, ls)), ls)
 
 
 #: the job that weighs the explanations of the instruments' conflict beside the figures (no file of its own)
@@ -456,8 +457,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     missing = missing_data(campaign, ident)
     effect = (thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
               if ident is not None and not analysis.fix_dx_BT else None)
-    # the Jacobian's statement on every machine; the least squares where those are the deterministic values; the
-    # stated truth of a simulated campaign
+    # the Jacobian's statement and the least squares on every machine; the stated truth of a simulated campaign
     machine_tables = machine_sections.tables(rep, shown.least_squares, campaign.truth)
     return _Rest(instruments, disputed, None, reports, missing, summary_table(rep),
                  mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df, machine_tables)
@@ -731,7 +731,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
             "highest-density interval, beside the deterministic ball-bar values (thesis Eqs 4.10–4.18 recomputed "
             "from this campaign) and the touch-probe values (as printed in Table 5.3 and as recomputed from Table "
             "5.2). 'in HDI' says whether that value lies inside the 95 % HDI. Angles in arc seconds, lengths in "
-            "micrometres. Full table: summary.csv.")
+            "micrometres. Full table: summary.csv. The least-squares values beside them: section 'Least-squares "
+            "identification'.")
     else:
         page.paragraph(f"Posterior of the deviations under the {model} model ({DATA_LABELS[rep.data]}): mean, sd "
                        "and 95 % highest-density interval; angles in arc seconds, lengths in micrometres. The "
@@ -739,8 +740,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     page.table(_results_table(summary, shown.listed), digits={"R-hat": 3})
     if rep.reading_choice_note:
         page.paragraph(rep.reading_choice_note)
-    if shown.least_squares is not None:
-        machine_sections.least_squares_section(page, rep, shown.least_squares)
+    machine_sections.least_squares_section(page, rep, shown.least_squares)
     if "truth.csv" in c.machine_tables:
         machine_sections.truth_section(page, c.machine_tables["truth.csv"])
     _statement_section(page, rep)
@@ -748,11 +748,10 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     _budget_section(page, rep, tmp, sigma_names=shown.joint)
 
     page.section("corner", "Joint posterior")
-    page.figure(tmp / "corner.png", (corner_plot.CAPTION if ident is not None else machine_sections.CORNER_CAPTION)
+    page.figure(tmp / "corner.png", corner_plot.caption(shown.reference, shown.joint)
                 + (" Off scale, not drawn: " + "; ".join(c.off_scale) + "." if c.off_scale else ""), "corner plot")
     page.section("forest", "Intervals against the deterministic methods")
-    page.figure(tmp / "forest.png", forest.CAPTION if ident is not None else machine_sections.FOREST_CAPTION,
-                "forest plot")
+    page.figure(tmp / "forest.png", forest.caption(shown.reference, shown.listed), "forest plot")
 
     if c.instruments is not None:
         _instruments_section(page, c, tmp)

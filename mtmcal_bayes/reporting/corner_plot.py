@@ -1,4 +1,5 @@
-"""Corner plot of the eight identified quantities with the deterministic values marked."""
+"""Corner plot of the quantities a report draws together, with deterministic values marked: the thesis' where the
+machine's plug-in gives them (ball bar as lines, touch probe as lines and markers), else the least squares."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from matplotlib.lines import Line2D
 
 from ..figure_style import COLOURS, REFERENCE_LABELS, figure, label, symbol, unit_symbol
 from ..parameters import IDENTIFIABLE
+from ..posterior.comparison import REFERENCES
 
 #: probability mass inside the 2-D contours (corner's own default is 0.5σ…2σ of a 2-D Gaussian)
 LEVELS = (0.68, 0.95)
@@ -22,6 +24,7 @@ DRAW_STYLE = {"alpha": 0.02, "ms": 1.5, "mec": "none", "zorder": -1, "rasterized
 #: about 1.4 px wide at the report's resolution; the rest is room for antialiasing)
 HIDDEN_MARGIN_PX = 3.0
 
+#: the caption where the thesis' values are drawn
 CAPTION = (
     "Corner plot of the posterior of the eight quantities the thesis identifies. Diagonal: marginal "
     "histograms with the posterior mean ± sd as title. Off-diagonal: 2-D histograms of the draws "
@@ -31,6 +34,13 @@ CAPTION = (
     "green: the touch-probe values as printed (Table 5.3); pink dashed: the touch-probe values "
     "recomputed from Table 5.2 (Eqs 5.1–5.19). Strong diagonal ridges are quantities the data tie "
     "together (e.g. β_XB with δx_CZ − δx_BT through dx_BT)."
+)
+#: the caption where the least squares are drawn (a machine whose plug-ins give no values of their own)
+LEAST_SQUARES_CAPTION = (
+    "Corner plot of the posterior of the deviations this campaign determines (one by one or in combination). "
+    "Diagonal: marginal histograms with the posterior mean ± sd as title. Off-diagonal: 2-D histograms with contours "
+    "enclosing 68 % and 95 % of the posterior mass; a narrow diagonal ridge is a combination the data determine "
+    "better than its terms. Orange lines: the least-squares identification of each deviation determined one by one."
 )
 
 
@@ -44,7 +54,7 @@ def _draws(idata, names: list[str], seed: int = 0) -> np.ndarray:
 
 
 def _ranges(x: np.ndarray, refs: dict[str, list], names) -> tuple[list, list[str]]:
-    """Axis range per quantity covering the draws and the reference values within reach."""
+    """Axis range per quantity covering the draws and the reference values within reach (``refs``: those drawn)."""
     ranges, off = [], []
     mean, sd = x.mean(axis=0), x.std(axis=0)
     for i, n in enumerate(names):
@@ -54,7 +64,7 @@ def _ranges(x: np.ndarray, refs: dict[str, list], names) -> tuple[list, list[str
             if v is None:
                 continue
             if abs(v - mean[i]) > OFF_SCALE_SD * sd[i]:
-                off.append(f"{n}: {REFERENCE_LABELS.get(key, LEAST_SQUARES_LABEL)} {v:.2f} {unit_symbol(n)} "
+                off.append(f"{n}: {REFERENCE_LABELS[key]} {v:.2f} {unit_symbol(n)} "
                            f"({(v - mean[i]) / sd[i]:+.0f} sd, off scale)")
             else:
                 lo, hi = min(lo, v), max(hi, v)
@@ -63,17 +73,11 @@ def _ranges(x: np.ndarray, refs: dict[str, list], names) -> tuple[list, list[str
     return ranges, off
 
 
-#: the kinds of reference value a comparison table may hold (its columns): the thesis' deterministic values, or the
-#: least-squares identification of a machine whose plug-ins give none of their own
-REFERENCE_KINDS = ("ballbar", "probe_reported", "probe_recomputed", "least_squares")
-#: the label of the least-squares values (the thesis' labels: figure_style.REFERENCE_LABELS)
-LEAST_SQUARES_LABEL = "least squares (the chain's first order)"
-
-
 def reference_values(comparison: pd.DataFrame, names) -> dict[str, list]:
-    """Per reference kind, a list aligned with ``names`` of values (display units) or None."""
+    """Per reference kind (:data:`~mtmcal_bayes.posterior.comparison.REFERENCES`), a list aligned with ``names`` of
+    values (display units) or None."""
     out = {}
-    for key in REFERENCE_KINDS:
+    for key in REFERENCES:
         vals = []
         for n in names:
             v = comparison.loc[n, key] if n in comparison.index and key in comparison else None
@@ -133,13 +137,25 @@ class _LowerTriangle:
             self.placeholder.remove()
 
 
+def _line_key(refs: dict[str, list]) -> str:
+    """The kind of reference drawn as corner's truth lines: the thesis' ball-bar values where there are any, else
+    the least squares (the touch-probe values are drawn beside them in a style of their own)."""
+    return "ballbar" if any(v is not None for v in refs["ballbar"]) else "least_squares"
+
+
+def caption(comparison: pd.DataFrame, names) -> str:
+    """The corner figure's caption for the reference values it draws of ``names``."""
+    return CAPTION if _line_key(reference_values(comparison, names)) == "ballbar" else LEAST_SQUARES_CAPTION
+
+
 def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
     """The corner figure and a list of reference values left off the axes (too far away)."""
     names = [n for n in names if n in idata.posterior]
     x = _draws(idata, names)
     refs = reference_values(comparison, names)
-    ranges, off = _ranges(x, refs, names)
-    line_key = "ballbar" if any(v is not None for v in refs["ballbar"]) else "least_squares"  # drawn as corner's truths
+    line_key = _line_key(refs)  # drawn as corner's truths
+    drawn = (line_key, "probe_reported", "probe_recomputed")
+    ranges, off = _ranges(x, {k: refs[k] for k in drawn}, names)
     K = len(names)
     cells = _LowerTriangle(figure(figsize=(_corner_size(K),) * 2), K)
     corner.corner(
@@ -173,7 +189,7 @@ def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
     handles = [Line2D([], [], color=COLOURS["posterior"], lw=6, alpha=0.5, label="posterior (68 % / 95 % contours)")]
     if any(v is not None for v in refs[line_key]):
         handles.append(Line2D([], [], color=COLOURS["ballbar"], lw=1.5,
-                              label=REFERENCE_LABELS.get(line_key, LEAST_SQUARES_LABEL)))
+                              label=REFERENCE_LABELS[line_key]))
     for key, st in styles.items():
         if any(v is not None for v in refs[key]):
             handles.append(Line2D([], [], color=st["color"], ls=st["ls"], marker=st["marker"], lw=1.3,

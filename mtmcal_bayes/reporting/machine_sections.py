@@ -1,9 +1,9 @@
-"""The report's sections about a machine's description and what its campaign determines (SPEC §19): the chain and
-its location errors drawn, the Jacobian's identifiability with each combination's posterior, the least-squares
-identification beside the posterior (the deterministic values of a machine whose plug-ins give no identification of
-their own) and, for a simulated campaign, its stated truth beside both.  Each section appears where the campaign and
-its posterior have what it needs: an identifiability, least-squares values, a stated truth; every machine has a
-description (the thesis campaign's is the built-in ``integrex-i200``)."""
+"""The report's sections about a machine's description and what its campaign determines (SPEC §19, §20): the chain
+and its location errors drawn, the Jacobian's identifiability with each combination's posterior, the least-squares
+identification beside the posterior (every machine's deterministic values, beside those of its plug-in's own method
+where it has one) and, for a simulated campaign, its stated truth beside both.  Each section appears where the
+campaign and its posterior have what it needs: an identifiability, least-squares values, a stated truth; every
+machine has a description (the thesis campaign's is the built-in ``integrex-i200``)."""
 
 from __future__ import annotations
 
@@ -22,15 +22,6 @@ CHAIN_CAPTION = ("The machine at its home pose: the frame, each rotary axis' nom
                  "move the workpiece); the chain from workpiece to tool below.")
 DEVIATIONS_CAPTION = ("What each location error means (positive values, exaggerated), as the chain applies it: a "
                       "small rigid displacement of the body the axis carries, turning about the axis' point.")
-CORNER_CAPTION = ("Corner plot of the posterior of the deviations this campaign determines (one by one or in "
-                  "combination). Diagonal: marginal histograms with the posterior mean ± sd as title. Off-diagonal: "
-                  "2-D histograms with contours enclosing 68 % and 95 % of the posterior mass; a narrow diagonal "
-                  "ridge is a combination the data determine better than its terms. Orange lines: the least-squares "
-                  "identification of each deviation determined one by one.")
-FOREST_CAPTION = ("One row per deviation, each with its own scale (″ for angles, µm for lengths): posterior mean "
-                  "(dot) and 95 % highest-density interval (bar), and below it the least-squares identification of "
-                  "the chain's first order (section 'Least-squares identification'), for each deviation the "
-                  "campaign determines one by one. An undetermined deviation spans its prior.")
 
 
 def figure_jobs(campaign) -> list:
@@ -52,12 +43,6 @@ def shown_together(rep) -> list[str]:
 def least_squares_of(rep) -> LeastSquares:
     """The least-squares identification of ``rep``'s campaign and data at its posterior median σ_model."""
     return least_squares(rep.log_posterior, rep.identifiability, units.to_internal(rep.sigma_model_um, "um"))
-
-
-def reference(ls: LeastSquares) -> pd.DataFrame:
-    """The least-squares values as the forest and corner plots take their reference values (column
-    ``least_squares``, display units, by quantity)."""
-    return ls.table.set_index("quantity")[["estimate"]].rename(columns={"estimate": "least_squares"})
 
 
 def tables(rep, ls: LeastSquares | None, truth) -> dict[str, pd.DataFrame]:
@@ -134,15 +119,16 @@ def determined_section(page: Page, rep) -> None:
 
 def least_squares_section(page: Page, rep, ls: LeastSquares) -> None:
     """The least-squares identification beside the posterior, for what the campaign determines."""
-    s, ident = rep.summary, rep.identifiability
+    s = rep.summary
     page.section("least-squares", "Least-squares identification beside the posterior")
-    page.paragraph(f"The deterministic counterpart: the least-squares solution of the chain's first order, the "
-                   f"nuisance terms held to their set-up knowledge, the deviations free, at σ_model = "
-                   f"{ls.sigma_model_um:.2f} µm (the posterior median); only what the campaign determines. "
-                   "least_squares.csv.")
+    page.paragraph(f"The deterministic counterpart on every machine: the least-squares solution of the first order "
+                   f"of the machine's kinematic model, the nuisance terms held to their set-up knowledge, the "
+                   f"deviations free, at σ_model = {ls.sigma_model_um:.2f} µm (the posterior median); only what the "
+                   "campaign determines (one by one, in combination, and the derived quantities whose terms it "
+                   "determines). least_squares.csv.")
     lsq = ls.table.set_index("quantity")
-    post_mean = {**{n: (s.loc[n, "mean"], s.loc[n, "sd"]) for n in ident.determined},
-                 **{c["name"]: (c["mean"], c["sd"]) for c in rep.combinations}}
+    post_mean = {**{c["name"]: (c["mean"], c["sd"]) for c in rep.combinations},
+                 **{n: (s.loc[n, "mean"], s.loc[n, "sd"]) for n in lsq.index if n in s.index}}
     page.table(pd.DataFrame({"unit": lsq["unit"].map(units.SYMBOL), "least squares": lsq["estimate"],
                              "u": lsq["u"], "posterior mean": [post_mean[n][0] for n in lsq.index],
                              "posterior sd": [post_mean[n][1] for n in lsq.index]}))

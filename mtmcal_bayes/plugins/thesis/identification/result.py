@@ -92,6 +92,17 @@ class IdentificationResult:
                                             for k, v in self.ballbar_in_convention.items()}
         return out
 
+    def references(self) -> dict[str, dict[str, float | None]]:
+        """The values to set beside a posterior (:func:`~mtmcal_bayes.posterior.comparison.comparison`), display
+        units, by kind then quantity: ``ballbar`` (Eqs 4.10–4.18 on the offsets read as the campaign reads them, the
+        data the posterior saw; the thesis' own reading is :attr:`ballbar`), ``probe_reported`` (Table 5.3, where
+        printed) and ``probe_recomputed`` (Eqs 5.1–5.19).  Every quantity a method addresses has an entry, ``None``
+        where it gives no value."""
+        ballbar = self.ballbar_in_convention if self.ballbar_in_convention is not None else self.ballbar
+        return {"ballbar": {n: v.display for n, v in ballbar.items()},
+                "probe_reported": {n: v.reported_display if v.reported else None for n, v in self.probe.items()},
+                "probe_recomputed": {n: v.display for n, v in self.probe.items()}}
+
     def to_text(self) -> str:
         """What ``mtmcal-bayes identify`` prints."""
         from .output import format_identification
