@@ -1,4 +1,4 @@
-"""The reading frames of a described machine's ball-bar patterns (SPEC §17 on every machine, SPEC §19).
+"""The reading frames of every machine's ball-bar patterns, from its chain (SPEC §17 on every machine, SPEC §19).
 
 A run's reading convention (:mod:`mtmcal_bayes.conventions`) says where the ball-bar software drew the samples at 0°
 and 90° of the motion; what it is read against is the pattern's frame.  On a machine from its description the
@@ -6,7 +6,8 @@ pattern ``<K><d>`` has the components of :func:`~mtmcal_bayes.machines.patterns.
 ``ez, ex`` about Y; ``ey, ez`` about X), the machine frame's sample at angle ψ standing for ``(cos ψ, sin ψ)`` along
 them, ψ the commanded angle of K (for a radial pattern the polar angle of the bar, :func:`~mtmcal_bayes.machines.
 patterns.pattern_commands`), and the ``"machine"`` convention's directions those of the programmed linear position
-from the programmed arc's centre, as for the thesis' patterns.
+from the programmed arc's centre.  The thesis' patterns are read against these too (their campaign in the chain's
+terms: ``plugins/thesis/translation.py``): they are the frames of Tables 2.2/2.3 (``tests/test_conventions_machines.py``).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The 12 ball-bar measuring patterns of thesis Tables 2.2/2.3: names, components, commands, eccentricities.
+"""The 12 ball-bar measuring patterns of thesis Tables 2.2/2.3: names, components, angle grids, eccentricities.
 
 B patterns swivel the B axis over a 0–90° arc (X, Z interpolating); their
 trajectories live in the XZ plane and give eccentricities ``ex`` and ``ez``.
@@ -16,7 +16,9 @@ patterns and ``(cos ψ, sin ψ)`` giving ``(ex, ey)`` for C patterns, ψ = θ ex
 CR with the Table 2.3 geometry (T ball at radius R_C − L_B), where ψ = θ + 180°:
 the direction of the bar from the W ball to the T ball, ``T − W = −L_B·(cos θ, sin θ)``
 whatever the sign of R_C − L_B (for R_C ≥ L_B as well as for the thesis' R_C < L_B).
-The same extractor reads measured traces and simulated ones.
+The same extractor reads measured traces and simulated ones.  The Tables' commands themselves are the thesis
+plug-in's (``plugins/thesis/pattern_tables.py``, its models'); every other command the package gives comes from a
+machine's chain (:mod:`mtmcal_bayes.machines.patterns`).
 """
 
 from __future__ import annotations
@@ -55,65 +57,6 @@ CR_GEOMETRIES = ("RC-LB", "RC+LB")
 #: default angle grids: B patterns over 0–90°, C patterns over one turn
 B_ANGLES_DEG = np.linspace(0.0, 90.0, 91)
 C_ANGLES_DEG = np.arange(0.0, 360.0, 5.0)
-
-
-@dataclass(frozen=True)
-class Commands:
-    """Axis commands of one pattern over its angle grid, each shape ``(k,)``.
-
-    X, Y, Z in mm (B-axis centre), B and C in rad, ``psi`` the polar-plot angle
-    in rad used for the eccentricity fit.
-    """
-
-    X: np.ndarray
-    Y: np.ndarray
-    Z: np.ndarray
-    B: np.ndarray
-    C: np.ndarray
-    psi: np.ndarray
-
-
-def pattern_commands(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: float,
-                     angles_deg: np.ndarray | None = None, cr_geometry: str = "RC-LB") -> Commands:
-    """Commands of thesis Tables 2.2 (B patterns) and 2.3 (C patterns), programmed values in mm.
-
-    ``R_B`` tool length, ``Z_C``/``R_C`` height and radius of the W ball, ``L_B`` bar length (mm);
-    ``angles_deg`` the B or C angles (default :data:`B_ANGLES_DEG` / :data:`C_ANGLES_DEG`).
-    """
-    if pattern in B_PATTERNS:
-        phi = np.deg2rad(B_ANGLES_DEG if angles_deg is None else np.asarray(angles_deg, float))
-        s, c, zero = np.sin(phi), np.cos(phi), np.zeros_like(phi)
-        if pattern == "BR":
-            X, Y, Z = (L_B + R_B) * s, zero, Z_C + (L_B + R_B) * c
-        elif pattern == "BT":
-            R_BT, a = np.hypot(R_B, L_B), np.arctan2(L_B, R_B)
-            X, Y, Z = R_BT * np.sin(phi + a), zero, Z_C + R_BT * np.cos(phi + a)
-        elif pattern in ("BA", "BY"):  # the thesis notes these two motions are the same
-            X, Y, Z = R_B * s, zero + L_B, Z_C + R_B * c
-        elif pattern == "BX":
-            X, Y, Z = L_B + R_B * s, zero, Z_C + R_B * c
-        else:  # BZ
-            X, Y, Z = R_B * s, zero, L_B + Z_C + R_B * c
-        return Commands(X, Y, Z, phi, zero, phi)
-
-    th = np.deg2rad(C_ANGLES_DEG if angles_deg is None else np.asarray(angles_deg, float))
-    s, c, zero = np.sin(th), np.cos(th), np.zeros_like(th)
-    Zr = Z_C + R_B + zero
-    if pattern == "CR":
-        if cr_geometry not in CR_GEOMETRIES:
-            raise ValueError(f"unknown CR geometry {cr_geometry!r}")
-        radius = R_C - L_B if cr_geometry == "RC-LB" else R_C + L_B
-        X, Y, Z = radius * c, radius * s, Zr
-    elif pattern == "CT":
-        R_CT, a = np.hypot(R_C, L_B), np.arctan2(L_B, R_C)
-        X, Y, Z = R_CT * np.cos(th + a), R_CT * np.sin(th + a), Zr
-    elif pattern in ("CA", "CZ"):  # the same motion
-        X, Y, Z = R_C * c, R_C * s, Zr + L_B
-    elif pattern == "CX":
-        X, Y, Z = L_B + R_C * c, R_C * s, Zr
-    else:  # CY
-        X, Y, Z = R_C * c, L_B + R_C * s, Zr
-    return Commands(X, Y, Z, zero, th, polar_angle(pattern, th, cr_geometry))
 
 
 def polar_angle(pattern: str, theta: np.ndarray, cr_geometry: str = "RC-LB") -> np.ndarray:

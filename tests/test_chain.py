@@ -20,7 +20,7 @@ from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.parameters import ParameterSpace
 from mtmcal_bayes.campaign import Run
 from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS
-from mtmcal_bayes.patterns import pattern_commands as thesis_commands
+from mtmcal_bayes.plugins.thesis.pattern_tables import pattern_commands as thesis_commands
 
 
 @pytest.fixture(scope="module")

@@ -87,7 +87,8 @@ def _tables_frame(pattern: str, *, R_B: float, Z_C: float, R_C: float, L_B: floa
     (sin φ, cos φ); C: ψ → (cos ψ, sin ψ), ψ = θ, θ + 180° for CR with its T ball inside the W ball) and the
     programmed directions from the Tables' commands about the arc's centre."""
     from mtmcal_bayes.conventions import PatternFrame
-    from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, pattern_commands, polar_angle
+    from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, polar_angle
+    from mtmcal_bayes.plugins.thesis.pattern_tables import pattern_commands
 
     is_b = pattern in B_PATTERNS
     if is_b:

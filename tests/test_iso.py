@@ -19,7 +19,7 @@ from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.iso import ISO_SYMBOL, NO_SYMBOL, iso_symbol, thesis_name
 from mtmcal_bayes.plugins.thesis.htm import HTM_LITERAL, CAxis, Geometry, t_ball
 from mtmcal_bayes.parameters import DEVIATIONS, QUANTITIES
-from mtmcal_bayes.patterns import Commands
+from mtmcal_bayes.plugins.thesis.pattern_tables import Commands
 
 VALUE = {"angle": 20.0, "length": 20.0}  # ″ or µm: large enough to read, small enough for first order
 

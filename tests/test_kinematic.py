@@ -11,13 +11,8 @@ from mtmcal_bayes.campaign import Run
 from mtmcal_bayes.models import jacobian, make_model
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.plugins.thesis.linear import LEFT_OUT
-from mtmcal_bayes.patterns import (
-    B_PATTERNS,
-    C_PATTERNS,
-    COMPONENTS,
-    fit_eccentricity,
-    pattern_commands,
-)
+from mtmcal_bayes.patterns import B_PATTERNS, C_PATTERNS, COMPONENTS, fit_eccentricity
+from mtmcal_bayes.plugins.thesis.pattern_tables import pattern_commands
 
 from .conftest import DATA
 

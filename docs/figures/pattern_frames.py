@@ -13,7 +13,9 @@ import numpy as np
 from mtmcal_bayes import conventions as cv
 from mtmcal_bayes.figure_style import new_figure, save_png
 from mtmcal_bayes.io import load_campaign
-from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS, pattern_commands
+from mtmcal_bayes.campaign import Mount, Run, Setup
+from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS
+from mtmcal_bayes.plugins.thesis.pattern_tables import pattern_commands
 
 OUT = Path(__file__).parent
 #: the thesis' geometry (Tables 4.3 and Sec 4.3.2), a smaller R_B so the panels stay readable
@@ -26,6 +28,20 @@ def _plane(pattern: str, cmd):
     if pattern in B_PATTERNS:
         return np.c_[cmd.X, cmd.Z], cmd.Y
     return np.c_[cmd.X, cmd.Y], cmd.Z
+
+
+def _directions(convention: str, pattern: str, R_C: float) -> np.ndarray:
+    """``D`` (2, 2) of ``convention`` for a run of thesis ``pattern`` at GEO, from the frame the package reads it
+    against (the chain's), its columns along the pattern's plane axes (X, Z) or (X, Y)."""
+    bb = load_campaign(None).ballbar
+    bb.setups, bb.mounts, bb.length = {"S": Setup("S", GEO["R_B"], 0.0, 0.0)}, {"M": Mount("M", GEO["Z_C"], R_C)}, GEO["L_B"]
+    frame = cv.run_frame(Run(pattern, "S", "M", {}, convention=convention), bb)
+    return cv.frame_directions(convention, frame)[:, [frame.axes.index(a) for a in _axes(pattern)]]
+
+
+def _axes(pattern: str) -> tuple[str, str]:
+    """The pattern's plane axes in the thesis' order of its components: (X, Z) or (X, Y)."""
+    return tuple(c[1].upper() for c in COMPONENTS[pattern])
 
 
 def draw_pattern(ax, pattern: str, convention: str = "thesis", title: str | None = None) -> None:
@@ -51,7 +67,7 @@ def draw_pattern(ax, pattern: str, convention: str = "thesis", title: str | None
     ax.plot(*T, "o", color="#D55E00", ms=7, label="T ball at 0°")
     if np.linalg.norm(T - W) > 1e-6:
         ax.plot([W[0], T[0]], [W[1], T[1]], color="k", lw=2.2, label="bar at 0°")
-    D = cv.directions(convention, pattern, R_B=GEO["R_B"], Z_C=GEO["Z_C"], R_C=R_C, L_B=GEO["L_B"])
+    D = _directions(convention, pattern, R_C)
     r = 0.5 * float(np.linalg.norm(p0[0] - centre))
     angle = "B" if pattern in B_PATTERNS else "C"
     for d, lab, col in ((D[0], f"{angle} = 0°", "#009E73"), (D[1], f"{angle} = 90°", "#CC79A7")):
@@ -59,7 +75,7 @@ def draw_pattern(ax, pattern: str, convention: str = "thesis", title: str | None
         ax.plot(*(centre + 1.5 * r * d), alpha=0.0)  # keeps the arrow and its label inside the axes
         ax.text(*(centre + 1.3 * r * d + np.array([0.0, 0.15 * r * abs(d[0])])), lab, color=col, ha="center",
                 va="center", fontsize=8, fontweight="bold")
-    axes = cv.plane_axes(pattern)
+    axes = _axes(pattern)
     comps = COMPONENTS[pattern]
     ax.set_xlabel(f"{axes[0]} [mm]")
     ax.set_ylabel(f"{axes[1]} [mm]")

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...models.rotations import _apply, rotation
-from ...patterns import Commands
+from .pattern_tables import Commands
 
 
 @dataclass(frozen=True)

@@ -21,14 +21,8 @@ from ...parameters import (
     ParameterSpace,
     nuisance_name,
 )
-from ...patterns import (
-    B_PATTERNS,
-    COMPONENTS,
-    Commands,
-    fit_eccentricity,
-    mount_conflict,
-    pattern_commands,
-)
+from ...patterns import B_PATTERNS, COMPONENTS, fit_eccentricity, mount_conflict
+from .pattern_tables import Commands, pattern_commands
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball, w_ball
 
 #: rows of a parameter batch evaluated at once (memory: a few MB per temporary)

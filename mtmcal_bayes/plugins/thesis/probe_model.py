@@ -45,7 +45,7 @@ from ...parameters import (
     ParameterSpace,
     nuisance_name,
 )
-from ...patterns import Commands
+from .pattern_tables import Commands
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
 
 COMPONENTS = ("X", "Y", "Z")

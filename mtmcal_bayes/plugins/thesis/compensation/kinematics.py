@@ -16,7 +16,7 @@ import numpy as np
 
 from ..htm import PIVOTS, CAxis, Geometry, t_ball
 from ....parameters import DEVIATIONS
-from ....patterns import Commands
+from ..pattern_tables import Commands
 
 
 

@@ -8,7 +8,7 @@ import pandas as pd
 from .... import units
 from ..htm import nc_origin
 from ....parameters import DEVIATIONS, ParameterSpace
-from ....patterns import Commands
+from ..pattern_tables import Commands
 from ..kinematic import HTMModel
 from .kinematics import compensate_exact
 from .printed_method import compensate_thesis
