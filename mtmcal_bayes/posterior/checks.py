@@ -1,19 +1,16 @@
 """Checks a posterior owes its reader: how far it is from the exact (or linearised) posterior, does the linear
-model's first order hold, what dx_BT = 0 would change."""
+model's first order hold (what the thesis' dx_BT = 0 would change is its plug-in's: ``plugins/thesis/assumption.py``)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
 
-import pandas as pd
 
 from .. import units
-from ..analysis import CampaignAnalysis, analysis_of
-from ..inference.analytic import gaussian_posterior
 from ..inference.sampling import SamplingResult
 from ..models import default_kinematic_model, first_order_gap
-from ..parameters import IDENTIFIABLE, weights
+from ..parameters import IDENTIFIABLE
 
 
 def linear_model_check(result: SamplingResult) -> list[str]:
@@ -37,30 +34,6 @@ def linear_model_check(result: SamplingResult) -> list[str]:
             f"mean the kinematic model {kinematic} predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} "
             f"µm away from it (instrument accuracy {units.from_internal(accuracy, 'um'):g} µm); use the {kinematic} "
             "model"]
-
-
-def thesis_assumption_effect(campaign, model: str = "linear", sigma_model_um: float = 0.3,
-                             data: str = "ballbar") -> pd.DataFrame:
-    """beta_XB and dx_CZ − dx_BT with and without dx_BT = 0, closed form (linearised) at fixed sigma_model.
-
-    Columns: mean and sd of each quantity, by default and with the thesis' Eq 4.2 assumption.  ``campaign`` may
-    be a :class:`~mtmcal_bayes.analysis.CampaignAnalysis` (its model and data are then used).
-    """
-    sigma = units.to_internal(sigma_model_um, "um")
-    if isinstance(campaign, CampaignAnalysis):
-        model, data = campaign.model, campaign.data
-    analysis = analysis_of(campaign, model=model, data=data, sigma_model=sigma)
-    rows = {}
-    for label, fix in (("default", False), ("dx_BT = 0", True)):
-        g = gaussian_posterior(analysis.variant(fix_dx_BT=fix).log_posterior, sigma_model=sigma,
-                               allow_non_normal=True)
-        b_mean, b_sd = g.linear_combination(weights("beta_XB"))
-        d_mean, d_sd = g.linear_combination(weights("dx_CZ_minus_dx_BT", g.names))
-        rows[label] = {"beta_XB mean ″": units.from_internal(b_mean, "arcsec"),
-                       "beta_XB sd ″": units.from_internal(b_sd, "arcsec"),
-                       "dx_CZ_minus_dx_BT mean µm": units.from_internal(d_mean, "um"),
-                       "dx_CZ_minus_dx_BT sd µm": units.from_internal(d_sd, "um")}
-    return pd.DataFrame(rows).T
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,6 @@ from .. import units
 from ..inference import reading_choice
 from ..inference.budget import sigma_prior_sentence, sigma_prior_sources
 from ..machines.plugins import provided
-from .checks import thesis_assumption_effect
 
 #: summary columns of the JSON (SPEC §10)
 JSON_COLUMNS = ["mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail", "unit"]
@@ -226,7 +225,7 @@ def identifiability_block(ident, combinations: list[dict]) -> str:
 
 def format_sample(result) -> str:
     """What ``sample`` prints: :func:`format_posterior`, the identifiability and what the machine's plug-in adds
-    (the thesis': unless imposed, the effect of dx_BT = 0, :func:`thesis_assumption_lines`)."""
+    (the thesis': unless imposed, the effect of dx_BT = 0)."""
     lines = [format_posterior(result)]
     post = result.log_posterior
     if result.identifiability is not None:
@@ -239,13 +238,3 @@ def format_sample(result) -> str:
     return "\n".join(lines)
 
 
-def thesis_assumption_lines(result) -> list[str]:
-    """The effect of the thesis assumption dx_BT = 0 (Eq 4.2) on a posterior that does not impose it."""
-    post = result.log_posterior
-    if post.fix_dx_BT:
-        return []
-    sigma_um = result.sigma_model_um
-    return ["", f"The thesis assumption dx_BT = 0 (Eq 4.2), closed form at sigma_model = {sigma_um:.2f} µm "
-            f"({'as fixed' if post.fixed_sigma is not None else 'the posterior median'}; fix_dx_BT, on the command "
-            "line --fix-dx-BT, samples it):",
-            thesis_assumption_effect(post.campaign, post.model_name, sigma_um, post.data).round(2).to_string()]

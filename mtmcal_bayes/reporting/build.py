@@ -35,7 +35,6 @@ from ..models import models_of
 from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
-from ..posterior.checks import thesis_assumption_effect
 from ..posterior.comparison import comparison, references
 from ..posterior.conflict import ConflictAnalysis, explain_conflict
 from ..posterior.conformity import (
@@ -455,8 +454,9 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
                 campaign)))
     draw(figures)
     missing = missing_data(campaign, ident)
-    effect = (thesis_assumption_effect(analysis, sigma_model_um=rep.sigma_model_um)
-              if ident is not None and not analysis.fix_dx_BT else None)
+    assumption = provided(campaign.machine, "assumption_effect")  # a plug-in's assumption (the thesis': dx_BT = 0)
+    effect = (assumption(analysis, sigma_model_um=rep.sigma_model_um)
+              if assumption is not None and not analysis.fix_dx_BT else None)
     # the Jacobian's statement and the least squares on every machine; the stated truth of a simulated campaign
     machine_tables = machine_sections.tables(rep, shown.least_squares, campaign.truth)
     return _Rest(instruments, disputed, None, reports, missing, summary_table(rep),

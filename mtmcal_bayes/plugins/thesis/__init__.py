@@ -120,9 +120,16 @@ def compensate(c, parsed, *, method: str, model, values: str, posterior, point: 
 
 def sample_notes(result) -> list[str]:
     """What ``sample`` adds on the thesis machine: the effect of the thesis assumption dx_BT = 0 (Eq 4.2)."""
-    from ...posterior.output import thesis_assumption_lines
+    from .assumption import sample_notes as notes
 
-    return thesis_assumption_lines(result)
+    return notes(result)
+
+
+def assumption_effect(analysis, *, sigma_model_um: float):
+    """The report's table of the effect of dx_BT = 0 (Eq 4.2) on ``analysis``' posterior (``thesis_assumption_dx_BT.csv``)."""
+    from .assumption import assumption_effect as effect
+
+    return effect(analysis, sigma_model_um=sigma_model_um)
 
 
 def planning():
@@ -278,6 +285,7 @@ class ThesisPlugin:
     # its published method, programs, compensation and simulation
     identify = staticmethod(identify)
     sample_notes = staticmethod(sample_notes)
+    assumption_effect = staticmethod(assumption_effect)
     report_section = staticmethod(report_section)
     program = staticmethod(program)
     compensation_program = staticmethod(compensation_program)
