@@ -90,11 +90,11 @@ def simulate_commands() -> dict[str, list]:
              "thesis-designed": ([str(data / "formats" / "designed_thesis_d54cc98.toml")], thesis_truth),
              "thesis-new-designed": ([str(data / "formats" / "designed_new_machine_d54cc98.toml")], thesis_truth),
              "thesis-probe-gap": ([str(data / "formats" / "thesis_first_published.toml")], thesis_truth)}
+    truths = ROOT / "bench" / "simulate_truths"  # each demo's [truth]
     for t in TYPES:
-        cases[t] = (["--machine", t], str(ROOT / "mtmcal_bayes" / "datasets" / "machines" / f"{t}-demo.toml"))
+        cases[t] = (["--machine", t], str(truths / f"{t}.toml"))
     for t in ("trunnion", "head-head"):
-        cycle = str(data / "controller_cycles" / f"{t}-cycle.toml")
-        cases[f"{t}-cycle"] = ([cycle], cycle)
+        cases[f"{t}-cycle"] = ([str(data / "controller_cycles" / f"{t}-cycle.toml")], str(truths / f"{t}.toml"))
     c: dict[str, list] = {}
     for name, (where, truth) in cases.items():
         base = ["simulate", *where, "--truth", truth]
