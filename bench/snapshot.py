@@ -76,6 +76,37 @@ def commands() -> dict[str, list]:
     c["trunnion-history"] = [["simulate", "--history", "h", "--machine", "trunnion", "--campaigns", "3", "--step",
                               "E_B0C=40@3", "--seed", "1"],
                              ["history", "h", "--json"]]
+    c.update(simulate_commands())
+    return c
+
+
+def simulate_commands() -> dict[str, list]:
+    """``simulate`` on every campaign format: text, ``--json``, ``linear``, ``-o`` with and without noise, written
+    histories; planned runs (designed campaigns), a probe gap (a C-axis run naming no stylus) and probe-only
+    campaigns (the controller cycles)."""
+    data = ROOT / "tests" / "data"
+    thesis_truth = str(data / "formats_truth.toml")
+    cases = {"thesis": ([], thesis_truth),
+             "thesis-designed": ([str(data / "formats" / "designed_thesis_d54cc98.toml")], thesis_truth),
+             "thesis-new-designed": ([str(data / "formats" / "designed_new_machine_d54cc98.toml")], thesis_truth),
+             "thesis-probe-gap": ([str(data / "formats" / "thesis_first_published.toml")], thesis_truth)}
+    truths = ROOT / "bench" / "simulate_truths"  # each demo's [truth]
+    for t in TYPES:
+        cases[t] = (["--machine", t], str(truths / f"{t}.toml"))
+    for t in ("trunnion", "head-head"):
+        cases[f"{t}-cycle"] = ([str(data / "controller_cycles" / f"{t}-cycle.toml")], str(truths / f"{t}.toml"))
+    c: dict[str, list] = {}
+    for name, (where, truth) in cases.items():
+        base = ["simulate", *where, "--truth", truth]
+        c[f"{name}-simulate-text"] = base
+        c[f"{name}-simulate"] = [*base, "--json"]
+        c[f"{name}-simulate-linear"] = [*base, "--model", "linear", "--json"]
+        c[f"{name}-simulate-o"] = [*base, "-o", "{out}/synthetic.toml"]
+        c[f"{name}-simulate-noise"] = [*base, "--noise", "--seed", "3", "-o", "{out}/synthetic.toml"]
+        c[f"{name}-simulate-linear-noise"] = [*base, "--model", "linear", "--noise", "--seed", "3", "-o",
+                                              "{out}/synthetic.toml"]
+        c[f"{name}-simulate-history"] = ["simulate", *where, "--truth", truth, "--history", "h", "--campaigns", "2",
+                                         "--seed", "1"]
     return c
 
 

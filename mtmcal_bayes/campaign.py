@@ -185,6 +185,11 @@ class CAxisProbe:
     dprnt: list[str] | None = None
     centre_cov: np.ndarray | None = None  # (r, a, 3, 3) mm², NaN where not fitted
 
+    def replace_centres(self, centres: np.ndarray) -> None:
+        """Readings ``centres`` (r, a, 3), mm, given directly: the DPRNT files and fit covariances of the old ones
+        dropped."""
+        self.centres, self.centre_cov, self.dprnt = centres, None, None
+
 
 @dataclass
 class Stylus:
@@ -202,6 +207,11 @@ class Stylus:
     ball_radius: float = 0.0
     dprnt: list[str] | None = None
     centre_cov: np.ndarray | None = None  # (r, b, 3, 3) mm², NaN where not fitted
+
+    def replace_centres(self, centres: np.ndarray) -> None:
+        """Readings ``centres`` (r, b, 3), mm, given directly: the DPRNT files and fit covariances of the old ones
+        dropped."""
+        self.centres, self.centre_cov, self.dprnt = centres, None, None
 
 
 @dataclass
@@ -259,6 +269,26 @@ class ProbeRun:
     def positions(self) -> int:
         return self.centres.shape[1]
 
+    def replace_centres(self, centres: np.ndarray) -> None:
+        """Readings ``centres`` (r, a, 3), mm."""
+        self.centres = centres
+
+
+@dataclass(frozen=True)
+class ReadingRun:
+    """A run of touch-probe readings in the terms every campaign format shares: its ``id``, the ``stylus`` it probes
+    with, ``angles_deg`` {axis letter: (a,)} the rotary axes' positions, degrees (axes not named at 0), and ``run``,
+    the campaign's own record of it, which holds the readings (``centres`` (r, a, 3), mm; ``replace_centres``)."""
+
+    id: str
+    stylus: str
+    angles_deg: dict[str, np.ndarray]
+    run: CAxisProbe | Stylus | ProbeRun
+
+    @property
+    def positions(self) -> int:
+        return self.run.centres.shape[1]
+
 
 @dataclass
 class Probe:
@@ -287,6 +317,17 @@ class Probe:
             fix = "give its length R_B_mm (and ball_radius_mm when it is measured to the stylus-ball tip)"
         return [Gap("probe.c_axis.stylus", "the C-axis run names no stylus",
                     "the touch-probe likelihood (probe or both data) and the comparison of the instruments", fix)]
+
+    def reading_runs(self) -> list[ReadingRun]:
+        """Every run with readings, in the order of the probe models' positions: the C-axis run (C indexed), then
+        each stylus of the B-axis run (B indexed), then the ``[[probe.runs]]``."""
+        out = []
+        if self.c_axis is not None:
+            out.append(ReadingRun(self.C_RUN, self.stylus_of_c_run(), {"C": self.c_axis.angles_deg}, self.c_axis))
+        if self.b_axis is not None:
+            out += [ReadingRun(self.B_RUN, s.id, {"B": self.b_axis.angles_deg}, s) for s in self.b_axis.styli.values()]
+        return out + [ReadingRun(r.id, r.stylus, {a: units.from_internal(v, "deg") for a, v in r.angles.items()}, r)
+                      for r in self.runs]
 
     def stylus_of_c_run(self) -> str:
         """Owner of the stylus the C-axis run probes with: a B-axis stylus id, or ``"c_axis"``."""

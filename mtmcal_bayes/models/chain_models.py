@@ -205,6 +205,10 @@ class ChainProbeModel:
         out = (self.readings(theta) - self.nominal).reshape(len(np.atleast_2d(theta)), -1)
         return out[0] if single else out
 
+    def centres(self, theta: np.ndarray) -> np.ndarray:
+        """The readings ``(k, 3)`` for one ``theta`` (p,): X, Y, Z, mm (the nominal plus :meth:`predict`)."""
+        return self.nominal + self.predict(theta).reshape(-1, 3)
+
     __call__ = predict
 
 
@@ -253,5 +257,9 @@ class FirstOrderModel:
 
     def predict(self, theta: np.ndarray) -> np.ndarray:
         return _numbers(theta) @ self.design.T
+
+    def centres(self, theta: np.ndarray) -> np.ndarray:
+        """A probe model's first-order readings ``(k, 3)`` for one ``theta`` (p,): X, Y, Z, mm."""
+        return self.nominal + self.predict(theta).reshape(-1, 3)
 
     __call__ = predict

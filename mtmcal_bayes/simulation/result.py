@@ -10,16 +10,15 @@ import pandas as pd
 from .. import units
 from ..campaign import Campaign, Truth
 from ..io.campaign_writer import save_campaign
-from ..machines.plugins import provided
-from ..models import first_order_gap
 from ..observations import Observations
-from ..parameters import ParameterSpace, quantity_unit
+from ..parameters import quantity_unit
 from .simulate import (
+    ballbar_prediction,
     eccentricity_records,
-    planned_as_runs,
-    predict_truth,
+    first_order_warnings,
+    probe_readings,
+    probe_records,
     synthetic_campaign,
-    truth_vector,
 )
 
 
@@ -38,7 +37,7 @@ class Simulation:
     seed: int | None = None
     warnings: list[str] = field(default_factory=list)
     output: str | None = None
-    probe_readings: list[dict] | None = None  # a described machine's: predicted probe readings, noise-free
+    probe_readings: list[dict] | None = None  # JSON records of the probe model's readings, noise-free (probe_records)
 
     @property
     def eccentricities(self) -> pd.DataFrame:
@@ -65,12 +64,12 @@ class Simulation:
         self.output = str(path)
 
     def to_json(self) -> dict:
-        out = {"model": self.model, "eccentricities": eccentricity_records(self.observations, self.predicted)}
-        if provided(self.campaign.machine, "simulate") is None:  # the engine's simulation: the machine and truth too
-            out["machine"] = self.campaign.machine.description.builtin or self.campaign.machine.name
-            out["truth"] = {n: units.from_internal(v, quantity_unit(n)) for n, v in self.truth.deviations.items()}
-            if self.probe_readings is not None:
-                out["probe"] = self.probe_readings
+        machine = self.campaign.machine
+        out = {"model": self.model, "eccentricities": eccentricity_records(self.observations, self.predicted),
+               "machine": getattr(machine.description, "builtin", None) or machine.name,
+               "truth": {n: units.from_internal(v, quantity_unit(n)) for n, v in self.truth.deviations.items()}}
+        if self.probe_readings is not None:
+            out["probe"] = self.probe_readings
         return out
 
     def to_text(self) -> str:
@@ -86,39 +85,15 @@ class Simulation:
 
 def simulate_truth(campaign: Campaign, truth: Truth, *, model: str = "htm-thesis", noise: bool = False,
                    seed: int | None = None, source: str = "<truth>") -> Simulation:
-    """Predict every component for ``truth``; warn when the linear model is asked for a truth too large for it.  A
-    campaign in a plug-in's own format is simulated by the plug-in (the thesis': :func:`thesis_simulation`)."""
-    simulate = provided(campaign.machine, "simulate", _described_simulation)
-    return simulate(campaign, truth, model=model, noise=noise, seed=seed, source=source)
-
-
-def thesis_simulation(campaign: Campaign, truth: Truth, *, model: str, noise: bool, seed: int | None,
-                      source: str) -> Simulation:
-    """The simulation of a campaign in the thesis' format (its eccentricities; its probe readings when saved)."""
-    obs, pred = predict_truth(campaign, truth, model, source=source)
-    warnings = []
-    if model == "linear":  # first order: say so when the truth is too large for it
-        space = ParameterSpace.for_campaign(campaign)
-        gap = first_order_gap(planned_as_runs(campaign), truth_vector(space, truth.ballbar_part(), source), space)
-        if gap > campaign.ballbar.accuracy:
-            warnings.append(f"the linear model is first order and this truth is too large for it: htm-thesis "
-                            f"predicts eccentricities up to {units.from_internal(gap, 'um'):.1f} µm away (instrument "
-                            f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm)")
-    return Simulation(campaign, truth, source, model, obs, pred, noise, seed, warnings)
-
-
-def _described_simulation(campaign: Campaign, truth: Truth, *, model: str, noise: bool, seed: int | None,
-                          source: str) -> Simulation:
-    """A described machine's simulation: its ball-bar eccentricities (if it has runs) and probe readings."""
-    if campaign.ballbar.runs or campaign.ballbar.planned:  # planned runs are simulated (and written) too
-        obs, pred = predict_truth(campaign, truth, model, source=source)
-    else:
-        obs, pred = Observations((), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int)), np.zeros(0)
-    readings = None
-    if campaign.has_probe_readings():
-        probe = synthetic_campaign(campaign, truth, model).probe
-        readings = [{"run": r.id, "stylus": r.stylus, "position": i + 1,
-                     **{f"{a}_deg": float(units.from_internal(v[i], "deg")) for a, v in r.angles.items()},
-                     **{f"{x}_mm": float(r.centres[0, i, j]) for j, x in enumerate("XYZ")}}
-                    for r in probe.runs for i in range(r.positions)]
-    return Simulation(campaign, truth, source, model, obs, pred, noise, seed, [], probe_readings=readings)
+    """The eccentricities of every measured and planned ball-bar run for ``truth`` (with a warning where the linear
+    model is asked for a truth too large for it) and the probe model's readings of every probed position, on any
+    machine.  A campaign with neither runs nor probe readings is an error (nothing to simulate)."""
+    bb = campaign.ballbar
+    if bb.runs or bb.planned or not campaign.has_probe_readings():  # neither: ballbar_prediction says so
+        fm, theta, pred = ballbar_prediction(campaign, truth, model, source=source)
+        obs, warnings = fm.observations, first_order_warnings(fm, theta)
+    else:  # a probe-only campaign
+        obs, pred, warnings = Observations((), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int)), np.zeros(0), []
+    readings = probe_readings(campaign, truth, model)
+    records = probe_records(campaign, readings) if readings is not None else None
+    return Simulation(campaign, truth, source, model, obs, pred, noise, seed, warnings, probe_readings=records)

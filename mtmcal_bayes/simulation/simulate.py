@@ -21,7 +21,7 @@ from ..machines import selected
 from ..machines.patterns import components
 from ..machines.plugins import provided
 from ..machines.space import described_space
-from ..models import make_model
+from ..models import default_kinematic_model, first_order_gap, make_model
 from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_run_values
 from ..parameters import ParameterSpace, nuisance_name
 
@@ -99,6 +99,14 @@ def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *
     A truth so large that an eccentricity is not finite or not below the bar
     length (no ball-bar could measure it) is an error naming ``source``.
     """
+    fm, _, pred = ballbar_prediction(campaign, truth, model, source=source)
+    return fm.observations, pred
+
+
+def ballbar_prediction(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *,
+                       source: str = "<truth>") -> tuple:
+    """:func:`predict_truth` with what it was computed from: ``(forward model of the campaign with its planned runs
+    as runs, truth vector (p,) in its space, eccentricities (m,) mm)``."""
     campaign = planned_as_runs(campaign)
     if not campaign.ballbar.runs:
         raise InputError(campaign.source, "ballbar.runs", "nothing to simulate: the campaign has no runs, measured or "
@@ -113,7 +121,23 @@ def predict_truth(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *
         raise InputError(source, None, f"this truth gives {k.component} of {k.pattern} = "
                          f"{units.from_internal(pred[bad][0], 'um'):.4g} µm under {model}, not below the bar length "
                          f"L_B = {campaign.ballbar.length:g} mm: the deviations are too large to be measured")
-    return fm.observations, pred
+    return fm, theta, pred
+
+
+def first_order_warnings(fm, theta: np.ndarray) -> list[str]:
+    """The warning of a ``linear`` model ``fm`` (:func:`ballbar_prediction`) asked for a truth ``theta`` too large for
+    it: where the machine's kinematic model predicts eccentricities further from it than the ball bar's accuracy
+    (:func:`~mtmcal_bayes.models.first_order_gap`); none for another model."""
+    if fm.name != "linear":
+        return []
+    campaign = fm.campaign
+    gap = first_order_gap(campaign, theta, fm.space)
+    if gap <= campaign.ballbar.accuracy:
+        return []
+    return [f"the linear model is first order and this truth is too large for it: "
+            f"{default_kinematic_model(campaign.machine)} predicts eccentricities up to "
+            f"{units.from_internal(gap, 'um'):.1f} µm away (instrument accuracy "
+            f"{units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm)"]
 
 
 def noisy_repeats(mean: np.ndarray, n_repeats: np.ndarray, accuracy: float, rng: np.random.Generator, *,
@@ -163,66 +187,66 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
 
 def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
                     rng: np.random.Generator | None = None, repeats: int | None = None):
-    """The campaign's ``[probe]`` with sphere centres simulated for ``truth`` (``None`` without probe readings, or
-    where a gap of the campaign keeps the probe model from running: :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
+    """The campaign's ``[probe]`` with its runs' readings simulated for ``truth``: ``None`` without a ``[probe]`` or
+    where a gap of the campaign keeps the probe model from running (:meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`);
+    the probe as measured where it has no readings or no repeatability its model can take (:func:`probe_noise`).
 
-    The readings are those of the probe model (:class:`~mtmcal_bayes.plugins.thesis.probe_model.ProbeModel`; ``linear``: its
-    first order) in the campaign's reading frame.  Noise-free: one repeat equal to the prediction.  With
-    ``noise``: as many repeats as measured (or ``repeats``), each scattered by the probe's repeatability.
-    DPRNT file names and fit covariances are dropped: the readings are centres now.
+    The readings are the probe model's (:func:`probe_readings`), handed to the runs in order
+    (:meth:`~mtmcal_bayes.campaign.Probe.reading_runs`).  Noise-free: one repeat equal to the prediction.  With
+    ``noise``: as many repeats as measured (or ``repeats``), each scattered by the probe's repeatability.  DPRNT file
+    names and fit covariances are dropped: the readings are centres now.
     """
-    own = provided(campaign.machine, "simulated_probe")  # a plug-in's probe format (the thesis': its two runs)
-    if own is not None:
-        return own(campaign, truth, model, noise=noise, rng=rng, repeats=repeats)
-    if not campaign.has_probe_readings():
-        return copy.deepcopy(campaign.probe) if campaign.probe is not None else None
-    fm = make_model(model, campaign, simulation_space(campaign, truth, "probe"), data="probe")
-    return _described_probe(campaign, fm, truth_vector(fm.space, truth.probe_part()), noise=noise, rng=rng,
-                            repeats=repeats)
-
-
-def thesis_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
-                 rng: np.random.Generator | None = None, repeats: int | None = None):
-    """:func:`simulated_probe` of a campaign in the thesis' format: its C-axis run and B-axis styli, in the reading
-    frame (its repeatability needed for noise; a gap of the campaign, none)."""
-    if not campaign.has_probe_readings() or campaign.probe.repeatability is None:
-        return copy.deepcopy(campaign.probe) if campaign.probe is not None else None
+    sd = probe_noise(campaign)
+    if sd is None:  # no readings, or none its model can take: the probe as it is
+        return copy.deepcopy(campaign.probe)
     if campaign.probe_gap() is not None:  # readings the probe model cannot simulate: none (Simulation.save says so)
         return None
-    fm = make_model(model, campaign, simulation_space(campaign, truth, "probe"), data="probe")
-    theta = truth_vector(fm.space, truth.probe_part())
-    layout = fm.layout
-    flat = fm.predict(theta)  # observations: Qᵀ (reading − nominal)
-    dev = np.einsum("kij,kj->ki", layout.rotation, flat.reshape(-1, 3))  # back to reading-frame axes
-    readings = layout.nominal + dev  # (k, 3) mm
+    readings = probe_readings(campaign, truth, model)
     out = copy.deepcopy(campaign.probe)
-    runs = ([out.c_axis] if out.c_axis is not None else []) + (list(out.b_axis.styli.values()) if out.b_axis else [])
     start = 0
-    for run in runs:
-        a = run.centres.shape[1]
-        r = (repeats or run.centres.shape[0]) if noise else 1
+    for run in out.reading_runs():
+        a = run.positions
+        r = (repeats or run.run.centres.shape[0]) if noise else 1
         centres = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
         if noise:
-            centres += rng.normal(0.0, campaign.probe.repeatability, size=centres.shape)
-        run.centres, run.centre_cov, run.dprnt = centres, None, None
+            centres += rng.normal(0.0, sd, size=centres.shape)
+        run.run.replace_centres(centres)
         start += a
     return out
 
 
-def _described_probe(campaign: Campaign, fm, theta: np.ndarray, *, noise: bool, rng, repeats: int | None):
-    """A described machine's ``[probe]`` with each run's centres simulated: the chain's readings (nominal plus the
-    model's prediction), scattered by the probe's repeatability with ``noise``."""
-    readings = fm.nominal + fm.predict(theta).reshape(-1, 3)
-    out = copy.deepcopy(campaign.probe)
-    start = 0
-    for run in out.runs:
-        a = run.positions
-        r = (repeats or run.centres.shape[0]) if noise else 1
-        centres = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
-        if noise:
-            centres += rng.normal(0.0, campaign.probe.repeatability or DEFAULT_PROBE_SD, size=centres.shape)
-        run.centres = centres
-        start += a
+def probe_noise(campaign: Campaign) -> float | None:
+    """The sd, mm, of a simulated probe reading's repeat scatter: the probe's repeatability; where it states none,
+    :data:`DEFAULT_PROBE_SD`, unless the machine's probe model takes only a stated one (the thesis': its readings are
+    then not simulated); None without probe readings."""
+    if not campaign.has_probe_readings():
+        return None
+    if campaign.probe.repeatability is not None:
+        return campaign.probe.repeatability
+    return None if provided(campaign.machine, "probe_repeatability_required", False) else DEFAULT_PROBE_SD
+
+
+def probe_readings(campaign: Campaign, truth: Truth, model: str = "htm-thesis") -> np.ndarray | None:
+    """Noise-free readings ``(k, 3)``, mm, of every probed position for ``truth`` under the probe model of ``model``
+    (``linear``: its first order), in the campaign's reading frame and in the order of
+    :meth:`~mtmcal_bayes.campaign.Probe.reading_runs`; None where the campaign has none to simulate (no readings, a
+    gap, no repeatability its model can take: :func:`probe_noise`)."""
+    if probe_noise(campaign) is None or campaign.probe_gap() is not None:
+        return None
+    fm = make_model(model, campaign, simulation_space(campaign, truth, "probe"), data="probe")
+    return fm.centres(truth_vector(fm.space, truth.probe_part()))
+
+
+def probe_records(campaign: Campaign, readings: np.ndarray) -> list[dict]:
+    """JSON records of ``readings`` (k, 3), mm (:func:`probe_readings`), one per probed position: run, stylus,
+    position (from 1), each rotary axis' angle (``<letter>_deg``) and ``X_mm``, ``Y_mm``, ``Z_mm``."""
+    out, start = [], 0
+    for run in campaign.probe.reading_runs():
+        out += [{"run": run.id, "stylus": run.stylus, "position": i + 1,
+                 **{f"{a}_deg": float(v[i]) for a, v in run.angles_deg.items()},
+                 **{f"{x}_mm": float(readings[start + i, j]) for j, x in enumerate("XYZ")}}
+                for i in range(run.positions)]
+        start += run.positions
     return out
 
 

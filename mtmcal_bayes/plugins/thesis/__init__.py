@@ -61,21 +61,6 @@ def campaign_document(c, doc: dict, save_dir=None) -> dict:
     return document(c, doc, save_dir)
 
 
-def simulate(campaign, truth, **options):
-    """The eccentricities of a campaign in the thesis' format for ``truth`` (``model``, ``noise``, ``seed``,
-    ``source``)."""
-    from ...simulation.result import thesis_simulation
-
-    return thesis_simulation(campaign, truth, **options)
-
-
-def simulated_probe(campaign, truth, model: str, **options):
-    """The touch-probe readings of a campaign in the thesis' format simulated for ``truth``."""
-    from ...simulation.simulate import thesis_probe
-
-    return thesis_probe(campaign, truth, model, **options)
-
-
 def pattern_components(pattern: str) -> tuple[str, ...]:
     """The eccentricity components of a thesis pattern (Tables 2.2/2.3)."""
     from ...patterns import COMPONENTS
@@ -282,7 +267,8 @@ class ThesisPlugin:
     first_order_gap = staticmethod(first_order_gap)
     parameter_space = staticmethod(parameter_space)
     probe_layout = staticmethod(probe_layout)
-    # its published method, programs, compensation and simulation
+    probe_repeatability_required = True  # its probe model takes the campaign's repeatability as its noise (ProbeLayout)
+    # its published method, programs and compensation
     identify = staticmethod(identify)
     sample_notes = staticmethod(sample_notes)
     assumption_effect = staticmethod(assumption_effect)
@@ -290,8 +276,6 @@ class ThesisPlugin:
     program = staticmethod(program)
     compensation_program = staticmethod(compensation_program)
     compensate = staticmethod(compensate)
-    simulate = staticmethod(simulate)
-    simulated_probe = staticmethod(simulated_probe)
     sensitivity_geometry = staticmethod(sensitivity_geometry)
 
     @property

@@ -248,6 +248,10 @@ class ProbeModel:
         out = np.einsum("kji,nkj->nki", self.layout.rotation, r).reshape(len(r), -1)
         return out[0] if single else out
 
+    def centres(self, theta: np.ndarray) -> np.ndarray:
+        """The readings ``(k, 3)`` for one ``theta`` (p,), in the reading frame, mm (:func:`reading_centres`)."""
+        return reading_centres(self.layout, self.predict(theta))
+
     __call__ = predict
 
 
@@ -267,4 +271,14 @@ class LinearProbeModel:
     def predict(self, theta: np.ndarray) -> np.ndarray:
         return np.asarray(theta, dtype=float) @ self.design.T
 
+    def centres(self, theta: np.ndarray) -> np.ndarray:
+        """The first-order readings ``(k, 3)`` for one ``theta`` (p,), in the reading frame, mm."""
+        return reading_centres(self.layout, self.predict(theta))
+
     __call__ = predict
+
+
+def reading_centres(layout: ProbeLayout, observations: np.ndarray) -> np.ndarray:
+    """Readings ``(k, 3)`` in the reading frame, mm, of a model's ``observations`` (m,) = Qᵀ (reading − nominal):
+    each turned back to the reading frame's axes and added to its nominal."""
+    return layout.nominal + np.einsum("kij,kj->ki", layout.rotation, observations.reshape(-1, 3))
