@@ -1,4 +1,4 @@
-"""What planning asks of a campaign's machine (SPEC §20): its catalogue, feasibility, planner, clock, names and the
+"""What planning asks of a campaign's machine (SPEC §20): its catalogue, feasibility, clock and the
 shape of its planned runs, in one object.
 
 The engine's own kit serves every machine from its description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its
