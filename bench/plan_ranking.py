@@ -2,10 +2,10 @@
 
     python bench/plan_ranking.py
 
-Batched: one Planner over all candidates (one linear model for all new runs, one
-stacked matrix inverse), which is what ``mtmcal-bayes plan`` does.  One at a time:
-a Planner per candidate (its own linear model and inverse), as a per-candidate
-loop would do.  Same numbers; the ratio is measured in this run.  Also the time of
+Batched: one Planner over all candidates (each new run's rows from a campaign of
+that run after its mount's first run, one stacked matrix inverse), which is what
+``mtmcal-bayes plan`` does.  One at a time: a Planner per candidate (its own
+campaign's rows and inverse), as a per-candidate loop would do.  Same numbers; the ratio is measured in this run.  Also the time of
 the whole ``plan`` (catalogue, ranking, 51-point sweep, Monte-Carlo check).
 """
 

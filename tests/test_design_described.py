@@ -14,7 +14,7 @@ from mtmcal_bayes.io.campaign_reader import load_campaign
 from mtmcal_bayes.io.campaign_writer import save_campaign
 from mtmcal_bayes.models.chain_models import ChainBallbarModel
 from mtmcal_bayes.planning.chain_candidates import described_catalogue, described_feasibility_check, run_of
-from mtmcal_bayes.planning.chain_planner import DescribedPlanner
+from mtmcal_bayes.planning.design import Planner
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +68,7 @@ def test_a_candidates_rows_are_the_chains_derivatives(trunnion):
     parameter, here checked by central differences of the nonlinear chain model (1e-4 ″/µm steps; to 1e-6 of the
     largest row entry)."""
     cands = [c for c in described_catalogue(trunnion) if c.kind == "held axes"][:2]
-    planner = DescribedPlanner(trunnion, cands, ["E_B0A"])
+    planner = Planner(trunnion, cands, ["E_B0A"])
     for c, (A, _) in zip(cands, planner.candidate_rows()):
         aug = copy.copy(trunnion)
         bb = copy.copy(trunnion.ballbar)
@@ -160,7 +160,7 @@ def test_probe_candidates_index_each_axis_and_their_rows_are_the_chains_derivati
         for letter, angles in x.positions:
             lo, hi = np.rad2deg(desc.axes[letter].travel)
             assert lo <= min(angles) and max(angles) <= hi
-    planner = DescribedPlanner(c, cands[:2], ["E_B0A"])
+    planner = Planner(c, cands[:2], ["E_B0A"])
     table = quantities(desc)
     for x, (A, _) in zip(cands[:2], planner.candidate_rows()):
         own = ParameterSpace([], [], planner.deviations, x.terms(c), table=table)

@@ -45,15 +45,19 @@ from .. import units
 from ..campaign import Run
 from ..errors import ParameterError
 from ..inference.analytic import NOT_IDENTIFIED_GROWTH, WIDEN
+from ..inference.identifiability import CENTRED, identifiability
 from ..inference.likelihood import GaussianMeanLikelihood
-from ..inference.log_posterior import SAMPLED_DEVIATIONS
+from ..inference.log_posterior import parameter_space
 from ..inference.priors import make_prior
-from ..models import build_model, check_data, jacobian
+from ..machines.deviations import quantities
+from ..machines.patterns import components
+from ..machines.plugins import provided
+from ..models import build_model, check_data, check_model, jacobian_at_zero, models_of
 from ..observations import Observations
-from ..parameters import IDENTIFIABLE, QUANTITIES, ParameterSpace, weights
-from ..patterns import COMPONENTS
+from ..parameters import ParameterSpace, weights
 from .candidates import Candidate
-from .probe_candidates import ProbeCandidate, probe_rows, probe_terms
+from .chain_candidates import arc_of
+from .probe_candidates import ProbeCandidate
 from .scale_priors import contraction_reference, default_sigma_model, scale_prior
 
 #: a candidate that changes no target's sd by this fraction identifies nothing new
@@ -64,13 +68,30 @@ SIGMA_CONTRACTION = 0.5
 MAX_RUNS = 50
 
 
-def check_targets(targets) -> list[str]:
-    allowed = list(IDENTIFIABLE) + [d for d in SAMPLED_DEVIATIONS if d not in IDENTIFIABLE]
-    targets = list(targets or IDENTIFIABLE)
+def quantity_table(campaign) -> dict:
+    """The quantities of ``campaign``'s machine by name: its plug-in's table where it has one (deviations and derived
+    quantities, the thesis' ``dx_CZ_minus_dx_BT``), else its description's deviations."""
+    return provided(campaign.machine, "quantity_table") or quantities(campaign.machine.description)
+
+
+def planned_deviations(campaign) -> list[str]:
+    """The deviations a posterior of ``campaign`` samples (the machine's parameter space), in its order."""
+    return [p.name for p in parameter_space(campaign, False, "ballbar").parameters if p.group == "deviation"]
+
+
+def target_names(targets, campaign) -> list[str]:
+    """``targets`` as the machine's quantity names (ISO symbols accepted where the machine names them otherwise),
+    without repeats: the quantities its plug-in reports (the thesis' eight) and every deviation it samples; a
+    ParameterError names an unknown one."""
+    devs = planned_deviations(campaign)
+    reported = list(provided(campaign.machine, "reported_quantities", ()))
+    allowed = reported + [d for d in devs if d not in reported]
+    by = {n: n for n in allowed} | {s: n for s, n in provided(campaign.machine, "aliases", ()) if n in allowed}
     for t in targets:
-        if t not in allowed:
-            raise ParameterError("targets", f"unknown quantity {t!r} (expected one of: {', '.join(allowed)})")
-    return list(dict.fromkeys(targets))
+        if t not in by:
+            raise ParameterError("targets", f"unknown quantity {t!r} for this machine (expected one of: "
+                                 f"{', '.join(allowed)})")
+    return list(dict.fromkeys(by[t] for t in targets))
 
 
 @dataclass
@@ -146,16 +167,27 @@ class SigmaInformation:
 
 
 class Planner:
-    """The current closed-form posterior of a campaign and the rows of candidate runs.
+    """The current closed-form posterior of a campaign and the rows of candidate runs, on any machine.
+
+    What depends on the machine is asked of it: its parameter space (the deviations its posterior samples,
+    :func:`~mtmcal_bayes.inference.log_posterior.parameter_space`, with the nuisance terms of every set-up and mount,
+    the candidates' too, and of the probe), its quantity table and the weights of each target over the deviations
+    (:func:`~mtmcal_bayes.parameters.weights`: the thesis' ``dx_CZ_minus_dx_BT`` is two), the rows of a campaign
+    (its model from :func:`~mtmcal_bayes.models.build_model`, linearised at zero where it is not linear) and a
+    candidate as a campaign run (its arc and held axes where it has them).
 
     Parameters
     ----------
     campaign : Campaign
     candidates : list of Candidate or ProbeCandidate (their new setups, mounts and probe terms join the
         parameter space)
-    targets : quantity names (default the eight identifiable ones)
+    targets : quantity names or ISO symbols (:func:`target_names`); by default the quantities the machine's plug-in
+        reports (the thesis' eight of Table 4.5), else the deviations the campaign plus every candidate determine one
+        by one (:func:`~mtmcal_bayes.inference.identifiability.identifiability` of their stacked rows, the T ball
+        centred), the others named in :attr:`not_targeted`
     sigma_model : fixed model-discrepancy sd of the ball bar, mm (default :func:`default_sigma_model`); the probe's
         is the rms of the ``sigma_model_probe`` prior
+    model : one of the machine's models (:func:`~mtmcal_bayes.models.models_of`)
     data : what the campaign's current posterior rests on: ``"ballbar"`` (default), ``"probe"`` or ``"both"``
     sigma_prior : a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere, or None (the assumed
         priors): the prior of each scale it names, so the default ``sigma_model`` and the probe's scale are the rms
@@ -166,10 +198,12 @@ class Planner:
     def __init__(self, campaign, candidates: list, targets=None, *, sigma_model: float | None = None,
                  model: str = "linear", data: str = "ballbar", sigma_prior=None):
         self.campaign = campaign
-        self.model = model
+        self.model = check_model(model, models_of(campaign.machine))
         # a new machine (set-ups and mounts only) is planned for ball-bar data still to come
         self.data = check_data(data, campaign) if campaign.ballbar.runs or data != "ballbar" else data
         self.candidates = list(candidates)
+        self._rows_cache: list | None = None
+        self.not_targeted: list[str] = []
         self._scales(campaign, sigma_model, sigma_prior)
         bb = campaign.ballbar
         self._setups, self._mounts = dict(bb.setups), dict(bb.mounts)
@@ -177,7 +211,10 @@ class Planner:
             if isinstance(c, Candidate):
                 self._setups.setdefault(c.setup.id, c.setup)
                 self._mounts.setdefault(c.mount.id, c.mount)
-        self.space = self._make_space(data)
+        self.table = quantity_table(campaign)
+        own = parameter_space(campaign, False, data)
+        self.deviations = [p.name for p in own.parameters if p.group == "deviation"]
+        self.space = self._make_space([(p.owner, p.base) for p in own.parameters if p.group == "probe"])
         priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
         self.prior_var = np.array([p.sd for p in priors]) ** 2
         self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
@@ -186,34 +223,40 @@ class Planner:
         self.pooled_sd = obs.pooled_sd()
         A, V = [np.zeros((0, len(self.space)))], [np.zeros(0)]
         if data != "probe" and len(obs):  # the ball bar's rows first: repeats of its runs index them
-            A.append(self._design(campaign))
+            A.append(self.rows_for(campaign, self.space))
             V.append(GaussianMeanLikelihood(obs, bb.accuracy).base_var + self.sigma_model**2)
         if data != "ballbar":
-            rows, base = self._probe_now(campaign)
-            A.append(rows)
-            V.append(base + self.sigma_probe**2)
+            probe = build_model(self.model, campaign, self.space, "probe")
+            A.append(_first_order(probe))
+            V.append(probe.observations.noise_variance() + self.sigma_probe**2)
         self.A, self.V = np.vstack(A), np.concatenate(V)
-        self.targets = self._targets_of(targets)
+        self.targets = target_names(targets, campaign) if targets else self._default_targets()
         self.T = self.target_matrix(self.space)
-        self.target_units = [self._unit(t) for t in self.targets]
+        self.target_units = [self.table[t].unit for t in self.targets]
 
-    def _make_space(self, data: str) -> ParameterSpace:
-        """The parameters: the sampled deviations, every set-up's and mount's terms (the candidates' too), the
-        probe's own terms with probe data and each probe candidate's."""
-        own_probe = self.campaign.probe.nuisance_terms() if data != "ballbar" else []
-        cand_probe = [t for c in self.candidates if isinstance(c, ProbeCandidate)
-                      for t in probe_terms(c, self.campaign)]
-        return ParameterSpace(list(self._setups), list(self._mounts), SAMPLED_DEVIATIONS, own_probe + cand_probe)
+    def _make_space(self, probe: list) -> ParameterSpace:
+        """The parameters: the machine's deviations, every set-up's and mount's terms (the candidates' too), the
+        probe's own terms ``probe`` (with probe data) and each probe candidate's."""
+        probe = probe + [t for c in self.candidates if isinstance(c, ProbeCandidate) for t in c.terms(self.campaign)]
+        return ParameterSpace(list(self._setups), list(self._mounts), self.deviations, probe, table=self.table)
 
-    def _probe_now(self, campaign) -> tuple[np.ndarray, np.ndarray]:
-        """The campaign's probe rows ``(k, P)`` and their noise without sigma_model_probe ``(k,)``, mm²."""
-        probe = build_model(self.model, campaign, self.space, "probe")
-        return (probe.design if self.model == "linear" else self._jacobian(probe)), \
-            probe.observations.noise_variance()
+    def _default_targets(self) -> list[str]:
+        """The quantities the machine's plug-in reports, else those the campaign and every candidate determine."""
+        reported = provided(self.campaign.machine, "reported_quantities")
+        return target_names(reported, self.campaign) if reported else self._determinable()
 
-    def _targets_of(self, targets) -> list[str]:
-        """The targets valued: ``targets`` checked, by default the eight identifiable quantities."""
-        return self._checked(targets)
+    def _determinable(self) -> list[str]:
+        """The deviations the campaign and every candidate together determine one by one (the rest in
+        :attr:`not_targeted`)."""
+        rows = [A for A, _ in self.candidate_rows()] if self.candidates else []
+        J = np.vstack([self.A] + rows)
+        if not len(J):
+            self.not_targeted = list(self.deviations)
+            return []
+        known = [b for b in CENTRED if any(p.base == b for p in self.space.parameters)]
+        determined = set(identifiability(J, self.space, known=known).determined)
+        self.not_targeted = [d for d in self.deviations if d not in determined]
+        return [d for d in self.deviations if d in determined]
 
     def _scales(self, campaign, sigma_model: float | None, sigma_prior) -> None:
         """The learnt prior kept, the ball bar's fixed σ_model (default the rms of its prior) and the probe's."""
@@ -224,15 +267,9 @@ class Planner:
 
     def retarget(self, targets: list[str]) -> None:
         """Value ``targets`` instead (names checked as at construction; the rows are kept)."""
-        self.targets = self._checked(targets)
+        self.targets = target_names(targets, self.campaign)
         self.T = self.target_matrix(self.space)
-        self.target_units = [self._unit(t) for t in self.targets]
-
-    def _checked(self, targets) -> list[str]:
-        return check_targets(targets)
-
-    def _unit(self, target: str) -> str:
-        return QUANTITIES[target].unit
+        self.target_units = [self.table[t].unit for t in self.targets]
 
     # ------------------------------------------------------------------ what depends on the machine
     def target_matrix(self, space: ParameterSpace) -> np.ndarray:
@@ -244,53 +281,53 @@ class Planner:
         return T
 
     def space_for(self, campaign) -> ParameterSpace:
-        """The ball-bar parameter space of ``campaign`` (its set-ups and mounts, the sampled deviations)."""
+        """The ball-bar parameter space of ``campaign`` (its set-ups and mounts, the planner's deviations)."""
         bb = campaign.ballbar
-        return ParameterSpace(list(bb.setups), list(bb.mounts), SAMPLED_DEVIATIONS)
+        return ParameterSpace(list(bb.setups), list(bb.mounts), self.deviations, table=self.table)
 
     def rows_for(self, campaign, space: ParameterSpace) -> np.ndarray:
-        """Rows ``(m, P)`` of ``campaign``'s ball-bar runs over ``space``: the linear model, or a kinematic model
-        linearised at zero."""
-        if self.model == "linear":
-            return build_model("linear", campaign, space).design
-        return self._jacobian(build_model(self.model, campaign, space))
+        """Rows ``(m, P)`` of ``campaign``'s ball-bar runs over ``space``: the planner's model, linearised at zero
+        where it is not linear, differentiated in the columns the runs touch only (the deviations, their set-ups'
+        and mounts' terms; the other columns are zero)."""
+        bb = campaign.ballbar
+        if not bb.runs:
+            return np.zeros((0, len(space)))
+        used = ParameterSpace(list(dict.fromkeys(r.setup for r in bb.runs)),
+                              list(dict.fromkeys(r.mount for r in bb.runs)), self.deviations, table=self.table)
+        own = _first_order(build_model(self.model, campaign, used))
+        out = np.zeros((len(own), len(space)))
+        out[:, [space.index(n) for n in used.names]] = own
+        return out
 
     def as_run(self, candidate: Candidate) -> Run:
-        """A new-run candidate as a campaign run (zero readings, ``repeats`` each: rows do not depend on them)."""
+        """A new-run candidate as a campaign run (zero readings, ``repeats`` each: rows do not depend on them), with
+        its arc and held axes where it has them."""
+        machine = self.campaign.machine
+        comps = provided(machine, "pattern_components") or (lambda p: components(machine.description, p))
+        arc = None if candidate.arc_deg is None else arc_of(candidate, machine.description)
         return Run(candidate.pattern, candidate.setup.id, candidate.mount.id,
-                   {comp: np.zeros(candidate.repeats) for comp in COMPONENTS[candidate.pattern]})
+                   {comp: np.zeros(candidate.repeats) for comp in comps(candidate.pattern)},
+                   arc_deg=arc, hold_deg=dict(candidate.hold_deg) or None)
 
     # ------------------------------------------------------------------ rows
-    def _design(self, campaign) -> np.ndarray:
-        """Design matrix ``(m, P)`` of ``campaign``'s runs over the planner's space (:meth:`rows_for`)."""
-        return self.rows_for(campaign, self.space)
-
-    @staticmethod
-    def _jacobian(model) -> np.ndarray:
-        return jacobian(model)
-
     def noise_var(self, repeats: int) -> float:
         """Variance of one repeat mean of a new run, mm²."""
         return self.pooled_sd**2 / repeats + self.campaign.ballbar.accuracy**2 + self.sigma_model**2
 
-    def candidate_rows(self, candidates: list[Candidate] | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
-        """For each candidate, its rows ``(k, P)`` and precision weights ``(k,)`` (1/mm²)."""
-        candidates = self.candidates if candidates is None else candidates
-        out: list = [None] * len(candidates)
-        by_length: dict[float, list[int]] = {}
-        for i, c in enumerate(candidates):
-            if isinstance(c, ProbeCandidate):
-                A, base = probe_rows(c, self.campaign, self.space.names, SAMPLED_DEVIATIONS)
-                out[i] = (A, 1.0 / (base + self.sigma_probe**2))
-            elif c.repeat_of is None:
-                by_length.setdefault(c.length, []).append(i)
-            else:
-                out[i] = self._repeat_rows(c)
-        for length, idx in by_length.items():
-            rows = self._new_run_rows([candidates[i] for i in idx], length)
-            for i, r in zip(idx, rows):
-                out[i] = r
-        return out
+    def candidate_rows(self, candidates: list | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """For each candidate, its rows ``(k, P)`` and precision weights ``(k,)`` (1/mm²); the planner's own
+        candidates' rows made once."""
+        if candidates is None or candidates is self.candidates:
+            if self._rows_cache is None:
+                self._rows_cache = [self._rows_of(c) for c in self.candidates]
+            return self._rows_cache
+        return [self._rows_of(c) for c in candidates]
+
+    def _rows_of(self, c) -> tuple[np.ndarray, np.ndarray]:
+        if isinstance(c, ProbeCandidate):
+            A, base = c.rows(self.campaign, self.space, self.deviations, self.table)
+            return A, 1.0 / (base + self.sigma_probe**2)
+        return self._new_run_rows(c) if c.repeat_of is None else self._repeat_rows(c)
 
     def _repeat_rows(self, c: Candidate):
         keys = [j for j, k in enumerate(self.observations.keys) if k.run == c.repeat_of]
@@ -299,22 +336,21 @@ class Planner:
         v_new = self.V[keys] - s2 / n + s2 / (n + c.repeats)
         return self.A[keys], 1.0 / v_new - 1.0 / self.V[keys]
 
-    def _new_run_rows(self, candidates: list[Candidate], length: float):
-        """Rows of new runs from one linear model over the campaign plus the runs (bar length ``length``)."""
+    def _new_run_rows(self, c: Candidate):
+        """Rows of a new run (its bar length), from a campaign of that run alone after the campaign's first run at its
+        mount: a model that places a mount's W ball by the first run there (the chain: that run's set-up enters the
+        rows of every run at the mount) sees the candidate where the campaign placed it; one that does not, the same
+        rows as in the campaign itself."""
+        first = next((r for r in self.campaign.ballbar.runs if r.mount == c.mount.id), None)
         aug = copy.copy(self.campaign)
         bb = copy.copy(self.campaign.ballbar)
-        bb.length = length
+        bb.length = c.length
         bb.setups, bb.mounts = self._setups, self._mounts
-        m0 = len(bb.runs)
-        bb.runs = list(bb.runs) + [self.as_run(c) for c in candidates]
+        bb.runs = ([] if first is None else [first]) + [self.as_run(c)]
         aug.ballbar = bb
-        design = self._design(aug)
-        keys = Observations.from_campaign(aug).keys
-        out = []
-        for j, c in enumerate(candidates):
-            rows = [i for i, k in enumerate(keys) if k.run == m0 + j]
-            out.append((design[rows], np.full(len(rows), 1.0 / self.noise_var(c.repeats))))
-        return out
+        design = self.rows_for(aug, self.space)
+        rows = [i for i, k in enumerate(Observations.from_campaign(aug).keys) if k.run == len(bb.runs) - 1]
+        return design[rows], np.full(len(rows), 1.0 / self.noise_var(c.repeats))
 
     # ------------------------------------------------------------------ posterior
     def _precision(self, widen: float = 1.0) -> np.ndarray:
@@ -428,3 +464,9 @@ class Planner:
         W = 1.0 / V
         M = [np.einsum("mp,rm,mq->rpq", X0, W**j, X0) for j in (1, 2, 3)]
         return trace_inv_sq(*M, np.sum(W**2, axis=1))
+
+
+def _first_order(model) -> np.ndarray:
+    """The rows ``(m, P)`` of ``model``: its design where it is linear, else its Jacobian at zero deviations
+    (:func:`~mtmcal_bayes.models.jacobian_at_zero`: by the complex step where the model allows it)."""
+    return model.design if hasattr(model, "design") else jacobian_at_zero(model)

@@ -22,8 +22,8 @@ from .. import units
 from ..errors import InputError, ParameterError
 from ..machine_time import TimeModel
 from .candidates import Candidate
-from .machine_kit import catalogue_of, feasibility_of, kit_of
-from .design import Planner
+from .machine_kit import catalogue_of, feasibility_of
+from .design import Planner, target_names
 from .design_check import Preposterior, preposterior
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
 from .design_runs import DesignedRun, designed_runs
@@ -87,11 +87,10 @@ class Design:
 
 def parse_targets(targets: dict | None, campaign) -> dict[str, float]:
     """``{quantity: sd}`` (display units; ISO symbols allowed) checked: quantities of ``campaign``'s machine (its
-    planning kit's names, :func:`~.machine_kit.kit_of`), positive finite sds."""
+    names, :func:`.design.target_names`), positive finite sds."""
     out = {}
-    name_of = kit_of(campaign).target_name
     for name, sd in (targets or {}).items():
-        q = name_of(str(name), campaign)
+        q = target_names([str(name)], campaign)[0]
         try:
             v = float(sd)
         except (TypeError, ValueError):
@@ -167,9 +166,7 @@ def reporting_planner(campaign, cands: list[Candidate], want: dict, *, tolerance
     every quantity reported by default (the thesis machine's eight identifiable ones; a described machine's
     deviations the campaign and the candidates determine one by one)."""
     tol = list(tolerances or {})
-    kit = kit_of(campaign)
-    planner = kit.reported(campaign, lambda names: kit.planner(campaign, cands, names, model=model,
-                                                                sigma_prior=sigma_prior))
+    planner = Planner(campaign, cands, None, model=model, sigma_prior=sigma_prior)
     known = set(planner.targets) | set(want)
     planner.retarget(list(dict.fromkeys(list(want) + [q for q in tol if q in known] + planner.targets)))
     return planner

@@ -13,8 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..campaign import Campaign, Mount, Run, Setup
-from ..patterns import COMPONENTS
+from ..campaign import Campaign, Mount, Setup
 from .candidates import Candidate
 
 
@@ -72,23 +71,19 @@ def geometry_of(campaign: Campaign, runs: list[DesignedRun]) -> tuple[dict[str, 
     return setups, mounts
 
 
-def with_runs(campaign: Campaign, runs: list[DesignedRun], as_run=None) -> Campaign:
+def with_runs(campaign: Campaign, runs: list[DesignedRun], as_run) -> Campaign:
     """A copy of ``campaign`` with ``runs`` appended as runs of zero eccentricities (``repeats`` each): the rows
     of the forward models for them, after the measured runs' rows.  ``as_run(candidate) -> Run`` makes a candidate a
-    run (:meth:`.design.Planner.as_run`: a described machine's carries its arc and held axes); the run is placed at
-    its designed mount."""
+    run (:meth:`.design.Planner.as_run`: with its arc and held axes where it has them); the run is placed at its
+    designed mount."""
     aug = copy.copy(campaign)
     bb = copy.copy(campaign.ballbar)
     bb.setups, bb.mounts = geometry_of(campaign, runs)
     made = []
     for r in runs:
-        if as_run is None:
-            made.append(Run(r.pattern, r.setup.id, r.mount.id,
-                            {comp: np.zeros(r.repeats) for comp in COMPONENTS[r.pattern]}))
-        else:
-            run = as_run(r.candidate)
-            run.setup, run.mount = r.setup.id, r.mount.id
-            made.append(run)
+        run = as_run(r.candidate)
+        run.setup, run.mount = r.setup.id, r.mount.id
+        made.append(run)
     bb.runs = list(bb.runs) + made
     aug.ballbar = bb
     return aug

@@ -1,10 +1,11 @@
-"""What planning asks of a campaign's machine (SPEC §20): its catalogue, feasibility, planner, clock, names and the
+"""What planning asks of a campaign's machine (SPEC §20): its catalogue, feasibility, clock and the
 shape of its planned runs, in one object.
 
 The engine's own kit serves every machine from its description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its
 arcs, held axes and W-ball positions, :mod:`.chain_candidates`).  A machine whose plug-in has a campaign format
 of its own contributes ``planning``, a :class:`PlanningKit` built from its functions (the thesis plug-in: the thesis'
-12 patterns and lever arms, :mod:`.candidates`, :mod:`.probe_candidates`, :class:`~.design.Planner`).  Planning asks
+12 patterns and lever arms, :mod:`.candidates`, :mod:`.probe_candidates`).  The planner is one for every machine
+(:class:`~.design.Planner`): it asks the machine what it provides.  Planning asks
 :func:`kit_of` and never which kind of machine it holds.
 """
 
@@ -24,10 +25,7 @@ class PlanningKit:
 
     ``catalogue(campaign)`` the candidate ball-bar runs; ``feasibility(campaign)`` a ``check(candidate) -> (ok,
     why)``; ``probe_catalogue(campaign)`` and ``probe_feasibility(candidate, campaign)`` the touch-probe runs;
-    ``planner(campaign, candidates, targets, **kw)`` the :class:`~.design.Planner`; ``reported(campaign, planner_of)``
-    the quantities a design reports by default (``planner_of(names)`` builds a planner for names, None: the planner's
-    own targets); ``target_name(name, campaign)`` a quantity's canonical name (ISO symbols accepted) or a
-    ParameterError; ``clock(time_model, campaign)`` the machine minutes of runs; ``where(candidate)`` the geometry
+    ``clock(time_model, campaign)`` the machine minutes of runs; ``where(candidate)`` the geometry
     columns of the plan's table; ``sweep(campaign, pattern, extensions)`` the tool-length sweep's candidates;
     ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for; ``feasibility_note`` and
     ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
@@ -39,9 +37,6 @@ class PlanningKit:
     feasibility: Callable
     probe_catalogue: Callable
     probe_feasibility: Callable
-    planner: Callable
-    reported: Callable
-    target_name: Callable
     clock: Callable
     where: Callable
     sweep: Callable
@@ -62,13 +57,9 @@ def kit_of(campaign) -> PlanningKit:
 def engine_kit() -> PlanningKit:
     """The engine's planning, for any machine from its description."""
     from . import chain_candidates as dc
-    from .chain_planner import DescribedPlanner, described_targets
     from .chain_probe_candidates import described_probe_catalogue, described_probe_feasibility
     from .chain_clock import engine_clock
     from .run_records import DESCRIBED_RUN_COLUMNS, described_records
-
-    def reported(campaign, planner_of):
-        return planner_of(None)
 
     def where(c) -> dict:
         return {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": np.nan, "mount": c.mount.id, "R_C_mm": np.nan}
@@ -88,10 +79,7 @@ def engine_kit() -> PlanningKit:
 
     return PlanningKit(
         catalogue=dc.described_catalogue, feasibility=dc.described_feasibility_check,
-        probe_catalogue=described_probe_catalogue, probe_feasibility=described_probe_feasibility,
-        planner=DescribedPlanner, reported=reported,
-        target_name=lambda name, campaign: described_targets([name], campaign.machine.description)[0],
-        clock=engine_clock, where=where, sweep=dc.sweep_candidates,
+        probe_catalogue=described_probe_catalogue, probe_feasibility=described_probe_feasibility, clock=engine_clock, where=where, sweep=dc.sweep_candidates,
         sweep_pattern=sweep_pattern,
         feasibility_note="feasible = every command of every point (the arc, the held axes, the linear axes) lies "
                          "within the travels of the machine's description",
@@ -114,6 +102,7 @@ def feasibility_of(campaign):
 
 
 def planner_for(campaign, candidates: list, targets=None, **kw):
-    """The planner of ``campaign``'s machine (the engine's :class:`~.chain_planner.DescribedPlanner`, or its
-    plug-in's, the thesis machine's :class:`~.design.Planner`; keywords as theirs)."""
-    return kit_of(campaign).planner(campaign, candidates, targets, **kw)
+    """The :class:`~.design.Planner` of ``campaign`` (one for every machine; keywords as its)."""
+    from .design import Planner
+
+    return Planner(campaign, candidates, targets, **kw)

@@ -233,7 +233,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     if len(sweep) > 1 and np.allclose(sweep[cols].to_numpy(), sweep[cols].to_numpy()[0], rtol=1e-6):
         notes.append(f"the tool-length sweep of {sweep_pattern} is flat: a longer tool teaches nothing more here "
                      "(on a machine whose spindle no rotary axis carries, the tool length moves no lever)")
-    if getattr(planner, "not_targeted", None) and not targets:
+    if planner.not_targeted and not targets:
         notes.append(f"not targeted: {', '.join(planner.not_targeted)} — no run of the catalogue determines them one "
                      "by one (identifiability of the campaign and every candidate together, the T ball centred)")
     notes += probe_skipped(campaign)

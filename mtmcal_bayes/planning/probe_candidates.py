@@ -91,6 +91,25 @@ class ProbeCandidate:
         """The planner's name of one of the run's owners (``b_axis`` → ``b_axis#<id>``; its stylus keeps its id)."""
         return owner if owner == self.id else f"{owner}#{self.id}"
 
+    def terms(self, campaign) -> list[tuple[str, str]]:
+        """Its own nuisance terms as ``(owner, base)`` pairs, owners named for the planner."""
+        return [(self.owner(o), b) for o, b in self.probe(campaign.probe.repeatability, 0.0).nuisance_terms()]
+
+    def rows(self, campaign, space: ParameterSpace, deviations, table) -> tuple[np.ndarray, np.ndarray]:
+        """Its rows ``(k, P)`` over the planner's ``space`` and their base noise ``(k,)`` mm² (the repeatability; the
+        planner adds ``sigma_model_probe²``): the machine's first-order probe model of a campaign holding this run
+        alone, over ``deviations`` (names of ``table``) and the run's own terms."""
+        one = copy.copy(campaign)
+        X_T = campaign.probe.b_axis.X_T if campaign.probe.b_axis is not None else campaign.primary_setup().X_T
+        one.probe = self.probe(campaign.probe.repeatability, X_T)
+        own = one.probe.nuisance_terms()
+        sub = ParameterSpace([], [], deviations, own, table=table)
+        model = build_model("linear", one, sub, "probe")  # the machine's first-order probe model
+        rename = {f"{b}[{o}]": f"{b}[{self.owner(o)}]" for o, b in own}
+        A = np.zeros((model.design.shape[0], len(space)))
+        A[:, [space.index(rename.get(n, n)) for n in sub.names]] = model.design
+        return A, model.observations.noise_variance()
+
 
 def probe_catalogue(campaign) -> list[ProbeCandidate]:
     """The probe candidates of ``campaign`` (module docstring); none without a usable ``[probe]``."""
@@ -131,28 +150,6 @@ def probe_skipped(campaign) -> list[str]:
     if gap is None or p is None or p.repeatability is None or p.b_axis is None or not p.b_axis.styli:
         return []
     return [gap.skipped("the touch-probe candidates on the C axis (more angles, another sphere height or radius)")]
-
-
-def probe_terms(candidate: ProbeCandidate, campaign) -> list[tuple[str, str]]:
-    """The candidate's own nuisance terms as ``(owner, base)`` pairs, owners named for the planner."""
-    return [(candidate.owner(o), b) for o, b in candidate.probe(campaign.probe.repeatability, 0.0).nuisance_terms()]
-
-
-def probe_rows(candidate: ProbeCandidate, campaign, names: list[str], deviations) -> tuple[np.ndarray, np.ndarray]:
-    """The candidate's rows ``(k, P)`` over the planner's parameter ``names`` and their base noise ``(k,)`` mm²
-    (the repeatability; the planner adds ``sigma_model_probe²``)."""
-    one = copy.copy(campaign)
-    X_T = campaign.probe.b_axis.X_T if campaign.probe.b_axis is not None else campaign.primary_setup().X_T
-    one.probe = candidate.probe(campaign.probe.repeatability, X_T)
-    own = one.probe.nuisance_terms()
-    space = ParameterSpace([], [], deviations, own)
-    model = build_model("linear", one, space, "probe")  # the machine's first-order probe model
-    index = {n: i for i, n in enumerate(names)}
-    rename = {f"{b}[{o}]": f"{b}[{candidate.owner(o)}]" for o, b in own}
-    A = np.zeros((model.design.shape[0], len(names)))
-    for j, name in enumerate(space.names):
-        A[:, index[rename.get(name, name)]] = model.design[:, j]
-    return A, model.observations.noise_variance()
 
 
 def probe_feasibility(candidate: ProbeCandidate, campaign) -> tuple[bool, str]:

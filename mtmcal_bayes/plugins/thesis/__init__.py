@@ -120,20 +120,12 @@ def assumption_effect(analysis, *, sigma_model_um: float):
 def planning():
     """The planning of the thesis' campaign format: its 12 patterns at its lever arms (R_B, Z_T, X_T, R_C, Z_C), its
     probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
-    from ...parameters import IDENTIFIABLE
     from ...planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
                                        read_candidates)
-    from ...iso import thesis_name
-    from ...planning.design import Planner, check_targets
     from ...planning.run_records import RUN_COLUMNS, thesis_records
     from ...planning.machine_kit import PlanningKit
     from ...planning.probe_candidates import probe_catalogue, probe_feasibility
     from .timing import campaign_clock
-
-    def target_name(name, campaign):
-        q = thesis_name(str(name))
-        check_targets([q])
-        return q
 
     def where(c) -> dict:
         return {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "mount": c.mount.id,
@@ -150,9 +142,7 @@ def planning():
 
     return PlanningKit(
         catalogue=catalogue, feasibility=feasibility_check, probe_catalogue=probe_catalogue,
-        probe_feasibility=probe_feasibility, planner=Planner,
-        reported=lambda campaign, planner_of: planner_of(list(IDENTIFIABLE)), target_name=target_name,
-        clock=campaign_clock, where=where, sweep=sweep, sweep_pattern=sweep_pattern,
+        probe_feasibility=probe_feasibility, clock=campaign_clock, where=where, sweep=sweep, sweep_pattern=sweep_pattern,
         feasibility_note="feasible = the span of each linear-axis command fits the axis travel of [machine] (the "
                          "campaign does not give where the C axis sits within the travels)",
         probe_note="touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its "

@@ -1,0 +1,100 @@
+"""The one closed-form planner on every built-in type (issue 42): a candidate's rows are those of its run in the
+campaign, whichever other candidates the planner values beside it; targets by name or ISO symbol on every machine."""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from mtmcal_bayes import api
+from mtmcal_bayes.errors import ParameterError
+from mtmcal_bayes.inference.log_posterior import parameter_space
+from mtmcal_bayes.models import build_model
+from mtmcal_bayes.planning.design import Planner, target_names
+from mtmcal_bayes.planning.machine_kit import catalogue_of
+
+TYPES = ("integrex-i200", "trunnion", "vertical-turn-mill", "head-head")
+
+
+@pytest.fixture(scope="module", params=TYPES)
+def campaign(request):
+    return api.campaign_of(api.demo_campaign(request.param))
+
+
+def _sample(campaign) -> list:
+    """New-run candidates of several kinds at the campaign's bar, at most one per mount the campaign has not used."""
+    seen_kinds, new_mounts, out = set(), set(), []
+    for c in catalogue_of(campaign):
+        if c.repeat_of is not None or c.length != campaign.ballbar.length or c.kind in seen_kinds:
+            continue
+        if c.mount.id not in campaign.ballbar.mounts:
+            if c.mount.id in new_mounts:
+                continue
+            new_mounts.add(c.mount.id)
+        seen_kinds.add(c.kind)
+        out.append(c)
+    return out
+
+
+def _columns(rows: np.ndarray, names: list[str], to: list[str]) -> np.ndarray:
+    """``rows`` (k, len(names)) laid out over ``to`` (names absent from ``to`` must be zero columns)."""
+    index = {n: i for i, n in enumerate(to)}
+    out = np.zeros((len(rows), len(to)))
+    for j, n in enumerate(names):
+        if n in index:
+            out[:, index[n]] = rows[:, j]
+        else:
+            assert not np.any(rows[:, j]), n
+    return out
+
+
+def test_a_candidates_rows_are_its_runs_rows_in_the_measured_campaign(campaign):
+    """Each sampled candidate's rows equal the rows its run has once appended to the campaign, taken from the
+    machine's `linear` model of that campaign (the model registry, not the planner) over the posterior's own space."""
+    cands = _sample(campaign)
+    assert len(cands) >= 3
+    planner = Planner(campaign, cands, None)
+    for c, (A, _) in zip(cands, planner.candidate_rows()):
+        aug = copy.copy(campaign)
+        bb = copy.copy(campaign.ballbar)
+        bb.setups, bb.mounts = dict(bb.setups) | {c.setup.id: c.setup}, dict(bb.mounts) | {c.mount.id: c.mount}
+        bb.runs = list(bb.runs) + [planner.as_run(c)]
+        aug.ballbar = bb
+        space = parameter_space(aug, False, "ballbar")
+        design = build_model("linear", aug, space).design
+        want = design[-len(A):]
+        got = _columns(A, planner.space.names, space.names)
+        assert np.allclose(got, want, rtol=0, atol=1e-9 * np.abs(want).max()), c.name
+
+
+def test_a_candidates_rows_do_not_depend_on_the_other_candidates(campaign):
+    """Two candidates at one mount the campaign has not used, with different set-ups: the second one's rows are the
+    same valued alone as beside the first.  (The chain places a mount's W ball by the first run there: valued in one
+    campaign with the first, the head-head machine's second run would move by 50 mm per radian of tool-side tilt.)"""
+    first = next(c for c in catalogue_of(campaign)
+                 if c.repeat_of is None and c.mount.id not in campaign.ballbar.mounts)
+    longer = next(c for c in catalogue_of(campaign) if c.kind == "tool length" and c.setup.id != first.setup.id)
+    second = replace(longer, name="second", mount=first.mount)
+    both = Planner(campaign, [first, second], None)
+    alone = Planner(campaign, [second], None)
+    A2, w2 = both.candidate_rows()[1]
+    A1, w1 = alone.candidate_rows()[0]
+    assert np.array_equal(_columns(A2, both.space.names, alone.space.names), A1)
+    assert np.array_equal(w1, w2)
+
+
+def test_targets_by_name_or_iso_symbol_and_one_refusal(campaign):
+    """Every deviation the planner samples is a target by its name and by its ISO symbol where the machine names it
+    otherwise (the thesis' alpha_XB is E_A0B); an unknown name is refused naming the machine's quantities."""
+    planner = Planner(campaign, [], None)
+    aliases = dict(campaign.machine.description.aliases) if campaign.machine.description else {}
+    for d in planner.deviations:
+        assert target_names([d], campaign) == [d]
+    for symbol, name in aliases.items():
+        if name in planner.deviations:
+            assert target_names([symbol], campaign) == [name]
+    with pytest.raises(ParameterError, match=r"unknown quantity 'beta_QQ' for this machine .*" + planner.deviations[0]):
+        target_names(["beta_QQ"], campaign)
