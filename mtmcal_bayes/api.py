@@ -274,9 +274,8 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     ``sigma_model_um`` and ``sigma_model_prior`` as for :func:`sample` (the learnt prior for every posterior of
     the report; with ``posterior``, it must be the one that posterior was sampled with).
     """
-    from .inference.sampling import SamplerSettings
     from .models import check_data, check_model
-    from .reporting import build_report
+    from .reporting.start import begin
 
     c = campaign_of(campaign, measured=True)
     check_model(model)
@@ -286,12 +285,17 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
         from .errors import ParameterError
 
         raise ParameterError("sigma_model_prior", "is not the prior the given posterior was sampled with")
-    settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
-    return build_report(analysis_or_campaign(campaign, c), output, model=model, settings=settings, fix_dx_BT=fix_dx_BT,
-                        compare_models=compare_models,
-                        posterior=posterior, progress=progress, command=command, data=data,
-                        tolerances=tolerances_of(tolerances, c), sigma_model=sigma_model_of(sigma_model_um),
-                        sigma_prior=learnt)
+    tol, sigma = tolerances_of(tolerances, c), sigma_model_of(sigma_model_um)
+    # the machine's figures begun before the report's computation is imported (reporting.start)
+    with begin(c, output) as begun:
+        from .inference.sampling import SamplerSettings
+        from .reporting.build import build_report
+
+        settings = SamplerSettings(seed=seed, max_steps=max_steps, target_ess=target_ess, sampler=sampler)
+        return build_report(analysis_or_campaign(campaign, c), output, model=model, settings=settings,
+                            fix_dx_BT=fix_dx_BT, compare_models=compare_models, posterior=posterior,
+                            progress=progress, command=command, data=data, tolerances=tol, sigma_model=sigma,
+                            sigma_prior=learnt, begun=begun)
 
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,

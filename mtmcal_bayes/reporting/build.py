@@ -8,6 +8,7 @@ nothing half-written.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime
 import time
@@ -19,7 +20,6 @@ import pandas as pd
 from .. import units
 from ..analysis import analysis_of
 from ..conventions import reads_as_thesis
-from ..errors import MtmcalError
 from ..figure_style import save_png
 from ..html_page import Page
 from ..inference import reading_choice
@@ -29,7 +29,6 @@ from ..inference.identifiability import DETERMINED, campaign_identifiability
 from ..inference.sampling import SamplerSettings
 from ..io.machine_reader import description_of
 from ..io.netcdf import write_netcdf_atomic
-from ..io.textfiles import atomic_directory
 from ..machines.plugins import provided
 from ..models import models_of
 from ..parameters import IDENTIFIABLE
@@ -69,6 +68,7 @@ from . import machine_sections
 from .decisions import SUGGESTION_COLUMNS, add_suggestions, suggestion_text
 from .drawing import Drawing
 from .missing import missing_data
+from .start import Begun, begin, check_output_dir
 
 SUMMARY_COLUMNS = ["iso", "unit", "mean", "sd", "median", "hdi_low", "hdi_high", "r_hat", "ess_bulk", "ess_tail",
                    "prior_sd", "sd_ratio", "identified", "identification", "combination", "identified_through",
@@ -163,17 +163,11 @@ def _side_posterior(analysis, settings: SamplerSettings, say, progress):
     return side
 
 
-def _check_output_dir(out_dir: Path) -> None:
-    if out_dir.exists() and not out_dir.is_dir():
-        raise MtmcalError(f"{out_dir}: cannot write the report: it exists and is not a directory")
-    if not out_dir.resolve().parent.is_dir():
-        raise MtmcalError(f"{out_dir}: cannot write the report: directory {out_dir.resolve().parent} does not exist")
-
-
 def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerSettings | None = None,
                  fix_dx_BT: bool = False, compare_models: bool = False, posterior: PosteriorResult | None = None,
                  progress: Progress | None = None, command: str = "", data: str = "ballbar",
-                 tolerances: dict | None = None, sigma_model: float | None = None, sigma_prior=None) -> Report:
+                 tolerances: dict | None = None, sigma_model: float | None = None, sigma_prior=None,
+                 begun: Begun | None = None) -> Report:
     """Sample, draw, tabulate and write the report of ``campaign`` (any machine's) into ``out_dir``.
 
     ``posterior``: a posterior of this campaign already sampled (its model, data, dx_BT assumption and σ_model
@@ -185,11 +179,13 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     decisions; ``sigma_model`` (mm) fixes the model-discrepancy scale of every posterior instead of sampling it;
     ``sigma_prior`` (a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`) is the prior of the sampled scales of every
     posterior, learnt elsewhere (None: the assumed default).  Each section appears where the campaign and its
-    machine have what it needs (docs/report.md).
+    machine have what it needs (docs/report.md).  ``begun``: the report already begun into ``out_dir``
+    (:func:`~.start.begin`, whose ``with`` block then holds this call), else it is begun here.
     """
     t0 = time.perf_counter()
     out_dir = Path(out_dir)
-    _check_output_dir(out_dir)
+    if begun is None:
+        check_output_dir(out_dir)
     settings = settings or SamplerSettings()
 
     def say(text: str) -> None:
@@ -204,8 +200,8 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
     # the plug-in's own deterministic identification where it gives one (the thesis': its tables and section); the
     # least squares beside it on every machine come after the sampling (at its σ_model: Shown.of)
     ident = analysis.identification
-    with atomic_directory(out_dir) as tmp:
-        drawing = Drawing(tmp)
+    with contextlib.nullcontext(begun) if begun is not None else begin(campaign, out_dir) as started:
+        tmp, drawing = started.directory, started.drawing
         try:
             ahead, planned_for = _ahead(analysis, drawing, say)
             tol = campaign.tolerances if tolerances is None else tolerances
@@ -333,17 +329,17 @@ def _compares_instruments(campaign) -> bool:
 
 def _ahead(analysis, drawing: Drawing, say) -> tuple[dict[str, int], list[str]]:
     """Begin, before the posterior is sampled, what needs the campaign alone, each in a process of its own (the
-    sampler leaves the second core idle): the figures of the machine's description (where it has one), the plan
-    for the listed quantities the campaign's Jacobian does not determine one by one (:func:`_expected_unidentified`;
-    none: the planner's default targets) and its figures and, for a campaign with both instruments some of whose
+    sampler leaves the second core idle): the plan for the listed quantities the campaign's Jacobian does not
+    determine one by one (:func:`_expected_unidentified`; none: the planner's default targets) and its figures and,
+    for a campaign with both instruments some of whose
     B runs read otherwise than in the thesis, the weighing of the explanations of a conflict between them, which
     that reading always wants (elsewhere it is begun only when the comparison finds a conflict,
     :func:`_rest_of_report`).  Returns their batches by job name
-    and the targets the plan was begun for."""
+    and the targets the plan was begun for.  (The figures of the machine's description were begun before, with
+    the report: :func:`~.start.begin`.)"""
     campaign = analysis.campaign
     ahead = {}
     targets = _expected_unidentified(analysis)
-    drawing.start(machine_sections.figure_jobs(campaign))
     if _plans(campaign):
         say("planning the next measurement (beside the sampling)")
         ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(

@@ -93,9 +93,9 @@ class Drawing:
         self._warm = False
         self._frozen = False
 
-    def start(self, jobs: list[tuple[str, Callable]]) -> int:
-        """Begin drawing ``jobs`` (``(file name, make)``) and return the batch's number (for :meth:`wait` and
-        :meth:`cancel`); without fork, draw them now."""
+    def start(self, jobs: list[tuple[str, Callable]], workers: int | None = None) -> int:
+        """Begin drawing ``jobs`` (``(file name, make)``) in up to ``workers`` processes (default the drawing's) and
+        return the batch's number (for :meth:`wait` and :meth:`cancel`); without fork, draw them now."""
         jobs = list(jobs)
         batch = self._batches
         self._batches += 1
@@ -125,7 +125,7 @@ class Drawing:
         # kept until the drawing ends: a counter freed while its batch still runs could be handed to the next batch
         # (the shared memory is reused), and two batches would then take jobs from one counter
         self._counters.append(counter)
-        for _ in range(min(self.workers, len(jobs))):
+        for _ in range(min(self.workers if workers is None else workers, len(jobs))):
             receive, send = ctx.Pipe(duplex=False)
             proc = ctx.Process(target=_work, args=(jobs, self.directory, counter, send), daemon=True)
             proc.start()

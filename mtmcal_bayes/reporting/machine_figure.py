@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import FancyBboxPatch
 
 from ..figure_style import figure, save_png, tight_layout
+from ..io.machine_reader import description_of
 from ..machines.description import FRAME, SPINDLE, MachineDescription
 from ..machines.deviations import SQUARENESS_ERRORS, Deviation, generated, redundant, selected
 from ..machines.plugins import provided
@@ -92,6 +93,15 @@ def campaign_tool(campaign) -> tuple[float, str]:
         sid, length = next(iter(styli.items()))
         return float(length), f"stylus {sid}'s length"
     return TOOL_MM, "a nominal length"
+
+
+def figure_jobs(campaign) -> list:
+    """The drawing jobs of the figures of the campaign's machine (``machine.png`` with the campaign's tool,
+    ``deviations.png``): they need the campaign alone (a report begins them before anything else,
+    :mod:`~.start`)."""
+    description, tool = description_of(campaign.machine), campaign_tool(campaign)
+    return [("machine.png", lambda: chain_figure(description, tool)),
+            ("deviations.png", lambda: deviations_figure(description))]
 
 
 def _arc3d(ax, centre: np.ndarray, d: np.ndarray, *, radius: float, colour: str) -> None:

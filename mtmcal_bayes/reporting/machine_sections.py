@@ -13,7 +13,6 @@ import pandas as pd
 
 from .. import units
 from ..html_page import Page
-from ..io.machine_reader import description_of
 from ..posterior.least_squares import LeastSquares, least_squares
 from . import machine_figure
 
@@ -22,14 +21,6 @@ CHAIN_CAPTION = ("The machine at its home pose: the frame, each rotary axis' nom
                  "move the workpiece); the chain from workpiece to tool below.")
 DEVIATIONS_CAPTION = ("What each location error means (positive values, exaggerated), as the chain applies it: a "
                       "small rigid displacement of the body the axis carries, turning about the axis' point.")
-
-
-def figure_jobs(campaign) -> list:
-    """The drawing jobs of the figures of the campaign's machine (``machine.png`` with the campaign's tool,
-    ``deviations.png``)."""
-    description, tool = description_of(campaign.machine), machine_figure.campaign_tool(campaign)
-    return [("machine.png", lambda: machine_figure.chain_figure(description, tool)),
-            ("deviations.png", lambda: machine_figure.deviations_figure(description))]
 
 
 def shown_together(rep) -> list[str]:
@@ -84,7 +75,8 @@ def truth_table(rep, ls: LeastSquares | None, truth) -> pd.DataFrame:
 
 
 def machine_section(page: Page, description, rep, tmp: Path) -> None:
-    """The machine: its description, chain and location errors (figures drawn by :func:`figure_jobs`)."""
+    """The machine: its description, chain and location errors (figures drawn by
+    :func:`~.machine_figure.figure_jobs`)."""
     post = rep.log_posterior
     kind = f"built-in type {description.builtin}" if description.builtin else "described in the campaign"
     page.section("machine", "The machine")
