@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -20,6 +21,8 @@ import numpy as np
 from . import units
 from .errors import InputError
 from .machines import MachineDescription
+from .machines.plugins import provided
+from .pattern_frames import chain_frame
 from .patterns import B_PATTERNS, C_PATTERNS
 
 
@@ -420,6 +423,13 @@ class DesignGoal:
     times: dict[str, float] = field(default_factory=dict)
 
 
+def _chain_frames(ballbar: Ballbar, machine: Machine) -> None:
+    """The engine's own: a ball bar's runs read against its machine's chain (a machine without a description has
+    none: its runs can be read only in the machine frame, convention "thesis")."""
+    if machine.description is not None:
+        ballbar.pattern_frames = functools.partial(chain_frame, machine.description)
+
+
 @dataclass
 class Campaign:
     machine: Machine
@@ -434,6 +444,14 @@ class Campaign:
     date: datetime.datetime | None = None  # when the campaign was measured (a TOML date is taken at 00:00)
     temperature_C: float | None = None  # workshop temperature during the campaign, °C
     design: DesignGoal | None = None  # what the campaign was designed for ([design]), if it was
+
+    def __post_init__(self) -> None:
+        """A campaign built in Python gets what a read one has: its runs' reading frames from its machine's chain
+        and, where its machine's plug-in reads a format of its own, that format in the engine's terms (the thesis':
+        its patterns' arcs and bar sides, ``plugins/thesis/translation.py``)."""
+        if self.ballbar.pattern_frames is None:
+            complete = provided(self.machine, "complete_ballbar", _chain_frames)
+            complete(self.ballbar, self.machine)
 
     def lacking_data(self) -> list[str]:
         """One line per planned run, in measuring order: ``"1. BX@RB1/B, 3 repeats (why)"``."""

@@ -151,13 +151,13 @@ def run_convention(run, ballbar) -> str:
 
 
 def run_frame(run, ballbar) -> PatternFrame:
-    """The frame of a run: its machine's (``ballbar.pattern_frames``, from its chain: set when a campaign is read);
-    :class:`ConventionError` for a ball bar without frames (built in Python, its runs read otherwise than in the
-    machine frame: give it ``pattern_frames``, e.g. ``functools.partial(pattern_frames.chain_frame, description)``)."""
+    """The frame of a run: its machine's (``ballbar.pattern_frames``, from its chain: set when a campaign is read or
+    built); :class:`ConventionError` for a ball bar without frames (outside a campaign, or of a machine without a
+    description, its runs read otherwise than in the machine frame)."""
     if ballbar.pattern_frames is None:
         raise ConventionError(f"run {run.label} is read in convention {run_convention(run, ballbar)!r}, and its "
-                              "ball bar has no pattern frames to read it against (a ball bar built in Python: set "
-                              "its pattern_frames to its machine's chain frames, pattern_frames.chain_frame)")
+                              "ball bar has no pattern frames to read it against (a ball bar outside a campaign, or "
+                              "of a machine without a description: set its pattern_frames, pattern_frames.chain_frame)")
     return ballbar.pattern_frames(run, ballbar)
 
 

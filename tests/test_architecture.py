@@ -25,9 +25,9 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
     ("conventions", "machines"),                                   # what a ball-bar offset means in machine axes;
                                                                    # machines described: chains and location errors
-    ("campaign", "observations", "machine_time", "sigma_prior",    # the data of a calibration, its machine time, a
-     "pattern_frames"),                                            # σ_model prior learnt elsewhere, a described
-                                                                   # machine's reading frames
+    ("pattern_frames",),                                           # every machine's reading frames, from its chain
+    ("campaign", "observations", "machine_time", "sigma_prior"),   # the data of a calibration, its machine time, a
+                                                                   # σ_model prior learnt elsewhere
     ("io",),                                                       # files in and out
     ("models",),                                                   # forward models
     ("identification", "inference", "figure_style", "html_page"),  # DPRNT sphere fit, Bayesian engine, figure and page look

@@ -39,6 +39,23 @@ def campaign_sections(r, doc: dict, machine, base_dir):
     return sections(r, doc, machine, base_dir)
 
 
+def complete_ballbar(ballbar, machine) -> None:
+    """A ball bar built in Python for the thesis machine in the engine's terms: in its own campaign format (mounts by
+    R_C and Z_C) its patterns' arcs and bar sides and its runs' frames (:func:`.translation.complete`); with W-ball
+    positions (the generic format) its runs' frames only."""
+    import functools
+
+    from ...io.machine_reader import description_of
+    from ...pattern_frames import chain_frame
+    from .translation import complete
+
+    desc = description_of(machine)
+    if any(m.position is not None for m in ballbar.mounts.values()):
+        ballbar.pattern_frames = functools.partial(chain_frame, desc)
+    else:
+        complete(ballbar, desc)
+
+
 def probe_owners(machine, probe) -> set[str]:
     """The owners of the probe's nuisance terms in the thesis' format: its styli, ``c_axis`` and ``b_axis``."""
     from .campaign_keys import probe_owners as owners
@@ -247,6 +264,7 @@ class ThesisPlugin:
     campaign_sections = staticmethod(campaign_sections)
     campaign_document = staticmethod(campaign_document)
     probe_owners = staticmethod(probe_owners)
+    complete_ballbar = staticmethod(complete_ballbar)
     run_placement = staticmethod(run_placement)
     pattern_components = staticmethod(pattern_components)
     mount_conflict = staticmethod(mount_conflict)
