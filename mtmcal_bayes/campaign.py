@@ -138,8 +138,8 @@ class Ballbar:
     convention: str = "thesis"  # how the runs' offsets were read (conventions.py), unless a run says otherwise
     planned: list[PlannedRun] = field(default_factory=list)  # runs without data yet, in measuring order
     alternative_reason: str = ""  # one line: why the runs' conventions were preferred to their alternative_convention
-    # the frames its runs are read against (conventions.run_frame), from its machine's chain; set when the campaign
-    # is read (a campaign built in Python whose runs are read in another convention than "thesis" sets it)
+    # the frames its runs are read against (conventions.run_frame), from its machine's chain: set when the campaign
+    # is read, and by Campaign.__post_init__ when it is built in Python
     pattern_frames: Callable | None = None
     # the patterns whose bar the campaign's format puts on the other side of the W ball from the engine's patterns
     # (machines/patterns): the thesis' BT, and its CR in the geometry of Fig 2.6 (its campaign keys)

@@ -132,19 +132,6 @@ def frame_matrix(convention: str, frame: PatternFrame) -> np.ndarray:
     return np.linalg.solve(frame.basis, frame_directions(convention, frame))
 
 
-def frame_describe(convention: str, frame: PatternFrame) -> str:
-    """Where a convention draws the samples of a run of ``frame``, in words: ``"B = 0° at +Z, B = 90° at +X"``."""
-    D, axes, angle = frame_directions(convention, frame), frame.axes, frame.letter
-
-    def word(v):
-        k = int(np.argmax(np.abs(v)))
-        if abs(abs(v[k]) - 1.0) < 1e-9:
-            return f"{'+' if v[k] > 0 else '-'}{axes[k]}"
-        return f"{np.degrees(np.arctan2(v[1], v[0])):.1f}° from +{axes[0]} towards +{axes[1]}"
-
-    return f"{angle} = 0° at {word(D[0])}, {angle} = 90° at {word(D[1])}"
-
-
 def run_convention(run, ballbar) -> str:
     """The convention a run is read in: its own, else the campaign's ``[ballbar] convention``."""
     return run.convention or ballbar.convention
