@@ -27,8 +27,9 @@ import numpy as np
 
 import mtmcal_bayes as mb
 from mtmcal_bayes import units
-from mtmcal_bayes.compensation.chain_inverse import invert, work_tool_point
-from mtmcal_bayes.compensation.through_chain import compensate_described, program_commands
+from mtmcal_bayes.compensation.chain_kinematics import ChainKinematics, work_tool_point
+from mtmcal_bayes.compensation.compensate import compensate, program_commands
+from mtmcal_bayes.compensation.inverse import invert
 from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.io.gcode import LINEAR, read_program
 from mtmcal_bayes.io.machine_reader import demo_campaign
@@ -58,12 +59,12 @@ def run(machine: str, n: int, seed: int, model: str = "chain") -> dict:
         true = {name: float(v) for name, v in truth.deviations.items()}
         true1 = {name: np.array([v]) for name, v in true.items()}
         # Newton: compensated with the true values, through the true chain
-        xyz_t, _ = invert(chain, length, q, true)
+        xyz_t, _ = invert(ChainKinematics(chain, length), q, true)
         at = work_tool_point(chain, length, {**q, **dict(zip(LINEAR, xyz_t.T))}, true1)[0]
         newton_um.append(units.from_internal(float(np.abs(np.linalg.norm(at - nominal, axis=-1)).max()), "um"))
         # coverage: compensated with the posterior of a simulated campaign, through the true chain
         c = mb.simulate(base, truth=truth, model=model, noise=True, seed=seed * 1000 + k).synthetic_campaign()
-        result = compensate_described(c, program, mb.sample(c, sampler="exact", seed=k))
+        result = compensate(c, program, mb.sample(c, sampler="exact", seed=k))
         at = work_tool_point(chain, length, {**q, **dict(zip(LINEAR, result.xyz_c.T))}, true1)[0]
         r_true = units.from_internal(np.linalg.norm(at - nominal, axis=-1), "um")  # (k,)
         inside = r_true <= result.residual_p95_um
@@ -72,7 +73,7 @@ def run(machine: str, n: int, seed: int, model: str = "chain") -> dict:
         share_blocks.append(float(inside.mean()))
         bands.append(float(result.residual_p95_um.max()))
         # the part the data vouch for: the truth's deviations left at zero set to zero, against the band of the
-        # draws with them at zero too (compensate_described's residual_determined_um, per block)
+        # draws with them at zero too (the compensation's residual_determined_um, per block)
         left = {d["name"] for d in result.info["not_measured"] if d["status"] == "left at zero"}
         seen_true = {nm: v for nm, v in true1.items() if nm not in left}
         at = work_tool_point(chain, length, {**q, **dict(zip(LINEAR, result.xyz_c.T))}, seen_true)[0]

@@ -440,91 +440,46 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     ``accept_disagreement``, which compensates and warns; so is a campaign on which the check cannot run (a gap of
     its probe readings, :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
 
-    On a described machine (docs/compensation.md): the exact method through its chain, the rotary axes by their
-    letters, ``model`` the chain (default), the values the posterior (default the exact posterior of every instrument
-    the campaign has), ``setup`` the ball-bar set-up whose tool length is the tool's; deviations the data do not
-    determine are left at zero and named.
+    One path on every machine (docs/compensation.md, :mod:`mtmcal_bayes.compensation.compensate`): Newton through
+    the machine's kinematics (its chain, or a plug-in's model: the thesis machine's ``htm-thesis`` by default), the
+    rotary axes by their letters, ``setup`` the ball-bar set-up whose tool length is the tool's; the values the
+    posterior mean (default posterior: the exact posterior of the machine's default data, or a plug-in's own), the
+    deviations the data do not determine left at zero and named.  ``method="thesis"``, ``values="ballbar"`` and
+    ``mount`` are what a plug-in offers (the thesis machine's).
     """
+    from .compensation.compensate import check_options, compensate as rewrite, kinematics_of, read
     from .errors import ParameterError
+    from .machines import selected
     from .machines.plugins import provided
 
     c = campaign_of(campaign, measured=True)
-    prepare = provided(c.machine, "compensation_program", _chain_compensation_program)  # a plug-in's methods
-    parsed, used = prepare(c, program, method=method, model=model, values=values, mount=mount,
-                           integer_unit=integer_unit)
+    check_options(c, method=method, values=values, point=point)
+    kinematics_of(c, model=model, point=point, setup=setup, mount=mount)  # its options, checked before any work
+    parsed = read(c, program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
     if c.has_probe_readings() and c.ballbar.runs and (gap := c.probe_gap()) is not None:
         refusal = (f"whether the instruments of {c.source} agree on the deviations it uses cannot be checked: "
                    f"{gap.reason()}")
     elif c.has_probe_readings() and c.ballbar.runs:
-        refusal = instruments(c, explain=False).refusal(used)
+        refusal = instruments(c, explain=False).refusal([d.name for d in selected(c.machine.description)])
     if refusal and not accept_disagreement:
         raise ParameterError("accept_disagreement", f"not given, and {refusal}")
-    rewrite = provided(c.machine, "compensate", _compensate_through_chain)
-    result = rewrite(c, parsed, method=method, model=model, values=values, posterior=posterior, point=point,
-                     setup=setup, mount=mount)
+    label = None
+    if posterior is None:
+        own = provided(c.machine, "compensation_posterior")
+        if own is not None:
+            posterior = own(c)
+        else:
+            posterior = sample(c, sampler="exact", seed=1)
+            label = f"exact posterior of the linear model ({posterior.log_posterior.data} data)"
+    result = rewrite(c, parsed, posterior, method=method, model=model, values=values, point=point, setup=setup,
+                     mount=mount, label=label)
     if refusal:
         result.warnings.append(f"compensated although {refusal} (accepted)")
     if output is not None:
         result.save(output)
     return result
-
-
-def _chain_compensation_program(c: Campaign, program, *, method: str, model: str | None, values: str,
-                                mount: str | None, integer_unit: str | None):
-    """``(parsed program, deviations the compensation uses)`` on a machine compensated through its chain: the options
-    checked, the rotary axes read by their letters, every block within the travels, before any work."""
-    from .compensation.through_chain import program_commands
-    from .io.gcode import LINEAR, read_program
-
-    used = _described_compensation_options(c, method=method, model=model, values=values, mount=mount)
-    rotary = tuple(a.letter for a in c.machine.description.rotary_axes)
-    parsed = read_program(program, integer_unit=integer_unit, rotary=rotary, required=LINEAR + rotary)
-    program_commands(c, parsed)
-    return parsed, used
-
-
-def _compensate_through_chain(c: Campaign, parsed, *, posterior, point: str, setup: str | None, **_thesis_options):
-    """Newton through the machine's chain with the posterior's values (default: the exact posterior of every
-    instrument the campaign has); the options of a plug-in's methods (``method``, ``values``, ``mount``) were
-    checked by :func:`_chain_compensation_program`."""
-    from .compensation.through_chain import compensate_described
-
-    label = None
-    if posterior is None:
-        posterior = sample(c, sampler="exact", seed=1)
-        label = f"exact posterior of the linear model ({posterior.log_posterior.data} data)"
-    return compensate_described(c, parsed, posterior, setup=setup, point=point, label=label)
-
-
-def _described_compensation_options(c: Campaign, *, method: str, model: str | None, values: str,
-                                    mount: str | None) -> list[str]:
-    """The options of ``compensate`` a described machine takes (a :class:`ParameterError` naming the first it does
-    not: the thesis method, the ball-bar values and a mount are the thesis machine's), and its selected deviations."""
-    from .compensation import METHODS, VALUES
-    from .errors import ParameterError
-    from .machines import selected
-
-    desc = c.machine.description
-    where = f"{desc.name}, {desc.configuration}"
-    if method not in METHODS:
-        raise ParameterError("method", f"{method!r} (expected {' or '.join(METHODS)})")
-    if method != "exact":
-        raise ParameterError("method", f"{method}: thesis Eqs 3.4–3.13 are the thesis machine's; a described machine "
-                             f"({where}) is compensated exactly through its chain")
-    if values not in VALUES:
-        raise ParameterError("values", f"{values!r} (expected {' or '.join(VALUES)})")
-    if values != "posterior":
-        raise ParameterError("values", f"{values}: the deterministic ball-bar values are thesis Table 4.5's; a "
-                             f"described machine ({where}) is compensated with its posterior")
-    if model not in (None, "chain"):
-        raise ParameterError("model", f"{model}: a described machine ({where}) is compensated through its chain "
-                             "(chain, the default)")
-    if mount is not None:
-        raise ParameterError("mount", f"not used on a described machine ({where}): its workpiece frame is the "
-                             "description's")
-    return [d.name for d in selected(desc)]
 
 
 def sbc(campaign: CampaignLike = None, *, n: int = 200, model: str = "linear", sampler: str = "emcee",

@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from mtmcal_bayes.plugins.thesis.compensation.kinematics import compensate_exact, tool_point
+from mtmcal_bayes.compensation.inverse import invert
+from mtmcal_bayes.plugins.thesis.compensation.kinematics import ModelFrameKinematics, tool_point
 from mtmcal_bayes.plugins.thesis.compensation.printed_method import compensate_thesis
 from mtmcal_bayes.plugins.thesis.compensation.values import ballbar_values
 from mtmcal_bayes.plugins.thesis.compensation.verify import resimulate
@@ -41,9 +42,10 @@ def test_gcode_round_trip_and_modal_axes():
 
 
 @pytest.mark.parametrize("text, where, what", [
-    ("G01 X1. Y2. Z3.\nG01 X- Y2. Z3.\n", "line 2", "has no number"),
+    ("G01 X1. Y2. Z3. B0 C0\nG01 X- Y2. Z3.\n", "line 2", "has no number"),
+    ("G01 X1. Y2. Z3. B0\n", "line 1", "axis C not known"),  # every axis of the machine, rotary too
     ("G91 G01 X1. Y2. Z3.\n", "line 1", "G91"),
-    ("G01 X1. Y2.\n", "line 1", "axis Z not known"),
+    ("G01 X1. Y2. B0 C0\n", "line 1", "axis Z not known"),
     ("G02 X1. Y2. Z3. I1 J0\n", "line 1", "circular"),
 ])
 def test_malformed_programs_name_the_line(run_cli, tmp_path, text, where, what):
@@ -79,11 +81,9 @@ def test_compensate_names_the_deviations_resting_on_the_choice_of_reading(thesis
     of the campaign read in its recorded alternative (exact draws of both, built from the file's text); the
     compensated program is the one of the campaign without the record."""
     import mtmcal_bayes as mb
-    from mtmcal_bayes.plugins.thesis.compensation.compensate import compensate
-
     from . import variants
 
-    res = compensate(thesis, read_program(FIG))
+    res = mb.compensate(FIG, campaign=thesis)
     chosen, alt = (mb.sample(mb.parse_campaign(t), sampler="exact", seed=1, sigma_model_um=2).summary
                    for t in (variants.without_reading_choice(), variants.alternative_reading()))
     used = [n for n in res.info["deviations"] if n in chosen.index]
@@ -102,7 +102,7 @@ def test_compensate_names_the_deviations_resting_on_the_choice_of_reading(thesis
         if name in tilted:
             assert ln.split()[1].startswith("†") == (name in moved), ln
     assert "B0=+X,B90=-Z" in text and json.dumps(res.to_json())
-    plain = compensate(mb.parse_campaign(variants.without_reading_choice()), read_program(FIG))
+    plain = mb.compensate(FIG, campaign=mb.parse_campaign(variants.without_reading_choice()))
     assert plain.text == res.text and plain.reading_choice is None and "†" not in plain.to_text()
 
 
@@ -119,16 +119,22 @@ def test_exact_compensation_removes_the_eccentricities(thesis):
 
 
 def test_newton_reaches_the_programmed_point(thesis):
+    """The engine's Newton through the thesis' models in their model frame (the program's NC frame shifted by its
+    origin, written out here): the compensated commands put the tool point of ``tool_point``, the models' own
+    function with B and C in degrees, on the nominal one."""
     geo = Geometry(356.3945, 112.2877, 490.0, 65.5348, 50.0)
+    origin = np.array([490.0, 0.0, 65.5348 + 356.3945 + 112.2877])
     pos = read_program(FIG).positions()
-    xyz = pos[:, :3] + np.array([490.0, 0.0, 65.5348 + 356.3945 + 112.2877])
+    xyz = pos[:, :3] + origin
     theta = ballbar_values(thesis)
+    q = {"X": pos[:, 0], "Y": pos[:, 1], "Z": pos[:, 2], "B": np.radians(pos[:, 3]), "C": np.radians(pos[:, 4])}
     for model in ("htm-thesis", "htm-literal"):
-        x_c, miss = compensate_exact(theta[None], geo, xyz, pos[:, 3:], model=model)
+        x_c, miss = invert(ModelFrameKinematics(geo, model, point="tcp", origin=origin), q, dict(zip(DEVIATIONS, theta)))
         assert miss < 1e-9  # mm
-        actual = tool_point(theta[None], geo, x_c, pos[:, 3:], model=model)[0]
+        actual = tool_point(theta[None], geo, x_c + origin, pos[:, 3:], model=model)[0]
         nominal = tool_point(np.zeros((1, 13)), geo, xyz, pos[:, 3:], model=model)[0]
         assert np.abs(actual - nominal).max() < 1e-9
+        assert np.abs(actual - tool_point(theta[None], geo, xyz, pos[:, 3:], model=model)[0]).max() > 1e-3
 
 
 def test_thesis_method_corrects_twice(thesis):

@@ -14,10 +14,12 @@ import pytest
 
 import mtmcal_bayes as mb
 from mtmcal_bayes import units
-from mtmcal_bayes.compensation.chain_inverse import invert, work_tool_point
+from mtmcal_bayes.compensation.chain_kinematics import ChainKinematics, work_tool_point
+from mtmcal_bayes.compensation.inverse import invert
+from mtmcal_bayes.inference.analytic import prior_sensitivity
 from mtmcal_bayes.inference.identifiability import campaign_identifiability
 from mtmcal_bayes.inference.log_posterior import LogPosterior
-from mtmcal_bayes.compensation.through_chain import compensate_described, program_commands
+from mtmcal_bayes.compensation.compensate import compensate, program_commands
 from mtmcal_bayes.io.gcode import LINEAR, read_program
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated
@@ -53,7 +55,7 @@ def test_newton_through_the_true_chain_reaches_the_programmed_point(machine):
     true = {n: float(v) for n, v in _prior_truth(c, seed=3).deviations.items()}
     length = 180.0
     nominal = work_tool_point(chain, length, q, {})[0]
-    xyz_c, _ = invert(chain, length, q, true)
+    xyz_c, _ = invert(ChainKinematics(chain, length), q, true)
     one = {n: np.array([v]) for n, v in true.items()}
     after = work_tool_point(chain, length, {**q, **dict(zip(LINEAR, xyz_c.T))}, one)[0]
     before = work_tool_point(chain, length, q, one)[0]
@@ -71,7 +73,7 @@ def test_the_residual_band_covers_the_true_residual_on_a_simulated_trunnion():
     c = mb.simulate(base, truth=truth, model="chain", noise=True, seed=11).synthetic_campaign()
     rotary = ("A", "C")
     program = read_program(PROGRAM, rotary=rotary, required=LINEAR + rotary)
-    result = compensate_described(c, program, mb.sample(c, sampler="exact", seed=11))
+    result = compensate(c, program, mb.sample(c, sampler="exact", seed=11))
     desc = c.machine.description
     chain = Chain(desc, generated(desc))
     q = program_commands(c, program)
@@ -90,17 +92,24 @@ def test_the_residual_band_covers_the_true_residual_on_a_simulated_trunnion():
 
 
 def test_compensate_on_a_described_machine_names_what_it_cannot_measure(tmp_path, run_cli):
-    """The CLI on the trunnion's demo: JSON with the chain's Newton at rounding level, the tilts, and the deviations
-    left at zero exactly those the campaign does not determine (from its identifiability)."""
+    """The CLI on the trunnion's demo: JSON with the chain's Newton at rounding level, the tilts; of the deviations the
+    campaign does not determine (its identifiability), those no nuisance prior informs are left at zero and those
+    whose posterior rests on nuisance priors (the prior-sensitivity diagnostic) are compensated with their mean."""
     out = tmp_path / "out.nc"
     code, stdout, err = run_cli("compensate", "--machine", "trunnion", PROGRAM, "-o", out, "--json")
     assert code == 0, err
     j = json.loads(stdout)
     assert j["blocks"] == 12 and j["model"] == "chain" and j["newton_miss_um"] < 1e-4
     assert j["not_compensable"][0]["tool_tilt_arcsec"] > 0
-    ident = campaign_identifiability(LogPosterior(mb.load_campaign(demo_campaign("trunnion")), "linear", data="both"))
-    left = sorted(d["name"] for d in j["not_measured"] if d["status"] == "left at zero")
-    assert left == sorted(ident.undetermined) and left
+    lp = LogPosterior(mb.load_campaign(demo_campaign("trunnion")), "linear", data="both")
+    ident = campaign_identifiability(lp)
+    through = prior_sensitivity(lp, units.to_internal(2.0, "um")).through
+    status = {d["name"]: d["status"] for d in j["not_measured"]}
+    left = sorted(n for n, s in status.items() if s == "left at zero")
+    informed = sorted(n for n, s in status.items() if s == "through nuisance priors")
+    assert sorted(left + informed) == sorted(ident.undetermined) and left and informed
+    assert all(through.get(n) for n in informed) and not any(through.get(n) for n in left)
+    assert set(informed) <= set(j["deviations"]) and not set(left) & set(j["deviations"])
     assert "left at zero" in err
     assert out.read_text().splitlines()[3].split()[5:] == PROGRAM.read_text().splitlines()[3].split()[5:]  # A, C
 

@@ -209,12 +209,10 @@ def test_without_the_record_of_the_choice_nothing_is_marked_and_no_number_moves(
 
 def test_compensating_with_a_sampled_posterior_names_what_rests_on_the_choice(thesis_posterior, thesis, tmp_path):
     """From the NetCDF file (its attributes say which posterior it is): the deviations the posterior marks."""
-    from mtmcal_bayes.plugins.thesis.compensation.compensate import compensate
     from mtmcal_bayes.datasets import data_path
-    from mtmcal_bayes.io.gcode import read_program
 
     thesis_posterior.save(tmp_path / "post.nc")
-    res = compensate(thesis, read_program(data_path("fig4_30a_bx_original.nc")), posterior=tmp_path / "post.nc")
+    res = mb.compensate(data_path("fig4_30a_bx_original.nc"), campaign=thesis, posterior=tmp_path / "post.nc")
     used = set(res.info["deviations"])
     assert set(res.reading_choice["rests_on_choice"]) == used & set(reading_choice.marked(thesis_posterior.summary))
     assert {"alpha_XB", "alpha_BT"} <= set(res.reading_choice["rests_on_choice"])

@@ -13,7 +13,7 @@ import numpy as np
 
 import mtmcal_bayes as mb
 from mtmcal_bayes import units
-from mtmcal_bayes.compensation.chain_inverse import work_tool_point
+from mtmcal_bayes.compensation.chain_kinematics import work_tool_point
 from mtmcal_bayes.io.gcode import LINEAR
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated

@@ -16,17 +16,13 @@ from .. import units
 from ..analysis import analysis_of
 from ..inference import reading_choice
 from ..io.netcdf import read_posterior_attrs
-from ..parameters import DEVIATIONS
-from .options import SIGMA_MODEL_UM
 
 
 def _analysis(campaign, posterior):
-    """The analysis of the posterior a compensation takes its draws from: the closed form's (``posterior`` None), a
-    sampled result's own, or that an InferenceData or NetCDF file names in its attributes (model, data, dx_BT
-    assumption, a fixed σ_model; a σ_model prior learnt elsewhere is not recorded there: the assumed one)."""
-    if posterior is None:
-        return analysis_of(campaign, model="linear", data="ballbar",
-                           sigma_model=units.to_internal(SIGMA_MODEL_UM, "um"))
+    """The analysis of the posterior a compensation takes its draws from: a sampled result's own (or a plug-in's
+    default draws', :class:`~.compensate.Draws`), or that an InferenceData or NetCDF file names in its attributes
+    (model, data, dx_BT assumption, a fixed σ_model; a σ_model prior learnt elsewhere is not recorded there: the
+    assumed one)."""
     lp = getattr(posterior, "log_posterior", None)
     if lp is not None:
         return analysis_of(lp.campaign, model=lp.model_name, data=lp.data, fix_dx_BT=lp.fix_dx_BT,
@@ -39,22 +35,23 @@ def _analysis(campaign, posterior):
                        sigma_model=None if fixed is None else units.to_internal(float(fixed), "um"))
 
 
-def deviation_marks(campaign, theta, *, posterior=None, values: str = "posterior") -> dict | None:
-    """For each deviation of ``theta`` (13, internal units) used (non-zero): its value (display units), its estimate
-    under the campaign's alternative reading, the shift in posterior sd and whether it rests on the choice; with the
-    mark, the line saying what it means and the names resting on the choice.  None where the campaign records no
-    choice, the posterior's data are the probe's alone, or ``values="ballbar"`` (thesis Table 4.5, the offsets read
-    as the thesis reads them whatever the campaign's reading: no choice enters)."""
-    if values == "ballbar" or not campaign.ballbar.reading_choices():
+def deviation_marks(campaign, values: dict[str, float], unit: dict[str, str], *, posterior,
+                    kind: str = "posterior") -> dict | None:
+    """For each deviation of ``values`` (``{name: value}``, internal units; ``unit`` its display unit by name) used
+    (non-zero): its value (display units), its estimate under the campaign's alternative reading, the shift in
+    posterior sd and whether it rests on the choice; with the mark, the line saying what it means and the names
+    resting on the choice.  None where the campaign records no choice, the posterior's data are the probe's alone,
+    or the values are not the posterior's (``kind``: a plug-in's deterministic values, such as thesis Table 4.5,
+    read the offsets as their procedure reads them whatever the campaign's reading: no choice enters)."""
+    if kind != "posterior" or not campaign.ballbar.reading_choices():
         return None
-    used = {n: v for n, v in zip(DEVIATIONS, theta) if v != 0.0}
+    used = {n: v for n, v in values.items() if v != 0.0}
     table = _analysis(campaign, posterior).reading_choice(used)
     if table is None:
         return None
     deviations = {}
     for name, row in table.iterrows():
-        unit = DEVIATIONS[name].unit
-        deviations[name] = {"value": units.from_internal(used[name], unit), "unit": unit,
+        deviations[name] = {"value": units.from_internal(used[name], unit[name]), "unit": unit[name],
                             "alternative": float(row[reading_choice.ALTERNATIVE]),
                             "shift_sd": float(row[reading_choice.SHIFT]) if math.isfinite(row[reading_choice.SHIFT])
                             else None, "rests_on_choice": bool(row[reading_choice.RESTS])}

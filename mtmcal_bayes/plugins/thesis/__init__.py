@@ -16,13 +16,14 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
   section of them (thesis values recomputed);
 * **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them;
-* **its compensation**: Eqs 3.4–3.13 as printed beside the exact inversion of its kinematic models, with the
-  published ball-bar values as an option.
+* **its parts of the engine's compensation**: its kinematic models' tool point in their model frame (which the
+  engine's Newton inverts), Eqs 3.4–3.13 as printed (``method="thesis"``), the published ball-bar values
+  (``values="ballbar"``) and its default posterior (the closed form at σ_model 2 µm from the ball bar).
 
 The package holds the thesis' own code beside these contributions: :mod:`.linear`, :mod:`.kinematic`,
 :mod:`.probe_model`, :mod:`.htm` (its models) and :mod:`.translation`, :mod:`.names`, :mod:`.campaign_keys` and
 :mod:`.campaign_document` (its names and keys), :mod:`.identification` (Eqs 4.10–4.18, 5.1–5.19),
-:mod:`.compensation` (Eqs 3.4–3.13 and the exact inversion of its models), :mod:`.program_format` and
+:mod:`.compensation` (Eqs 3.4–3.13 and the tool point of its models), :mod:`.program_format` and
 :mod:`.measuring` (Fig 4.30(a)), :mod:`.report_section`.  No layer of the package imports them: the engine asks the machine
 (:func:`mtmcal_bayes.machines.plugins.provided`).  Each contribution imports its code when asked for, so loading the
 plug-in costs nothing.
@@ -102,22 +103,33 @@ def sensitivity_geometry(c) -> str:
             f"L_B = {bb.length:g} mm, CR geometry {bb.cr_geometry}")
 
 
-def compensation_program(c, program, *, method: str, model, values: str, mount, integer_unit):
-    """``(parsed program, deviations the compensation uses)``: the thesis' X/Y/Z/B/C blocks and its sampled
-    deviations (every option of its methods is taken)."""
-    from ...inference.log_posterior import SAMPLED_DEVIATIONS
-    from ...io.gcode import read_program
+def compensation_kinematics(campaign, *, model, point: str, setup, mount):
+    """The kinematics the engine's compensation inverts on its machine: its model (default ``htm-thesis``) in its
+    model frame at a set-up's and a mount's lever arms, the program in its NC frame (:mod:`.compensation`)."""
+    from .compensation.compensate import kinematics
 
-    return read_program(program, integer_unit=integer_unit), SAMPLED_DEVIATIONS
+    return kinematics(campaign, model=model, point=point, setup=setup, mount=mount)
 
 
-def compensate(c, parsed, *, method: str, model, values: str, posterior, point: str, setup, mount):
-    """The thesis machine's compensation: exact inversion of its kinematic model (default ``htm-thesis``) or Eqs
-    3.4–3.13 as printed (``method="thesis"``), with the posterior or the ball-bar values of Table 4.5."""
-    from .compensation.compensate import compensate as rewrite_program
+def printed_method(kin, values, program, q):
+    """Eqs 3.4–3.13 as printed (``method="thesis"``): X, Y, Z ``(k, 3)`` mm of ``program``."""
+    from .compensation.compensate import printed_method as method
 
-    return rewrite_program(c, parsed, method=method, model="htm-thesis" if model is None else model, values=values,
-                           posterior=posterior, point=point, setup=setup, mount=mount)
+    return method(kin, values, program, q)
+
+
+def ballbar_values(campaign) -> dict:
+    """The deterministic ball-bar values of Table 4.5 (``values="ballbar"``), ``{name: value}`` mm and rad."""
+    from .compensation.compensate import ballbar
+
+    return ballbar(campaign)
+
+
+def compensation_posterior(campaign):
+    """Its default posterior of a compensation: 1000 draws of the closed form at σ_model 2 µm from the ball bar."""
+    from .compensation.values import default_posterior
+
+    return default_posterior(campaign)
 
 
 def sample_notes(result) -> list[str]:
@@ -282,8 +294,10 @@ class ThesisPlugin:
     assumption_effect = staticmethod(assumption_effect)
     report_section = staticmethod(report_section)
     program = staticmethod(program)
-    compensation_program = staticmethod(compensation_program)
-    compensate = staticmethod(compensate)
+    compensation_kinematics = staticmethod(compensation_kinematics)
+    compensation_methods = {"thesis": printed_method}
+    compensation_values = {"ballbar": ballbar_values}
+    compensation_posterior = staticmethod(compensation_posterior)
     sensitivity_geometry = staticmethod(sensitivity_geometry)
 
     @property

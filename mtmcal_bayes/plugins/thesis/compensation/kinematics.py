@@ -1,4 +1,5 @@
-"""Where the tool centre point actually is, relative to the workpiece, and the exact X/Y/Z inversion.
+"""Where the tool centre point actually is, relative to the workpiece: the thesis machine's kinematics of a
+compensation, which the engine's Newton inverts (:mod:`mtmcal_bayes.compensation.inverse`).
 
 The tool point is followed through the kinematic chain of :mod:`~mtmcal_bayes.plugins.thesis.htm`
 (spindle side, ``t_ball``) and expressed in the frame of the C table (the
@@ -32,11 +33,18 @@ def deviation_dict(theta: np.ndarray) -> dict[str, np.ndarray]:
 def tool_point(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray, *, model: str = "htm-thesis",
                point: str = "tcp") -> np.ndarray:
     """Tool point in the C-table frame, ``(n, k, 3)`` mm, for deviations ``(n, 13)`` and commands ``(k, 3)``/``(k, 2)``."""
+    return tool_point_rad(theta, geo, xyz, (np.radians(bc_deg[:, 0]), np.radians(bc_deg[:, 1])), model=model,
+                          point=point)
+
+
+def tool_point_rad(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc: tuple[np.ndarray, np.ndarray], *,
+                   model: str = "htm-thesis", point: str = "tcp") -> np.ndarray:
+    """:func:`tool_point` with ``bc`` = (B, C), each ``(k,)`` rad."""
+    B, C = bc
     piv = PIVOTS[model]
     p = deviation_dict(theta)
     if point == "nose":
         p["dRB"] = np.full(len(p["dx_BT"]), -geo.Z_T)  # the tool vector ends Z_T short of the ball
-    B, C = np.radians(bc_deg[:, 0]), np.radians(bc_deg[:, 1])
     cmd = Commands(xyz[:, 0], xyz[:, 1], xyz[:, 2], B, C, B)
     T = t_ball(p, geo, cmd, piv)  # (n, k, 3) machine frame
     Tc = CAxis(p, geo.Z_C, piv).to_table(T)  # C-axis frame (Eq 2.16)
@@ -47,37 +55,35 @@ def tool_point(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.nda
     return np.stack([x, y, Tc[..., 2]], axis=-1)
 
 
-def compensate_exact(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray, *,
-                     model: str = "htm-thesis", point: str = "tcp", iterations: int = 4) -> tuple[np.ndarray, float]:
-    """X, Y, Z ``(k, 3)`` that bring the actual tool point onto the nominal one; and the largest miss, mm.
+class ModelFrameKinematics:
+    """The thesis machine's kinematics for the engine's compensation (:mod:`mtmcal_bayes.compensation.inverse`):
+    the tool point of its model ``model`` (``htm-thesis``: its pivots; ``htm-literal``: the chain) at the lever arms
+    ``geo``, the tool centre (``point="tcp"``) or the spindle nose (``"nose"``).  Commands ``{X, Y, Z (k,) mm, B,
+    C (k,) rad}`` are the program's, whose origin sits at ``origin`` ``(3,)`` mm of the model frame (a program
+    in the thesis' NC frame: :func:`~mtmcal_bayes.plugins.thesis.htm.nc_origin`; commands of its model: zero);
+    deviations ``{thesis name: (n,)}`` mm and rad."""
 
-    Newton on the three linear axes per block, B and C as programmed.  The tool
-    point is affine in X, Y, Z, so the Jacobian from unit steps is exact and two
-    iterations reach rounding level; four are done.
-    """
-    theta = np.atleast_2d(theta)[:1]
-    target = tool_point(np.zeros_like(theta), geo, xyz, bc_deg, model=model, point=point)[0]
-    x = np.array(xyz, dtype=float)
-    for _ in range(iterations):
-        base = tool_point(theta, geo, x, bc_deg, model=model, point=point)[0]
-        J = np.stack([tool_point(theta, geo, x + e, bc_deg, model=model, point=point)[0] - base for e in np.eye(3)],
-                     axis=-1)
-        x = x - np.linalg.solve(J, (base - target)[..., None])[..., 0]
-    miss = tool_point(theta, geo, x, bc_deg, model=model, point=point)[0] - target
-    return x, float(np.abs(miss).max())
+    def __init__(self, geo: Geometry, model: str, *, point: str, origin: np.ndarray, info: dict | None = None):
+        self.geo, self.model, self.point, self.origin = geo, model, point, np.asarray(origin, dtype=float)
+        self.info = dict(info or {})
 
+    def _theta(self, dev: dict, n: int) -> np.ndarray:
+        theta = np.zeros((n, len(DEVIATIONS)))
+        for i, name in enumerate(DEVIATIONS):
+            if name in dev:
+                theta[:, i] = dev[name]
+        return theta
 
-def tool_axis_tilt(theta: np.ndarray, geo: Geometry, xyz: np.ndarray, bc_deg: np.ndarray, *,
-                   model: str = "htm-thesis") -> np.ndarray:
-    """Tilt of the tool axis against the nominal one in the workpiece frame, ``(n, k)`` rad.
+    def _at(self, q, dev, n: int, point: str) -> np.ndarray:
+        xyz = np.stack([q["X"], q["Y"], q["Z"]], axis=-1) + self.origin
+        bc = (np.asarray(q["B"], dtype=float), np.asarray(q["C"], dtype=float))
+        return tool_point_rad(self._theta(dev, n), self.geo, xyz, bc, model=self.model, point=point)
 
-    Independent of the X/Y/Z commands: what moving the linear axes cannot correct.
-    """
-    def axis(th):
-        tip = tool_point(th, geo, xyz, bc_deg, model=model, point="tcp")
-        nose = tool_point(th, geo, xyz, bc_deg, model=model, point="nose")
-        v = tip - nose
+    def tool_point(self, q, dev, *, n: int = 1) -> np.ndarray:
+        """The compensated point ``(n, k, 3)`` mm in the C-table frame."""
+        return self._at(q, dev, n, self.point)
+
+    def tool_axis(self, q, dev, *, n: int = 1) -> np.ndarray:
+        """The tool's direction ``(n, k, 3)``, the nose to the tool centre (independent of X/Y/Z)."""
+        v = self._at(q, dev, n, "tcp") - self._at(q, dev, n, "nose")
         return v / np.linalg.norm(v, axis=-1, keepdims=True)
-
-    actual, nominal = axis(theta), axis(np.zeros((1, len(DEVIATIONS))))
-    return np.arccos(np.clip(np.sum(actual * nominal, axis=-1), -1.0, 1.0))

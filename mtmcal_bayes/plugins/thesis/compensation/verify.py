@@ -10,7 +10,8 @@ from ..htm import nc_origin
 from ....parameters import DEVIATIONS, ParameterSpace
 from ..pattern_tables import Commands
 from ..kinematic import HTMModel
-from .kinematics import compensate_exact
+from ....compensation.inverse import invert
+from .kinematics import ModelFrameKinematics
 from .printed_method import compensate_thesis
 
 
@@ -31,8 +32,9 @@ def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", meth
     for i, run in enumerate(htm.runs):
         c = run.commands
         xyz, bc = np.c_[c.X, c.Y, c.Z], np.degrees(np.c_[c.B, c.C])
-        if method == "exact":
-            xyz_c, _ = compensate_exact(theta13[None], run.geometry, xyz, bc, model=model, point=point)
+        if method == "exact":  # the engine's Newton through the model, its commands in the model frame
+            kin = ModelFrameKinematics(run.geometry, model, point=point, origin=np.zeros(3))
+            xyz_c, _ = invert(kin, {"X": c.X, "Y": c.Y, "Z": c.Z, "B": c.B, "C": c.C}, d)
         else:
             origin = nc_origin(run.geometry)
             xyz_c = compensate_thesis(d, xyz - origin, bc)[0] + origin

@@ -1,0 +1,303 @@
+"""``compensate`` on any machine: one path from the program's commands to the compensated program (SPEC §20).
+
+1. the program's commands, each block within the description's travels (:func:`program_commands`);
+2. the posterior's deviation draws (:func:`deviation_draws`);
+3. the values compensated with (:func:`classify_values`): the posterior mean of each deviation the model
+   estimates — under the posterior the value that leaves the smallest expected squared error — except one whose
+   posterior is its prior (the campaign's Jacobian, nuisance terms included, leaves it undetermined:
+   :func:`~mtmcal_bayes.inference.identifiability.campaign_identifiability`, and no nuisance prior informs it), which
+   is left at zero, its prior mean, its spread staying in the residual band; one the machine's model does not
+   estimate is held at zero and is in neither.  Each value the data do not determine one by one is named, with the
+   nuisance priors it rests on (the separate diagnostic :func:`~mtmcal_bayes.inference.analytic.prior_sensitivity`).
+   A plug-in may offer values of its own (the thesis' ball-bar values, Table 4.5);
+4. Newton block by block through the machine's kinematics (:func:`.inverse.invert`; the description's chain,
+   :mod:`.chain_kinematics`, or a plug-in's), or a plug-in's method (the thesis' Eqs 3.4–3.13 as printed);
+5. per block the residual band: the tool point of the compensated program through the kinematics of each draw,
+   against the programmed point;
+6. the tool-axis tilt each deviation used leaves (:func:`tilts`), the warnings, the result.
+
+What a machine's plug-ins may contribute (:func:`~mtmcal_bayes.machines.plugins.provided`):
+``compensation_kinematics(campaign, model=, point=, setup=, mount=)`` (default :func:`.chain_kinematics.
+chain_kinematics`), ``compensation_methods`` ``{name: method(kin, values, program, q) -> xyz (k, 3)}``,
+``compensation_values`` ``{name: values(campaign) -> {deviation: value}}``, and a default posterior
+(``compensation_posterior``, asked for by ``api.compensate``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import units
+from ..errors import InputError, ParameterError
+from ..inference.analytic import prior_sensitivity
+from ..inference.identifiability import DETERMINED, campaign_identifiability
+from ..inference.identifiability import IN_COMBINATION as IN_COMBINATION_VERDICT
+from ..inference.log_posterior import LogPosterior
+from ..io.gcode import LINEAR, Program, read_program, rewrite
+from ..io.netcdf import read_posterior, read_posterior_attrs
+from ..machines.deviations import generated, redundant, selected
+from ..machines.plugins import provided
+from .chain_kinematics import chain_kinematics
+from .inverse import invert, tool_axis_tilt, with_xyz
+from .options import N_DRAWS, OFF_TOOL_MM, POINTS, SIGMA_MODEL_UM
+from .reading_choice import deviation_marks
+from .result import CompensationResult
+
+#: the engine's own method and values
+EXACT, POSTERIOR = "exact", "posterior"
+#: why a deviation is not compensated with a measured value, by its class
+LEFT_AT_ZERO = "not determined by this campaign (its posterior is its prior): left at zero, its prior mean; its " \
+               "prior spread is in the residual band"
+THROUGH_PRIORS = "not determined by this campaign's data (its Jacobian, nuisance terms included), but its posterior " \
+                 "rests on the nuisance prior{s} {names}: compensated with its posterior mean, as good as that " \
+                 "set-up knowledge"
+HELD_AT_ZERO = "not estimated by the machine's model ({why}): held at zero, not in the residual band"
+IN_COMBINATION = "determined only in combination ({names}): compensated with its posterior mean, whose split " \
+                 "within the combination is the prior's"
+
+
+@dataclass
+class Draws:
+    """Deviation draws a plug-in gives as its machine's default posterior: ``draws`` ``{name: (n,)}`` internal
+    units, the (linear) ``log_posterior`` they come from and ``label``, what the result says they are (with the
+    number of draws)."""
+
+    draws: dict[str, np.ndarray]
+    log_posterior: LogPosterior
+    label: str
+
+
+def _where(campaign) -> str:
+    desc = campaign.machine.description
+    return f"{desc.name} ({desc.configuration})"
+
+
+def check_options(campaign, *, method: str, values: str, point: str) -> None:
+    """A :class:`ParameterError` naming the first option the machine does not offer: ``method`` (exact, or a
+    plug-in's), ``values`` (posterior, or a plug-in's), ``point``."""
+    for name, value, offered in (
+            ("method", method, (EXACT, *provided(campaign.machine, "compensation_methods", {}))),
+            ("values", values, (POSTERIOR, *provided(campaign.machine, "compensation_values", {}))),
+            ("point", point, POINTS)):
+        if value not in offered:
+            raise ParameterError(name, f"{value!r}: not a compensation {name} of {_where(campaign)}, which has "
+                                 f"{' or '.join(offered)}")
+
+
+def kinematics_of(campaign, *, model: str | None = None, point: str = "tcp", setup: str | None = None,
+                  mount: str | None = None):
+    """The kinematics a compensation on ``campaign``'s machine inverts: a plug-in's
+    (``compensation_kinematics``) or the description's chain (:func:`.chain_kinematics.chain_kinematics`); a
+    :class:`ParameterError` for a ``model``, ``setup`` or ``mount`` it does not take."""
+    make = provided(campaign.machine, "compensation_kinematics", chain_kinematics)
+    return make(campaign, model=model, point=point, setup=setup, mount=mount)
+
+
+def read(campaign, path, *, integer_unit: str | None = None) -> Program:
+    """The program at ``path``, its rotary axes by the description's letters (each one required), every block
+    checked against the travels (:func:`program_commands`)."""
+    rotary = tuple(a.letter for a in campaign.machine.description.rotary_axes)
+    program = read_program(path, integer_unit=integer_unit, rotary=rotary, required=LINEAR + rotary)
+    program_commands(campaign, program)
+    return program
+
+
+def program_commands(campaign, program: Program) -> dict[str, np.ndarray]:
+    """``{letter: (k,)}`` commands (mm, rad) of the program's motion blocks, each block checked against the
+    described travels (an :class:`InputError` naming the program's line)."""
+    desc = campaign.machine.description
+    pos = program.positions()
+    q = {}
+    for i, letter in enumerate(program.axes):
+        ax = desc.axes[letter]
+        unit = "deg" if ax.rotary else "mm"
+        q[letter] = units.to_internal(pos[:, i], unit) if ax.rotary else pos[:, i]
+        if ax.travel is None:
+            continue
+        lo, hi = ax.travel
+        bad = np.flatnonzero((q[letter] < lo - 1e-12) | (q[letter] > hi + 1e-12))
+        if bad.size:
+            block = program.motion[int(bad[0])]
+            shown = [units.from_internal(v, unit) if ax.rotary else v for v in (lo, hi)]
+            sym = units.SYMBOL[unit]
+            raise InputError(program.source, f"line {block.number}", f"{letter}{pos[bad[0], i]:g} is beyond the "
+                             f"{letter} travel [{shown[0]:g}, {shown[1]:g}] {sym} of {desc.name} "
+                             f"({desc.configuration})")
+    return q
+
+
+def deviation_draws(campaign, posterior, *, n: int = N_DRAWS, label: str | None = None) -> tuple[dict[str, np.ndarray], object, str]:
+    """``({name: (n,)} internal units, log posterior, where from)``: the deviation draws of ``posterior`` (a
+    :class:`Draws`, a :class:`~mtmcal_bayes.posterior.sample.PosteriorResult`, an InferenceData or a NetCDF file of
+    ``sample -o``), thinned evenly to at most ``n``, and the (linear) log posterior whose identifiability they are
+    read with; ``label``: what the draws are, for where from (default: the posterior given)."""
+    if isinstance(posterior, Draws):
+        count = len(next(iter(posterior.draws.values())))
+        return posterior.draws, posterior.log_posterior, f"{label or posterior.label}, {count} draws"
+    lp = getattr(posterior, "log_posterior", None)
+    idata = getattr(posterior, "idata", posterior)
+    if hasattr(idata, "posterior"):
+        post, where = idata.posterior, "the given posterior"
+        data = lp.data if lp is not None else str(idata.posterior.attrs.get("data", "ballbar"))
+    else:
+        post, where = read_posterior(posterior), str(posterior)
+        data = str(read_posterior_attrs(posterior).get("data", "ballbar"))
+    if lp is None or lp.model_name != "linear":
+        lp = LogPosterior(campaign, "linear", data=data)
+    devs = [p for p in lp.space.parameters if p.group == "deviation"]
+    if not any(p.name in post for p in devs):
+        raise InputError(where, None, "holds no draws of this machine's deviations (is it a posterior of this "
+                         "campaign from mtmcal-bayes sample?)")
+    total = int(np.asarray(post[next(p.name for p in devs if p.name in post)]).size)
+    idx = np.linspace(0, total - 1, min(n, total)).astype(int)
+    draws = {p.name: units.to_internal(np.ravel(np.asarray(post[p.name]))[idx], p.unit) for p in devs if p.name in post}
+    return draws, lp, f"{label}, {len(idx)} draws" if label else f"posterior draws from {where}"
+
+
+def sigma_model_um(posterior) -> float:
+    """σ_model (µm) of a posterior's prior-sensitivity diagnostic: the median of its draws where it has them, else
+    :data:`SIGMA_MODEL_UM`."""
+    idata = getattr(posterior, "idata", posterior)
+    post = getattr(idata, "posterior", None)
+    return float(np.median(post["sigma_model"])) if post is not None and "sigma_model" in post else SIGMA_MODEL_UM
+
+
+def classify_values(campaign, draws: dict[str, np.ndarray], ident,
+                    through: dict[str, tuple[str, ...]]) -> tuple[dict[str, float], list[dict]]:
+    """The values compensated with ``{name: value}`` (internal units) and the deviations not compensated with a
+    value the data determine, each ``{"name", "status", "why"}``: ``left at zero`` (the campaign's Jacobian leaves
+    it undetermined, ``ident``, and no nuisance prior informs it, ``through`` of the prior-sensitivity diagnostic:
+    its posterior is its prior, whose mean is zero), ``through nuisance priors`` (undetermined, its posterior mean
+    set by set-up knowledge: compensated with it), ``in combination``, ``held at zero`` (not estimated)."""
+    desc = campaign.machine.description
+    combos: dict[str, list[str]] = {}
+    for c in ident.combinations:
+        for name in c.weights:
+            combos.setdefault(name, []).append(c.name)
+    values, notes = {}, []
+    reasons = redundant(desc)
+    for d in generated(desc):
+        priors = through.get(d.name, ())
+        if d.name not in draws:
+            notes.append({"name": d.name, "status": "held at zero",
+                          "why": HELD_AT_ZERO.format(why=reasons.get(d.name, "not selected in the description"))})
+        elif d.name in ident.undetermined and not priors:
+            notes.append({"name": d.name, "status": "left at zero", "why": LEFT_AT_ZERO})
+        else:
+            values[d.name] = float(np.mean(draws[d.name]))
+            if d.name in ident.undetermined:
+                notes.append({"name": d.name, "status": "through nuisance priors",
+                              "why": THROUGH_PRIORS.format(s="s" if len(priors) > 1 else "",
+                                                           names=" and ".join(priors))})
+            elif d.name not in ident.determined:
+                notes.append({"name": d.name, "status": "in combination",
+                              "why": IN_COMBINATION.format(names="; ".join(combos.get(d.name, [])))})
+    return values, notes
+
+
+def tilts(kin, q: dict, values: dict[str, float]) -> list[dict]:
+    """Tool-axis tilt left by each deviation used (largest over the blocks), all together, and its position error
+    :data:`OFF_TOOL_MM` along the tool; one call for every deviation (one per row)."""
+    names = [n for n, v in values.items() if v != 0.0]
+    rows = len(names) + 1
+    dev = {n: np.zeros(rows) for n in names}
+    for i, n in enumerate(names):
+        dev[n][i] = values[n]
+        dev[n][-1] = values[n]  # the last row: all together
+    tilt = tool_axis_tilt(kin, q, dev, n=rows).max(axis=1) if names else np.zeros(1)
+    off = f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um"
+    out = [{"name": n, "tool_tilt_arcsec": units.from_internal(float(t), "arcsec"),
+            off: units.from_internal(float(t) * OFF_TOOL_MM, "um")}
+           for n, t in zip(names + ["all together"], tilt)]
+    return sorted([r for r in out if r["tool_tilt_arcsec"] > 0.01 or r["name"] == "all together"],
+                  key=lambda r: -r["tool_tilt_arcsec"])
+
+
+def value_warnings(ident, through: dict[str, tuple[str, ...]], values: dict[str, float],
+                   unit: dict[str, str]) -> list[str]:
+    """A warning for each deviation compensated with a value the data do not determine one by one (the campaign's
+    Jacobian, ``ident``), and, separately, for each whose value rests on nuisance priors (``through``, the
+    prior-sensitivity diagnostic); each among the quantities the diagnostic reports."""
+    out = []
+    for name, value in values.items():
+        if name not in through or value == 0.0:
+            continue
+        shown = f"{name} = {units.from_internal(value, unit[name]):.3g} {units.SYMBOL[unit[name]]}"
+        verdict, combos = ident.of(name)
+        if verdict == IN_COMBINATION_VERDICT:
+            out.append(f"compensating with {shown}, which the data determine only in combination ({'; '.join(combos)}): "
+                       "its own value follows the priors")
+        elif verdict != DETERMINED:
+            out.append(f"compensating with {shown}, which the data do not identify (the campaign's Jacobian leaves it "
+                       "undetermined; its value follows the priors)")
+        if through[name]:
+            out.append(f"compensating with {shown}, whose value rests on the nuisance prior"
+                       f"{'s' if len(through[name]) > 1 else ''} {' and '.join(through[name])}: the "
+                       "correction is as good as that set-up knowledge (docs/metrology.md)")
+    return out
+
+
+def compensate(campaign, program: Program, posterior, *, method: str = EXACT, model: str | None = None,
+               values: str = POSTERIOR, point: str = "tcp", setup: str | None = None,
+               mount: str | None = None, label: str | None = None) -> CompensationResult:
+    """Compensate ``program`` (read by :func:`read`) for the deviations of ``posterior`` (see the module docstring
+    and :func:`deviation_draws`).  ``method``: ``"exact"`` (Newton through the kinematics) or a plug-in's;
+    ``model``: the kinematics' model (default the machine's); ``values``: the posterior mean or a plug-in's;
+    ``point``: the tool centre (``"tcp"``) or the spindle ``"nose"``; ``setup``/``mount``: the campaign's tool and
+    workpiece placement, where the kinematics takes them; ``label``: what the posterior is, as the result states it
+    (default: the posterior given, or a :class:`Draws`' own).
+
+    Besides the residual band, ``info["residual_determined_um"]``: the band with the deviations left at zero held at
+    zero in every draw too — what the data vouch for; the rest of the band is those deviations' prior spread."""
+    machine = campaign.machine
+    check_options(campaign, method=method, values=values, point=point)
+    kin = kinematics_of(campaign, model=model, point=point, setup=setup, mount=mount)
+    q = program_commands(campaign, program)
+    draws, lp, source = deviation_draws(campaign, posterior, label=label)
+    ident = campaign_identifiability(lp)
+    through = prior_sensitivity(lp, units.to_internal(sigma_model_um(posterior), "um")).through
+    used, notes = classify_values(campaign, draws, ident, through)
+    unit = {p.name: p.unit for p in lp.space.parameters}
+    left = [d["name"] for d in notes if d["status"] == "left at zero"]
+    if values != POSTERIOR:  # a plug-in's values (the thesis' ball-bar values): each as its procedure gives it
+        used = provided(machine, "compensation_values")[values](campaign)
+    desc = machine.description
+    rank = {name: i for i, name in enumerate(desc.deviations or [d.name for d in selected(desc)])}
+    used = dict(sorted(used.items(), key=lambda item: rank.get(item[0], len(rank))))  # the description's order
+    warnings = []
+    if values == POSTERIOR:
+        if left:
+            warnings.append("left at zero, not determined by this campaign (their posterior is their prior): "
+                            + ", ".join(left))
+        warnings += value_warnings(ident, through, used, unit)
+    xyz = np.stack([q[a] for a in LINEAR], axis=-1)
+    if method == EXACT:
+        xyz_c, miss = invert(kin, q, used)
+    else:
+        xyz_c, miss = provided(machine, "compensation_methods")[method](kin, used, program, q), float("nan")
+    nominal = kin.tool_point(q, {})[0]
+    before = kin.tool_point(q, {n: np.array([v]) for n, v in used.items()})[0] - nominal
+    n = len(next(iter(draws.values())))
+    q_c = with_xyz(q, xyz_c)
+    resid = units.from_internal(np.linalg.norm(kin.tool_point(q_c, draws, n=n) - nominal, axis=-1), "um")  # (n, k)
+    seen = {nm: v for nm, v in draws.items() if nm not in left}
+    resid_seen = units.from_internal(np.linalg.norm(kin.tool_point(q_c, seen, n=n) - nominal, axis=-1),
+                                     "um") if left else resid
+    info = {"method": method, "model": kin.model, "point": point, "values": values,
+            "uncertainty_from": source,
+            "machine": {"name": desc.name, "configuration": desc.configuration, "rotary_axes": list(program.axes[3:])},
+            **kin.info, "newton_miss_um": units.from_internal(miss, "um"),
+            "deviations": {nm: {"value": units.from_internal(v, unit[nm]), "unit": unit[nm]}
+                           for nm, v in used.items() if v != 0.0}}
+    if values == POSTERIOR:
+        info["not_measured"] = notes
+        info["residual_determined_um"] = {"mean_max": float(resid_seen.mean(axis=0).max()),
+                                          "p95_max": float(np.quantile(resid_seen, 0.95, axis=0).max()),
+                                          "per_block_p95": np.quantile(resid_seen, 0.95, axis=0).tolist()}
+    return CompensationResult(rewrite(program, xyz_c), program.source, xyz, xyz_c, resid.mean(axis=0),
+                              np.quantile(resid, 0.95, axis=0),
+                              units.from_internal(np.linalg.norm(before, axis=-1), "um"), tilts(kin, q, used), info,
+                              warnings=warnings,
+                              reading_choice=deviation_marks(campaign, used, unit, posterior=posterior, kind=values))
