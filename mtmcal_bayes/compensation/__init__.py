@@ -3,11 +3,13 @@
 * :class:`CompensationResult` — the compensated program, per block the corrections, the residual error from
   posterior draws and the tool tilts X/Y/Z cannot correct (:mod:`.result`; the options a compensation is
   asked with, :mod:`.options`: :data:`METHODS`, :data:`VALUES`, :data:`POINTS`).
-* :func:`~.through_chain.compensate_described` — exact Newton inversion through a described machine's chain.
+* :func:`~.compensate.compensate` — the one path of every machine: the program's commands, the posterior's
+  draws, the values, Newton through the machine's kinematics (:mod:`.inverse`; the description's chain,
+  :mod:`.chain_kinematics`), the residual band, the tilts.
 
-The thesis machine's compensation (its kinematic models inverted exactly, Eqs 3.4–3.13 as printed, its ball-bar
-values) and its measuring programs (Fig 4.30(a)) are the thesis plug-in's (``mtmcal_bayes.plugins.thesis``): the
-engine asks a machine for its ``compensate`` and ``program``.
+A machine's plug-in contributes only what is its own (the thesis': its models' tool point in their model frame,
+Eqs 3.4–3.13 as printed, its ball-bar values, its default posterior; ``mtmcal_bayes.plugins.thesis``): the engine
+asks the machine (:func:`mtmcal_bayes.machines.plugins.provided`).
 """
 
 from .options import METHODS, N_DRAWS, OFF_TOOL_MM, POINTS, SIGMA_MODEL_UM, VALUES

@@ -16,7 +16,7 @@ def format_compensation(result) -> str:
                  f"tool-point error before {j['error_before_um']['max']:.1f} µm")
     lines.append(f"  residual tool-point error ({j['uncertainty_from']}): mean ≤ {j['residual_um']['mean_max']:.1f} µm, "
                  f"95 % ≤ {j['residual_um']['p95_max']:.1f} µm per block")
-    if "residual_determined_um" in j:
+    if any(d["status"] == "left at zero" for d in j.get("not_measured", ())):
         lines.append(f"    with the deviations left at zero taken as zero: 95 % ≤ {j['residual_determined_um']['p95_max']:.1f} µm "
                      "(what the data vouch for; the rest is their prior spread)")
     lines.append(f"  not compensable by X/Y/Z (tool-axis tilt; error {OFF_TOOL_MM:g} mm along the tool from the "
@@ -35,7 +35,8 @@ def format_compensation(result) -> str:
 
 
 def not_measured_lines(notes: list[dict]) -> list[str]:
-    """A described machine's deviations not compensated with a measured value, those sharing a reason on one line."""
+    """The deviations not compensated with a value the data determine one by one, those sharing a reason on one
+    line."""
     if not notes:
         return ["  every deviation of the machine is compensated with a value the data determine"]
     by_why: dict[str, list[str]] = {}

@@ -1,5 +1,4 @@
-"""What a compensation gives on any machine: the thesis machine's (its plug-in's methods: exact inversion of its
-kinematic models, Eqs 3.4–3.13 as printed, its ball-bar values) and a described machine's (:mod:`.through_chain`)."""
+"""What a compensation gives on any machine (:mod:`.compensate`)."""
 
 from __future__ import annotations
 

@@ -16,6 +16,10 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
   its tables, ``table("ballbar")``), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
   it;
+* ``compensation_kinematics(campaign, model=, point=, setup=, mount=)`` — the tool point its compensation inverts
+  (the engine's: the description's chain), ``compensation_methods`` and ``compensation_values`` (``{name:
+  function}``, beside the engine's exact method and posterior values), ``compensation_posterior(campaign)`` — its
+  default posterior (:mod:`mtmcal_bayes.compensation.compensate`);
 * and, while the engine still has two paths for them, the whole of a command (``report``, ``program``, ...):
   each one the engine takes over is one contribution fewer.
 
