@@ -266,12 +266,15 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("program", metavar="PROGRAM.nc", help="NC program (G00/G01 blocks, absolute)")
     s.add_argument("-o", "--output", required=True, metavar="OUT.nc", help="compensated program")
     s.add_argument("--method", choices=("exact", "thesis"), default="exact",
-                   help="exact inversion (default) or thesis Eqs 3.4–3.13 as printed (double correction)")
-    _model(s, None, help="kinematic model (default htm-thesis; on a described machine its chain; linear cannot "
-           "compensate)")
+                   help="exact inversion (default) or thesis Eqs 3.4–3.13 as printed (double correction; the thesis "
+                   "machine's)")
+    _model(s, None, help="kinematic model (default the machine's: its chain, htm-thesis on the thesis machine; linear "
+           "cannot compensate)")
     s.add_argument("--values", choices=("posterior", "ballbar"), default="posterior",
-                   help="compensate with the posterior mean (default) or the deterministic ball-bar values")
-    s.add_argument("--posterior", metavar="post.nc", help="posterior draws (from sample -o); default: closed form")
+                   help="compensate with the posterior mean (default) or the deterministic ball-bar values (thesis "
+                   "Table 4.5, the thesis machine's)")
+    s.add_argument("--posterior", metavar="post.nc", help="posterior draws (from sample -o); default: the exact posterior "
+                   "(the thesis machine: the closed form at sigma_model 2 µm)")
     s.add_argument("--point", choices=("tcp", "nose"), default="tcp",
                    help="compensate the tool centre point (default) or the spindle nose as the thesis does")
     s.add_argument("--setup", default=None, help="campaign setup of the tool (R_B, NC origin; default: that of BX; on a "
