@@ -1,10 +1,10 @@
 """The options a machine's compensation is asked with, and the constants of every compensation's result."""
 
-#: how X/Y/Z are found: exact inversion of a kinematic model, or thesis Eqs 3.4–3.13 as printed (the thesis
-#: machine's only)
+#: how X/Y/Z are found, every name a built-in machine offers: exact inversion of its kinematics (the engine's), or
+#: thesis Eqs 3.4–3.13 as printed (the thesis plug-in's); a machine offers the engine's and its plug-ins' own
 METHODS = ("exact", "thesis")
-#: where the deviations a program is compensated with come from: the posterior, or the deterministic ball-bar values
-#: (the thesis machine's only)
+#: where the deviations a program is compensated with come from, likewise: the posterior (the engine's), or the
+#: deterministic ball-bar values (the thesis plug-in's)
 VALUES = ("posterior", "ballbar")
 #: which point of the tool is put on the programmed point: the tool centre, or the spindle nose
 POINTS = ("tcp", "nose")
