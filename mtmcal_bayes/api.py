@@ -432,7 +432,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
 
     ``method``: ``"exact"`` inversion or ``"thesis"`` (Eqs 3.4–3.13 as printed); ``values``:
     ``"posterior"`` mean or ``"ballbar"``; ``posterior``: draws, as a NetCDF file, a :func:`sample` result or an InferenceData (default:
-    the closed form); ``integer_unit``: how X/Y/Z/B/C words without a decimal point (``X100``) are read, ``"um"``
+    the machine's, below); ``integer_unit``: how X/Y/Z/B/C words without a decimal point (``X100``) are read, ``"um"``
     (increments of 1 µm / 0.001°) or ``"mm"`` (mm / °); by default they are refused (zeros are accepted).
 
     A campaign with both instruments is checked first (:func:`instruments`): where they disagree on a deviation the
@@ -443,8 +443,9 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     One path on every machine (docs/compensation.md, :mod:`mtmcal_bayes.compensation.compensate`): Newton through
     the machine's kinematics (its chain, or a plug-in's model: the thesis machine's ``htm-thesis`` by default), the
     rotary axes by their letters, ``setup`` the ball-bar set-up whose tool length is the tool's; the values the
-    posterior mean (default posterior: the exact posterior of the machine's default data, or a plug-in's own), the
-    deviations the data do not determine left at zero and named.  ``method="thesis"``, ``values="ballbar"`` and
+    posterior mean (default posterior: the exact posterior of the machine's default data, or a plug-in's own), a
+    deviation the data do not determine left at zero where its posterior is its prior, else compensated with its
+    mean, each named.  ``method="thesis"``, ``values="ballbar"`` and
     ``mount`` are what a plug-in offers (the thesis machine's).
     """
     from .compensation.compensate import check_options, compensate as rewrite, kinematics_of, read
