@@ -153,7 +153,8 @@ def test_deviations_informed_through_nuisance_priors_are_compensated_with_their_
     vanishes to first order because the values are the draws' mean), within 5 %.  The draws of the deviations left
     at zero are left out of both: they are zero in both programs, and their draws' mean is Monte-Carlo noise."""
     from mtmcal_bayes.api import campaign_of
-    from mtmcal_bayes.compensation.compensate import deviation_draws, kinematics_of, read
+    from mtmcal_bayes.compensation.compensate import kinematics_of, read
+    from mtmcal_bayes.compensation.values import deviation_draws
     from mtmcal_bayes.compensation.inverse import with_xyz
 
     demo, path = ONE_PATH[machine]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .... import units
-from ....compensation.compensate import Draws
+from ....compensation.values import Draws
 from ....errors import MtmcalError
 from ....inference.analytic import gaussian_posterior
 from ....inference.log_posterior import LogPosterior
