@@ -173,7 +173,7 @@ def planning():
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
-    from ...models.chain_models import ChainBallbarModel
+    from ...models.ballbar import BallbarModel
     from ...models.joint import JointModel
     from ...observations import Observations
     from .translation import translated
@@ -187,8 +187,8 @@ def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observ
     parts = []
     if data in ("ballbar", "both"):
         parts.append(LinearModel(campaign, space, observations=observations) if name == "linear"
-                     else ChainBallbarModel(translated(campaign), space,
-                                            observations=observations or Observations.from_campaign(campaign))
+                     else BallbarModel(translated(campaign), space,
+                                       observations=observations or Observations.from_campaign(campaign))
                      if name == "chain"
                      else HTMModel(campaign, name, space, observations=observations))
     if data in ("probe", "both"):
