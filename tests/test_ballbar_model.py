@@ -14,7 +14,9 @@ from mtmcal_bayes.models.ballbar import BallbarModel, ChainKernel
 from mtmcal_bayes.parameters import ParameterSpace
 from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS, polar_angle
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel, PivotsKernel
-from mtmcal_bayes.plugins.thesis.pattern_tables import pattern_commands as table_commands
+from mtmcal_bayes.plugins.thesis.pattern_tables import (
+    pattern_commands as table_commands,
+)
 
 
 def _thesis_with(thesis, runs):
