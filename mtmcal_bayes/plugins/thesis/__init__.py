@@ -4,8 +4,10 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 
 * **its published models**: ``linear`` (the thesis relations, Eqs 4.1–4.9 and Table 2.6, with the nuisance terms)
   and ``htm-thesis`` (the thesis' pivots), beside ``htm-literal`` (Eq 2.10 as printed, the test oracle of the chain)
-  and ``chain``, the engine's chain on its campaign translated into W-ball positions, arcs and bar sides
-  (:mod:`.translation`); ``htm-thesis`` is its default kinematic model;
+  and ``chain``, the engine's chain on its campaign translated into W-ball positions, arcs, bar sides and the
+  Tables' commands (:mod:`.translation`); all three kinematic models are the engine's one ball-bar model
+  (:mod:`mtmcal_bayes.models.ballbar`), the first two with the thesis' Eq 2.10 as its kernel (:mod:`.kinematic`);
+  ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C (a run's W ball, arc and bar side in the
