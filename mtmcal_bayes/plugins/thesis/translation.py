@@ -7,9 +7,9 @@ ball).  A run's arc is the thesis' grid (B 0–90° by 1°, C 0–355° by 5°).
 W ball and, in the geometry of Fig 2.6 (``cr_geometry = "RC+LB"``), its CR bar outside it: both *reversed* against
 the engine's patterns (:mod:`mtmcal_bayes.machines.patterns`), which a campaign read in this format states as its
 ``pattern_arcs`` and ``reversed_patterns`` (:func:`complete`), with its runs' commands as the Tables print them
-(``run_commands``, :func:`table_commands`: the bits of the published numbers; the engine's equal them to rounding).  Through these the engine's chain
-(:class:`~mtmcal_bayes.models.chain_models.ChainBallbarModel`) is the thesis machine's ``chain`` model
-(``tests/test_chain.py``), its reading frames are those of Tables 2.2/2.3 (``tests/test_conventions_machines.py``),
+(``run_commands``, :func:`table_commands`: the bits of the published numbers; the engine's equal them to
+rounding).  Through these the engine's ball-bar model (:class:`~mtmcal_bayes.models.ballbar.BallbarModel`) with
+the chain is the thesis machine's ``chain`` model (``tests/test_chain.py``), its reading frames are those of Tables 2.2/2.3 (``tests/test_conventions_machines.py``),
 and the engine's :func:`~mtmcal_bayes.machines.patterns.pattern_commands` gives the commands of Tables 2.2/2.3
 (:func:`commands`: the programs of Fig 4.30(a), the planner's feasibility and clock).
 """
