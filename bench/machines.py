@@ -55,14 +55,14 @@ def command_ratios(repeats: int) -> dict:
 
 def throughput(repeats: int) -> dict:
     from mtmcal_bayes.api import campaign_of
-    from mtmcal_bayes.plugins.thesis.chain_model import ThesisChainModel
+    from mtmcal_bayes.models import make_model
     from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
     from mtmcal_bayes.parameters import ParameterSpace
 
     c = campaign_of(None)
     space = ParameterSpace.for_campaign(c)
     theta = np.random.default_rng(1).normal(size=(2000, len(space))) * space.display_scale() * 30
-    models = {"chain": ThesisChainModel(c, space), "htm-literal": HTMModel(c, "htm-literal", space)}
+    models = {"chain": make_model("chain", c, space), "htm-literal": HTMModel(c, "htm-literal", space)}
     times: dict[str, list[float]] = {k: [] for k in models}
     for _ in range(repeats):
         for name, m in models.items():

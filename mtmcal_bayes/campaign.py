@@ -147,6 +147,9 @@ class Ballbar:
     # the arc (k,) degrees of a run of a pattern that gives none, where the campaign's format fixes it (the thesis'
     # grids: B 0–90° by 1°, C 0–355° by 5°); elsewhere the swivelled axis' default (machines/patterns)
     pattern_arcs: dict[str, np.ndarray] = field(default_factory=dict)
+    # a run's commands and polar angles, ``(run, ballbar) -> PatternCommands or None``, where the campaign's format
+    # fixes them (the thesis': Tables 2.2/2.3 as printed); None: the engine's patterns' (machines/patterns)
+    run_commands: Callable | None = None
 
     def bar_reversed(self, run) -> bool:
         """Whether ``run``'s T ball is on the other side of the W ball from where the engine's pattern puts it: the

@@ -16,11 +16,13 @@ from mtmcal_bayes.io.campaign_reader import parse_campaign
 from mtmcal_bayes.io.machine_reader import builtin_description
 from mtmcal_bayes.machines.patterns import pattern_commands as described_commands
 from mtmcal_bayes.models import make_model
+from mtmcal_bayes.models.ballbar import BallbarModel, ChainKernel
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.parameters import ParameterSpace
 from mtmcal_bayes.campaign import Run
 from mtmcal_bayes.patterns import B_PATTERNS, COMPONENTS, PATTERNS
 from mtmcal_bayes.plugins.thesis.pattern_tables import pattern_commands as thesis_commands
+from mtmcal_bayes.plugins.thesis.translation import translated
 
 
 @pytest.fixture(scope="module")
@@ -48,10 +50,18 @@ def test_chain_is_htm_literal_on_the_thesis_machine(thesis, cr_geometry):
     rng = np.random.default_rng(7)
     theta = rng.normal(size=(32, len(space))) * space.display_scale() * 50
     literal, chain = HTMModel(c, "htm-literal", space), make_model("chain", c, space)
-    assert type(chain).__name__ == "ChainBallbarModel"  # the engine's, not a model of the plug-in's own
+    assert isinstance(chain.kernel, ChainKernel)  # the engine's chain, not the plug-in's Eq 2.10
+    assert isinstance(literal, BallbarModel) and not isinstance(literal.kernel, ChainKernel)
     assert np.abs(chain.predict(theta) - literal.predict(theta)).max() < 1e-9
-    for (_, a), b in zip(literal.traces(theta), chain.traces(theta)):
+    for (_, a), (_, b) in zip(literal.traces(theta), chain.traces(theta)):
         assert np.abs(a - b).max() < 1e-9
+    # the campaign's runs in the engine's commands (machines/patterns) and polar angles instead of the Tables' as
+    # printed: the same eccentricities, to rounding
+    engine = translated(c)
+    engine.ballbar.run_commands = None
+    by_engine = BallbarModel(engine, space)
+    assert any(not np.array_equal(a.q[x], b.q[x]) for a, b in zip(by_engine.runs, chain.runs) for x in "XYZ")
+    assert np.abs(by_engine.predict(theta) - literal.predict(theta)).max() < 1e-9
     # and it is not the thesis' own pivots: htm-thesis differs at these sizes
     assert np.abs(HTMModel(c, "htm-thesis", space).predict(theta) - literal.predict(theta)).max() > 1e-4
 

@@ -12,7 +12,7 @@ import pytest
 from mtmcal_bayes import api, units
 from mtmcal_bayes.io.campaign_reader import load_campaign
 from mtmcal_bayes.io.campaign_writer import save_campaign
-from mtmcal_bayes.models.chain_models import ChainBallbarModel
+from mtmcal_bayes.models.ballbar import ChainBallbarModel
 from mtmcal_bayes.planning.chain_candidates import described_catalogue, described_feasibility_check, run_of
 from mtmcal_bayes.planning.design import Planner
 
@@ -44,7 +44,7 @@ def test_every_catalogue_run_is_checked_against_every_described_travel(trunnion)
         model = ChainBallbarModel(_with(trunnion, c, run))
         inside = all(desc.axes[a].travel is None or
                      (desc.axes[a].travel[0] - 1e-9 <= v.min() and v.max() <= desc.axes[a].travel[1] + 1e-9)
-                     for a, v in model.q.items())
+                     for a, v in model.points().q.items())
         assert check(c)[0] == inside, c.name
     # an arc beyond the A travel [-120, 30]° is refused, naming the axis
     far = replace(cands[0], pattern="AR", arc_deg=(-150.0, 0.0, 1.0))

@@ -11,7 +11,7 @@ import pytest
 
 from mtmcal_bayes import api
 from mtmcal_bayes.io import load_campaign, save_campaign
-from mtmcal_bayes.models.chain_models import ChainBallbarModel
+from mtmcal_bayes.models.ballbar import ChainBallbarModel
 from tests.variants import demo_with_first_run_key
 
 TYPES = ("trunnion", "vertical-turn-mill", "head-head")

@@ -15,7 +15,8 @@ import numpy as np
 from ..errors import ParameterError
 from ..machines.plugins import provided
 from ..machines.space import described_space
-from .chain_models import ChainBallbarModel, ChainProbeModel, FirstOrderModel
+from .ballbar import BallbarModel, ChainBallbarModel
+from .chain_models import ChainProbeModel, FirstOrderModel
 from .jacobian import jacobian, jacobian_at_zero
 from .joint import JointModel
 
@@ -118,7 +119,7 @@ def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -
     return float(np.abs(chain.predict(theta) - FirstOrderModel(chain).predict(theta)).max())
 
 
-__all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "ChainBallbarModel",
+__all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "BallbarModel", "ChainBallbarModel",
            "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
            "models_of", "default_kinematic_model", "JointModel", "first_order_gap", "jacobian",
            "jacobian_at_zero"]

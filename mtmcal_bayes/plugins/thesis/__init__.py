@@ -4,8 +4,10 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 
 * **its published models**: ``linear`` (the thesis relations, Eqs 4.1–4.9 and Table 2.6, with the nuisance terms)
   and ``htm-thesis`` (the thesis' pivots), beside ``htm-literal`` (Eq 2.10 as printed, the test oracle of the chain)
-  and ``chain``, the engine's chain on its campaign translated into W-ball positions, arcs and bar sides
-  (:mod:`.translation`); ``htm-thesis`` is its default kinematic model;
+  and ``chain``, the engine's chain on its campaign translated into W-ball positions, arcs, bar sides and the
+  Tables' commands (:mod:`.translation`); all three kinematic models are the engine's one ball-bar model
+  (:mod:`mtmcal_bayes.models.ballbar`), the first two with the thesis' Eq 2.10 as its kernel (:mod:`.kinematic`);
+  ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
 * **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C (a run's W ball, arc and bar side in the
@@ -185,7 +187,7 @@ def planning():
 
 def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """The model ``name`` for a campaign in the thesis' format (thesis lever arms, probe runs of Tables 5.1/5.2)."""
-    from ...models.chain_models import ChainBallbarModel
+    from ...models.ballbar import BallbarModel
     from ...models.joint import JointModel
     from ...observations import Observations
     from .translation import translated
@@ -199,8 +201,8 @@ def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observ
     parts = []
     if data in ("ballbar", "both"):
         parts.append(LinearModel(campaign, space, observations=observations) if name == "linear"
-                     else ChainBallbarModel(translated(campaign), space,
-                                            observations=observations or Observations.from_campaign(campaign))
+                     else BallbarModel(translated(campaign), space,
+                                       observations=observations or Observations.from_campaign(campaign))
                      if name == "chain"
                      else HTMModel(campaign, name, space, observations=observations))
     if data in ("probe", "both"):

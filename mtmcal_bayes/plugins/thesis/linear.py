@@ -65,10 +65,11 @@ LEFT_OUT = ("gamma_XY", "alpha_YZ", "beta_YZ")
 def _kinematic_rows(campaign, space: ParameterSpace, runs: set[int]) -> dict[tuple[int, str], np.ndarray]:
     """Rows ``(p,)`` of the runs ``runs`` (indices into the campaign's ball-bar runs) by ``(run, component)``: the
     htm-thesis model linearised at zero, for the patterns the thesis gives no relation for.  Only those runs are
-    simulated, with the run that places each of their mounts' W ball (:func:`~.kinematic.placing_runs`): the rows
-    are then those of the whole campaign's Jacobian."""
+    simulated, with the run that places each of their mounts' W ball (:func:`~mtmcal_bayes.models.ballbar.placing_runs`):
+    the rows are then those of the whole campaign's Jacobian."""
+    from ...models.ballbar import placing_runs
     from ...models.jacobian import jacobian
-    from .kinematic import HTMModel, placing_runs
+    from .kinematic import HTMModel
 
     first = placing_runs(campaign.ballbar)
     chosen = sorted(set(runs) | {first[campaign.ballbar.runs[r].mount] for r in runs})

@@ -1,7 +1,9 @@
-"""The axis commands of thesis Tables 2.2 (B patterns) and 2.3 (C patterns), as printed: what the thesis' own
-models (``htm-literal``, ``htm-thesis``, :mod:`.kinematic`) evaluate.  The engine's commands of the same patterns come
-from the machine's chain (:func:`mtmcal_bayes.machines.patterns.pattern_commands`, through :mod:`.translation`); the
-tests hold the two to each other (``tests/test_chain.py``, ``tests/test_thesis_programs.py``).
+"""The axis commands of thesis Tables 2.2 (B patterns) and 2.3 (C patterns), as printed: the commands a thesis-format
+campaign states for its runs (:func:`.translation.table_commands`), which every ball-bar model of it evaluates.  The
+engine's commands of the same patterns come from the machine's chain (:func:`mtmcal_bayes.machines.patterns.
+pattern_commands`, through :mod:`.translation`: programs, feasibility, reading frames); they equal these to rounding
+(~1e-13 mm, ``tests/test_chain.py``, ``tests/test_thesis_programs.py``), and rounding decides a tie between two of
+``plan``'s candidate runs, so the thesis' numbers are computed with these bits.
 """
 
 from __future__ import annotations

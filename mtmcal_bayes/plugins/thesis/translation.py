@@ -6,9 +6,10 @@ description; a mount of a campaign's B runs has R_C = 0, so :meth:`~mtmcal_bayes
 ball).  A run's arc is the thesis' grid (B 0–90° by 1°, C 0–355° by 5°).  Its BT bar is on the trailing side of the
 W ball and, in the geometry of Fig 2.6 (``cr_geometry = "RC+LB"``), its CR bar outside it: both *reversed* against
 the engine's patterns (:mod:`mtmcal_bayes.machines.patterns`), which a campaign read in this format states as its
-``pattern_arcs`` and ``reversed_patterns`` (:func:`complete`).  Through these the engine's chain
-(:class:`~mtmcal_bayes.models.chain_models.ChainBallbarModel`) is the thesis machine's ``chain`` model
-(``tests/test_chain.py``), its reading frames are those of Tables 2.2/2.3 (``tests/test_conventions_machines.py``),
+``pattern_arcs`` and ``reversed_patterns`` (:func:`complete`), with its runs' commands as the Tables print them
+(``run_commands``, :func:`table_commands`: the bits of the published numbers; the engine's equal them to
+rounding).  Through these the engine's ball-bar model (:class:`~mtmcal_bayes.models.ballbar.BallbarModel`) with
+the chain is the thesis machine's ``chain`` model (``tests/test_chain.py``), its reading frames are those of Tables 2.2/2.3 (``tests/test_conventions_machines.py``),
 and the engine's :func:`~mtmcal_bayes.machines.patterns.pattern_commands` gives the commands of Tables 2.2/2.3
 (:func:`commands`: the programs of Fig 4.30(a), the planner's feasibility and clock).
 """
@@ -25,6 +26,7 @@ from ...io.machine_reader import description_of
 from ...machines.patterns import PatternCommands, pattern_commands
 from ...pattern_frames import chain_frame
 from ...patterns import B_ANGLES_DEG, B_PATTERNS, C_ANGLES_DEG, PATTERNS
+from .pattern_tables import pattern_commands as tables
 
 
 def w_ball(mount, pattern: str) -> np.ndarray:
@@ -65,11 +67,28 @@ def commands(desc, pattern: str, *, R_B: float, mount, L_B: float, cr_geometry: 
                             reverse=bar_reversed(pattern, cr_geometry))
 
 
+def table_commands(run, ballbar) -> PatternCommands | None:
+    """The commands of a thesis-format ``run`` of ``ballbar`` as Tables 2.2/2.3 print them
+    (:func:`.pattern_tables.pattern_commands`), with the polar angle its measured traces are read by
+    (:func:`~mtmcal_bayes.patterns.polar_angle`); None for a run the Tables do not give (a held axis, a bar side of
+    its own).  The engine's patterns give the same commands to rounding (``tests/test_chain.py``); these are the
+    bits the thesis' numbers were computed with (a tie between candidate runs in ``plan`` goes by them)."""
+    reversed_ = ballbar.bar_reversed(run)
+    if run.hold_deg or (reversed_ != (run.pattern == "BT") and run.pattern != "CR"):
+        return None
+    s, m = ballbar.setups[run.setup], ballbar.mounts[run.mount]
+    arc = np.asarray(ballbar.arc_of(run), dtype=float)
+    cmd = tables(run.pattern, R_B=s.R_B, Z_C=m.Z_C, R_C=m.R_C, L_B=ballbar.length, angles_deg=arc,
+                 cr_geometry="RC+LB" if reversed_ else "RC-LB")
+    return PatternCommands({"C": cmd.C, "B": cmd.B, "X": cmd.X, "Y": cmd.Y, "Z": cmd.Z}, cmd.psi, arc)
+
+
 def complete(ballbar, desc) -> None:
-    """Give a thesis-format ``ballbar`` (in place) the engine's terms: its patterns' arcs and bar sides and its runs'
-    reading frames through the chain of ``desc``."""
+    """Give a thesis-format ``ballbar`` (in place) the engine's terms: its patterns' arcs and bar sides, its runs'
+    commands (Tables 2.2/2.3) and their reading frames through the chain of ``desc``."""
     ballbar.pattern_arcs = {p: arc_deg(p) for p in PATTERNS}
     ballbar.reversed_patterns = reversed_patterns(ballbar.cr_geometry)
+    ballbar.run_commands = table_commands
     ballbar.pattern_frames = functools.partial(chain_frame, desc)
 
 

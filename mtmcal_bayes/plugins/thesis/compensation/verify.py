@@ -8,7 +8,6 @@ import pandas as pd
 from .... import units
 from ..htm import nc_origin
 from ....parameters import DEVIATIONS, ParameterSpace
-from ..pattern_tables import Commands
 from ..kinematic import HTMModel
 from ....compensation.inverse import invert
 from .kinematics import ModelFrameKinematics
@@ -30,15 +29,15 @@ def resimulate(campaign, theta13: np.ndarray, *, model: str = "htm-thesis", meth
     before = htm.predict(theta)[0]
     d = dict(zip(DEVIATIONS, theta13))
     for i, run in enumerate(htm.runs):
-        c = run.commands
-        xyz, bc = np.c_[c.X, c.Y, c.Z], np.degrees(np.c_[c.B, c.C])
+        q, geometry = run.q, htm.kernel.geometry(run.setup, run.mount)
+        xyz, bc = np.c_[q["X"], q["Y"], q["Z"]], np.degrees(np.c_[q["B"], q["C"]])
         if method == "exact":  # the engine's Newton through the model, its commands in the model frame
-            kin = ModelFrameKinematics(run.geometry, model, point=point, origin=np.zeros(3))
-            xyz_c, _ = invert(kin, {"X": c.X, "Y": c.Y, "Z": c.Z, "B": c.B, "C": c.C}, d)
+            kin = ModelFrameKinematics(geometry, model, point=point, origin=np.zeros(3))
+            xyz_c, _ = invert(kin, q, d)
         else:
-            origin = nc_origin(run.geometry)
+            origin = nc_origin(geometry)
             xyz_c = compensate_thesis(d, xyz - origin, bc)[0] + origin
-        htm.replace_commands(i, Commands(xyz_c[:, 0], xyz_c[:, 1], xyz_c[:, 2], c.B, c.C, c.psi))
+        htm.replace_commands(i, dict(q, X=xyz_c[:, 0], Y=xyz_c[:, 1], Z=xyz_c[:, 2]))
     after = htm.predict(theta)[0]
     return pd.DataFrame({"observation": htm.observations.labels, "before_um": units.from_internal(before, "um"),
                          "after_um": units.from_internal(after, "um")}).set_index("observation")
