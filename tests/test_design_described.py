@@ -13,7 +13,8 @@ from mtmcal_bayes import api, units
 from mtmcal_bayes.io.campaign_reader import load_campaign
 from mtmcal_bayes.io.campaign_writer import save_campaign
 from mtmcal_bayes.models.chain_models import ChainBallbarModel
-from mtmcal_bayes.planning.chain_candidates import described_catalogue, described_feasibility_check, run_of
+from mtmcal_bayes.planning.catalogue import catalogue as described_catalogue, feasibility_check as described_feasibility_check
+from mtmcal_bayes.planning.chain_candidates import run_of
 from mtmcal_bayes.planning.design import Planner
 
 

@@ -22,7 +22,7 @@ from mtmcal_bayes.errors import ParameterError
 from mtmcal_bayes.inference.identifiability import CENTRED, identifiability
 from mtmcal_bayes.io.campaign_writer import save_campaign
 from mtmcal_bayes.planning.design_make import design_candidates, make_design
-from mtmcal_bayes.planning.chain_candidates import described_catalogue
+from mtmcal_bayes.planning.catalogue import catalogue as described_catalogue
 from mtmcal_bayes.planning.machine_kit import planner_for
 from mtmcal_bayes.planning.design_output import design_document, design_text
 
