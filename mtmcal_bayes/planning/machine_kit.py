@@ -5,8 +5,8 @@ The ball-bar catalogue, its feasibility and the tool-length sweep are one for ev
 the kit holds the rules of the campaign format they follow.  The engine's own kit serves every machine from its
 description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its arcs, held axes and W-ball positions).  A machine
 whose plug-in has a campaign format of its own contributes ``planning``, a :class:`PlanningKit` built from its
-functions (the thesis plug-in: its catalogue rules, its probe runs, :mod:`.probe_candidates`).  The planner is one for every machine
-(:class:`~.design.Planner`): it asks the machine what it provides.  Planning asks
+functions (the thesis plug-in: its catalogue rules, its probe runs, :mod:`.probe_candidates`).  The planner is one
+for every machine (:class:`~.design.Planner`): it asks the machine what it provides.  Planning asks
 :func:`kit_of` and never which kind of machine it holds.
 """
 
@@ -27,8 +27,8 @@ class PlanningKit:
     ``catalogue_rules`` what its ball-bar catalogue varies (:class:`.catalogue.CatalogueRules`);
     ``probe_catalogue(campaign)`` and ``probe_feasibility(candidate, campaign)`` the touch-probe runs;
     ``clock(time_model, campaign)`` the machine minutes of runs; ``where(candidate)`` the geometry
-    columns of the plan's table; ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for; ``feasibility_note`` and
-    ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
+    columns of the plan's table; ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for;
+    ``feasibility_note`` and ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
     ``run_records(design, programs)`` the design's runs as records; ``planned_geometry(planned, candidate,
     campaign)`` what a planned run records beyond pattern, set-up and mount (the arc and held axes);
     ``read_candidates(path, campaign)`` the user's candidates from a ``--candidates`` file."""
