@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from mtmcal_bayes import load_campaign
-from mtmcal_bayes.planning.candidates import catalogue
+from mtmcal_bayes.planning.catalogue import catalogue
 from mtmcal_bayes.planning.design import Planner
 from mtmcal_bayes.planning.plan import plan
 

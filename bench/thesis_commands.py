@@ -15,7 +15,7 @@ from mtmcal_bayes.campaign import Mount, Setup
 from mtmcal_bayes.machine_time import TimeModel
 from mtmcal_bayes.patterns import PATTERNS
 from mtmcal_bayes.planning.design_timing import _AsRun
-from mtmcal_bayes.planning.machine_kit import kit_of
+from mtmcal_bayes.planning.machine_kit import catalogue_of, feasibility_of, kit_of
 
 out = Path(sys.argv[1]); out.mkdir(parents=True, exist_ok=True)
 thesis = campaign_of(None)
@@ -29,15 +29,15 @@ for name, c in (("thesis", thesis), ("rcplus", plus), ("rc150", wide)):
             key = f"{name}-{p}-" + "-".join(f"{k}{v}" for k, v in kw.items())
             (out / f"{key}.nc").write_text(api.ncgen(p, campaign=c, **kw))
     kit = kit_of(c)
-    fits = kit.feasibility(c)
+    fits = feasibility_of(c)
     clock = kit.clock(TimeModel(), c)
-    for cand in kit.catalogue(c):
+    for cand in catalogue_of(c):
         ok, why = fits(cand)
         lines.append(f"{name} {cand.name}: {ok} {why} {clock.run_minutes(_AsRun(cand))!r}")
     for e in (0.0, 100.0, 500.0):
         for p in PATTERNS:
             for R_C in (0.0, 50.0, 100.0, 400.0):
-                cand = type(kit.catalogue(c)[0])("x", "user", p, Setup("u", 356.0 + e, 0.0, 490.0),
+                cand = type(catalogue_of(c)[0])("x", "user", p, Setup("u", 356.0 + e, 0.0, 490.0),
                                                  Mount("m", 65.0, R_C), 100.0)
                 ok, why = fits(cand)
                 lines.append(f"{name} {p} e{e} R_C{R_C}: {ok} {why} {clock.run_minutes(_AsRun(cand))!r}")

@@ -13,7 +13,8 @@ from mtmcal_bayes import api, units
 from mtmcal_bayes.io.campaign_reader import load_campaign
 from mtmcal_bayes.io.campaign_writer import save_campaign
 from mtmcal_bayes.models.ballbar import ChainBallbarModel
-from mtmcal_bayes.planning.chain_candidates import described_catalogue, described_feasibility_check, run_of
+from mtmcal_bayes.planning.catalogue import catalogue, feasibility_check
+from mtmcal_bayes.planning.chain_candidates import run_of
 from mtmcal_bayes.planning.design import Planner
 
 
@@ -35,8 +36,8 @@ def test_every_catalogue_run_is_checked_against_every_described_travel(trunnion)
     """A candidate is feasible exactly when every command of every point lies within the description's travels (the
     check recomputed here from the model's own commands)."""
     desc = trunnion.machine.description
-    check = described_feasibility_check(trunnion)
-    cands = described_catalogue(trunnion)
+    check = feasibility_check(trunnion)
+    cands = catalogue(trunnion)
     kinds = {c.kind for c in cands}
     assert {"other pattern", "held axes", "tool length", "other placement", "repeats", "bar length"} <= kinds
     for c in cands:
@@ -67,7 +68,7 @@ def test_a_candidates_rows_are_the_chains_derivatives(trunnion):
     """The planner's rows of a new run are the derivatives of the chain's eccentricities with respect to every
     parameter, here checked by central differences of the nonlinear chain model (1e-4 ″/µm steps; to 1e-6 of the
     largest row entry)."""
-    cands = [c for c in described_catalogue(trunnion) if c.kind == "held axes"][:2]
+    cands = [c for c in catalogue(trunnion) if c.kind == "held axes"][:2]
     planner = Planner(trunnion, cands, ["E_B0A"])
     for c, (A, _) in zip(cands, planner.candidate_rows()):
         aug = copy.copy(trunnion)

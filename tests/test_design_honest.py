@@ -22,7 +22,7 @@ from mtmcal_bayes.errors import ParameterError
 from mtmcal_bayes.inference.identifiability import CENTRED, identifiability
 from mtmcal_bayes.io.campaign_writer import save_campaign
 from mtmcal_bayes.planning.design_make import design_candidates, make_design
-from mtmcal_bayes.planning.chain_candidates import described_catalogue
+from mtmcal_bayes.planning.catalogue import catalogue
 from mtmcal_bayes.planning.machine_kit import planner_for
 from mtmcal_bayes.planning.design_output import design_document, design_text
 
@@ -139,7 +139,7 @@ def test_the_second_mount_of_the_turn_mill_carries_every_tool_length():
     the C patterns whose bar has no direction on the axis only there); the travels then decide."""
     c = _campaign("vertical-turn-mill")
     assert len(c.ballbar.mounts) == 2
-    at = lambda m: {(x.pattern, x.setup.id) for x in described_catalogue(c)  # noqa: E731
+    at = lambda m: {(x.pattern, x.setup.id) for x in catalogue(c)  # noqa: E731
                     if x.mount.id == m and x.kind == "tool length"}
     assert at("axis") and at("off") >= at("axis")
     assert any(x.mount.id == "off" and x.kind == "tool length" for x in design_candidates(c))  # within the travels

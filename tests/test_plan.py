@@ -1,6 +1,7 @@
 """Measurement planning: ranking, sweep, closed form against independent computations and Monte Carlo."""
 
 import copy
+import dataclasses
 import json
 
 import numpy as np
@@ -10,7 +11,7 @@ from mtmcal_bayes import IDENTIFIABLE, units
 from mtmcal_bayes.inference import LogPosterior, gaussian_posterior
 from mtmcal_bayes.io import parse_campaign
 from mtmcal_bayes.parameters import weights
-from mtmcal_bayes.planning.candidates import catalogue, feasibility
+from mtmcal_bayes.planning.catalogue import catalogue, feasibility
 from mtmcal_bayes.planning.design import Planner
 from mtmcal_bayes.planning.plan import tool_length_sweep
 from mtmcal_bayes.planning.preposterior import realised_sd
@@ -142,12 +143,15 @@ def test_feasibility_uses_the_axis_travels(thesis):
                                                                      "travel_Z_mm = 1077.0\n", ""), "t.toml")
     ok, why = feasibility(by_name["CA @ RB1, R_C 150 mm"], thesis_no_travel)
     assert ok and "not checked" in why
-    # the span rule places a run as the machine's plug-in does; a described machine has its own check
+    # the same check on a machine whose description gives its travels: each command within its axis' travel
     from mtmcal_bayes.api import campaign_of, demo_campaign
-    from mtmcal_bayes.errors import ParameterError
 
-    with pytest.raises(ParameterError, match="description's travels"):
-        feasibility(by_name["CR @ R_B+150 mm"], campaign_of(demo_campaign("trunnion")))
+    trunnion = campaign_of(demo_campaign("trunnion"))
+    cr = next(c for c in catalogue(trunnion) if c.kind == "tool length" and c.pattern == "CR")
+    assert feasibility(cr, trunnion) == (True, "within the axis travels")
+    far = dataclasses.replace(cr, setup=dataclasses.replace(cr.setup, R_B=cr.setup.R_B + 5000.0))
+    ok, why = feasibility(far, trunnion)
+    assert not ok and "beyond its travel" in why and "mm" in why
 
 
 def test_feasibility_follows_the_bar_side_of_the_cr_geometry(thesis):

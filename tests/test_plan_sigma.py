@@ -19,7 +19,7 @@ import mtmcal_bayes
 from mtmcal_bayes import units
 from mtmcal_bayes.inference.marginal import MarginalPosterior
 from mtmcal_bayes.io import parse_campaign
-from mtmcal_bayes.planning.candidates import catalogue
+from mtmcal_bayes.planning.catalogue import catalogue
 from mtmcal_bayes.planning.design import (
     MAX_RUNS,
     SIGMA_CONTRACTION,

@@ -20,7 +20,7 @@ import mtmcal_bayes as mb
 from mtmcal_bayes import units
 from mtmcal_bayes.io import parse_campaign
 from mtmcal_bayes.io.sigma_prior_file import write_sigma_model_prior
-from mtmcal_bayes.planning.candidates import catalogue
+from mtmcal_bayes.planning.catalogue import catalogue
 from mtmcal_bayes.planning.design import Planner, sigma_contraction
 from mtmcal_bayes.planning.design_make import design_candidates
 from mtmcal_bayes.planning.design_problem import NODE_LEVELS, PROMISE, DesignProblem

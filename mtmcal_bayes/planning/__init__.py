@@ -1,6 +1,7 @@
 """Measurement planning: which extra ball-bar run reduces the uncertainty most (SPEC §6)."""
 
-from .candidates import Candidate, catalogue, feasibility, read_candidates
+from .candidates import Candidate, read_candidates
+from .catalogue import catalogue, feasibility
 from .design import Planner
 from .plan import PlanResult, best_measurement, plan
 

@@ -1,36 +1,22 @@
-"""Candidate additional measurements and their feasibility (SPEC §6).
+"""Candidate additional measurements (SPEC §6) and the user's, read from a ``--candidates`` file.
 
 A candidate is one ball-bar run that could be added to a campaign: a pattern
 at a tool setup and a W-ball mount with a bar length, measured ``repeats``
-times; or more repeats of a run the campaign already has.  New tool setups
-follow the thesis' extension-bar procedure (Step 5, Table 4.3): an extension
-of ``e`` mm gives ``R_B + e`` and ``Z_T − e`` (R_B + Z_T stays constant: the
-spindle head moves back by the extension), ``X_T`` unchanged.  A new setup or
+times; or more repeats of a run the campaign already has.  A new setup or
 mount brings its own nuisance offsets (a re-centred ball, a re-clamped ball).
+The catalogue of candidates, one for every machine, and their feasibility are
+:mod:`.catalogue`'s.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numpy as np
-
 from ..campaign import Campaign, Mount, Setup
-from ..errors import ParameterError
-from ..io.machine_reader import description_of
 from ..io.textfiles import read_user_text
 from ..io.toml_reader import TomlReader, parse_toml
-from ..machines.patterns import pattern_commands
-from ..machines.plugins import provided
 from ..patterns import PATTERNS, mount_conflict
 
-#: extension bars of the catalogue, mm
-EXTENSIONS_MM = (25.0, 50.0, 75.0, 100.0, 125.0, 150.0)
-#: other W-ball radii and bar lengths of the catalogue, mm
-OTHER_R_C_MM = (50.0, 100.0, 150.0)
-OTHER_L_B_MM = (50.0, 100.0, 150.0)
-#: patterns measured at additional tool lengths
-TOOL_LENGTH_PATTERNS = ("CR", "CA", "BX", "BY")
 DEFAULT_REPEATS = 3
 #: most repeats of a user candidate: beyond a few hundred, s²/n is far below u_inst² + sigma_model², which do not
 #: average out, so more repeats add nothing; 1e20 would overflow the planner's arrays (docs/planning.md)
@@ -48,7 +34,7 @@ class Candidate:
     parameters, so a candidate at an existing setup shares its offsets.
     ``repeat_of`` is the index of the campaign run it repeats (``None`` for a
     new run); ``extension`` the tool-length difference to the primary setup, mm; ``arc_deg``, ``hold_deg``
-    a described machine's arc and held axes (:mod:`.chain_candidates`).
+    the run's arc and held axes (:mod:`.catalogue`).
     """
 
     name: str
@@ -64,106 +50,6 @@ class Candidate:
     #: grid) and the held rotary axes ``((letter, degrees), ...)``
     arc_deg: tuple[float, float, float] | None = None
     hold_deg: tuple[tuple[str, float], ...] = ()
-
-
-def candidate_mount(campaign: Campaign, pattern: str) -> Mount:
-    """The mount of a new run of ``pattern``: ``campaign.mount_for``, except that a B pattern measures with the W
-    ball on the C axis (thesis Table 2.2) — without such a mount in the campaign, a new placement there
-    (``<id>@R_C0``, at that mount's height, with its own W-ball offsets)."""
-    m = campaign.mount_for(pattern)
-    if mount_conflict(pattern, m.id, m.R_C):
-        return Mount(f"{m.id}@R_C0", m.Z_C, 0.0)
-    return m
-
-
-def extended_setup(base: Setup, extension: float) -> Setup:
-    """The tool setup with an extension bar of ``extension`` mm (Step 5 of the thesis)."""
-    return Setup(f"{base.id}+{extension:g}", base.R_B + extension, base.Z_T - extension, base.X_T)
-
-
-def catalogue(campaign: Campaign, extensions=EXTENSIONS_MM) -> list[Candidate]:
-    """The default candidates: tool lengths, unmeasured setups, repeats, other patterns, R_C and L_B."""
-    bb = campaign.ballbar
-    base = campaign.primary_setup()
-    L = bb.length
-    mounts: dict[str, Mount] = {}
-
-    def mount(pattern: str) -> Mount:  # the campaign asked once per pattern
-        if pattern not in mounts:
-            mounts[pattern] = candidate_mount(campaign, pattern)
-        return mounts[pattern]
-
-    out: list[Candidate] = []
-    for pattern in TOOL_LENGTH_PATTERNS:
-        for e in extensions:
-            s = extended_setup(base, e)
-            out.append(Candidate(f"{pattern} @ R_B+{e:g} mm", "tool length", pattern, s, mount(pattern),
-                                 L, extension=e))
-    measured = {(r.pattern, r.setup) for r in bb.runs}
-    for s in bb.setups.values():
-        for pattern in TOOL_LENGTH_PATTERNS:
-            if (pattern, s.id) not in measured:
-                out.append(Candidate(f"{pattern} @ {s.id} (existing setup)", "existing setup", pattern, s,
-                                     mount(pattern), L, extension=s.R_B - base.R_B))
-    for i, run in enumerate(bb.runs):
-        out.append(Candidate(f"repeat {run.pattern} @ {run.setup}/{run.mount} (+{DEFAULT_REPEATS})", "repeats",
-                             run.pattern, bb.setups[run.setup], bb.mounts[run.mount], L, repeat_of=i))
-    done = {r.pattern for r in bb.runs}
-    for pattern in PATTERNS:
-        if pattern not in done:
-            out.append(Candidate(f"{pattern} @ {base.id}", "other pattern", pattern, base,
-                                 mount(pattern), L, extension=0.0))
-    c_mount = campaign.mount_for("CR")
-    for R_C in OTHER_R_C_MM:
-        if R_C != c_mount.R_C:
-            m = Mount(f"{c_mount.id}@R_C{R_C:g}", c_mount.Z_C, R_C)
-            for pattern in ("CR", "CA"):
-                out.append(Candidate(f"{pattern} @ {base.id}, R_C {R_C:g} mm", "other R_C", pattern, base, m, L,
-                                     extension=0.0))
-    for L_B in OTHER_L_B_MM:
-        if L_B != L:
-            for pattern in TOOL_LENGTH_PATTERNS:
-                out.append(Candidate(f"{pattern} @ {base.id}, L_B {L_B:g} mm", "bar length", pattern, base,
-                                     mount(pattern), L_B, extension=0.0))
-    return out
-
-
-def feasibility_check(campaign: Campaign):
-    """``check(candidate) -> (feasible, why)``: whether a candidate's axis motions fit the machine's travels.
-
-    The campaign gives each axis' travel, not where the C axis sits inside it,
-    so a pattern is feasible when the span of each linear-axis command fits the
-    travel.  The commands are the engine's (:func:`~mtmcal_bayes.machines.patterns.pattern_commands`) with the run
-    placed as the machine's plug-in places it (``run_placement``: on the thesis machine the B-axis centre path of
-    Tables 2.2/2.3).  The campaign is read once, here, for every candidate checked.
-    """
-    travel = dict(campaign.machine.travel or {})
-    desc = description_of(campaign.machine)
-    place = provided(campaign.machine, "run_placement")
-    if place is None:
-        raise ParameterError("campaign", "the span rule checks runs of a campaign format whose plug-in places them "
-                             "(the thesis' lever arms); a described machine's candidates are checked against its "
-                             "description's travels (planning.machine_kit.feasibility_of)")
-
-    def check(candidate: Candidate) -> tuple[bool, str]:
-        if not travel:
-            return True, "no axis travels in [machine]: not checked"
-        ball, arc, reverse = place(campaign, candidate.pattern, candidate.mount)
-        cmd = pattern_commands(desc, candidate.pattern, length=candidate.setup.R_B, ball=ball, bar=candidate.length,
-                               arc_deg=arc, reverse=reverse)
-        over = []
-        for axis in "XYZ":
-            span = float(np.ptp(cmd.q[axis]))
-            if axis in travel and span > travel[axis] + 1e-9:
-                over.append(f"{axis} span {span:.0f} mm > travel {travel[axis]:g} mm")
-        return (not over), ("; ".join(over) if over else "within the axis travels")
-
-    return check
-
-
-def feasibility(candidate: Candidate, campaign: Campaign) -> tuple[bool, str]:
-    """Whether the pattern's axis motions fit the machine's travels, and why not (:func:`feasibility_check`)."""
-    return feasibility_check(campaign)(candidate)
 
 
 _USER_KEYS = {"name", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm", "Z_C_mm", "R_C_mm", "length_mm",

@@ -6,7 +6,7 @@ stylus), with the campaign's first stylus and its first run's sphere:
 
 * each rotary axis K indexed to 0° and up to three of 90°, −90°, 45°, −45°, 30°, −30° (those its travel
   allows; a fully turning axis to 0/90/180/270°), the other rotary axes at 0;
-* the same with the other rotary axes held where the ball-bar catalogue holds them (:func:`._hold_for`);
+* the same with the other rotary axes held where the ball-bar catalogue holds them (:func:`.catalogue.hold_for`);
 * K's positions with a stylus :data:`LONGER_STYLUS_MM` longer, and with the sphere :data:`HIGHER_SPHERE_MM` higher.
 
 Each candidate is a new run with its own nuisance terms — its stylus' centring and length (a stylus set anew,
@@ -28,7 +28,7 @@ from ..campaign import Probe, ProbeRun
 from ..machines.probe_terms import probe_terms
 from ..models.chain_models import ChainProbeModel, FirstOrderModel
 from ..parameters import ParameterSpace
-from .chain_candidates import HOLD_DEG, _hold_for, travel_problems
+from .catalogue import HOLD_DEG, hold_for, travel_problems
 from .probe_candidates import PROBE_REPEATS, ProbeCandidate
 
 #: a longer stylus of the catalogue, mm added to the campaign's first
@@ -119,7 +119,7 @@ def described_probe_catalogue(campaign) -> list[DescribedProbeCandidate]:
         angles = _positions(ax)
         shown = "/".join(f"{a:g}" for a in angles)
         add(f"probe {ax.letter} {shown}° ({stylus} stylus)", ax, angles)
-        held = _hold_for(desc, ax.letter)
+        held = hold_for(desc, ax.letter)
         if held:
             add(f"probe {ax.letter} {shown}°, " + ", ".join(f"{a} at {v:g}°" for a, v in held), ax, angles,
                 held=held)

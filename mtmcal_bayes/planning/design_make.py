@@ -1,7 +1,7 @@
 """``design``: the whole campaign — which runs, in which order, how many machine minutes, what uncertainty.
 
-1. Candidates: the planner's catalogue of new ball-bar runs (patterns × tool lengths × R_C × unmeasured
-   set-ups, :func:`.candidates.catalogue`) and the user's, feasible within the travels; a design may run a
+1. Candidates: the catalogue's new ball-bar runs (patterns × tool lengths × placements × unmeasured
+   set-ups, :func:`.catalogue.catalogue`) and the user's, feasible within the travels; a design may run a
    candidate up to :data:`.design_problem.MAX_INSTANCES` times, each further run on a new W-ball placement.
 2. The search (:mod:`.design_search`) on the closed-form criterion at σ_model's quantiles
    (:mod:`.design_problem`) with the machine-time model (:mod:`mtmcal_bayes.machine_time`).

@@ -1,11 +1,12 @@
-"""What planning asks of a campaign's machine (SPEC §20): its catalogue, feasibility, clock and the
+"""What planning asks of a campaign's machine (SPEC §20): its catalogue's rules, probe runs, clock and the
 shape of its planned runs, in one object.
 
-The engine's own kit serves every machine from its description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its
-arcs, held axes and W-ball positions, :mod:`.chain_candidates`).  A machine whose plug-in has a campaign format
-of its own contributes ``planning``, a :class:`PlanningKit` built from its functions (the thesis plug-in: the thesis'
-12 patterns and lever arms, :mod:`.candidates`, :mod:`.probe_candidates`).  The planner is one for every machine
-(:class:`~.design.Planner`): it asks the machine what it provides.  Planning asks
+The ball-bar catalogue, its feasibility and the tool-length sweep are one for every machine (:mod:`.catalogue`);
+the kit holds the rules of the campaign format they follow.  The engine's own kit serves every machine from its
+description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its arcs, held axes and W-ball positions).  A machine
+whose plug-in has a campaign format of its own contributes ``planning``, a :class:`PlanningKit` built from its
+functions (the thesis plug-in: its catalogue rules, its probe runs, :mod:`.probe_candidates`).  The planner is one
+for every machine (:class:`~.design.Planner`): it asks the machine what it provides.  Planning asks
 :func:`kit_of` and never which kind of machine it holds.
 """
 
@@ -23,23 +24,20 @@ from ..machines.plugins import provided
 class PlanningKit:
     """The planning contributions of one campaign format.
 
-    ``catalogue(campaign)`` the candidate ball-bar runs; ``feasibility(campaign)`` a ``check(candidate) -> (ok,
-    why)``; ``probe_catalogue(campaign)`` and ``probe_feasibility(candidate, campaign)`` the touch-probe runs;
+    ``catalogue_rules`` what its ball-bar catalogue varies (:class:`.catalogue.CatalogueRules`);
+    ``probe_catalogue(campaign)`` and ``probe_feasibility(candidate, campaign)`` the touch-probe runs;
     ``clock(time_model, campaign)`` the machine minutes of runs; ``where(candidate)`` the geometry
-    columns of the plan's table; ``sweep(campaign, pattern, extensions)`` the tool-length sweep's candidates;
-    ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for; ``feasibility_note`` and
-    ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
+    columns of the plan's table; ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for;
+    ``feasibility_note`` and ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
     ``run_records(design, programs)`` the design's runs as records; ``planned_geometry(planned, candidate,
     campaign)`` what a planned run records beyond pattern, set-up and mount (the arc and held axes);
     ``read_candidates(path, campaign)`` the user's candidates from a ``--candidates`` file."""
 
-    catalogue: Callable
-    feasibility: Callable
+    catalogue_rules: object
     probe_catalogue: Callable
     probe_feasibility: Callable
     clock: Callable
     where: Callable
-    sweep: Callable
     sweep_pattern: Callable
     feasibility_note: str
     probe_note: str
@@ -57,6 +55,7 @@ def kit_of(campaign) -> PlanningKit:
 def engine_kit() -> PlanningKit:
     """The engine's planning, for any machine from its description."""
     from . import chain_candidates as dc
+    from .catalogue import CatalogueRules
     from .chain_probe_candidates import described_probe_catalogue, described_probe_feasibility
     from .chain_clock import engine_clock
     from .run_records import DESCRIBED_RUN_COLUMNS, described_records
@@ -78,9 +77,8 @@ def engine_kit() -> PlanningKit:
         planned.hold_deg = dict(candidate.hold_deg) or None
 
     return PlanningKit(
-        catalogue=dc.described_catalogue, feasibility=dc.described_feasibility_check,
-        probe_catalogue=described_probe_catalogue, probe_feasibility=described_probe_feasibility, clock=engine_clock, where=where, sweep=dc.sweep_candidates,
-        sweep_pattern=sweep_pattern,
+        catalogue_rules=CatalogueRules(), probe_catalogue=described_probe_catalogue,
+        probe_feasibility=described_probe_feasibility, clock=engine_clock, where=where, sweep_pattern=sweep_pattern,
         feasibility_note="feasible = every command of every point (the arc, the held axes, the linear axes) lies "
                          "within the travels of the machine's description",
         probe_note="touch-probe runs (kind 'probe'): each rotary axis indexed to 0° and up to three more positions, "
@@ -92,13 +90,17 @@ def engine_kit() -> PlanningKit:
 
 
 def catalogue_of(campaign) -> list:
-    """The candidate catalogue of ``campaign``'s machine."""
-    return kit_of(campaign).catalogue(campaign)
+    """The candidate catalogue of ``campaign``'s machine (:func:`.catalogue.catalogue`)."""
+    from .catalogue import catalogue
+
+    return catalogue(campaign)
 
 
 def feasibility_of(campaign):
-    """``check(candidate) -> (feasible, why)`` for ``campaign``'s machine."""
-    return kit_of(campaign).feasibility(campaign)
+    """``check(candidate) -> (feasible, why)`` for ``campaign``'s machine (:func:`.catalogue.feasibility_check`)."""
+    from .catalogue import feasibility_check
+
+    return feasibility_check(campaign)
 
 
 def planner_for(campaign, candidates: list, targets=None, **kw):

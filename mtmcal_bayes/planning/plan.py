@@ -9,7 +9,8 @@ import pandas as pd
 
 from .. import units
 from .candidates import Candidate
-from .machine_kit import catalogue_of, kit_of, planner_for
+from .catalogue import sweep_candidates
+from .machine_kit import catalogue_of, feasibility_of, kit_of, planner_for
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
 from .probe_candidates import ProbeCandidate, probe_skipped
@@ -104,7 +105,7 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
     si = planner.sigma_information(candidates, rows=made)
     rows = []
     kit = kit_of(campaign)
-    fits = kit.feasibility(campaign)
+    fits = feasibility_of(campaign)
     for k, c in enumerate(candidates):
         probe = isinstance(c, ProbeCandidate)
         ok, why = kit.probe_feasibility(c, campaign) if probe else fits(c)
@@ -141,12 +142,12 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
 def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP_MM) -> pd.DataFrame:
     """Expected target sds for ``pattern`` at the primary setup plus each extension (mm)."""
     kit = kit_of(campaign)
-    cands = kit.sweep(campaign, pattern, extensions)
+    cands = sweep_candidates(campaign, pattern, extensions)
     sub = planner_for(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
                       data=planner.data, sigma_prior=planner.learnt)
     ev = sub.evaluate()
     rows = []
-    fits = kit.feasibility(campaign)
+    fits = feasibility_of(campaign)
     for k, (c, e) in enumerate(zip(cands, extensions)):
         ok, why = fits(c)
         row = {"extension_mm": float(e), "R_B_mm": c.setup.R_B, "Z_T_mm": kit.where(c)["Z_T_mm"],
@@ -208,7 +209,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     σ_model (unless ``sigma_model_um``) and the probe's scale are the rms of its priors, and the σ_model information
     and the Monte-Carlo check use it (:class:`.design.Planner`)."""
     kit = kit_of(campaign)
-    ballbar = [c for c in kit.catalogue(campaign) if data != "probe" or c.repeat_of is None]
+    ballbar = [c for c in catalogue_of(campaign) if data != "probe" or c.repeat_of is None]
     candidates = ballbar + kit.probe_catalogue(campaign) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
     planner = planner_for(campaign, candidates, targets, sigma_model=sigma, model=model, data=data,

@@ -149,31 +149,28 @@ def assumption_effect(analysis, *, sigma_model_um: float):
 
 
 def planning():
-    """The planning of the thesis' campaign format: its 12 patterns at its lever arms (R_B, Z_T, X_T, R_C, Z_C), its
-    probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by default."""
-    from ...planning.candidates import (Candidate, candidate_mount, catalogue, extended_setup, feasibility_check,
-                                       read_candidates)
+    """The planning of the thesis' campaign format: the engine's catalogue under its rules (Step 5's extension bars
+    with Z_T − e, its other R_C and bar lengths, B patterns with R_C = 0, its labels: :mod:`.catalogue_rules`), its
+    probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by
+    default."""
+    from ...planning.candidates import read_candidates
     from ...planning.run_records import RUN_COLUMNS, thesis_records
     from ...planning.machine_kit import PlanningKit
     from ...planning.probe_candidates import probe_catalogue, probe_feasibility
+    from .catalogue_rules import catalogue_rules
     from .timing import campaign_clock
 
     def where(c) -> dict:
         return {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": c.setup.Z_T, "mount": c.mount.id,
                 "R_C_mm": c.mount.R_C}
 
-    def sweep(campaign, pattern, extensions):
-        base, mount = campaign.primary_setup(), candidate_mount(campaign, pattern)
-        return [Candidate(f"{pattern} @ R_B+{e:g} mm", "sweep", pattern, extended_setup(base, e), mount,
-                          campaign.ballbar.length, extension=float(e)) for e in extensions]
-
     def sweep_pattern(table, campaign) -> str:
         best = table[table["kind"] == "tool length"]
         return str(best.iloc[0]["pattern"]) if len(best) else "CR"
 
     return PlanningKit(
-        catalogue=catalogue, feasibility=feasibility_check, probe_catalogue=probe_catalogue,
-        probe_feasibility=probe_feasibility, clock=campaign_clock, where=where, sweep=sweep, sweep_pattern=sweep_pattern,
+        catalogue_rules=catalogue_rules(), probe_catalogue=probe_catalogue, probe_feasibility=probe_feasibility,
+        clock=campaign_clock, where=where, sweep_pattern=sweep_pattern,
         feasibility_note="feasible = the span of each linear-axis command fits the axis travel of [machine] (the "
                          "campaign does not give where the C axis sits within the travels)",
         probe_note="touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its "
