@@ -39,6 +39,14 @@ def campaign_sections(r, doc: dict, machine, base_dir):
     return sections(r, doc, machine, base_dir)
 
 
+def ballbar_keys():
+    """Its keys of ``[ballbar]`` in the engine's reader: set-ups by R_B, Z_T, X_T, mounts by Z_C, R_C, cr_geometry
+    (:class:`.campaign_keys.BallbarKeys`)."""
+    from .campaign_keys import BallbarKeys
+
+    return BallbarKeys
+
+
 def complete_ballbar(ballbar, machine) -> None:
     """A ball bar built in Python for the thesis machine in the engine's terms: in its own campaign format (mounts by
     R_C and Z_C) its patterns' arcs and bar sides and its runs' frames (:func:`.translation.complete`); with W-ball
@@ -292,6 +300,11 @@ class ThesisPlugin:
         from ...patterns import PATTERNS
 
         return PATTERNS
+
+    @property
+    def ballbar_keys(self):
+        """Its keys of ``[ballbar]`` (:func:`ballbar_keys`)."""
+        return ballbar_keys()
 
     @property
     def planning(self):
