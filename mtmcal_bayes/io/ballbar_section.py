@@ -25,12 +25,18 @@ import numpy as np
 
 from .. import units
 from ..campaign import Ballbar, Machine, Mount, PlannedRun, Run, Setup
-from ..conventions import ConventionError, check_run, run_convention, run_matrix
+from ..conventions import (
+    CONVENTIONS,
+    ConventionError,
+    check_convention_name,
+    check_run,
+    run_convention,
+    run_matrix,
+)
 from ..machines.description import MachineDescription
 from ..machines.patterns import axis_of, components, default_arc_deg, pattern_commands
 from ..machines.plugins import provided
 from ..pattern_frames import chain_frame
-from .measurement_sections import read_campaign_convention, read_convention
 from .planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
 from .planned_runs import planned_in_order, planned_run
 from .toml_reader import TomlReader, kind_of
@@ -335,6 +341,27 @@ def _reading_choice(r: TomlReader, t: dict, items: list[Run | PlannedRun], bb: B
     bb.alternative_reason = reason
 
 
+def read_campaign_convention(r: TomlReader, t: dict, path: str, *, example: str) -> str:
+    """``[ballbar] convention``, the reading of every run that names none: a named one (default ``"thesis"``);
+    ``example`` the geometry string the message shows for a run's own."""
+    convention = r.string(t, "convention", path, default="thesis")
+    if convention not in CONVENTIONS:
+        r.fail(f"{path}.convention", f"unknown convention {convention!r} (expected one of {', '.join(CONVENTIONS)}; "
+               f"a run reads another way with its own convention = \"{example}\", docs/conventions.md)")
+    return convention
+
+
+def read_convention(r: TomlReader, t: dict, path: str, key: str = "convention") -> str | None:
+    """A run's reading convention (``key``), checked as a name or a geometry string; None where it gives none."""
+    convention = r.string(t, key, path, default="") or None
+    if convention is not None:
+        try:
+            check_convention_name(convention)
+        except ConventionError as err:
+            r.fail(f"{path}.{key}", str(err))
+    return convention
+
+
 def _arc(r: TomlReader, t: dict, path: str, ax) -> np.ndarray:
     if "arc_deg" not in t:
         if "step_deg" in t:
@@ -371,4 +398,4 @@ def _hold(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, swivel
     return out
 
 
-__all__ = ["read_ballbar", "read_run_trace", "EngineKeys", "NO_BALLBAR"]
+__all__ = ["NO_BALLBAR", "EngineKeys", "read_ballbar", "read_run_trace"]

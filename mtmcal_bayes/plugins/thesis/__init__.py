@@ -8,9 +8,10 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   (:mod:`.translation`); ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
-* **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C (a run's W ball, arc and bar side in the
-  engine's terms: ``run_placement``, :mod:`.translation`) and the touch probe's ``[probe.c_axis]`` and
-  ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
+* **its campaign keys**: in the engine's reader of ``[ballbar]``, the thesis' lever arms R_B, Z_T, X_T and mounts
+  Z_C, R_C and its ``cr_geometry`` (``ballbar_keys``; a run's W ball, arc and bar side in the engine's terms:
+  ``run_placement``, :mod:`.translation`); the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables
+  4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its patterns**: its 12 in the order of Tables 2.2/2.3 (B before C), their components, B patterns only with the
   W ball on the C axis (Table 2.2), and the geometry line of its sensitivity table (Tables 2.4–2.6);
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
@@ -32,8 +33,8 @@ from __future__ import annotations
 
 
 def campaign_sections(r, doc: dict, machine, base_dir):
-    """``[ballbar]`` and ``[probe]`` of a campaign in the thesis' format (lever arms R_B, Z_T, X_T, Z_C, R_C; the
-    probe's ``[probe.c_axis]`` and ``[probe.b_axis]``)."""
+    """``[ballbar]`` (required; the engine's reader with :func:`ballbar_keys`) and ``[probe]`` of a campaign in the
+    thesis' format (``[probe.c_axis]`` and ``[probe.b_axis]``)."""
     from .campaign_keys import campaign_sections as sections
 
     return sections(r, doc, machine, base_dir)

@@ -16,7 +16,16 @@ from pathlib import Path
 import numpy as np
 
 from ... import units
-from ...campaign import Ballbar, BAxisProbe, CAxisProbe, Machine, Mount, Probe, Setup, Stylus
+from ...campaign import (
+    Ballbar,
+    BAxisProbe,
+    CAxisProbe,
+    Machine,
+    Mount,
+    Probe,
+    Setup,
+    Stylus,
+)
 from ...datasets import data_path
 from ...errors import InputError, MtmcalError
 from ...io.ballbar_section import read_ballbar
