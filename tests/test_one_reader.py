@@ -8,16 +8,19 @@ independent model, read back through the chain's directions)."""
 
 from __future__ import annotations
 
+import dataclasses
 import tomllib
 
 import numpy as np
 import pytest
 
 from mtmcal_bayes import InputError, load_campaign, parse_campaign, save_campaign
+from mtmcal_bayes.conventions import run_matrix
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.io.tomlio import dumps
 from mtmcal_bayes.machines.patterns import components
 from mtmcal_bayes.models.chain_models import ChainBallbarModel
+from mtmcal_bayes.observations import Observations
 from mtmcal_bayes.simulation.simulate import planned_as_runs
 from mtmcal_bayes.units import ARCSEC
 
@@ -149,7 +152,8 @@ def test_a_planned_run_with_a_bar_of_its_own(machine, tmp_path, run_cli):
 @pytest.mark.parametrize("machine", TYPES)
 def test_the_engine_keys_hold_alike_on_every_machine(machine, tmp_path):
     """The checks the thesis' reader had are the engine's: an offset beyond the bar, a component the pattern has not,
-    two set-ups of one tool length, a duplicate run; each refused by its key."""
+    two set-ups of one tool length, a duplicate run, each refused by its key; and what it allowed is allowed: one
+    component alone, or components with repeats of their own where the reading keeps them apart."""
     c = load_campaign(demo_campaign(machine))
     run = c.ballbar.runs[0]
     a, _ = components(c.machine.description, run.pattern)
@@ -175,6 +179,31 @@ def test_the_engine_keys_hold_alike_on_every_machine(machine, tmp_path):
     one = _demo(machine)  # one component alone is a run's data, as on the thesis machine
     one["ballbar"]["runs"][0].pop(f"{components(c.machine.description, run.pattern)[1]}_um")
     assert list(_loads(one, tmp_path).ballbar.runs[0].repeats) == [a]
+    uneven = _demo(machine)  # so are components with repeats of their own, each its own observation ...
+    b = components(c.machine.description, run.pattern)[1]
+    uneven["ballbar"]["runs"][0][f"{b}_um"] = [*uneven["ballbar"]["runs"][0][f"{b}_um"], 0.5]
+    read = _loads(uneven, tmp_path)
+    obs = Observations.from_campaign(read)
+    n = {k.component: count for k, count in zip(obs.keys, obs.n) if k.run == 0}
+    assert n[b] == n[a] + 1 == len(read.ballbar.runs[0].repeats[b])
+    # ... unless the run's reading mixes them: then one of each per repeat
+    uneven["ballbar"]["runs"][0]["convention"] = _mixing(read, read.ballbar.runs[0])
+    err = _error(uneven, tmp_path)
+    assert err.key == "ballbar.runs[0].convention" and "give both components of every repeat" in str(err)
+
+
+def _mixing(c, run) -> str:
+    """A geometry string that reads ``run`` with its two components mixed (a non-diagonal reading matrix)."""
+    a, b = (x[1].upper() for x in components(c.machine.description, run.pattern))
+    k = run.pattern[0]
+    for first, second in ((a, b), (b, a)):
+        for s1 in "+-":
+            for s2 in "+-":
+                g = f"{k}0={s1}{first},{k}90={s2}{second}"
+                M = run_matrix(dataclasses.replace(run, convention=g), c.ballbar)
+                if not np.allclose(M, np.diag(np.diag(M))):
+                    return g
+    raise AssertionError(f"no geometry string mixes the components of {run.label}")
 
 
 def test_the_thesis_keys_are_its_plugins_alone(thesis, tmp_path):

@@ -238,10 +238,6 @@ def _run(ctx: _Context, t: dict, path: str) -> Run | PlannedRun:
                    f"L_B = {bb.length:g} mm: not an eccentricity")
         run.repeats[c] = v
     run.repeats = {c: run.repeats[c] for c in comps if c in run.repeats}  # in the pattern's order
-    if len({len(v) for v in run.repeats.values()}) > 1:
-        a, b = run.repeats
-        r.fail(f"{path}.{b}_um", f"has {len(run.repeats[b])} repeats, {a}_um {len(run.repeats[a])}: give both "
-               "components of every repeat")
     if "trace_csv" in t:
         if run.repeats:
             r.fail(f"{path}.trace_csv", "a run carries either eccentricity repeats or traces, not both")
