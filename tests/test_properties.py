@@ -38,7 +38,7 @@ from mtmcal_bayes.campaign import (
 from mtmcal_bayes.errors import MtmcalError
 from mtmcal_bayes.io.dprnt import parse_dprnt
 from mtmcal_bayes.io.gcode import block_line, parse_program, rewrite
-from mtmcal_bayes.io.ballbar_section import read_run_trace
+from mtmcal_bayes.io.traces import read_run_trace
 from mtmcal_bayes.io.machine_reader import description_of
 from mtmcal_bayes.models import MODELS, jacobian, make_model
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel

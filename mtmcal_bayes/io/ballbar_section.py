@@ -34,13 +34,13 @@ from ..conventions import (
     run_matrix,
 )
 from ..machines.description import MachineDescription
-from ..machines.patterns import axis_of, components, default_arc_deg, pattern_commands
+from ..machines.patterns import axis_of, components, default_arc_deg
 from ..machines.plugins import provided
 from ..pattern_frames import chain_frame
 from .planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
 from .planned_runs import planned_in_order, planned_run
 from .toml_reader import TomlReader, kind_of
-from .traces import read_trace
+from .traces import read_run_trace
 
 #: bar length and accuracy of a campaign without ball-bar data (nothing reads them then)
 NO_BALLBAR = (100.0, units.to_internal(0.5, "um"))
@@ -248,7 +248,7 @@ def _run(ctx: _Context, t: dict, path: str) -> Run | PlannedRun:
 
 
 def _traces(ctx: _Context, t: dict, path: str, run: Run) -> None:
-    """``trace_csv``: one trace file per repeat, each fitted (:func:`read_run_trace`) into ``run.repeats``."""
+    """``trace_csv``: one trace file per repeat, each fitted (:func:`~.traces.read_run_trace`) into ``run.repeats``."""
     r, comps = ctx.r, ctx.components(run.pattern)
     raw = t["trace_csv"]
     names = [raw] if isinstance(raw, str) else raw
@@ -266,25 +266,6 @@ def _traces(ctx: _Context, t: dict, path: str, run: Run) -> None:
         extracted.append(ex.values)
         run.trace_rms.append(ex.rms)
     run.repeats = {c: np.array([e[c] for e in extracted]) for c in comps}
-
-
-def read_run_trace(path, ballbar: Ballbar, desc: MachineDescription, run, *, order: tuple[str, ...] | None = None):
-    """The eccentricities of ``run`` in one trace file (:func:`~mtmcal_bayes.io.traces.read_trace`): its angle
-    column the swivelled axis' commanded angle, each sample standing for the direction ψ its pattern's commands give
-    there (the polar angle of a radial bar; :func:`~mtmcal_bayes.machines.patterns.pattern_commands`), the result in
-    the pattern's components as the ``"thesis"`` convention reads them (those of ``order``, in its order; default the
-    engine's two)."""
-    setup, mount = ballbar.setups[run.setup], ballbar.mounts[run.mount]
-    ax = axis_of(desc, run.pattern)
-
-    def psi_of(angles_deg: np.ndarray) -> np.ndarray:
-        return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.centre(), bar=ballbar.length,
-                                arc_deg=angles_deg, hold_deg=run.hold_deg, reverse=ballbar.bar_reversed(run)).psi
-
-    arc = ballbar.arc_of(run)
-    span = float(np.ptp(default_arc_deg(ax) if arc is None else arc))
-    return read_trace(path, ballbar.length, psi_of=psi_of, components=components(desc, run.pattern), order=order,
-                      axis=ax.letter, arc_span_deg=span if span <= 180.0 else None)
 
 
 def _distinct_runs(r: TomlReader, runs: list[Run | PlannedRun], path: str, ctx: _Context) -> None:
@@ -394,4 +375,4 @@ def _hold(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, swivel
     return out
 
 
-__all__ = ["NO_BALLBAR", "EngineKeys", "read_ballbar", "read_run_trace"]
+__all__ = ["NO_BALLBAR", "EngineKeys", "read_ballbar"]

@@ -3,7 +3,7 @@
 Each direction (CW, CCW) is fitted separately, ``ΔL = r0 + e_a cos ψ + e_b sin ψ`` with ψ the direction each sample
 stands for as the chain's models read a simulated trace (:func:`~mtmcal_bayes.machines.patterns.fit_basis`), and the
 two are averaged (thesis Sec 4.3.2); a file must hold both.  The same for every machine: the caller gives ψ of the
-angle column (:func:`mtmcal_bayes.io.ballbar_section.read_run_trace`).
+angle column (:func:`read_run_trace`).
 """
 
 from __future__ import annotations
@@ -17,7 +17,13 @@ import numpy as np
 
 from .. import units
 from ..errors import InputError
-from ..machines.patterns import fit_basis
+from ..machines.patterns import (
+    axis_of,
+    components,
+    default_arc_deg,
+    fit_basis,
+    pattern_commands,
+)
 from .textfiles import read_user_text
 
 DIRECTIONS = ("CW", "CCW")
@@ -97,3 +103,22 @@ def fit_eccentricity(psi: np.ndarray, dL: np.ndarray) -> tuple[np.ndarray, float
     D = fit_basis(psi)
     coef, *_ = np.linalg.lstsq(D, dL, rcond=None)
     return coef[1:], float(np.sqrt(np.mean((dL - D @ coef) ** 2)))
+
+
+def read_run_trace(path, ballbar, desc, run, *, order: tuple[str, ...] | None = None):
+    """The eccentricities of ``run`` in one trace file (:func:`read_trace`): its angle
+    column the swivelled axis' commanded angle, each sample standing for the direction ψ its pattern's commands give
+    there (the polar angle of a radial bar; :func:`~mtmcal_bayes.machines.patterns.pattern_commands`), the result in
+    the pattern's components as the ``"thesis"`` convention reads them (those of ``order``, in its order; default the
+    engine's two)."""
+    setup, mount = ballbar.setups[run.setup], ballbar.mounts[run.mount]
+    ax = axis_of(desc, run.pattern)
+
+    def psi_of(angles_deg: np.ndarray) -> np.ndarray:
+        return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.centre(), bar=ballbar.length,
+                                arc_deg=angles_deg, hold_deg=run.hold_deg, reverse=ballbar.bar_reversed(run)).psi
+
+    arc = ballbar.arc_of(run)
+    span = float(np.ptp(default_arc_deg(ax) if arc is None else arc))
+    return read_trace(path, ballbar.length, psi_of=psi_of, components=components(desc, run.pattern), order=order,
+                      axis=ax.letter, arc_span_deg=span if span <= 180.0 else None)
