@@ -160,14 +160,20 @@ def reads_as_thesis(ballbar) -> bool:
 
 def check_run(run, ballbar) -> None:
     """:class:`ConventionError` when a run's convention cannot be applied to it: a malformed one, or one that
-    mixes the two components of a run that gives only one of them."""
+    mixes the two components of a run that gives only one of them, or not one of each per repeat."""
     M = run_matrix(run, ballbar)
     comps = run_frame(run, ballbar).components
-    if len(run.repeats) < 2 and not np.allclose(M, np.diag(np.diag(M))):
+    if np.allclose(M, np.diag(np.diag(M))):
+        return
+    first, second = sorted(comps)
+    mixes = f"convention {run_convention(run, ballbar)!r} mixes {first} and {second} of pattern {run.pattern}"
+    if len(run.repeats) < 2:
         have = next(iter(run.repeats), comps[0])
-        first, second = sorted(comps)
-        raise ConventionError(f"convention {run_convention(run, ballbar)!r} mixes {first} and {second} of "
-                              f"pattern {run.pattern}, and the run gives only {have}: give both components")
+        raise ConventionError(f"{mixes}, and the run gives only {have}: give both components")
+    counts = {c: len(v) for c, v in run.repeats.items()}
+    if len(set(counts.values())) > 1:
+        raise ConventionError(f"{mixes}, and the run gives {' and '.join(f'{n} of {c}' for c, n in counts.items())}: "
+                              "give both components of every repeat")
 
 
 def reads_machine_frame(run, ballbar) -> bool:

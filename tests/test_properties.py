@@ -38,7 +38,8 @@ from mtmcal_bayes.campaign import (
 from mtmcal_bayes.errors import MtmcalError
 from mtmcal_bayes.io.dprnt import parse_dprnt
 from mtmcal_bayes.io.gcode import block_line, parse_program, rewrite
-from mtmcal_bayes.io.traces import read_trace
+from mtmcal_bayes.io.traces import read_run_trace
+from mtmcal_bayes.io.machine_reader import description_of
 from mtmcal_bayes.models import MODELS, jacobian, make_model
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.plugins.thesis.linear import LinearModel
@@ -723,7 +724,9 @@ def test_block_line_parses_back(vals, dec, feed):
 def test_trace_csv_extraction_recovers_the_model_eccentricities(c, data, r0_um, lag_um, tmp_path_factory):
     """A trace simulated by htm-thesis, written as CSV (angle_deg, dL_um, direction) with a constant offset r0 and
     a direction lag that is opposite in CW and CCW (it averages out, thesis Sec 4.3.2), is read back to the
-    model's eccentricities.  dL is written with repr (exact), so the tolerance is the fit's rounding: 1e-9 µm."""
+    model's eccentricities by the engine's reader, which fits every machine's traces against the directions its chain's
+    commands give (those of Tables 2.2/2.3 here, which it is not told).  dL is written with repr (exact), so the
+    tolerance is the fit's rounding: 1e-9 µm."""
     fm = HTMModel(c, "htm-thesis")
     theta = data.draw(thetas(fm.space))
     pred = fm.predict(theta)
@@ -738,7 +741,7 @@ def test_trace_csv_extraction_recovers_the_model_eccentricities(c, data, r0_um, 
             rows += [f"{float(a)!r},{float(v)!r},{direction}" for a, v in zip(angles[order], vals[order])]
         path = d / f"run{i}.csv"
         path.write_text("\n".join(rows) + "\n")
-        ex = read_trace(path, run.pattern, c.ballbar.length, c.ballbar.cr_geometry)
+        ex = read_run_trace(path, c.ballbar, description_of(c.machine), run, order=COMPONENTS[run.pattern])
         for comp in COMPONENTS[run.pattern]:
             k = index[(i, comp)]
             assert ex.values[comp] == pytest.approx(pred[k], abs=1e-12), (run.label, comp)  # mm: 1e-9 µm

@@ -28,7 +28,8 @@ from ..parameters import (
 from ..machines.deviations import quantities as deviation_table
 from ..machines.plugins import provided
 from ..machines.probe_terms import probe_terms
-from .measurement_sections import described_ballbar, described_probe
+from .ballbar_section import read_ballbar
+from .measurement_sections import described_probe
 from .machine_reader import (BUILTIN_TYPES, DESCRIPTION_KEYS, THESIS_TYPE, builtin_description, parse_description,
                              referenced_description)
 from .textfiles import read_user_text
@@ -97,7 +98,7 @@ def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: P
     ``position_mm``), runs ``<axis><R|T|A|X|Y|Z>`` with ``arc_deg`` and ``hold_deg``, ``[[probe.runs]]``."""
     desc = machine.description
     probe_t = r.table(doc, "probe", "", required=False)
-    ballbar = described_ballbar(r, r.table(doc, "ballbar", "", required=False), desc)
+    ballbar = read_ballbar(r, r.table(doc, "ballbar", "", required=False), machine, base_dir)
     probe = described_probe(r, probe_t, desc) if probe_t is not None else None
     if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
         r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]] (or, for a machine to design "

@@ -180,10 +180,16 @@ def ballbar_commands(campaign, run, *, step_deg: float | None = None):
     return _pattern_commands(campaign, desc, run, setup=setup, mount=mount, arc=arc, held=held)
 
 
+def bar_length(campaign, run) -> float:
+    """The bar length, mm, of ``run``: a planned run's own (``length_mm``), else the campaign's."""
+    own = getattr(run, "length", None)  # a measured Run has the campaign's
+    return campaign.ballbar.length if own is None else own
+
+
 def _pattern_commands(campaign, desc, run, *, setup, mount, arc, held):
     try:
         return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.centre(),
-                                bar=campaign.ballbar.length, arc_deg=arc, hold_deg=held,
+                                bar=bar_length(campaign, run), arc_deg=arc, hold_deg=held,
                                 reverse=campaign.ballbar.bar_reversed(run))
     except ValueError as err:  # a pattern the description does not have
         raise ParameterError("pattern", str(err)) from None
@@ -208,7 +214,8 @@ def ballbar_program(campaign, run, *, feed: float | None = None, step_deg: float
     s = _tool_direction(desc, {a.letter: q[a.letter][[0, -1]] for a in desc.rotary_axes})
     backed = [_shift(q, i, -RETRACT_MM * s[j]) for j, i in enumerate((0, k - 1))]
     mid = {a: 0.5 * (v[:-1] + v[1:]) for a, v in q.items()}
-    chord = np.abs(np.linalg.norm(relative_position(desc, mid, tool=tool, ball=mount.centre()), axis=1) - bb.length)
+    bar = bar_length(campaign, run)
+    chord = np.abs(np.linalg.norm(relative_position(desc, mid, tool=tool, ball=mount.centre()), axis=1) - bar)
     fine = (arc[1] - arc[0]) * np.sqrt(CHORD_MM / chord.max()) if k > 1 and chord.max() > 0 else None
     place = placement_commands(desc, length=setup.R_B, ball=mount.centre())
     every = {a: np.concatenate([np.atleast_1d(p[a]) for p in (q, *backed)]) for a in q}
@@ -222,7 +229,7 @@ def ballbar_program(campaign, run, *, feed: float | None = None, step_deg: float
         + _DIRECTION[run.pattern[1]].format(K=ax.letter) + f"; held: {held_text}",
         f"setup {run.setup}: tool length R_B {setup.R_B:g} mm from the spindle point; mount {run.mount}: W ball at "
         + " ".join(f"{a}{v:g}" for a, v in zip(FRAME, mount.centre())) + " mm at the home pose",
-        f"bar {bb.length:g} mm; before this program the W ball is set where the dummy sphere in the spindle sits at "
+        f"bar {bar:g} mm; before this program the W ball is set where the dummy sphere in the spindle sits at "
         + axis_block(_words(letters, place, 0), motion="", decimals=decimals).strip(),
         _COMMANDS_NOTE,
         f"bar length exact at the blocks; between them each axis moves linearly: up to {chord.max():.4f} mm off"

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 
 from .. import units
@@ -45,7 +48,7 @@ def _direction(v: np.ndarray) -> str:
 
 def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
     """``doc`` (format, date, ...) completed with a described campaign's machine, ball bar, probe, priors and truth
-    (``save_dir``: unused, its runs carry no trace files)."""
+    (``save_dir``: where its runs' trace files are written relative to; absolute when ``None``)."""
     um = lambda v: units.from_internal(v, "um")  # noqa: E731
     m = c.machine
     machine = {"name": m.name} if m.name else {}
@@ -60,21 +63,28 @@ def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
             b["feed_mm_per_min"] = bb.feed_mm_per_min
         if bb.convention != "thesis":
             b["convention"] = bb.convention
+        if bb.alternative_reason and bb.reading_choices():  # the reason of a choice whose runs are still there
+            b["alternative_reason"] = bb.alternative_reason
         b["setups"] = {s.id: {"R_B_mm": s.R_B} for s in bb.setups.values()}
         b["mounts"] = {mt.id: {"position_mm": [float(x) for x in mt.position]} for mt in bb.mounts.values()}
         b["runs"] = []
         for run in bb.runs:
             d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
                  **({"reversed": True} if run.reversed else {}),
-                 **({"convention": run.convention} if run.convention else {})}
-            d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
+                 **({"convention": run.convention} if run.convention else {}),
+                 **({"alternative_convention": run.alternative_convention} if run.alternative_convention else {})}
+            if run.trace_csv:
+                d["trace_csv"] = [relative_path(c, f, save_dir) for f in run.trace_csv]
+            else:
+                d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
             b["runs"].append(d)
         for run in bb.planned:  # after the measured runs, in measuring order
             d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
                  **({"reversed": True} if run.reversed else {}),
                  **({"convention": run.convention} if run.convention else {}), "planned": True,
                  "repeats": int(run.repeats)}
-            d.update({k: v for k, v in (("minutes", run.minutes), ("order", run.order), ("why", run.why)) if v})
+            d.update({k: v for k, v in (("length_mm", run.length), ("minutes", run.minutes), ("order", run.order),
+                                        ("why", run.why)) if v})
             b["runs"].append(d)
         if not b["runs"]:
             del b["runs"]  # a machine with set-ups and mounts only
@@ -100,6 +110,12 @@ def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
     if c.design is not None:
         doc["design"] = design_to_dict(c.design, quantities=deviation_table(m.description))
     return doc
+
+
+def relative_path(c: Campaign, name: str, save_dir) -> str:
+    """A file named in ``c`` (relative to its folder), as seen from ``save_dir`` (absolute when ``None``)."""
+    path = Path(c.base_dir or ".", name).resolve()
+    return str(path) if save_dir is None else os.path.relpath(path, save_dir)
 
 
 def _arc_hold(run) -> dict:

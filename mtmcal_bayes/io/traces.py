@@ -1,8 +1,9 @@
 """Raw ball-bar traces: reading ``angle_deg, dL_um, direction`` CSV files and extracting eccentricities.
 
-Each direction (CW, CCW) is fitted separately with the same least-squares
-extractor the kinematic models use, and the two are averaged (thesis Sec 4.3.2);
-a file must hold both.
+Each direction (CW, CCW) is fitted separately, ``ΔL = r0 + e_a cos ψ + e_b sin ψ`` with ψ the direction each sample
+stands for as the chain's models read a simulated trace (:func:`~mtmcal_bayes.machines.patterns.fit_basis`), and the
+two are averaged (thesis Sec 4.3.2); a file must hold both.  The same for every machine: the caller gives ψ of the
+angle column (:func:`read_run_trace`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,13 @@ import numpy as np
 
 from .. import units
 from ..errors import InputError
-from ..patterns import B_PATTERNS, COMPONENTS, fit_eccentricity, polar_angle
+from ..machines.patterns import (
+    axis_of,
+    components,
+    default_arc_deg,
+    fit_basis,
+    pattern_commands,
+)
 from .textfiles import read_user_text
 
 DIRECTIONS = ("CW", "CCW")
@@ -30,8 +37,15 @@ class TraceExtraction:
     rms: dict[str, float]
 
 
-def read_trace(path, pattern: str, L_B: float, cr_geometry: str = "RC-LB") -> TraceExtraction:
-    """Read a trace CSV and extract the pattern's eccentricities; bad content names file and line."""
+def read_trace(path, L_B: float, *, psi_of, components: tuple[str, str], order: tuple[str, ...] | None = None,
+               axis: str = "", arc_span_deg: float | None = None) -> TraceExtraction:
+    """Read a trace CSV and extract a pattern's eccentricities; bad content names file and line.
+
+    ``psi_of(angles_deg (k,)) -> (k,)`` rad: the direction each sample stands for at the swivelled axis' angle
+    (``axis``); ``components``: the pattern's two, along ``cos ψ`` and ``sin ψ``; ``order``: those to return, in
+    this order (default both); ``arc_span_deg``: the span of the pattern's arc where it is at
+    most half a turn (a swing, whose trace spans 30° to 180°: more is another axis' trace), None for a turn (whose
+    trace spans at least 90°).  L_B the bar length, mm."""
     text = read_user_text(path, "trace CSV file")
     src = str(path)
     rows = list(csv.reader(io.StringIO(text)))
@@ -66,18 +80,45 @@ def read_trace(path, pattern: str, L_B: float, cr_geometry: str = "RC-LB") -> Tr
             continue
         arr = np.array(pts)
         span = np.ptp(arr[:, 0])
-        if pattern in B_PATTERNS and span > 180.0:
-            raise InputError(src, None, f"{d} trace spans {span:g}°, more than the 180° a B pattern can swing "
-                             "(0–90° in the thesis): is this a C-pattern trace?")
-        if len(arr) < 4 or span < (30.0 if pattern in B_PATTERNS else 90.0):
+        if arc_span_deg is not None and span > 180.0:
+            raise InputError(src, None, f"{d} trace spans {span:g}°, more than the 180° a {axis} pattern can swing "
+                             f"(its arc spans {arc_span_deg:g}°): is this a trace of another axis?")
+        if len(arr) < 4 or span < (30.0 if arc_span_deg is not None else 90.0):
             raise InputError(src, None, f"{d} trace too short to fit ({len(arr)} points over {span:g}°)")
-        psi = polar_angle(pattern, np.deg2rad(arr[:, 0]), cr_geometry)
-        fits[d] = fit_eccentricity(pattern, psi, units.to_internal(arr[:, 1], "um"))
+        psi = psi_of(arr[:, 0])
+        fits[d] = fit_eccentricity(psi, units.to_internal(arr[:, 1], "um"))
     if not fits:
         raise InputError(src, None, "no data rows")
     missing = [d for d in DIRECTIONS if d not in fits]
     if missing:  # each repeat is the mean of a CW and a CCW run (thesis Sec 4.3.2); one alone is not guessed
         raise InputError(src, None, f"no {missing[0]} rows: a trace needs both directions, CW and CCW "
                          "(their mean cancels the direction-dependent errors)")
-    values = {c: float(np.mean([f.component(c) for f in fits.values()])) for c in COMPONENTS[pattern]}
-    return TraceExtraction(values, {d: float(f.rms) for d, f in fits.items()})
+    mean = np.mean([f[0] for f in fits.values()], axis=0)  # (2,): along cos ψ, sin ψ
+    values = {c: float(mean[components.index(c)]) for c in (order or components)}
+    return TraceExtraction(values, {d: float(f[1]) for d, f in fits.items()})
+
+
+def fit_eccentricity(psi: np.ndarray, dL: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least squares ``dL = r0 + e_a cos ψ + e_b sin ψ`` over (k,) samples: ``((e_a, e_b), rms residual)``, mm."""
+    D = fit_basis(psi)
+    coef, *_ = np.linalg.lstsq(D, dL, rcond=None)
+    return coef[1:], float(np.sqrt(np.mean((dL - D @ coef) ** 2)))
+
+
+def read_run_trace(path, ballbar, desc, run, *, order: tuple[str, ...] | None = None):
+    """The eccentricities of ``run`` in one trace file (:func:`read_trace`): its angle
+    column the swivelled axis' commanded angle, each sample standing for the direction ψ its pattern's commands give
+    there (the polar angle of a radial bar; :func:`~mtmcal_bayes.machines.patterns.pattern_commands`), the result in
+    the pattern's components as the ``"thesis"`` convention reads them (those of ``order``, in its order; default the
+    engine's two)."""
+    setup, mount = ballbar.setups[run.setup], ballbar.mounts[run.mount]
+    ax = axis_of(desc, run.pattern)
+
+    def psi_of(angles_deg: np.ndarray) -> np.ndarray:
+        return pattern_commands(desc, run.pattern, length=setup.R_B, ball=mount.centre(), bar=ballbar.length,
+                                arc_deg=angles_deg, hold_deg=run.hold_deg, reverse=ballbar.bar_reversed(run)).psi
+
+    arc = ballbar.arc_of(run)
+    span = float(np.ptp(default_arc_deg(ax) if arc is None else arc))
+    return read_trace(path, ballbar.length, psi_of=psi_of, components=components(desc, run.pattern), order=order,
+                      axis=ax.letter, arc_span_deg=span if span <= 180.0 else None)

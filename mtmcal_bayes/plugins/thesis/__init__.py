@@ -10,9 +10,10 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
-* **its campaign keys**: the thesis' lever arms R_B, Z_T, X_T, Z_C, R_C (a run's W ball, arc and bar side in the
-  engine's terms: ``run_placement``, :mod:`.translation`) and the touch probe's ``[probe.c_axis]`` and
-  ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
+* **its campaign keys**: in the engine's reader of ``[ballbar]``, the thesis' lever arms R_B, Z_T, X_T and mounts
+  Z_C, R_C and its ``cr_geometry`` (``ballbar_keys``; a run's W ball, arc and bar side in the engine's terms:
+  ``run_placement``, :mod:`.translation`); the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables
+  4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its patterns**: its 12 in the order of Tables 2.2/2.3 (B before C), their components, B patterns only with the
   W ball on the C axis (Table 2.2), and the geometry line of its sensitivity table (Tables 2.4–2.6);
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
@@ -35,11 +36,19 @@ from __future__ import annotations
 
 
 def campaign_sections(r, doc: dict, machine, base_dir):
-    """``[ballbar]`` and ``[probe]`` of a campaign in the thesis' format (lever arms R_B, Z_T, X_T, Z_C, R_C; the
-    probe's ``[probe.c_axis]`` and ``[probe.b_axis]``)."""
+    """``[ballbar]`` (required; the engine's reader with :func:`ballbar_keys`) and ``[probe]`` of a campaign in the
+    thesis' format (``[probe.c_axis]`` and ``[probe.b_axis]``)."""
     from .campaign_keys import campaign_sections as sections
 
     return sections(r, doc, machine, base_dir)
+
+
+def ballbar_keys():
+    """Its keys of ``[ballbar]`` in the engine's reader: set-ups by R_B, Z_T, X_T, mounts by Z_C, R_C, cr_geometry
+    (:class:`.campaign_keys.BallbarKeys`)."""
+    from .campaign_keys import BallbarKeys
+
+    return BallbarKeys
 
 
 def complete_ballbar(ballbar, machine) -> None:
@@ -305,6 +314,11 @@ class ThesisPlugin:
         from ...patterns import PATTERNS
 
         return PATTERNS
+
+    @property
+    def ballbar_keys(self):
+        """Its keys of ``[ballbar]`` (:func:`ballbar_keys`)."""
+        return ballbar_keys()
 
     @property
     def planning(self):

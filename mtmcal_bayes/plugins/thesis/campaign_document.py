@@ -4,11 +4,11 @@ and asks the machine for the rest (its ``campaign_document``)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from ... import units
 from ...campaign import Campaign, PlannedRun, Probe
+from ...io.description_writer import relative_path
 from ...io.design_table import design_to_dict
 from ...io.tomlio import Fixed
 from ...io.truth_table import truth_to_dict
@@ -46,7 +46,7 @@ def campaign_document(c: Campaign, doc: dict, save_dir: Path | None = None) -> d
         if run.alternative_convention:
             d["alternative_convention"] = run.alternative_convention
         if run.trace_csv:
-            d["trace_csv"] = [_relative(c, f, save_dir) for f in run.trace_csv]
+            d["trace_csv"] = [relative_path(c, f, save_dir) for f in run.trace_csv]
         else:
             d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
         b["runs"].append(d)
@@ -105,7 +105,7 @@ def _probe_dict(p: Probe, c: Campaign, save_dir: Path | None) -> dict:
 
     def readings(run) -> dict:  # DPRNT files relative to the saved file, else the centres
         if run.dprnt:
-            return {"dprnt": [_relative(c, f, save_dir) for f in run.dprnt]}
+            return {"dprnt": [relative_path(c, f, save_dir) for f in run.dprnt]}
         return {"centres_mm": run.centres}
 
     if p.b_axis is not None:
@@ -133,9 +133,3 @@ def _probe_dict(p: Probe, c: Campaign, save_dir: Path | None) -> dict:
             cd["datum"] = x.datum
         d["c_axis"] = {**cd, **readings(x)}
     return d
-
-
-def _relative(c: Campaign, name: str, save_dir: Path | None) -> str:
-    """A file named in ``c`` (relative to its folder), as seen from ``save_dir`` (absolute when ``None``)."""
-    path = Path(c.base_dir or ".", name).resolve()
-    return str(path) if save_dir is None else os.path.relpath(path, save_dir)

@@ -1,236 +1,90 @@
-"""The thesis' campaign keys: ``[ballbar]`` and ``[probe]`` of a campaign in its format (thesis Tables 4.2–4.4,
-5.1/5.2), read into the engine's dataclasses with the validation of every key.
+"""The thesis' campaign keys (thesis Tables 4.2–4.4, 5.1/5.2): what its format has that the engine's has not.
 
-The ball bar's tool set-ups by their lever arms (``R_B_mm``, ``Z_T_mm``, ``X_T_mm``) and W-ball mounts (``Z_C_mm``,
-``R_C_mm``), its runs of the 12 thesis patterns with their reading convention; the touch probe's ``[probe.b_axis]``
-(styli at indexed B angles) and ``[probe.c_axis]`` (a sphere at indexed C angles), their centres or DPRNT files.
-The engine reads the rest of the campaign (:mod:`mtmcal_bayes.io.campaign_reader`) and asks the machine for these
-(its ``campaign_sections`` and ``probe_owners``).
+In ``[ballbar]`` (read by the engine's reader, :mod:`mtmcal_bayes.io.ballbar_section`, like every machine's): its
+tool set-ups by their lever arms (``R_B_mm``, ``Z_T_mm``, ``X_T_mm``), its W-ball mounts by ``Z_C_mm`` and
+``R_C_mm``, its ``cr_geometry`` (:class:`BallbarKeys`); its 12 patterns, their components and Table 2.2's rule on
+mounts are the plug-in's ``patterns``, ``pattern_components`` and ``mount_conflict``.  The touch probe's
+``[probe.b_axis]`` (styli at indexed B angles) and ``[probe.c_axis]`` (a sphere at indexed C angles), their centres or
+DPRNT files, are read here.  The engine asks the machine for these (its ``campaign_sections``, ``ballbar_keys`` and
+``probe_owners``).
 """
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
 
 from ... import units
-from ...campaign import Ballbar, BAxisProbe, CAxisProbe, Machine, Mount, PlannedRun, Probe, Run, Setup, Stylus
-from ...conventions import ConventionError, check_run, run_convention, run_matrix
+from ...campaign import (
+    Ballbar,
+    BAxisProbe,
+    CAxisProbe,
+    Machine,
+    Mount,
+    Probe,
+    Setup,
+    Stylus,
+)
 from ...datasets import data_path
 from ...errors import InputError, MtmcalError
+from ...io.ballbar_section import read_ballbar
 from ...io.dprnt import read_dprnt
-from ...io.machine_reader import description_of
-from ...io.measurement_sections import read_campaign_convention, read_convention
-from ...io.planned_runs import PLANNED_KEYS as PLANNED_RUN_KEYS
-from ...io.planned_runs import planned_in_order, planned_run
 from ...io.toml_reader import TomlReader, kind_of
-from ...io.traces import read_trace
-from ...patterns import COMPONENTS, CR_GEOMETRIES, PATTERNS, mount_conflict
+from ...patterns import CR_GEOMETRIES
 from ...sphere import fit_sphere
 from .translation import complete
 
-#: the keys of a run's data: a planned run has none of them
-DATA_KEYS = ("ex_um", "ey_um", "ez_um", "trace_csv")
-
-
-#: the keys only a planned run (``planned = true``) has
-PLANNED_KEYS = (*PLANNED_RUN_KEYS, "length_mm")
-
 
 def campaign_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path | None) -> tuple[Ballbar, Probe]:
-    """``[ballbar]`` and ``[probe]`` in the thesis' campaign format (its lever arms R_B, Z_T, X_T, Z_C, R_C; the
-    probe's ``[probe.c_axis]`` and ``[probe.b_axis]``, thesis Tables 4.2–4.4, 5.1–5.2)."""
+    """``[ballbar]`` (required; read by the engine, :func:`~mtmcal_bayes.io.ballbar_section.read_ballbar`, with
+    :class:`BallbarKeys`) and ``[probe]`` in the thesis' campaign format (``[probe.c_axis]`` and ``[probe.b_axis]``,
+    thesis Tables 5.1–5.2)."""
     probe_t = r.table(doc, "probe", "", required=False)
-    ballbar = _ballbar(r, r.table(doc, "ballbar", ""), base_dir, description_of(machine))
+    ballbar = read_ballbar(r, r.table(doc, "ballbar", ""), machine, base_dir)
     return ballbar, _probe(r, probe_t, base_dir) if probe_t is not None else None
 
 
-def _ballbar(r: TomlReader, t: dict, base_dir: Path | None, desc) -> Ballbar:
-    P = "ballbar"
-    r.check_keys(t, {"instrument", "length_mm", "accuracy_um", "feed_mm_per_min", "cr_geometry", "convention",
-                     "alternative_reason", "setups", "mounts", "runs"}, P)
-    convention = read_campaign_convention(r, t, P, example="B0=+X,B90=+Z")
-    cr_geometry = r.string(t, "cr_geometry", P, default="RC-LB")
-    if cr_geometry not in CR_GEOMETRIES:
-        r.fail(f"{P}.cr_geometry", f"unknown CR geometry {cr_geometry!r} (expected {' or '.join(CR_GEOMETRIES)})")
-    length = r.number(t, "length_mm", P, positive=True)
-    accuracy = units.to_internal(r.number(t, "accuracy_um", P, positive=True), "um")
-    feed = r.number(t, "feed_mm_per_min", P, required=False, positive=True)
+class BallbarKeys:
+    """The thesis' keys of ``[ballbar]`` in the engine's reader (thesis Tables 4.2–4.4): its tool set-ups by their
+    lever arms ``R_B_mm``, ``Z_T_mm``, ``X_T_mm``, its W-ball mounts by ``Z_C_mm`` and ``R_C_mm`` (the W ball of a
+    run where Tables 2.2/2.3 place it, :meth:`~mtmcal_bayes.campaign.Mount.centre`), its ``cr_geometry``; its runs'
+    arcs and bar sides are its patterns' (:func:`.translation.complete`), not a run's own."""
 
-    setups: dict[str, Setup] = {}
-    for sid, path, s in r.subtables(t, "setups", P, allowed={"R_B_mm", "Z_T_mm", "X_T_mm"}, what="tool setup"):
-        setups[sid] = Setup(sid, r.number(s, "R_B_mm", path, positive=True),
-                            r.number(s, "Z_T_mm", path), r.number(s, "X_T_mm", path))
-    _distinct_tool_lengths(r, [(f"{P}.setups.{s.id}", s.R_B, s.Z_T) for s in setups.values()])
+    keys = ("cr_geometry",)
+    setup_keys = ("R_B_mm", "Z_T_mm", "X_T_mm")
+    mount_keys = ("Z_C_mm", "R_C_mm")
+    run_geometry = False
 
-    mounts: dict[str, Mount] = {}
-    for mid, path, m in r.subtables(t, "mounts", P, allowed={"Z_C_mm", "R_C_mm"}, what="W-ball mount"):
-        mounts[mid] = Mount(mid, r.number(m, "Z_C_mm", path, nonnegative=True),
-                            r.number(m, "R_C_mm", path, nonnegative=True))
+    @staticmethod
+    def read(r: TomlReader, t: dict, path: str) -> dict:
+        cr_geometry = r.string(t, "cr_geometry", path, default="RC-LB")
+        if cr_geometry not in CR_GEOMETRIES:
+            r.fail(f"{path}.cr_geometry", f"unknown CR geometry {cr_geometry!r} (expected {' or '.join(CR_GEOMETRIES)})")
+        return {"cr_geometry": cr_geometry}
 
-    raw_runs = t.get("runs", [])  # absent: a machine with set-ups and mounts but nothing measured or planned yet
-    if not isinstance(raw_runs, list) or not all(isinstance(x, dict) for x in raw_runs):
-        r.fail(f"{P}.runs", "expected one or more [[ballbar.runs]] tables")
-    items = [_run(r, x, f"{P}.runs[{i}]", setups=setups, mounts=mounts, base_dir=base_dir, L_B=length,
-                  cr_geometry=cr_geometry) for i, x in enumerate(raw_runs)]
-    _distinct_runs(r, items, P)
-    runs = [x for x in items if isinstance(x, Run)]
-    planned = planned_in_order(r, [(i, x) for i, x in enumerate(items) if isinstance(x, PlannedRun)], P)
-    bb = Ballbar(length, accuracy, r.string(t, "instrument", P), feed, setups, mounts, runs, cr_geometry, convention,
-                 planned)
-    complete(bb, desc)
-    for i, run in enumerate(items):
-        try:
-            check_run(run, bb) if isinstance(run, Run) else run_matrix(run, bb)
-        except ConventionError as err:
-            r.fail(f"{P}.runs[{i}].convention" if run.convention else f"{P}.convention", str(err))
-    _reading_choice(r, t, items, bb)
-    return bb
+    @staticmethod
+    def setup(r: TomlReader, sid: str, path: str, s: dict) -> Setup:
+        return Setup(sid, r.number(s, "R_B_mm", path, positive=True), r.number(s, "Z_T_mm", path),
+                     r.number(s, "X_T_mm", path))
 
+    @staticmethod
+    def check_setups(r: TomlReader, setups: dict[str, Setup], path: str) -> None:
+        """Z_T + R_B is constant between tool lengths (the B centre's height above the tool ball)."""
+        items = list(setups.values())
+        for i, a in enumerate(items):
+            for b in items[i + 1:]:
+                if a.Z_T == b.Z_T:
+                    r.fail(f"{path}.setups.{b.id}.Z_T_mm", f"equal to {path}.setups.{a.id}.Z_T_mm ({a.Z_T:g} mm) "
+                           "although R_B differs: Z_T + R_B must stay constant between tool lengths")
 
-def _reading_choice(r: TomlReader, t: dict, items: list[Run | PlannedRun], bb: Ballbar) -> None:
-    """Check each run's ``alternative_convention`` as its ``convention`` is checked, and that it reads the run
-    otherwise; set ``bb.alternative_reason`` (one line, only where some run names an alternative)."""
-    P = "ballbar"
-    for i, run in enumerate(items):
-        if not isinstance(run, Run) or run.alternative_convention is None:
-            continue
-        key = f"{P}.runs[{i}].alternative_convention"
-        other = dataclasses.replace(run, convention=run.alternative_convention)
-        try:
-            check_run(other, bb)
-        except ConventionError as err:
-            r.fail(key, str(err))
-        if np.allclose(run_matrix(other, bb), run_matrix(run, bb)):
-            r.fail(key, f"{run.alternative_convention!r} reads run {run.label} as its reading "
-                   f"({run_convention(run, bb)!r}) does: an alternative reads it otherwise")
-    reason = r.string(t, "alternative_reason", P).strip()
-    if "\n" in reason:
-        r.fail(f"{P}.alternative_reason", "expected one line (it is shown beside every number that rests on the choice)")
-    if reason and not bb.reading_choices():
-        r.fail(f"{P}.alternative_reason", "no run names an alternative_convention: there is no choice of reading to "
-               "give a reason for")
-    bb.alternative_reason = reason
+    @staticmethod
+    def mount(r: TomlReader, mid: str, path: str, m: dict) -> Mount:
+        return Mount(mid, r.number(m, "Z_C_mm", path, nonnegative=True), r.number(m, "R_C_mm", path, nonnegative=True))
 
-
-def _distinct_tool_lengths(r: TomlReader, items: list[tuple[str, float, float]]) -> None:
-    """Two tool lengths that are equal make the second one carry no information."""
-    for i, (pa, rb_a, zt_a) in enumerate(items):
-        for pb, rb_b, zt_b in items[i + 1:]:
-            if rb_a == rb_b:
-                r.fail(f"{pb}.R_B_mm", f"equal to {pa}.R_B_mm ({rb_a:g} mm): a second tool length "
-                       "equal to the first carries no information")
-            if zt_a == zt_b:
-                r.fail(f"{pb}.Z_T_mm", f"equal to {pa}.Z_T_mm ({zt_a:g} mm) although R_B differs: "
-                       "Z_T + R_B must stay constant between tool lengths")
-
-
-def _distinct_runs(r: TomlReader, runs: list[Run | PlannedRun], path: str) -> None:
-    """Two runs of one pattern, setup and mount are refused (``docs/campaign-format.md``, "Duplicate runs"):
-    merged they would pass two sessions, perhaps a re-clamped ball, for repeats of one measurement, whose
-    repeat sd the likelihood takes as the run's repeatability.  Measured and planned runs alike (the file's
-    order, ``runs`` indexing ``[[ballbar.runs]]``)."""
-    first: dict[tuple[str, str, str], int] = {}
-    for i, run in enumerate(runs):
-        j = first.setdefault((run.pattern, run.setup, run.mount), i)
-        if j != i:
-            if isinstance(run, PlannedRun) or isinstance(runs[j], PlannedRun):
-                where = "plan one run with all its repeats (repeats = N)"
-                if isinstance(runs[j], Run):
-                    where = "a run already measured is not planned again on the same placement"
-            else:
-                arrays = ('trace_csv = ["a.csv", "b.csv"]' if run.trace_csv or runs[j].trace_csv
-                          else f"{COMPONENTS[run.pattern][0]}_um = [..., ...]")
-                where = f"put all repeats of one measurement in one run's arrays ({arrays})"
-            r.fail(f"{path}.runs[{i}]", f"repeats {path}.runs[{j}] (pattern {run.pattern}, setup {run.setup!r}, "
-                   f"mount {run.mount!r}): {where}; if the ball was re-clamped, give it its own [{path}.mounts.<id>]")
-
-
-def _run(r: TomlReader, t: dict, path: str, *, setups, mounts, base_dir, L_B: float,
-         cr_geometry: str) -> Run | PlannedRun:
-    r.check_keys(t, {"pattern", "setup", "mount", "convention", "alternative_convention", "planned", *DATA_KEYS,
-                     *PLANNED_KEYS}, path)
-    planned = t.get("planned", False)
-    if not isinstance(planned, bool):
-        r.fail(f"{path}.planned", "expected true (a run planned but not yet measured) or false, got "
-               f"{kind_of(planned)}")
-    if not planned:
-        for key in PLANNED_KEYS:
-            if key in t:
-                r.fail(f"{path}.{key}", "only a planned run (planned = true) has this key; a measured run gives its "
-                       "repeats as arrays (ex_um = [..., ...]) or trace_csv")
-    pattern = r.string(t, "pattern", path, required=True)
-    if pattern not in PATTERNS:
-        r.fail(f"{path}.pattern", f"unknown pattern {pattern!r} (expected one of {' '.join(PATTERNS)})")
-    setup = r.string(t, "setup", path, required=True)
-    if setup not in setups:
-        r.fail(f"{path}.setup", f"names setup {setup!r}, which is not in [ballbar.setups] "
-               f"(have: {', '.join(setups)})")
-    mount = r.string(t, "mount", path, required=True)
-    if mount not in mounts:
-        r.fail(f"{path}.mount", f"names mount {mount!r}, which is not in [ballbar.mounts] "
-               f"(have: {', '.join(mounts)})")
-    if conflict := mount_conflict(pattern, mount, mounts[mount].R_C):
-        r.fail(f"{path}.mount", conflict)
-    if planned:
-        if "alternative_convention" in t:
-            r.fail(f"{path}.alternative_convention", "a planned run has no offsets to read another way; give it once "
-                   "the run is measured")
-        return _planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount, L_B=L_B)
-    repeats = {}
-    for c in ("ex", "ey", "ez"):
-        key = f"{c}_um"
-        if key in t:
-            if c not in COMPONENTS[pattern]:
-                r.fail(f"{path}.{key}", f"pattern {pattern} has no component {c} "
-                       f"(it gives {' and '.join(COMPONENTS[pattern])})")
-            repeats[c] = units.to_internal(r.array(t, key, path, (None,)), "um")
-            too_big = np.flatnonzero(np.abs(repeats[c]) >= L_B)
-            if too_big.size:  # also keeps the models and the planner away from overflow
-                i = int(too_big[0])
-                r.fail(f"{path}.{key}[{i}]", f"{units.from_internal(repeats[c][i], 'um'):g} µm is not below the "
-                       f"bar length L_B = {L_B:g} mm: not an eccentricity")
-    traces = rms = None
-    if "trace_csv" in t:
-        if repeats:
-            r.fail(f"{path}.trace_csv", "a run carries either eccentricity repeats or traces, not both")
-        raw = t["trace_csv"]
-        traces = [raw] if isinstance(raw, str) else raw
-        if not isinstance(traces, list) or not traces or not all(isinstance(x, str) and x for x in traces):
-            r.fail(f"{path}.trace_csv", "expected a file name or an array of file names")
-        extracted, rms = [], []
-        for name in traces:
-            fpath = (base_dir / name) if base_dir is not None else Path(name)
-            if not fpath.exists():
-                r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} not found")
-            if fpath.is_dir():
-                r.fail(f"{path}.trace_csv", f"trace file {str(fpath)!r} is a directory")
-            ex = read_trace(fpath, pattern, L_B, cr_geometry)
-            extracted.append(ex.values)
-            rms.append(ex.rms)
-        repeats = {c: np.array([e[c] for e in extracted]) for c in COMPONENTS[pattern]}
-    if not repeats:
-        r.fail(path, f"no eccentricities: give {' and/or '.join(c + '_um' for c in COMPONENTS[pattern])} "
-               "or trace_csv")
-    return Run(pattern, setup, mount, repeats, traces, rms, read_convention(r, t, path),
-               read_convention(r, t, path, "alternative_convention"))
-
-
-def _planned_run(r: TomlReader, t: dict, path: str, *, pattern: str, setup: str, mount: str,
-                 L_B: float) -> PlannedRun:
-    """A run with ``planned = true``: :func:`.planned_runs.planned_run`, with its reading convention and a bar length
-    other than the campaign's."""
-    data = [k for k in DATA_KEYS if k in t]
-    if data:
-        r.fail(f"{path}.planned", f"planned = true but the run has data ({', '.join(data)}): once it is measured, "
-               "delete planned and repeats")
-    run = planned_run(r, t, path, pattern=pattern, setup=setup, mount=mount)
-    length = r.number(t, "length_mm", path, required=False, positive=True)
-    run.convention = read_convention(r, t, path)
-    run.length = None if length == L_B else length
-    return run
+    @staticmethod
+    def complete(ballbar: Ballbar, desc) -> None:
+        complete(ballbar, desc)
 
 
 def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
