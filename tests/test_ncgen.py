@@ -248,3 +248,4 @@ def test_a_pattern_without_a_run_defaults_to_a_mount_its_axis_moves(machine):
         arc = [b for b in read_axis_blocks(mb.ncgen(K + "X", campaign=c), letters) if b.motion == "G01"]
         xyz = np.array([[b.position[a] for a in "XYZ"] for b in arc])
         assert np.ptp(xyz, axis=0).max() > 1.0, (machine, K)
+

@@ -113,3 +113,27 @@ def test_a_thesis_pattern_over_an_arc_with_a_held_axis():
     xyz = _table("BX", angle, R_B=s.R_B, Z_C=m.Z_C, R_C=m.R_C, L_B=bb.length, cr_geometry=bb.cr_geometry)
     np.testing.assert_allclose(got, np.c_[xyz - _nc_origin(s, m), angle, np.zeros(len(angle))], rtol=0,
                                atol=0.5e-4 + 1e-9)
+
+
+def test_a_planned_run_with_a_bar_of_its_own_is_programmed_for_that_bar(tmp_path):
+    """A planned run's ``length_mm`` (a bar other than the campaign's) is its program's L_B: the blocks of ``--run``
+    for it are Table 2.2's with L_B = 150 mm, not the campaign's 100 mm."""
+    import re
+
+    from mtmcal_bayes.datasets import builtin_campaign_text
+    from mtmcal_bayes.plugins.thesis.pattern_tables import pattern_commands
+
+    text = "\n".join(ln for ln in builtin_campaign_text()[0].splitlines()
+                     if not ln.startswith(("alternative_", "trace_"))) + "\n"
+    path = tmp_path / "planned.toml"
+    path.write_text(re.sub(r"^(e[xyz]_um = \[.*\]\n)+", "planned = true\nrepeats = 3\nlength_mm = 150.0\n", text,
+                           count=1, flags=re.MULTILINE), encoding="utf-8")
+    c = api.campaign_of(path)
+    (planned,) = c.ballbar.planned
+    assert planned.pattern == "BX" and planned.length == 150.0 and c.ballbar.length == 100.0
+    got = _blocks(api.ncgen(run=len(c.ballbar.runs) + 1, campaign=c))
+    s, m = c.ballbar.setups[planned.setup], c.ballbar.mounts[planned.mount]
+    angle = 2.5 * np.arange(37)
+    t = pattern_commands("BX", R_B=s.R_B, Z_C=m.Z_C, R_C=m.R_C, L_B=150.0, angles_deg=angle)
+    want = np.c_[np.c_[t.X, t.Y, t.Z] - _nc_origin(s, m), angle, np.zeros(len(angle))]
+    np.testing.assert_allclose(got, want, rtol=0, atol=0.5e-4 + 1e-9)
