@@ -50,9 +50,9 @@ from .. import units
 from ..campaign import Run, Setup
 from ..errors import InputError, ParameterError
 from ..machines.description import FRAME, Axis, MachineDescription
-from ..machines.plugins import provided
 from ..machines.patterns import (PatternCommands, axis_of, default_arc_deg, nominal_down, pattern_commands,
                                  placement_commands, tool_home)
+from ..machines.plugins import provided
 from ..units import fixed
 from .machine_reader import description_of
 from .nc_axes import DECIMALS, axis_block, axis_letters, comment
