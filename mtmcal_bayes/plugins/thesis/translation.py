@@ -53,9 +53,11 @@ def bar_reversed(pattern: str, cr_geometry: str) -> bool:
 
 def run_placement(campaign, pattern: str, mount) -> tuple[np.ndarray, np.ndarray, bool]:
     """A run of ``pattern`` on ``mount`` of a thesis-format ``campaign`` in the engine's terms: ``(W-ball position
-    (3,) mm, arc (k,) degrees, bar reversed)``; a mount that gives its position (the generic format) is there."""
-    ball = mount.centre() if mount.position is not None else w_ball(mount, pattern)
-    return ball, arc_deg(pattern), bar_reversed(pattern, campaign.ballbar.cr_geometry)
+    (3,) mm, arc (k,) degrees, bar reversed)``; a mount that gives its position (the generic format) is there, the
+    bar on the side the campaign states."""
+    if mount.position is not None:
+        return mount.centre(), arc_deg(pattern), pattern in campaign.ballbar.reversed_patterns
+    return w_ball(mount, pattern), arc_deg(pattern), bar_reversed(pattern, campaign.ballbar.cr_geometry)
 
 
 def table_commands(run, ballbar) -> PatternCommands | None:
