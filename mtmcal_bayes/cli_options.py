@@ -221,8 +221,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     _design_goal(s, contraction_default=None)
     s.add_argument("-o", "--output", metavar="DIR", help="write the re-planned campaign.toml and programs to DIR")
 
-    s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern, of a campaign's ball-bar "
-                 "run or of a probe run, in the machine's program format (the thesis machine's: Fig 4.30(a))",
+    s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern, of a campaign's "
+                 "ball-bar run or of a probe run, in the machine's program format (the thesis machine's: Fig 4.30(a))",
                  campaign=None, json_help=None)
     s.add_argument("pattern", nargs="?", metavar="PATTERN", help="<rotary axis><R|T|A|X|Y|Z>, e.g. BX on the thesis "
                    "machine, AR on a trunnion (with --run/--probe: the campaign)")

@@ -313,8 +313,8 @@ def _chain_ballbar(program: BallbarProgram, decimals: int) -> str:
         f"machine: {desc.name or 'described machine'}, {desc.configuration}",
         f"pattern {run.pattern}: {ax.letter} from {arc[0]:g} to {arc[-1]:g} deg{step}, {k} points; bar "
         + _DIRECTION[run.pattern[1]].format(K=ax.letter) + f"; held: {held_text}",
-        f"setup {run.setup}: tool length R_B {program.length:g} mm from the spindle point; mount {run.mount}: W ball at "
-        + " ".join(f"{a}{v:g}" for a, v in zip(FRAME, program.ball)) + " mm at the home pose",
+        f"setup {run.setup}: tool length R_B {program.length:g} mm from the spindle point; mount {run.mount}: W ball "
+        "at " + " ".join(f"{a}{v:g}" for a, v in zip(FRAME, program.ball)) + " mm at the home pose",
         f"bar {program.bar:g} mm; before this program the W ball is set where the dummy sphere in the spindle sits at "
         + axis_block(_words(letters, place, 0), motion="", decimals=decimals).strip(),
         _COMMANDS_NOTE,
@@ -377,7 +377,7 @@ def probe_program(campaign, probe_run, *, touch_radius_mm: float = TOUCH_RADIUS_
                   clearance_mm: float = CLEARANCE_MM, overtravel_mm: float = OVERTRAVEL_MM, feed: float = PROBE_FEED,
                   decimals: int = DECIMALS) -> str:
     """The NC program of touch-probe run ``probe_run`` (a :class:`~mtmcal_bayes.campaign.ProbeRun`: indexed
-    positions, sphere, stylus) of a described ``campaign``, as text (see the module docstring).
+    positions, sphere, stylus) of ``campaign``, as text in the engine's format (see the module docstring).
     ``touch_radius_mm``: sphere radius plus stylus-ball radius; ``clearance_mm`` before contact,
     ``overtravel_mm`` past it; ``feed`` of the skip moves, mm/min."""
     desc = description_of(campaign.machine)
