@@ -336,40 +336,26 @@ def ncgen(pattern: str | None = None, *, campaign: CampaignLike = None, R_B_mm: 
           step_deg: float | None = None, feed: float | None = None, n: int | None = None, setup: str | None = None,
           mount: str | None = None, run: int | None = None, probe: str | None = None, arc_deg=None,
           hold_deg: dict | None = None, output=None) -> str:
-    """The measuring NC program of ``pattern`` (thesis Fig 4.30(a) for BX), as text; ``output`` receives it.
+    """The measuring NC program of ``pattern`` at ``setup`` and ``mount``, of the campaign's ``run``-th ball-bar run
+    (1-based, measured then planned) or of its probe run ``probe`` (id or number), as text; ``output`` receives it.
 
-    ``start`` = (x0, y0, z0) mm places the first block, else the setup's NC origin is used.  Without a
-    campaign but with both ``R_B_mm`` and ``start`` the program needs none (bar 100 mm, R_C = Z_C = 0).
-    ``step_deg`` default 2.5.
-
-    On a described machine (:mod:`~mtmcal_bayes.io.chain_programs`): the program of ``pattern`` at ``setup`` and
-    ``mount`` over ``arc_deg`` = (start, end) degrees by ``step_deg`` with the other rotary axes at ``hold_deg``
-    {letter: degrees}; of the campaign's ``run``-th ball-bar run (1-based); or of its probe run ``probe``.
+    One path on every machine (:func:`~mtmcal_bayes.io.chain_programs.campaign_program`): the pattern over
+    ``arc_deg`` = (start, end) degrees by ``step_deg`` with the other rotary axes at ``hold_deg`` {letter: degrees},
+    its commands through the machine's chain, written in the machine's program format.  ``R_B_mm``, ``start`` and
+    ``n`` are options of a format that takes them (the thesis machine's, Fig 4.30(a): the tool length, the first
+    block's NC position (x0, y0, z0) mm, the number of blocks; default step 2.5°; without a campaign, with
+    ``R_B_mm`` and ``start``, a program from these alone); elsewhere they are refused by name.
     """
-    from .campaign import Machine
-    from .errors import ParameterError
-    from .io.chain_programs import described_program
+    from .io.chain_programs import campaign_program, program_format
     from .io.textfiles import write_text_atomic
-    from .machines.plugins import provided
 
-    c = campaign_of(campaign) if campaign is not None or R_B_mm is None or start is None else None
+    options = {"R_B_mm": R_B_mm, "start": start, "n": n}
+    c = campaign_of(campaign)
+    if campaign is None:  # the built-in campaign, or one its program format makes of its own options
+        c = program_format(c.machine).alone(c, {k: v for k, v in options.items() if v is not None})
     _writable(output, "program")
-    own = provided(c.machine if c is not None else Machine(), "program")  # a plug-in's program format (Fig 4.30(a))
-    if own is not None:
-        given = next((k for k, v in (("run", run), ("probe", probe), ("arc_deg", arc_deg), ("hold_deg", hold_deg))
-                      if v is not None), None)
-        if given:
-            raise ParameterError(given, "for a described machine's campaign only; the thesis machine's "
-                                 "programs are of a pattern and its step")
-        text = own(pattern, c, R_B_mm=R_B_mm, start=start, step_deg=2.5 if step_deg is None else step_deg,
-                   feed=feed, n=n, setup=setup, mount=mount)
-    else:
-        given = next((k for k, v in (("R_B_mm", R_B_mm), ("start", start), ("n", n)) if v is not None), None)
-        if given:
-            raise ParameterError(given, "for the thesis machine only: a described machine's program commands its "
-                                 "description's axis positions")
-        text = described_program(c, pattern=pattern, run=run, probe=probe, setup=setup, mount=mount,
-                                 arc_deg=arc_deg, step_deg=step_deg, hold_deg=hold_deg, feed=feed)
+    text = campaign_program(c, pattern=pattern, run=run, probe=probe, setup=setup, mount=mount, arc_deg=arc_deg,
+                            step_deg=step_deg, hold_deg=hold_deg, feed=feed, options=options)
     if output is not None:
         write_text_atomic(output, text)
     return text
@@ -715,15 +701,10 @@ def _time_items(c: Campaign, times) -> dict:
 
 
 def _program(campaign, planned) -> str:
-    """The measuring program of a planned run of ``campaign`` (a designed one), in its machine's plug-in's format
-    where it has one (the thesis': Fig 4.30(a))."""
+    """The measuring program of a planned run of ``campaign`` (a designed one), in its machine's program format,
+    with the campaign's feed."""
     from .io.chain_programs import ballbar_program
-    from .machines.plugins import provided
 
-    own = provided(campaign.machine, "program")
-    if own is not None:
-        return own(planned.pattern, campaign, setup=planned.setup, mount=planned.mount,
-                   feed=campaign.ballbar.feed_mm_per_min)
     return ballbar_program(campaign, planned, feed=campaign.ballbar.feed_mm_per_min)
 
 

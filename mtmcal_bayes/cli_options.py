@@ -221,32 +221,37 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     _design_goal(s, contraction_default=None)
     s.add_argument("-o", "--output", metavar="DIR", help="write the re-planned campaign.toml and programs to DIR")
 
-    s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern (e.g. thesis Fig 4.30(a)), "
-                 "or of a described machine's ball-bar or probe run", campaign=None, json_help=None)
-    s.add_argument("pattern", nargs="?", metavar="PATTERN", help="thesis machine: one of BR BT BA BX BY BZ CR CT CA CX "
-                   "CY CZ; a described machine: <rotary axis><R|T|A|X|Y|Z>, e.g. AR (with --run/--probe: the campaign)")
+    s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern, of a campaign's "
+                 "ball-bar run or of a probe run, in the machine's program format (the thesis machine's: Fig 4.30(a))",
+                 campaign=None, json_help=None)
+    s.add_argument("pattern", nargs="?", metavar="PATTERN", help="<rotary axis><R|T|A|X|Y|Z>, e.g. BX on the thesis "
+                   "machine, AR on a trunnion (with --run/--probe: the campaign)")
     s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign whose setup geometry to use (default: thesis)")
     s.add_argument("--machine", choices=list(BUILTIN_TYPES), default=None, metavar="TYPE",
                    help="instead of CAMPAIGN, the demo campaign of a built-in machine type: " + ", ".join(BUILTIN_TYPES))
-    s.add_argument("--R-B-mm", dest="R_B_mm", type=float, default=None, help="tool length R_B, mm (default: the setup's)")
-    s.add_argument("--x0", type=float, default=None, help="NC X of the first block, mm (with --z0)")
+    s.add_argument("--R-B-mm", dest="R_B_mm", type=float, default=None, help="a format that takes it (the thesis "
+                   "machine's): tool length R_B, mm (default: the setup's)")
+    s.add_argument("--x0", type=float, default=None, help="a format that takes it (the thesis machine's): NC X of the "
+                   "first block, mm (with --z0)")
     s.add_argument("--y0", type=float, default=0.0, help="NC Y of the first block, mm (default 0)")
     s.add_argument("--z0", type=float, default=None, help="NC Z of the first block, mm (with --x0)")
-    s.add_argument("--step-deg", type=float, default=None, help="B or C step, degrees (default 2.5; a described "
-                   "machine: the run's, or 1 with --arc-deg)")
-    s.add_argument("--feed", type=float, default=None, help="feed word F (default none; a described machine: the "
-                   "campaign's feed_mm_per_min, the probing moves F100)")
-    s.add_argument("-n", type=int, default=None, help="number of blocks (default: 0–90° for B, one turn for C)")
-    s.add_argument("--setup", default=None, help="campaign setup for R_B and the NC origin (default: that of BX; "
-                   "a described machine: that of the pattern's first run)")
-    s.add_argument("--mount", default=None, help="campaign mount for Z_C, R_C (a described machine: the W ball's)")
-    s.add_argument("--run", type=int, default=None, metavar="N", help="a described machine: the campaign's N-th "
-                   "ball-bar run (from 1)")
-    s.add_argument("--probe", default=None, metavar="ID", help="a described machine: the probe run ID (or its number)")
+    s.add_argument("--step-deg", type=float, default=None, help="the swivelled axis' step, degrees (default: the "
+                   "format's, 2.5 on the thesis machine; else the run's arc, or 1 with --arc-deg)")
+    s.add_argument("--feed", type=float, default=None, help="feed word F (default: the campaign's feed_mm_per_min "
+                   "where the format takes it, none on the thesis machine; the probing moves F100)")
+    s.add_argument("-n", type=int, default=None, help="a format that takes it (the thesis machine's): number of "
+                   "blocks (default: the arc's span, B 0–90°, C one turn)")
+    s.add_argument("--setup", default=None, help="campaign setup for the tool length (default: that of the pattern's "
+                   "first run, else the first)")
+    s.add_argument("--mount", default=None, help="campaign mount of the W ball (default: that of the pattern's first "
+                   "run, else the first that serves the pattern)")
+    s.add_argument("--run", type=int, default=None, metavar="N", help="the campaign's N-th ball-bar run (from 1; "
+                   "measured, then planned)")
+    s.add_argument("--probe", default=None, metavar="ID", help="the probe run ID (or its number) of [[probe.runs]]")
     s.add_argument("--arc-deg", type=float, nargs=2, default=None, metavar=("START", "END"),
-                   help="a described machine: the swivelled axis' arc, degrees (default: the axis' grid)")
+                   help="the swivelled axis' arc, degrees (default: the campaign format's or the axis' grid)")
     s.add_argument("--hold", dest="hold_deg", type=_hold, action="append", default=None, metavar="AXIS=DEG",
-                   help="a described machine: a held rotary axis' position, e.g. A=-45 (repeatable; default 0)")
+                   help="a held rotary axis' position, e.g. A=-45 (repeatable; default 0)")
     s.add_argument("-o", "--output", metavar="FILE.nc", help="write the program to FILE (default: print)")
 
     _command(sub, "instruments", handlers["instruments"], "do the ball bar and the touch probe agree? consistency, each "

@@ -24,8 +24,11 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   (the engine's: the description's chain), ``compensation_methods`` and ``compensation_values`` (``{name:
   function}``, beside the engine's exact method and posterior values), ``compensation_posterior(campaign)`` — its
   default posterior (:mod:`mtmcal_bayes.compensation.compensate`);
-* and, while the engine still has two paths for them, the whole of a command (``report``, ``program``, ...):
-  each one the engine takes over is one contribution fewer.
+* ``program_format`` — how its measuring programs are written (the engine selects, checks and computes them on
+  every machine: :mod:`mtmcal_bayes.io.chain_programs`, whose ``ChainFormat`` is the engine's own and states the
+  protocol: its own options, default step, grid, tool length, the writer);
+* and, while the engine still has two paths for them, the whole of a command (``report``, ...): each one the engine
+  takes over is one contribution fewer.
 
 The engine never asks which machine it holds: it asks :func:`provided` for a contribution and uses its own where no
 plug-in gives one.  This module is the one place that resolves a machine's plug-ins; the plug-ins are loaded by

@@ -18,7 +18,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   W ball on the C axis (Table 2.2), and the geometry line of its sensitivity table (Tables 2.4–2.6);
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
   section of them (thesis values recomputed);
-* **its program format**: the measuring programs of its patterns as Fig 4.30(a) writes them;
+* **its program format**: how Fig 4.30(a) writes a ball-bar program (its blocks, NC frame, grid and options ``R_B_mm``,
+  ``start``, ``n``), which the engine's one path of ``ncgen`` and ``design`` writes with;
 * **its parts of the engine's compensation**: its kinematic models' tool point in their model frame (which the
   engine's Newton inverts), Eqs 3.4–3.13 as printed (``method="thesis"``), the published ball-bar values
   (``values="ballbar"``) and its default posterior (the closed form at σ_model 2 µm from the ball bar).
@@ -26,8 +27,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
 The package holds the thesis' own code beside these contributions: :mod:`.linear`, :mod:`.kinematic`,
 :mod:`.probe_model`, :mod:`.htm` (its models) and :mod:`.translation`, :mod:`.names`, :mod:`.campaign_keys` and
 :mod:`.campaign_document` (its names and keys), :mod:`.identification` (Eqs 4.10–4.18, 5.1–5.19),
-:mod:`.compensation` (Eqs 3.4–3.13 and the tool point of its models), :mod:`.program_format` and
-:mod:`.measuring` (Fig 4.30(a)), :mod:`.report_section`.  No layer of the package imports them: the engine asks the machine
+:mod:`.compensation` (Eqs 3.4–3.13 and the tool point of its models), :mod:`.program_format` (Fig 4.30(a)),
+:mod:`.report_section`.  No layer of the package imports them: the engine asks the machine
 (:func:`mtmcal_bayes.machines.plugins.provided`).  Each contribution imports its code when asked for, so loading the
 plug-in costs nothing.
 """
@@ -249,14 +250,6 @@ def probe_layout(campaign):
     return ProbeLayout(campaign)
 
 
-def program(pattern: str, campaign=None, **options) -> str:
-    """The measuring NC program of a thesis pattern in the format of Fig 4.30(a) (:func:`~mtmcal_bayes.plugins.thesis.
-    measuring.measuring_program`: ``R_B_mm``, ``start``, ``step_deg``, ``feed``, ``n``, ``setup``, ``mount``)."""
-    from .measuring import measuring_program
-
-    return measuring_program(pattern, campaign, **options)
-
-
 def report_section(page, ident, effect, sigma_um: float) -> None:
     """The report's section "Thesis values recomputed": ``ident`` (its identification) beside the printed values,
     its checks and assumptions, and ``effect`` (a DataFrame or ``None``), that of dx_BT = 0 at ``sigma_um`` µm."""
@@ -301,7 +294,6 @@ class ThesisPlugin:
     sample_notes = staticmethod(sample_notes)
     assumption_effect = staticmethod(assumption_effect)
     report_section = staticmethod(report_section)
-    program = staticmethod(program)
     compensation_kinematics = staticmethod(compensation_kinematics)
     compensation_methods = {"thesis": printed_method}
     compensation_values = {"ballbar": ballbar_values}
@@ -319,6 +311,13 @@ class ThesisPlugin:
     def ballbar_keys(self):
         """Its keys of ``[ballbar]`` (:func:`ballbar_keys`)."""
         return ballbar_keys()
+
+    @property
+    def program_format(self):
+        """Its program format: Fig 4.30(a)'s blocks in its NC frame (:class:`.program_format.Fig430Format`)."""
+        from .program_format import FORMAT
+
+        return FORMAT
 
     @property
     def planning(self):

@@ -10,8 +10,8 @@ the engine's patterns (:mod:`mtmcal_bayes.machines.patterns`), which a campaign 
 (``run_commands``, :func:`table_commands`: the bits of the published numbers; the engine's equal them to
 rounding).  Through these the engine's ball-bar model (:class:`~mtmcal_bayes.models.ballbar.BallbarModel`) with
 the chain is the thesis machine's ``chain`` model (``tests/test_chain.py``), its reading frames are those of Tables 2.2/2.3 (``tests/test_conventions_machines.py``),
-and the engine's :func:`~mtmcal_bayes.machines.patterns.pattern_commands` gives the commands of Tables 2.2/2.3
-(:func:`commands`: the programs of Fig 4.30(a), the planner's feasibility and clock).
+and the engine's :func:`~mtmcal_bayes.machines.patterns.pattern_commands` gives the commands of Tables 2.2/2.3 at
+these W balls (:func:`run_placement`: the programs of ``ncgen``, the planner's feasibility and clock).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ import functools
 import numpy as np
 
 from ...io.machine_reader import description_of
-from ...machines.patterns import PatternCommands, pattern_commands
+from ...machines.patterns import PatternCommands
 from ...pattern_frames import chain_frame
 from ...patterns import B_ANGLES_DEG, B_PATTERNS, C_ANGLES_DEG, PATTERNS
 from .pattern_tables import pattern_commands as tables
@@ -53,18 +53,11 @@ def bar_reversed(pattern: str, cr_geometry: str) -> bool:
 
 def run_placement(campaign, pattern: str, mount) -> tuple[np.ndarray, np.ndarray, bool]:
     """A run of ``pattern`` on ``mount`` of a thesis-format ``campaign`` in the engine's terms: ``(W-ball position
-    (3,) mm, arc (k,) degrees, bar reversed)``."""
+    (3,) mm, arc (k,) degrees, bar reversed)``; a mount that gives its position (the generic format) is there, the
+    bar on the side the campaign states."""
+    if mount.position is not None:
+        return mount.centre(), arc_deg(pattern), pattern in campaign.ballbar.reversed_patterns
     return w_ball(mount, pattern), arc_deg(pattern), bar_reversed(pattern, campaign.ballbar.cr_geometry)
-
-
-def commands(desc, pattern: str, *, R_B: float, mount, L_B: float, cr_geometry: str = "RC-LB",
-             angles_deg=None) -> PatternCommands:
-    """The engine's commands of a thesis pattern (those of Tables 2.2/2.3): tool length ``R_B``, W ball on ``mount``,
-    bar ``L_B`` (mm), over ``angles_deg`` (default the thesis' grid, :func:`arc_deg`) on the thesis machine's
-    description ``desc``."""
-    return pattern_commands(desc, pattern, length=R_B, ball=w_ball(mount, pattern), bar=L_B,
-                            arc_deg=arc_deg(pattern) if angles_deg is None else angles_deg,
-                            reverse=bar_reversed(pattern, cr_geometry))
 
 
 def table_commands(run, ballbar) -> PatternCommands | None:

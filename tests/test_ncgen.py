@@ -1,9 +1,11 @@
-"""Measuring programs of a described machine (``ncgen``, :mod:`mtmcal_bayes.io.chain_programs`).
+"""Measuring programs (``ncgen``, :mod:`mtmcal_bayes.io.chain_programs`): one path for every machine.
 
-Each program is read back and its commanded positions are put through the nominal chain (models/chain.py, no
-deviations), an implementation independent of the pattern code that wrote them: a ball-bar program holds the bar
-length at every block of its arc, a probe program indexes the run's angles and probes the sphere from five
-directions at the stated distances.
+Each program of a demo machine is read back and its commanded positions are put through the nominal chain
+(models/chain.py, no deviations), an implementation independent of the pattern code that wrote them: a ball-bar
+program holds the bar length at every block of its arc, a probe program indexes the run's angles and probes the
+sphere from five directions at the stated distances.  The thesis machine's programs (its format, Fig 4.30(a)) are
+checked against Tables 2.2/2.3 in ``tests/test_thesis_programs.py``; selection, planned runs and refusals are
+checked here on every built-in type.
 """
 
 from __future__ import annotations
@@ -14,13 +16,15 @@ import pytest
 import mtmcal_bayes as mb
 from mtmcal_bayes.campaign import ProbeRun, Run
 from mtmcal_bayes.io.chain_programs import ballbar_program, probe_program
-from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, demo_campaign
+from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, builtin_description, demo_campaign
 from mtmcal_bayes.io.nc_axes import axis_letters, read_axis_blocks
 from mtmcal_bayes.machines.patterns import placement_commands, tool_home
 from mtmcal_bayes.models.chain import Chain
 from tests.variants import probe_only, sections_dropped
 
-DESCRIBED = [t for t in BUILTIN_TYPES if t != "integrex-i200"]
+#: the built-in types with a demo campaign in the generic format ([[probe.runs]], W-ball positions): their programs
+#: are in the engine's format, read back through the chain
+DEMOS = [t for t in BUILTIN_TYPES if demo_campaign(t) is not None]
 #: decimals of the programs checked to 1e-9 mm (the default 4 rounds each word to 0.05 µm)
 EXACT = 10
 
@@ -50,7 +54,7 @@ def _bar_lengths(campaign, run, blocks) -> np.ndarray:
     return np.linalg.norm(T - W, axis=-1)[0]
 
 
-@pytest.mark.parametrize("machine", DESCRIBED)
+@pytest.mark.parametrize("machine", DEMOS)
 def test_each_ballbar_program_holds_the_bar_length_over_the_runs_arc(machine):
     c = _campaign(machine)
     desc = c.machine.description
@@ -71,7 +75,7 @@ def test_each_ballbar_program_holds_the_bar_length_over_the_runs_arc(machine):
         assert np.max(np.abs(_bar_lengths(c, run, printed) - c.ballbar.length)) <= np.sqrt(3) * 0.5e-4
 
 
-@pytest.mark.parametrize("machine", DESCRIBED)
+@pytest.mark.parametrize("machine", DEMOS)
 def test_each_probe_program_indexes_the_runs_angles_and_probes_the_sphere(machine):
     c = _campaign(machine)
     desc = c.machine.description
@@ -112,7 +116,7 @@ def test_a_planned_run_gets_its_program_without_readings():
     assert probe_program(c, planned) == probe_program(c, run).replace("touch-probe run sphere", "touch-probe run p")
 
 
-def test_the_cli_writes_a_described_program(run_cli, tmp_path):
+def test_the_cli_writes_a_pattern_run_and_probe_program(run_cli, tmp_path):
     out = tmp_path / "ar.nc"
     code, _, err = run_cli("ncgen", "AR", "--machine", "trunnion", "--arc-deg", "-30", "30", "--step-deg", "5",
                            "--hold", "C=90", "--feed", "500", "-o", out)
@@ -134,26 +138,37 @@ def test_the_cli_writes_a_described_program(run_cli, tmp_path):
     (["AR", "--hold", "B=3"], "--hold: B is not a held rotary axis of AR"),
     (["--run", "9"], "--run: the campaign has 8 ball-bar runs"),
     (["--probe", "x"], "--probe: no probe run 'x'"),
-    (["AR", "--x0", "1", "--z0", "2"], "--x0/--y0/--z0: for the thesis machine only"),
+    (["AR", "--x0", "1", "--z0", "2"], "--x0/--y0/--z0: not an option of this machine's program format"),
+    (["AR", "-n", "10"], "-n: not an option of this machine's program format"),
+    (["AR", "--R-B-mm", "300"], "--R-B-mm: not an option of this machine's program format"),
 ])
-def test_bad_described_input_is_one_line_and_writes_nothing(run_cli, tmp_path, argv, key):
+def test_bad_input_is_one_line_and_writes_nothing(run_cli, tmp_path, argv, key):
     out = tmp_path / "out.nc"
     code, text, err = run_cli("ncgen", *argv, "--machine", "trunnion", "-o", out)
     assert code == 2 and len(err.strip().splitlines()) == 1 and key in err, err
     assert not out.exists() and text == ""
 
 
-def test_the_thesis_machine_refuses_the_described_options(run_cli):
-    code, _, err = run_cli("ncgen", "BX", "--arc-deg", "0", "90")
-    assert code == 2 and "--arc-deg: for a described machine's campaign only" in err, err
+def test_options_a_format_takes_are_refused_with_a_probe_run(run_cli):
+    """The thesis machine's format options (R_B_mm, start, n) are a ball-bar program's: with a probe run, refused."""
+    code, _, err = run_cli("ncgen", "--probe", "1", "--machine", "head-head", "-n", "5")
+    assert code == 2 and "-n: not an option of this machine's program format" in err, err
+    code, _, err = run_cli("ncgen", "--probe", "1", "-n", "5")
+    assert code == 2 and "-n: an option of a ball-bar program, not of a probe run's" in err, err
 
 
 def _demo_text(machine) -> str:
-    with open(demo_campaign(machine), encoding="utf-8") as f:
+    """The TOML text of ``machine``'s demo campaign (the thesis machine's: the built-in thesis campaign)."""
+    from mtmcal_bayes.datasets import builtin_campaign_text
+
+    path = demo_campaign(machine)
+    if path is None:
+        return builtin_campaign_text()[0]
+    with open(path, encoding="utf-8") as f:
         return f.read()
 
 
-@pytest.mark.parametrize("machine", DESCRIBED)
+@pytest.mark.parametrize("machine", DEMOS)
 def test_ncgen_on_a_campaign_without_what_the_option_needs_is_one_line_naming_file_and_key(run_cli, tmp_path,
                                                                                            machine):
     """Issue 42, defect 6: ``--probe`` without ``[probe]``, ``--run`` without ball-bar runs, a pattern without
@@ -176,13 +191,15 @@ def test_ncgen_on_a_campaign_without_what_the_option_needs_is_one_line_naming_fi
         assert code == 0 and stdout.rstrip().endswith("M30"), err
 
 
-@pytest.mark.parametrize("machine", DESCRIBED)
+@pytest.mark.parametrize("machine", BUILTIN_TYPES)
 def test_ncgen_run_counts_the_planned_runs_after_the_measured_ones(run_cli, tmp_path, machine):
     """A designed campaign's planned runs get programs by number (as saved: the measured runs, then the planned
     ones in measuring order), the same program a measured run at that geometry gets."""
     import re
 
     text = sections_dropped(_demo_text(machine), "probe", "truth")
+    # a planned run has no readings, so no traces and no reading rejected for it
+    text = "\n".join(ln for ln in text.splitlines() if not ln.startswith(("alternative_", "trace_"))) + "\n"
     planned = tmp_path / "planned.toml"
     planned.write_text(re.sub(r"^(e[xyz]_um = \[.*\]\n)+", "planned = true\nrepeats = 3\n", text, flags=re.M),
                        encoding="utf-8")
@@ -194,7 +211,7 @@ def test_ncgen_run_counts_the_planned_runs_after_the_measured_ones(run_cli, tmp_
     code, program, err = run_cli("ncgen", "--run", n, planned)
     assert code == 0, err
     code, same, err = run_cli("ncgen", "--run", n, measured)
-    assert code == 0 and program.replace("planned.toml", "measured.toml") == same, err
+    assert code == 0 and "G01 " in program and program.replace("planned.toml", "measured.toml") == same, err
     code, _, err = run_cli("ncgen", "--run", n + 1, planned)
     assert code == 2 and f"--run: the campaign has {n} ball-bar runs" in err, err
 
@@ -211,4 +228,24 @@ def test_ncgen_on_a_thesis_campaign_without_runs_writes_from_its_setups(run_cli,
     code0, builtin, _ = run_cli("ncgen", "BX")
     assert code == code0 == 0 and program == builtin, err
     code, _, err = run_cli("ncgen", "--probe", "1", path)
-    assert code == 2 and "--probe: for a described machine's campaign only" in err, err
+    assert code == 2 and f"{path}: probe.runs: no [[probe.runs]]" in err and "[probe.c_axis]" in err, err
+
+
+@pytest.mark.parametrize("machine", [t for t in BUILTIN_TYPES
+                                     if any(a.work_side for a in builtin_description(t).rotary_axes)])
+def test_a_pattern_without_a_run_defaults_to_a_mount_its_axis_moves(machine):
+    """``ncgen <K>X`` of a workpiece-side axis K with no run of its own: the default mount is one whose W ball K
+    carries round (off K's line), so the linear axes follow it; a ball on K's line would leave them still (the
+    vertical turn-mill's first mount sits on the C axis)."""
+    from mtmcal_bayes.io.machine_reader import description_of
+
+    c = mb.load_campaign(demo_campaign(machine))
+    desc = description_of(c.machine)
+    letters = axis_letters(desc)
+    work = [a.letter for a in desc.rotary_axes if a.work_side]
+    for K in work:
+        assert not any(r.pattern == K + "X" for r in c.ballbar.runs)
+        arc = [b for b in read_axis_blocks(mb.ncgen(K + "X", campaign=c), letters) if b.motion == "G01"]
+        xyz = np.array([[b.position[a] for a in "XYZ"] for b in arc])
+        assert np.ptp(xyz, axis=0).max() > 1.0, (machine, K)
+
