@@ -149,8 +149,11 @@ def catalogue(campaign) -> list[Candidate]:
     out: list[Candidate] = []
 
     def add(name, kind, pattern, setup, *, m, length=L, hold=(), repeat_of=None, arc=None, extension=None):
-        out.append(Candidate(name, kind, pattern, setup, m, length, DEFAULT_REPEATS, repeat_of,
-                             setup.R_B - base.R_B if extension is None else extension, arc, tuple(hold or ())))
+        # a new run's tool-length extension over the primary set-up; a repeat of a measured run has none
+        if extension is None and repeat_of is None:
+            extension = setup.R_B - base.R_B
+        out.append(Candidate(name, kind, pattern, setup, m, length, DEFAULT_REPEATS, repeat_of, extension, arc,
+                             tuple(hold or ())))
 
     measured = {(r.pattern, r.setup, r.mount, tuple(sorted((r.hold_deg or {}).items()))) for r in bb.runs}
     for p, w in pairs:
