@@ -19,7 +19,7 @@ from mtmcal_bayes.conventions import run_matrix
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.io.tomlio import dumps
 from mtmcal_bayes.machines.patterns import components
-from mtmcal_bayes.models.chain_models import ChainBallbarModel
+from mtmcal_bayes.models.ballbar import ChainBallbarModel
 from mtmcal_bayes.observations import Observations
 from mtmcal_bayes.simulation.simulate import planned_as_runs
 from mtmcal_bayes.units import ARCSEC
@@ -59,7 +59,7 @@ def test_traces_of_every_machine_read_back_to_its_chain_eccentricities(machine, 
     doc = _demo(machine)
     measured = [r for r in doc["ballbar"]["runs"] if not r.get("planned")]
     assert len(measured) == len(c.ballbar.runs) > 0
-    for i, (dL, run, table) in enumerate(zip(fm.traces(theta[None]), c.ballbar.runs, measured)):
+    for i, ((_, dL), run, table) in enumerate(zip(fm.traces(theta[None]), c.ballbar.runs, measured)):
         angles = c.ballbar.arc_of(run)
         rows = ["angle_deg,dL_um,direction"]
         for direction, order in (("CW", slice(None)), ("CCW", slice(None, None, -1))):
