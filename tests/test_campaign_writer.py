@@ -1,9 +1,9 @@
 """One campaign writer for every machine (issue 42): what the one reader reads, the one writer writes back.
 
 On the thesis campaign, designed campaigns (the thesis' and a demo's, as ``design -o`` wrote them), the three demos,
-a probe-only campaign, campaigns with traces and with a reading chosen over another, and a campaign of each format
-with everything else the reader takes (priors, tolerances, truth, design, date, temperature, travels, planned runs
-with their own geometry): save → load gives the same campaign, and save → load → save the same bytes.
+a probe-only campaign, campaigns with traces, with DPRNT files and with a reading chosen over another, and a campaign
+of each format with everything else the reader takes (priors, tolerances, truth, design, date, temperature, travels,
+planned runs with their own geometry): save → load gives the same campaign, and save → load → save the same bytes.
 
 "The same": every key the reader fills equal; numbers to 1e-11 relative, as the writer keeps 12 significant digits
 of each (:func:`mtmcal_bayes.io.tomlio._float`), which a mm ↔ µm conversion and back moves by at most one unit of
@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes import api, load_campaign, save_campaign
-from mtmcal_bayes.datasets import builtin_campaign_text
+from mtmcal_bayes.datasets import builtin_campaign_text, data_path
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.io.tomlio import dumps
 from mtmcal_bayes.machines.deviations import generated
@@ -101,6 +101,21 @@ def _thesis_traces(tmp_path: Path) -> Path:
     return _write(tmp_path, "thesis_traces.toml", text)
 
 
+def _thesis_dprnt(tmp_path: Path) -> Path:
+    """The thesis campaign with its C-axis run read from DPRNT files in a folder of their own (the published one at
+    every angle: what is written back is the files' names, relative to the saved campaign)."""
+    doc = tomllib.loads(builtin_campaign_text()[0])
+    c = doc["probe"]["c_axis"]
+    (tmp_path / "dprnt").mkdir()
+    names = []
+    for i in range(len(c["angles_deg"])):
+        names.append(f"dprnt/c{i}.txt")
+        (tmp_path / names[-1]).write_bytes(data_path("fig5_13_dprnt_output.txt").read_bytes())
+    del c["centres_mm"]
+    c["dprnt"] = names
+    return _write(tmp_path, "thesis_dprnt.toml", dumps(doc))
+
+
 def _demo_traces(tmp_path: Path) -> Path:
     """A demo whose every measured run is read from a trace file the chain simulates (deviations up to 100″ /
     100 µm, an offset r0 of 12.5 µm; CW, then CCW reversed)."""
@@ -151,6 +166,7 @@ CASES = {
     "thesis probe readings of the first format": lambda tmp: DATA / "formats" / "thesis_first_published.toml",
     "thesis extras": _thesis_extras,
     "thesis traces": _thesis_traces,
+    "thesis DPRNT": _thesis_dprnt,
     **{t: (lambda tmp, t=t: Path(demo_campaign(t))) for t in TYPES},
     "demo probe only": lambda tmp: DATA / "controller_cycles" / "trunnion-cycle.toml",
     "demo extras": _demo_extras,
@@ -161,13 +177,14 @@ CASES = {
 
 @pytest.mark.parametrize("case", [*CASES, "demo designed"])
 def test_save_load_is_the_campaign_and_save_load_save_the_bytes(case, tmp_path, request):
-    """Saved into another folder (trace files then written relative to it) and read back: the same campaign;
-    saved again from what was read: the same bytes."""
+    """Saved into another folder (trace and DPRNT files then named relative to it, not by their absolute path) and
+    read back: the same campaign; saved again from what was read: the same bytes."""
     source = request.getfixturevalue("designed_demo") if case == "demo designed" else CASES[case](tmp_path)
     original = load_campaign(source)
     out = tmp_path / "saved"
     out.mkdir()
     save_campaign(original, out / "a.toml")
+    assert str(tmp_path) not in (out / "a.toml").read_text(encoding="utf-8")  # files named relative to it
     back = load_campaign(out / "a.toml")
     _same_campaign(original, back)
     save_campaign(back, out / "b.toml")
