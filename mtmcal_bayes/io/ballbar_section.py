@@ -12,8 +12,9 @@ components as arrays of repeats (``ex_um``, ``ey_um`` for a pattern about Z; one
 A machine's plug-in may read its own keys in the place of the set-ups' and mounts' (``ballbar_keys``: the thesis'
 lever arms R_B, Z_T, X_T and W-ball mounts Z_C, R_C, its ``cr_geometry``), name its patterns (``patterns``,
 ``pattern_components``), refuse a mount for a pattern (``mount_conflict``) and complete the ball bar in the engine's
-terms (its patterns' arcs and bar sides); everything else is read here alike for every machine.  The same keys
-write its own keys back (``write``, ``write_setup``, ``write_mount``) in the one writer, :mod:`.ballbar_writer`.
+terms (its patterns' arcs and bar sides); everything else is read here alike for every machine.  The same
+``ballbar_keys`` write its keys back (``write``, ``write_setup``, ``write_mount``) for the one writer,
+:mod:`.ballbar_writer`.
 """
 
 from __future__ import annotations
