@@ -12,7 +12,9 @@ components as arrays of repeats (``ex_um``, ``ey_um`` for a pattern about Z; one
 A machine's plug-in may read its own keys in the place of the set-ups' and mounts' (``ballbar_keys``: the thesis'
 lever arms R_B, Z_T, X_T and W-ball mounts Z_C, R_C, its ``cr_geometry``), name its patterns (``patterns``,
 ``pattern_components``), refuse a mount for a pattern (``mount_conflict``) and complete the ball bar in the engine's
-terms (its patterns' arcs and bar sides); everything else is read here alike for every machine.
+terms (its patterns' arcs and bar sides); everything else is read here alike for every machine.  The same
+``ballbar_keys`` write its keys back (``write``, ``write_setup``, ``write_mount``) for the one writer,
+:mod:`.ballbar_writer`.
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ GEOMETRY_KEYS = ("arc_deg", "step_deg", "hold_deg", "reversed")
 
 
 class EngineKeys:
-    """The engine's set-up and mount keys (a plug-in's ``ballbar_keys`` has the same members)."""
+    """The engine's set-up and mount keys, read and written (a plug-in's ``ballbar_keys`` has the same members)."""
 
     keys: tuple[str, ...] = ()  # keys of [ballbar] besides the engine's
     setup_keys = ("R_B_mm",)
@@ -83,6 +85,21 @@ class EngineKeys:
     def complete(ballbar: Ballbar, desc: MachineDescription) -> None:
         """The ball bar in the engine's terms: its runs read against the machine's chain."""
         ballbar.pattern_frames = functools.partial(chain_frame, desc)
+
+    # the writing of the same keys (:mod:`.ballbar_writer`): what ``read``, ``setup`` and ``mount`` read back
+
+    @staticmethod
+    def write(ballbar: Ballbar) -> dict:
+        """Its own keys of ``[ballbar]`` (beside the engine's) as written."""
+        return {}
+
+    @staticmethod
+    def write_setup(s: Setup) -> dict:
+        return {"R_B_mm": s.R_B}
+
+    @staticmethod
+    def write_mount(m: Mount) -> dict:
+        return {"position_mm": [float(x) for x in m.position]}
 
 
 @dataclasses.dataclass

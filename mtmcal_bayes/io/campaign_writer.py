@@ -1,30 +1,96 @@
-"""Writing campaigns as TOML (``mtmcal-campaign/1``): file units, traces relative to the file, atomically."""
+"""Writing campaigns as TOML (``mtmcal-campaign/1``): file units, traces relative to the file, atomically.
+
+One writer for every machine, the inverse of the one reader (:mod:`.campaign_reader`): the format line, date and
+temperature, ``[ballbar]`` (:mod:`.ballbar_writer`), the probe's instrument and repeatability, ``[reported]``,
+``[priors]``, ``[tolerances]``, ``[truth]`` and ``[design]`` are the engine's; the machine contributes what its
+campaign format has of its own — its ``[machine]`` table (``machine_table``), its keys of ``[ballbar]`` (its
+``ballbar_keys``) and its probe's sections (``probe_document``) — and the engine's are used where it gives none
+(a description, :mod:`.description_writer`; ``[[probe.runs]]``).
+"""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 
-from ..campaign import Campaign
+from .. import units
+from ..campaign import Campaign, Probe
 from ..machines.plugins import provided
-from .description_writer import described_to_dict
-from .campaign_reader import FORMAT
+from ..parameters import quantity_unit
+from .ballbar_section import EngineKeys
+from .ballbar_writer import ballbar_to_dict, relative_path
+from .campaign_reader import FORMAT, deviation_quantities
+from .description_writer import machine_table
+from .design_table import design_to_dict
 from .textfiles import write_text_atomic
-from .tomlio import dumps
+from .tomlio import Fixed, dumps
+from .truth_table import truth_to_dict
 
 
 def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
     """The TOML document of a campaign (file units), as nested dicts.
 
-    Trace files are written relative to ``save_dir`` (absolute when ``None``).
+    Trace and DPRNT files are written relative to ``save_dir`` (absolute when ``None``).
     """
     doc: dict = {"format": FORMAT}
     if c.date is not None:
         doc["date"] = c.date
     if c.temperature_C is not None:
         doc["temperature_C"] = c.temperature_C
-    write = provided(c.machine, "campaign_document", described_to_dict)  # a plug-in's campaign keys
-    return write(c, doc, save_dir)
+    m = c.machine
+    doc["machine"] = provided(m, "machine_table", machine_table)(m)
+    ballbar = ballbar_to_dict(c, provided(m, "ballbar_keys", EngineKeys), save_dir)
+    if ballbar is not None:
+        doc["ballbar"] = ballbar
+    if c.probe is not None:
+        doc["probe"] = _probe(c, lambda name: relative_path(c, name, save_dir))
+    quantities = provided(m, "quantity_table") or deviation_quantities(m)  # the names the reader takes
+
+    def unit(name: str) -> str:  # a quantity's, a nuisance term's or a discrepancy scale's
+        return quantities[name].unit if name in quantities else quantity_unit(name)
+
+    if c.reported:
+        doc["reported"] = {method: {f"{n}_{v.unit}": Fixed(units.from_internal(v.value, v.unit), v.decimals)
+                                    for n, v in values.items()} for method, values in c.reported.items()}
+    if c.priors:
+        doc["priors"] = {name: {"dist": spec["dist"], **{f"{k}_{unit(name)}": units.from_internal(v, unit(name))
+                                                        for k, v in spec.items() if k != "dist"}}
+                         for name, spec in c.priors.items()}
+    if c.tolerances:
+        doc["tolerances"] = {f"{name}_{unit(name)}": _tolerance(t, unit(name)) for name, t in c.tolerances.items()}
+    if c.truth is not None:
+        doc["truth"] = truth_to_dict(c.truth)
+    if c.design is not None:
+        doc["design"] = design_to_dict(c.design, quantities)
+    return doc
+
+
+def _probe(c: Campaign, path_of: Callable[[str], str]) -> dict:
+    """``[probe]``: its instrument and repeatability, then its runs in the machine's format (a plug-in's
+    ``probe_document``, else ``[probe.styli]`` and ``[[probe.runs]]``); ``path_of`` writes a file's name as seen
+    from the saved file."""
+    p = c.probe
+    d: dict = {"instrument": p.instrument} if p.instrument else {}
+    if p.repeatability is not None:
+        d["repeatability_um"] = units.from_internal(p.repeatability, "um")
+    d.update(provided(c.machine, "probe_document", probe_runs)(p, path_of))
+    return d
+
+
+def probe_runs(p: Probe, path_of: Callable[[str], str]) -> dict:
+    """The engine's keys of ``[probe]`` (:mod:`.measurement_sections`): ``[probe.styli.<id>] length_mm`` and
+    ``[[probe.runs]]`` with their stylus, sphere, angles and centres."""
+    return {"styli": {sid: {"length_mm": float(length)} for sid, length in p.styli.items()},
+            "runs": [{"id": r.id, "stylus": r.stylus, "sphere_mm": [float(x) for x in r.sphere],
+                      "angles_deg": {k: [float(x) for x in units.from_internal(v, "deg")] for k, v in r.angles.items()},
+                      "centres_mm": r.centres} for r in p.runs]}
+
+
+def _tolerance(t, unit: str):
+    """A tolerance as written: ``± limit`` where symmetric, else ``{low, high}`` (the ends it has)."""
+    ends = {k: units.from_internal(v, unit) for k, v in (("low", t.low), ("high", t.high)) if v is not None}
+    return ends["high"] if t.low is not None and t.high is not None and t.low == -t.high else ends
 
 
 def save_campaign(campaign: Campaign, path: str | os.PathLike, header: str | None = None) -> None:

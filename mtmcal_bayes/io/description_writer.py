@@ -1,19 +1,12 @@
-"""Writing a described machine's campaign (SPEC §19, docs/machines.md): its description and its measurements."""
+"""Writing a machine's description (SPEC §19, docs/machines.md) and the engine's ``[machine]`` table of a campaign."""
 
 from __future__ import annotations
-
-import os
-from pathlib import Path
 
 import numpy as np
 
 from .. import units
-from ..campaign import Campaign
+from ..campaign import Machine
 from ..machines.description import FRAME, MachineDescription
-from ..machines.deviations import quantities as deviation_table
-from ..parameters import quantity_unit
-from .design_table import design_to_dict
-from .truth_table import truth_to_dict
 
 
 def description_to_dict(desc: MachineDescription) -> dict:
@@ -46,85 +39,11 @@ def _direction(v: np.ndarray) -> str:
     return ("+" if v[i] > 0 else "-") + FRAME[i]
 
 
-def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
-    """``doc`` (format, date, ...) completed with a described campaign's machine, ball bar, probe, priors and truth
-    (``save_dir``: where its runs' trace files are written relative to; absolute when ``None``)."""
-    um = lambda v: units.from_internal(v, "um")  # noqa: E731
-    m = c.machine
+def machine_table(m: Machine) -> dict:
+    """``[machine]`` of a campaign: its name, serial, type and axis travels, and its description (named where it is
+    a built-in type, else written out)."""
     machine = {"name": m.name} if m.name else {}
     machine.update({k: v for k, v in (("serial", m.serial), ("type", m.type)) if v})
+    machine.update({f"travel_{a}_mm": v for a, v in m.travel.items()})
     machine.update(description_to_dict(m.description))
-    doc["machine"] = machine
-    bb = c.ballbar
-    if bb.runs or bb.setups:
-        b: dict = {"instrument": bb.instrument} if bb.instrument else {}
-        b.update({"length_mm": bb.length, "accuracy_um": um(bb.accuracy)})
-        if bb.feed_mm_per_min is not None:
-            b["feed_mm_per_min"] = bb.feed_mm_per_min
-        if bb.convention != "thesis":
-            b["convention"] = bb.convention
-        if bb.alternative_reason and bb.reading_choices():  # the reason of a choice whose runs are still there
-            b["alternative_reason"] = bb.alternative_reason
-        b["setups"] = {s.id: {"R_B_mm": s.R_B} for s in bb.setups.values()}
-        b["mounts"] = {mt.id: {"position_mm": [float(x) for x in mt.position]} for mt in bb.mounts.values()}
-        b["runs"] = []
-        for run in bb.runs:
-            d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
-                 **({"reversed": True} if run.reversed else {}),
-                 **({"convention": run.convention} if run.convention else {}),
-                 **({"alternative_convention": run.alternative_convention} if run.alternative_convention else {})}
-            if run.trace_csv:
-                d["trace_csv"] = [relative_path(c, f, save_dir) for f in run.trace_csv]
-            else:
-                d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
-            b["runs"].append(d)
-        for run in bb.planned:  # after the measured runs, in measuring order
-            d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, **_arc_hold(run),
-                 **({"reversed": True} if run.reversed else {}),
-                 **({"convention": run.convention} if run.convention else {}), "planned": True,
-                 "repeats": int(run.repeats)}
-            d.update({k: v for k, v in (("length_mm", run.length), ("minutes", run.minutes), ("order", run.order),
-                                        ("why", run.why)) if v})
-            b["runs"].append(d)
-        if not b["runs"]:
-            del b["runs"]  # a machine with set-ups and mounts only
-        doc["ballbar"] = b
-    p = c.probe
-    if p is not None:
-        pd: dict = {"instrument": p.instrument} if p.instrument else {}
-        if p.repeatability is not None:
-            pd["repeatability_um"] = um(p.repeatability)
-        pd["styli"] = {sid: {"length_mm": float(length)} for sid, length in p.styli.items()}
-        pd["runs"] = [{"id": r.id, "stylus": r.stylus, "sphere_mm": [float(x) for x in r.sphere],
-                       "angles_deg": {k: [float(x) for x in units.from_internal(v, "deg")] for k, v in r.angles.items()},
-                       "centres_mm": r.centres} for r in p.runs]
-        doc["probe"] = pd
-    if c.priors:
-        doc["priors"] = {}
-        for name, spec in c.priors.items():
-            unit = quantity_unit(name)
-            doc["priors"][name] = {"dist": spec["dist"], **{f"{k}_{unit}": units.from_internal(v, unit)
-                                                            for k, v in spec.items() if k != "dist"}}
-    if c.truth is not None:
-        doc["truth"] = truth_to_dict(c.truth)
-    if c.design is not None:
-        doc["design"] = design_to_dict(c.design, quantities=deviation_table(m.description))
-    return doc
-
-
-def relative_path(c: Campaign, name: str, save_dir) -> str:
-    """A file named in ``c`` (relative to its folder), as seen from ``save_dir`` (absolute when ``None``)."""
-    path = Path(c.base_dir or ".", name).resolve()
-    return str(path) if save_dir is None else os.path.relpath(path, save_dir)
-
-
-def _arc_hold(run) -> dict:
-    """``arc_deg``, ``step_deg`` and ``hold_deg`` of a run (measured or planned)."""
-    d: dict = {}
-    if run.arc_deg is not None:
-        arc = np.asarray(run.arc_deg, dtype=float)
-        d["arc_deg"] = [float(arc[0]), float(arc[-1])]
-        d["step_deg"] = float(arc[1] - arc[0])
-    if run.hold_deg:
-        d["hold_deg"] = {k: float(v) for k, v in run.hold_deg.items()}
-    return d
+    return machine

@@ -13,10 +13,12 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
 * ``patterns``, ``pattern_components(pattern)``, ``mount_conflict(pattern, mount)`` — its patterns in its own
   order, their eccentricity components, why a mount cannot serve a pattern in its campaign format (the engine's:
   every ``<K><d>``, :mod:`mtmcal_bayes.machines.patterns`; any mount serves);
-* ``ballbar_keys`` — its own keys of ``[ballbar]`` in the engine's one reader of it: its set-ups', its mounts' and
-  the table's, read into the engine's set-ups and mounts, and the ball bar completed in the engine's terms (the
-  members of :class:`mtmcal_bayes.io.ballbar_section.EngineKeys`, the engine's own); ``campaign_sections(r, doc,
-  machine, base_dir)`` — its campaign's measurement sections where it reads its own ``[probe]``;
+* ``ballbar_keys`` — its own keys of ``[ballbar]`` in the engine's one reader and one writer of it: its set-ups',
+  its mounts' and the table's, read into the engine's set-ups and mounts and written back from them, and the ball
+  bar completed in the engine's terms (the members of :class:`mtmcal_bayes.io.ballbar_section.EngineKeys`, the
+  engine's own); ``campaign_sections(r, doc, machine, base_dir)`` — its campaign's measurement sections where it
+  reads its own ``[probe]``, ``probe_document(probe, path_of)`` their writing; ``machine_table(machine)`` — the
+  ``[machine]`` table of its campaign format (the engine's: name, serial, type and the description);
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
   its tables, ``table("ballbar")``), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
   it;

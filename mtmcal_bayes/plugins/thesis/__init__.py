@@ -10,10 +10,11 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
-* **its campaign keys**: in the engine's reader of ``[ballbar]``, the thesis' lever arms R_B, Z_T, X_T and mounts
-  Z_C, R_C and its ``cr_geometry`` (``ballbar_keys``; a run's W ball, arc and bar side in the engine's terms:
-  ``run_placement``, :mod:`.translation`); the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables
-  4.2–4.4, 5.1/5.2), its 13 deviation names and the derived dx_CZ − dx_BT;
+* **its campaign keys**, read and written by the engine's one reader and one writer: its ``[machine]`` table
+  (``machine_table``), in ``[ballbar]`` the thesis' lever arms R_B, Z_T, X_T and mounts Z_C, R_C and its
+  ``cr_geometry`` (``ballbar_keys``; a run's W ball, arc and bar side in the engine's terms: ``run_placement``,
+  :mod:`.translation`); the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2;
+  ``campaign_sections``, ``probe_document``), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its patterns**: its 12 in the order of Tables 2.2/2.3 (B before C), their components, B patterns only with the
   W ball on the C axis (Table 2.2), and the geometry line of its sensitivity table (Tables 2.4–2.6);
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
@@ -84,11 +85,19 @@ def run_placement(campaign, pattern: str, mount) -> tuple:
     return placement(campaign, pattern, mount)
 
 
-def campaign_document(c, doc: dict, save_dir=None) -> dict:
-    """``doc`` completed with the campaign in the thesis' format (the inverse of :func:`campaign_sections`)."""
-    from .campaign_document import campaign_document as document
+def machine_table(machine) -> dict:
+    """``[machine]`` of a campaign in the thesis' format: name, configuration, serial, type, travels."""
+    from .campaign_document import machine_table as table
 
-    return document(c, doc, save_dir)
+    return table(machine)
+
+
+def probe_document(probe, path_of) -> dict:
+    """``[probe.b_axis]`` and ``[probe.c_axis]`` written (the inverse of the probe's part of
+    :func:`campaign_sections`); ``path_of`` gives a DPRNT file's name as seen from the saved campaign."""
+    from .campaign_document import probe_document as document
+
+    return document(probe, path_of)
 
 
 def pattern_components(pattern: str) -> tuple[str, ...]:
@@ -275,7 +284,8 @@ class ThesisPlugin:
     description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
     description_label = "thesis machine"
     campaign_sections = staticmethod(campaign_sections)
-    campaign_document = staticmethod(campaign_document)
+    machine_table = staticmethod(machine_table)
+    probe_document = staticmethod(probe_document)
     probe_owners = staticmethod(probe_owners)
     complete_ballbar = staticmethod(complete_ballbar)
     run_placement = staticmethod(run_placement)

@@ -1,112 +1,29 @@
-"""The thesis' campaign keys written: a campaign in the thesis' format as the TOML document it reads back
-(:mod:`.campaign_keys`); the engine writes the format line and the date (:mod:`mtmcal_bayes.io.campaign_writer`)
-and asks the machine for the rest (its ``campaign_document``)."""
+"""The thesis' own parts of a campaign written (the inverse of :mod:`.campaign_keys`): its ``[machine]`` table and its
+touch probe's ``[probe.b_axis]`` and ``[probe.c_axis]`` (Tables 5.1/5.2).  The engine writes the rest of the document
+alike for every machine (:mod:`mtmcal_bayes.io.campaign_writer`), its keys of ``[ballbar]`` with the plug-in's
+(:class:`.campaign_keys.BallbarKeys`)."""
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Callable
 
-from ... import units
-from ...campaign import Campaign, PlannedRun, Probe
-from ...io.description_writer import relative_path
-from ...io.design_table import design_to_dict
-from ...io.tomlio import Fixed
-from ...io.truth_table import truth_to_dict
-from ...parameters import DEVIATIONS, QUANTITIES
-
-def campaign_document(c: Campaign, doc: dict, save_dir: Path | None = None) -> dict:
-    """The rest of ``doc`` (format, date, ...) for a campaign in the thesis' format: its machine, ball bar, probe,
-    published values, priors, tolerances, truth and design (``save_dir``: where trace and DPRNT files are written
-    relative to; absolute when ``None``)."""
-    um = lambda v: units.from_internal(v, "um")  # noqa: E731
-    doc["machine"] = {"name": c.machine.name, "configuration": c.machine.configuration,
-                      **({"serial": c.machine.serial} if c.machine.serial else {}),
-                      **({"type": c.machine.type} if c.machine.type else {}),
-                      **{f"travel_{a}_mm": v for a, v in c.machine.travel.items()}}
-    bb = c.ballbar
-    b: dict = {}
-    if bb.instrument:
-        b["instrument"] = bb.instrument
-    b["length_mm"] = bb.length
-    b["accuracy_um"] = um(bb.accuracy)
-    if bb.feed_mm_per_min is not None:
-        b["feed_mm_per_min"] = bb.feed_mm_per_min
-    if bb.cr_geometry != "RC-LB":
-        b["cr_geometry"] = bb.cr_geometry
-    b["convention"] = bb.convention
-    if bb.alternative_reason and bb.reading_choices():  # the reason of a choice whose runs are still there
-        b["alternative_reason"] = bb.alternative_reason
-    b["setups"] = {s.id: {"R_B_mm": s.R_B, "Z_T_mm": s.Z_T, "X_T_mm": s.X_T} for s in bb.setups.values()}
-    b["mounts"] = {m.id: {"Z_C_mm": m.Z_C, "R_C_mm": m.R_C} for m in bb.mounts.values()}
-    b["runs"] = []
-    for run in bb.runs:
-        d = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount}
-        if run.convention:
-            d["convention"] = run.convention
-        if run.alternative_convention:
-            d["alternative_convention"] = run.alternative_convention
-        if run.trace_csv:
-            d["trace_csv"] = [relative_path(c, f, save_dir) for f in run.trace_csv]
-        else:
-            d.update({f"{k}_um": [um(x) for x in v] for k, v in run.repeats.items()})
-        b["runs"].append(d)
-    b["runs"] += [planned_run_dict(run) for run in bb.planned]  # after the measured runs, in measuring order
-    if not b["runs"]:
-        del b["runs"]  # a machine with set-ups and mounts only
-    doc["ballbar"] = b
-    if c.probe is not None:
-        doc["probe"] = _probe_dict(c.probe, c, save_dir)
-    if c.reported:
-        doc["reported"] = {m: {f"{n}_{v.unit}": Fixed(units.from_internal(v.value, v.unit), v.decimals)
-                               for n, v in vals.items()} for m, vals in c.reported.items()}
-    if c.priors:
-        doc["priors"] = {}
-        for name, spec in c.priors.items():
-            unit = DEVIATIONS[name].unit if name in DEVIATIONS else "um"  # nuisance terms are lengths
-            doc["priors"][name] = {"dist": spec["dist"], **{f"{k}_{unit}": units.from_internal(v, unit)
-                                                            for k, v in spec.items() if k != "dist"}}
-    if c.tolerances:
-        doc["tolerances"] = {}
-        for name, t in c.tolerances.items():
-            unit = QUANTITIES[name].unit
-            ends = {k: units.from_internal(v, unit) for k, v in (("low", t.low), ("high", t.high)) if v is not None}
-            symmetric = t.low is not None and t.high is not None and t.low == -t.high
-            doc["tolerances"][f"{name}_{unit}"] = ends["high"] if symmetric else ends
-    if c.truth is not None:
-        doc["truth"] = truth_to_dict(c.truth)
-    if c.design is not None:
-        doc["design"] = design_to_dict(c.design)
-    return doc
+from ...campaign import Machine, Probe
 
 
-def planned_run_dict(run: PlannedRun) -> dict:
-    """The ``[[ballbar.runs]]`` table of a planned run: ``planned = true``, ``repeats`` and what else is set."""
-    d: dict = {"pattern": run.pattern, "setup": run.setup, "mount": run.mount, "planned": True,
-               "repeats": int(run.repeats)}
-    if run.convention:
-        d["convention"] = run.convention
-    if run.length is not None:
-        d["length_mm"] = run.length
-    if run.minutes is not None:
-        d["minutes"] = run.minutes
-    if run.order is not None:
-        d["order"] = int(run.order)
-    if run.why:
-        d["why"] = run.why
-    return d
+def machine_table(m: Machine) -> dict:
+    """``[machine]`` in the thesis' format: name, configuration, serial, type and the linear axes' travels (the
+    configuration names the thesis machine; no description is written)."""
+    return {"name": m.name, "configuration": m.configuration, **({"serial": m.serial} if m.serial else {}),
+            **({"type": m.type} if m.type else {}), **{f"travel_{a}_mm": v for a, v in m.travel.items()}}
 
 
-def _probe_dict(p: Probe, c: Campaign, save_dir: Path | None) -> dict:
+def probe_document(p: Probe, path_of: Callable[[str], str]) -> dict:
+    """``[probe.b_axis]`` (styli at indexed B angles) and ``[probe.c_axis]`` (a sphere at indexed C angles), each with
+    its centres or its DPRNT files (``path_of``: a file's name as seen from the saved campaign)."""
     d: dict = {}
-    if p.instrument:
-        d["instrument"] = p.instrument
-    if p.repeatability is not None:
-        d["repeatability_um"] = units.from_internal(p.repeatability, "um")
 
     def readings(run) -> dict:  # DPRNT files relative to the saved file, else the centres
-        if run.dprnt:
-            return {"dprnt": [relative_path(c, f, save_dir) for f in run.dprnt]}
-        return {"centres_mm": run.centres}
+        return {"dprnt": [path_of(f) for f in run.dprnt]} if run.dprnt else {"centres_mm": run.centres}
 
     if p.b_axis is not None:
         b = p.b_axis

@@ -49,7 +49,8 @@ class BallbarKeys:
     """The thesis' keys of ``[ballbar]`` in the engine's reader (thesis Tables 4.2–4.4): its tool set-ups by their
     lever arms ``R_B_mm``, ``Z_T_mm``, ``X_T_mm``, its W-ball mounts by ``Z_C_mm`` and ``R_C_mm`` (the W ball of a
     run where Tables 2.2/2.3 place it, :meth:`~mtmcal_bayes.campaign.Mount.centre`), its ``cr_geometry``; its runs'
-    arcs and bar sides are its patterns' (:func:`.translation.complete`), not a run's own."""
+    arcs and bar sides are its patterns' (:func:`.translation.complete`), not a run's own.  The ``write*`` members
+    write the same keys back in the engine's writer (:mod:`mtmcal_bayes.io.ballbar_writer`)."""
 
     keys = ("cr_geometry",)
     setup_keys = ("R_B_mm", "Z_T_mm", "X_T_mm")
@@ -58,7 +59,7 @@ class BallbarKeys:
 
     @staticmethod
     def read(r: TomlReader, t: dict, path: str) -> dict:
-        cr_geometry = r.string(t, "cr_geometry", path, default="RC-LB")
+        cr_geometry = r.string(t, "cr_geometry", path, default=CR_GEOMETRIES[0])
         if cr_geometry not in CR_GEOMETRIES:
             r.fail(f"{path}.cr_geometry", f"unknown CR geometry {cr_geometry!r} (expected {' or '.join(CR_GEOMETRIES)})")
         return {"cr_geometry": cr_geometry}
@@ -85,6 +86,19 @@ class BallbarKeys:
     @staticmethod
     def complete(ballbar: Ballbar, desc) -> None:
         complete(ballbar, desc)
+
+    @staticmethod
+    def write(ballbar: Ballbar) -> dict:
+        """``cr_geometry`` where it is not the default (``"RC-LB"``, Table 2.3)."""
+        return {"cr_geometry": ballbar.cr_geometry} if ballbar.cr_geometry != CR_GEOMETRIES[0] else {}
+
+    @staticmethod
+    def write_setup(s: Setup) -> dict:
+        return {"R_B_mm": s.R_B, "Z_T_mm": s.Z_T, "X_T_mm": s.X_T}
+
+    @staticmethod
+    def write_mount(m: Mount) -> dict:
+        return {"Z_C_mm": m.Z_C, "R_C_mm": m.R_C}
 
 
 def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
