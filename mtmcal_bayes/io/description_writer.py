@@ -10,6 +10,7 @@ from ..machines.description import FRAME, MachineDescription
 from ..machines.deviations import quantities as deviation_table
 from ..parameters import quantity_unit
 from .design_table import design_to_dict
+from .probe_readings import readings_entry
 from .truth_table import truth_to_dict
 
 
@@ -45,7 +46,7 @@ def _direction(v: np.ndarray) -> str:
 
 def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
     """``doc`` (format, date, ...) completed with a described campaign's machine, ball bar, probe, priors and truth
-    (``save_dir``: unused, its runs carry no trace files)."""
+    (``save_dir``: where it is saved, which the probe runs' DPRNT files are named relative to)."""
     um = lambda v: units.from_internal(v, "um")  # noqa: E731
     m = c.machine
     machine = {"name": m.name} if m.name else {}
@@ -87,7 +88,7 @@ def described_to_dict(c: Campaign, doc: dict, save_dir=None) -> dict:
         pd["styli"] = {sid: {"length_mm": float(length)} for sid, length in p.styli.items()}
         pd["runs"] = [{"id": r.id, "stylus": r.stylus, "sphere_mm": [float(x) for x in r.sphere],
                        "angles_deg": {k: [float(x) for x in units.from_internal(v, "deg")] for k, v in r.angles.items()},
-                       "centres_mm": r.centres} for r in p.runs]
+                       **readings_entry(r, c.base_dir, save_dir)} for r in p.runs]
         doc["probe"] = pd
     if c.priors:
         doc["priors"] = {}

@@ -206,7 +206,7 @@ def _readings(runs: list[LayoutRun], repeatability: float | None, noise: str):
 
 class ChainProbeKernel:
     """The engine's kernel: the probe through the machine's chain.  Stylus: the spindle's ``point_mm`` plus
-    ``(L + dRS)`` along the spindle, offset across it by its centring terms; the sphere at its nominal centre plus
+    ``(L + dRS)`` along the spindle (L the length to the stylus-ball centre), offset across it by its centring terms; the sphere at its nominal centre plus
     ``xP, yP, zP`` on the workpiece side."""
 
     name = "chain"
@@ -219,14 +219,14 @@ class ChainProbeKernel:
 
     def zero(self, layout: ProbeLayout) -> np.ndarray:
         desc = self.desc
-        tool = tool_home(desc, 0.0) + layout.length[:, None] * desc.spindle.direction
+        tool = tool_home(desc, 0.0) + (layout.length - layout.ball_radius)[:, None] * desc.spindle.direction
         w_rot = nominal_down(layout.sphere, desc.work_chain, layout.angles)
         t_rot = nominal_down(tool, desc.tool_chain, layout.angles)
         return np.stack([(w_rot - t_rot)[:, i] for i in range(3)], axis=-1)  # (k, 3) X, Y, Z
 
     def readings(self, layout: ProbeLayout, dev: dict, terms: dict, n: int) -> np.ndarray:
         s = self.desc.spindle
-        t = s.point + (layout.length + terms["dRS"])[..., None] * s.direction
+        t = s.point + (layout.length - layout.ball_radius + terms["dRS"])[..., None] * s.direction
         offsets = np.zeros(t.shape, dtype=t.dtype)
         for b in self.terms[:-1]:
             offsets[..., "xyz".index(b[0])] = terms[b]

@@ -4,12 +4,12 @@ and asks the machine for the rest (its ``campaign_document``)."""
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from ... import units
 from ...campaign import Campaign, PlannedRun, Probe
 from ...io.design_table import design_to_dict
+from ...io.probe_readings import readings_entry, relative_file
 from ...io.tomlio import Fixed
 from ...io.truth_table import truth_to_dict
 from ...parameters import DEVIATIONS, QUANTITIES
@@ -104,9 +104,7 @@ def _probe_dict(p: Probe, c: Campaign, save_dir: Path | None) -> dict:
         d["repeatability_um"] = units.from_internal(p.repeatability, "um")
 
     def readings(run) -> dict:  # DPRNT files relative to the saved file, else the centres
-        if run.dprnt:
-            return {"dprnt": [_relative(c, f, save_dir) for f in run.dprnt]}
-        return {"centres_mm": run.centres}
+        return readings_entry(run, c.base_dir, save_dir)
 
     if p.b_axis is not None:
         b = p.b_axis
@@ -137,5 +135,4 @@ def _probe_dict(p: Probe, c: Campaign, save_dir: Path | None) -> dict:
 
 def _relative(c: Campaign, name: str, save_dir: Path | None) -> str:
     """A file named in ``c`` (relative to its folder), as seen from ``save_dir`` (absolute when ``None``)."""
-    path = Path(c.base_dir or ".", name).resolve()
-    return str(path) if save_dir is None else os.path.relpath(path, save_dir)
+    return relative_file(c.base_dir, name, save_dir)
