@@ -113,3 +113,41 @@ def test_a_probe_run_read_from_dprnt_files_is_observed_in_its_fit_frame(machine,
     text = dumps(campaign_to_dict(read, tmp_path / "out"))
     assert '"../p1.txt"' in text
     assert ("centres_mm" in text) == (len(read.probe.runs) > 1)  # any other run keeps its centres
+
+
+BAD_DPRNT = [
+    ('dprnt = ["p1.txt", "p2.txt"]', "probe.runs[0].dprnt", "2 files for 12 positions"),
+    ('centres_mm = [[[0, 0, 0]]]\ndprnt = ["p1.txt"]', "probe.runs[0]", "give either centres_mm or dprnt, not both"),
+    ("", "probe.runs[0]", "no readings: give centres_mm (repeats x positions x 3) or dprnt"),
+]
+
+
+@pytest.mark.parametrize("readings, key, words", BAD_DPRNT)
+def test_bad_dprnt_readings_of_a_probe_run_are_one_line(tmp_path, run_cli, readings, key, words):
+    """A ``[[probe.runs]]`` run's DPRNT readings that cannot be used: one line naming the file and the key, exit 2."""
+    text = mb.datasets.builtin_text("machines/trunnion-demo.toml")
+    lines = text.splitlines(keepends=True)
+    at = next(i for i, line in enumerate(lines) if line.startswith("centres_mm = "))
+    path = tmp_path / "c.toml"
+    path.write_text("".join(lines[:at]) + (readings + "\n" if readings else "") + "".join(lines[at + 1:]),
+                    encoding="utf-8")
+    code, _, err = run_cli("sample", str(path), "--sampler", "exact", "--data", "probe")
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert str(path) in err and key in err and words in err, err
+
+
+def test_a_dprnt_file_with_too_few_points_names_its_position(tmp_path, run_cli):
+    """A DPRNT file of four points (a sphere through them, but no covariance) is refused by its index."""
+    text = mb.datasets.builtin_text("machines/trunnion-demo.toml")
+    lines = text.splitlines(keepends=True)
+    at = next(i for i, line in enumerate(lines) if line.startswith("centres_mm = "))
+    pts = _sphere_points(np.array([0.0, 60.0, -220.0]), np.random.default_rng(1))
+    for i in range(12):
+        (tmp_path / f"p{i}.txt").write_text("".join(f"X{x:.4f} Y{y:.4f} Z{z:.4f}\n" for x, y, z in
+                                                    (pts[:4] if i == 5 else pts)))
+    files = ", ".join(f'"p{i}.txt"' for i in range(12))
+    path = tmp_path / "c.toml"
+    path.write_text("".join(lines[:at]) + f"dprnt = [{files}]\n" + "".join(lines[at + 1:]), encoding="utf-8")
+    code, _, err = run_cli("sample", str(path), "--sampler", "exact", "--data", "probe")
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "probe.runs[0].dprnt[5]" in err and "at least 5" in err, err
