@@ -148,15 +148,8 @@ class ProbeLayout:
         if fitted.any():
             lam[fitted], Q[fitted] = np.linalg.eigh(cov[fitted])
         self.rotation = Q
-        kernel = kernel or ChainProbeKernel(machine.description)
-        self.zero = kernel.zero(self)
-        self.frame = np.zeros((len(self.run), 3))
-        first = {}  # a run's datum is its id's: runs of one id (a B-axis run's styli) share their first reading
-        for r, sl in zip(runs, self.slices):
-            i = first.setdefault(r.id, sl.start)
-            known = ~np.isnan(r.origin)
-            self.frame[sl] = self.reading_mean[i] - self.zero[i]
-            self.frame[sl, known] = r.origin[known]
+        self.zero = (kernel or ChainProbeKernel(machine.description)).zero(self)
+        self.frame = self._frame()
         self.has_frame = bool(self.frame.any())
         self.nominal = self.zero + self.frame if self.has_frame else self.zero
         y = mean - self.nominal
@@ -168,6 +161,19 @@ class ProbeLayout:
                 for j in range(3)]
         self.observations = ProbeObservations(tuple(keys), y.reshape(-1), lam.reshape(-1),
                                               np.repeat(np.array(n, dtype=int), 3))
+
+    def _frame(self) -> np.ndarray:
+        """Offset ``(k, 3)`` mm from the model frame to the reading frame: a run's ``origin`` where known, else where
+        its id's first reading puts it (its datum term, broad, is then centred at zero: the readings' absolute
+        value carries no information there).  Runs of one id (a B-axis run's styli) share their datum."""
+        frame = np.zeros((len(self.run), 3))
+        first: dict[str, int] = {}
+        for r, sl in zip(self.runs, self.slices):
+            i = first.setdefault(r.id, sl.start)
+            known = ~np.isnan(r.origin)
+            frame[sl] = self.reading_mean[i] - self.zero[i]
+            frame[sl, known] = r.origin[known]
+        return frame
 
     def centres(self, observations: np.ndarray) -> np.ndarray:
         """Readings ``(k, 3)`` in the reading frame, mm, of a model's ``observations`` (m,) = Qᵀ (reading − nominal):
