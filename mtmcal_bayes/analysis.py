@@ -106,13 +106,14 @@ class CampaignAnalysis:
 
     @property
     def probe_layout(self):
-        """The campaign's touch-probe readings and where they were taken, as its machine's plug-in lays them out for
-        its models (the thesis': :class:`~mtmcal_bayes.plugins.thesis.probe_model.ProbeLayout`), made once for every
-        variant; None where the machine's models read the campaign's probe runs themselves."""
-        from .machines.plugins import provided
+        """The campaign's touch-probe readings and where they were taken, laid out for its probe models
+        (:class:`~mtmcal_bayes.models.probe.ProbeLayout`, as the machine lays them out: ``probe_layout``), made once
+        for every variant; None without probe readings."""
+        from .models.probe import probe_layout
 
-        layout = provided(self.campaign.machine, "probe_layout")
-        return None if layout is None else self._shared("probe_layout", lambda: layout(self.campaign))
+        if not self.campaign.has_probe_readings():
+            return None
+        return self._shared("probe_layout", lambda: probe_layout(self.campaign))
 
     @property
     def observations(self):

@@ -263,21 +263,26 @@ class ProbeRun:
 
     ``sphere`` (3,) the sphere's nominal centre at the home pose, on the workpiece side, mm; ``angles``
     {axis letter: (a,)} rad, position i is the i-th entry of each (axes not named are at 0); ``centres``
-    (r, a, 3) the commanded X, Y, Z at which the stylus centre reached the sphere's centre, mm."""
+    (r, a, 3) the commanded X, Y, Z at which the stylus centre reached the sphere's centre, mm; ``centre_cov``
+    (r, a, 3, 3) mm² where the centres were fitted through DPRNT points (``dprnt``, one file per position), else
+    None."""
 
     id: str
     stylus: str
     sphere: np.ndarray
     angles: dict[str, np.ndarray]
     centres: np.ndarray
+    dprnt: list[str] | None = None
+    centre_cov: np.ndarray | None = None
 
     @property
     def positions(self) -> int:
         return self.centres.shape[1]
 
     def replace_centres(self, centres: np.ndarray) -> None:
-        """Readings ``centres`` (r, a, 3), mm."""
-        self.centres = centres
+        """Readings ``centres`` (r, a, 3), mm, given directly: the DPRNT files and fit covariances of the old ones
+        dropped."""
+        self.centres, self.centre_cov, self.dprnt = centres, None, None
 
 
 @dataclass(frozen=True)

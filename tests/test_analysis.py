@@ -15,7 +15,7 @@ from mtmcal_bayes.analysis import CampaignAnalysis, analysis_of
 from mtmcal_bayes.errors import StepFailure
 from mtmcal_bayes.inference import log_posterior
 from mtmcal_bayes.inference.marginal import GridProposal
-from mtmcal_bayes.plugins.thesis.probe_model import ProbeLayout
+from mtmcal_bayes.models.probe import ProbeLayout
 from mtmcal_bayes.observations import Observations
 from mtmcal_bayes.reporting import build
 from mtmcal_bayes.reporting.drawing import Drawing
@@ -66,8 +66,8 @@ def test_the_report_builds_each_analysis_of_the_campaign_once(thesis, tmp_path, 
     monkeypatch.setattr(log_posterior, "parameter_space", counted("space", log_posterior.parameter_space))
     monkeypatch.setattr(Observations, "from_campaign", counted("observations", Observations.from_campaign))
     real_layout = ProbeLayout.__init__
-    monkeypatch.setattr(ProbeLayout, "__init__", lambda self, campaign: counted("probe readings", lambda c: real_layout(
-        self, c))(campaign))
+    monkeypatch.setattr(ProbeLayout, "__init__", lambda self, campaign, *a, **kw: counted(
+        "probe readings", lambda c: real_layout(self, c, *a, **kw))(campaign))
     build.build_report(thesis, tmp_path / "r", settings=build.SamplerSettings(seed=1, max_steps=500))
     assert built and max(built.values()) == 1, [k for k, n in built.items() if n > 1]
     own = {k[1:-1] for k in built if k[0] == id(thesis)}

@@ -357,7 +357,7 @@ def test_each_built_in_type_relabelled_is_the_same_machine(machine):
 def test_complex_step_first_order_against_finite_differences(relabelled):
     """The ``linear`` model of a described machine is the complex-step Jacobian of the chain; central finite
     differences (1 µm, 1″ steps) agree with it to their own truncation error, 1e-6 of the largest entry."""
-    from mtmcal_bayes.models.chain_models import complex_step_jacobian
+    from mtmcal_bayes.models.jacobian import complex_step_jacobian
     from mtmcal_bayes.models import jacobian
 
     a, _ = relabelled

@@ -99,7 +99,7 @@ def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: P
     desc = machine.description
     probe_t = r.table(doc, "probe", "", required=False)
     ballbar = read_ballbar(r, r.table(doc, "ballbar", "", required=False), machine, base_dir)
-    probe = described_probe(r, probe_t, desc) if probe_t is not None else None
+    probe = described_probe(r, probe_t, desc, base_dir) if probe_t is not None else None
     if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
         r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]] (or, for a machine to design "
                "a campaign for, its [ballbar.setups] and [ballbar.mounts])")

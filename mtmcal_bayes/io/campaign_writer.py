@@ -80,11 +80,13 @@ def _probe(c: Campaign, path_of: Callable[[str], str]) -> dict:
 
 def probe_runs(p: Probe, path_of: Callable[[str], str]) -> dict:
     """The engine's keys of ``[probe]`` (:mod:`.measurement_sections`): ``[probe.styli.<id>] length_mm`` and
-    ``[[probe.runs]]`` with their stylus, sphere, angles and centres."""
+    ``[[probe.runs]]`` with their stylus, sphere, angles and centres or DPRNT files (``path_of``: a file's name as seen
+    from the saved campaign)."""
     return {"styli": {sid: {"length_mm": float(length)} for sid, length in p.styli.items()},
             "runs": [{"id": r.id, "stylus": r.stylus, "sphere_mm": [float(x) for x in r.sphere],
                       "angles_deg": {k: [float(x) for x in units.from_internal(v, "deg")] for k, v in r.angles.items()},
-                      "centres_mm": r.centres} for r in p.runs]}
+                      **({"dprnt": [path_of(f) for f in r.dprnt]} if r.dprnt else {"centres_mm": r.centres})}
+                     for r in p.runs]}
 
 
 def _tolerance(t, unit: str):

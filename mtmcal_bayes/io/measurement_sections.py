@@ -12,11 +12,13 @@ from __future__ import annotations
 from .. import units
 from ..campaign import Probe, ProbeRun
 from ..machines.description import MachineDescription
+from .probe_readings import probe_readings
 from .toml_reader import TomlReader
 
 
-def described_probe(r: TomlReader, t: dict, desc: MachineDescription) -> Probe:
-    """``[probe]`` of a described machine: styli and ``[[probe.runs]]``."""
+def described_probe(r: TomlReader, t: dict, desc: MachineDescription, base_dir=None) -> Probe:
+    """``[probe]`` of a described machine: styli and ``[[probe.runs]]`` (DPRNT files named relative to
+    ``base_dir``)."""
     P = "probe"
     r.check_keys(t, {"instrument", "repeatability_um", "styli", "runs"}, P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
@@ -32,7 +34,8 @@ def described_probe(r: TomlReader, t: dict, desc: MachineDescription) -> Probe:
     if not isinstance(raw, list) or not raw or not all(isinstance(x, dict) for x in raw):
         r.fail(f"{P}.runs", "expected one or more [[probe.runs]] tables")
     for i, x in enumerate(raw):
-        probe.runs.append(_probe_run(r, x, f"{P}.runs[{i}]", desc, styli=probe.styli, number=i + 1))
+        probe.runs.append(_probe_run(r, x, f"{P}.runs[{i}]", desc, styli=probe.styli, number=i + 1,
+                                     base_dir=base_dir))
     ids = [run.id for run in probe.runs]
     for i, rid in enumerate(ids):
         if rid in ids[:i]:
@@ -41,8 +44,8 @@ def described_probe(r: TomlReader, t: dict, desc: MachineDescription) -> Probe:
 
 
 def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, styli: dict,
-               number: int) -> ProbeRun:
-    r.check_keys(t, {"id", "stylus", "R_B_mm", "sphere_mm", "angles_deg", "centres_mm"}, path)
+               number: int, base_dir=None) -> ProbeRun:
+    r.check_keys(t, {"id", "stylus", "R_B_mm", "sphere_mm", "angles_deg", "centres_mm", "dprnt"}, path)
     rid = r.string(t, "id", path, default=f"run{number}")
     if "R_B_mm" in t:  # the stylus given by its length alone: a stylus of the run's own, named after it
         if "stylus" in t:
@@ -73,8 +76,9 @@ def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, s
     if n_pos < 2:
         r.fail(f"{path}.angles_deg", "needs at least two indexed positions (only differences between positions inform "
                "the deviations)")
-    centres = r.array(t, "centres_mm", path, (None, n_pos, 3))
-    return ProbeRun(rid, stylus, sphere, {k: units.to_internal(v, "deg") for k, v in angles.items()}, centres)
+    centres, cov, files = probe_readings(r, t, path, n_pos, base_dir=base_dir)
+    return ProbeRun(rid, stylus, sphere, {k: units.to_internal(v, "deg") for k, v in angles.items()}, centres,
+                    dprnt=files, centre_cov=cov)
 
 
 __all__ = ["described_probe"]

@@ -8,8 +8,10 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   ``make_model(name, campaign, space, data, observations=, probe_layout=)`` and ``first_order_gap(...)``;
 * ``default_data`` — which instruments a likelihood uses when none is asked for (the engine's rule: every
   instrument the campaign has);
-* ``probe_repeatability_required`` — true where its probe model takes only a stated repeatability as its noise (a
-  probe that states none is not simulated; the engine's: 1 µm is assumed);
+* ``probe_runs(campaign)``, ``probe_layout(campaign)``, ``probe_noise`` — its campaign format's probe runs in the
+  terms of the engine's one probe model, the layout whose nominal readings its own kernel gives, and the rule of
+  the probe's noise (:data:`mtmcal_bayes.models.probe.NOISE_RULES`; one that takes only a stated repeatability:
+  a probe that states none is not simulated; the engine's: the pooled repeat scatter, 1 µm assumed);
 * ``patterns``, ``pattern_components(pattern)``, ``mount_conflict(pattern, mount)`` — its patterns in its own
   order, their eccentricity components, why a mount cannot serve a pattern in its campaign format (the engine's:
   every ``<K><d>``, :mod:`mtmcal_bayes.machines.patterns`; any mount serves);

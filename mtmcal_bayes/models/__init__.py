@@ -19,6 +19,7 @@ from .ballbar import BallbarModel, ChainBallbarModel
 from .chain_models import ChainProbeModel, FirstOrderModel
 from .jacobian import jacobian, jacobian_at_zero
 from .joint import JointModel
+from .probe import ProbeModel
 
 #: the kinematic (homogeneous-transform) models of the thesis machine, which can also compensate NC programs (their
 #: code is the thesis plug-in's: ``mtmcal_bayes.plugins.thesis``)
@@ -95,7 +96,7 @@ def _engine_model(name: str, campaign, space, data: str, *, observations, probe_
     if data in ("ballbar", "both"):
         parts.append(ChainBallbarModel(campaign, space, observations=observations))
     if data in ("probe", "both"):
-        parts.append(ChainProbeModel(campaign, space))
+        parts.append(ProbeModel(campaign, space, layout=probe_layout))
     if name == "linear":
         parts = [FirstOrderModel(p) for p in parts]
     return parts[0] if len(parts) == 1 else JointModel(parts)
@@ -120,6 +121,6 @@ def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -
 
 
 __all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "BallbarModel", "ChainBallbarModel",
-           "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
+           "ProbeModel", "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
            "models_of", "default_kinematic_model", "JointModel", "first_order_gap", "jacobian",
            "jacobian_at_zero"]

@@ -84,7 +84,7 @@ class DescribedProbeCandidate(ProbeCandidate):
         """The commanded axes of every position: rotary (rad) and X, Y, Z reaching the sphere (mm), nominally."""
         m = ChainProbeModel(self.alone(campaign), ParameterSpace([], [], [], self.terms(campaign),
                                                                  table={}))
-        q = dict(m.q_rot)
+        q = dict(m.layout.angles)
         q.update({a: m.nominal[:, i] for i, a in enumerate("XYZ")})
         return q
 

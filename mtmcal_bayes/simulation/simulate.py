@@ -22,11 +22,12 @@ from ..machines.patterns import components
 from ..machines.plugins import provided
 from ..machines.space import described_space
 from ..models import default_kinematic_model, first_order_gap, make_model
+from ..models.probe import DEFAULT_REPEATABILITY, repeatability_required
 from ..observations import TYPICAL_REPEAT_SD_UM, Observations, with_run_values
 from ..parameters import ParameterSpace, nuisance_name
 
 #: repeat scatter of a described machine's probe readings where the campaign states no repeatability, mm
-DEFAULT_PROBE_SD = units.to_internal(1.0, "um")
+DEFAULT_PROBE_SD = DEFAULT_REPEATABILITY
 #: resolution of the ball-bar readings (thesis Table 4.1)
 RESOLUTION_UM = 0.1
 
@@ -223,7 +224,7 @@ def probe_noise(campaign: Campaign) -> float | None:
         return None
     if campaign.probe.repeatability is not None:
         return campaign.probe.repeatability
-    return None if provided(campaign.machine, "probe_repeatability_required", False) else DEFAULT_PROBE_SD
+    return None if repeatability_required(campaign.machine) else DEFAULT_PROBE_SD
 
 
 def probe_readings(campaign: Campaign, truth: Truth, model: str = "htm-thesis") -> np.ndarray | None:

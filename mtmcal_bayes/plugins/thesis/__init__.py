@@ -253,10 +253,18 @@ def parameter_space(campaign, fix_dx_BT: bool, data: str):
 
 
 def probe_layout(campaign):
-    """The touch-probe readings of the thesis' campaign format and where they were taken (Tables 5.1/5.2)."""
-    from .probe_model import ProbeLayout
+    """The engine's probe layout of the thesis' campaign format (Tables 5.1/5.2), its nominal readings through
+    ``htm-thesis``."""
+    from .probe_model import thesis_layout
 
-    return ProbeLayout(campaign)
+    return thesis_layout(campaign)
+
+
+def probe_runs(campaign):
+    """The thesis' ``[probe.c_axis]`` and ``[probe.b_axis]`` as the probe layout's runs."""
+    from .probe_model import probe_runs as runs
+
+    return runs(campaign)
 
 
 def report_section(page, ident, effect, sigma_um: float) -> None:
@@ -298,7 +306,8 @@ class ThesisPlugin:
     first_order_gap = staticmethod(first_order_gap)
     parameter_space = staticmethod(parameter_space)
     probe_layout = staticmethod(probe_layout)
-    probe_repeatability_required = True  # its probe model takes the campaign's repeatability as its noise (ProbeLayout)
+    probe_runs = staticmethod(probe_runs)
+    probe_noise = "run scatter plus repeatability"  # each run's repeat scatter plus the stated one, which it needs
     # its published method, programs and compensation
     identify = staticmethod(identify)
     sample_notes = staticmethod(sample_notes)

@@ -26,13 +26,10 @@ from ...campaign import (
     Setup,
     Stylus,
 )
-from ...datasets import data_path
-from ...errors import InputError, MtmcalError
 from ...io.ballbar_section import read_ballbar
-from ...io.dprnt import read_dprnt
-from ...io.toml_reader import TomlReader, kind_of
+from ...io.probe_readings import probe_readings
+from ...io.toml_reader import TomlReader
 from ...patterns import CR_GEOMETRIES
-from ...sphere import fit_sphere
 from .translation import complete
 
 
@@ -117,7 +114,7 @@ def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
         bax = BAxisProbe(r.number(b, "X_T_mm", path), angles, Z_C=r.number(b, "Z_C_mm", path, required=False))
         for sid, sp, st in r.subtables(b, "styli", path, what="stylus",
                                        allowed={"R_B_mm", "nominal_mm", "centres_mm", "dprnt", "ball_radius_mm"}):
-            centres, cov, files = _readings(r, st, sp, len(angles), base_dir=base_dir)
+            centres, cov, files = probe_readings(r, st, sp, len(angles), base_dir=base_dir, position="angle")
             bax.styli[sid] = Stylus(sid, r.number(st, "R_B_mm", sp, positive=True),
                                     r.array(st, "nominal_mm", sp, (len(angles), 3), required=False), centres,
                                     ball_radius=r.number(st, "ball_radius_mm", sp, required=False, nonnegative=True,
@@ -138,7 +135,7 @@ def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
         if len(np.unique(np.mod(angles, 360.0))) < 3:
             r.fail(f"{path}.angles_deg", f"needs at least three different C angles (a circle through the sphere "
                    f"centres), got [{', '.join(f'{a:g}' for a in angles)}]")
-        centres, cov, files = _readings(r, c, path, len(angles), base_dir=base_dir)
+        centres, cov, files = probe_readings(r, c, path, len(angles), base_dir=base_dir, position="angle")
         stylus = r.string(c, "stylus", path, default="") or None
         R_B = r.number(c, "R_B_mm", path, required=False, positive=True)
         if stylus is not None:
@@ -157,40 +154,6 @@ def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
             ball_radius=r.number(c, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0),
             datum=datum, dprnt=files, centre_cov=cov)
     return probe
-
-
-#: fewest probed points of a sphere fit whose centre covariance the likelihood can use (4 fit it exactly)
-MIN_DPRNT_POINTS = 5
-
-
-def _readings(r: TomlReader, t: dict, path: str, n_angles: int, *, base_dir: Path | None):
-    """Sphere centres of a probe run: ``centres_mm`` (r, a, 3), or one DPRNT file per angle, each fitted
-    (one repeat, with the centre covariance of the fit).  Returns ``(centres, cov or None, files or None)``."""
-    has_c, has_d = "centres_mm" in t, "dprnt" in t
-    if has_c == has_d:
-        r.fail(path, "no readings: give centres_mm (repeats x angles x 3) or dprnt (one DPRNT file per angle)"
-               if not has_c else "give either centres_mm or dprnt, not both")
-    if has_c:
-        return r.array(t, "centres_mm", path, (None, n_angles, 3)), None, None
-    files = t["dprnt"]
-    key = f"{path}.dprnt"
-    if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
-        r.fail(key, f"expected an array of file names, got {kind_of(files)}")
-    if len(files) != n_angles:
-        r.fail(key, f"{len(files)} files for {n_angles} angles: give one DPRNT file per indexed position")
-    centres, cov = np.empty((1, n_angles, 3)), np.empty((1, n_angles, 3, 3))
-    for i, name in enumerate(files):
-        fpath = (base_dir / name) if base_dir is not None else data_path(name)
-        try:
-            pts = read_dprnt(fpath).xyz
-            if len(pts) < MIN_DPRNT_POINTS:
-                raise MtmcalError(f"{len(pts)} probed points; a sphere fit with a covariance needs at least "
-                                  f"{MIN_DPRNT_POINTS}")
-            fit = fit_sphere(pts)
-        except MtmcalError as err:
-            r.fail(f"{key}[{i}]", str(err) if isinstance(err, InputError) else f"{name}: {err}")
-        centres[0, i], cov[0, i] = fit.centre, fit.centre_cov
-    return centres, cov, list(files)
 
 
 def probe_owners(machine: Machine | None, probe: Probe) -> set[str]:
