@@ -168,14 +168,19 @@ def _convention_example(machine: Machine, desc: MachineDescription) -> str:
     return f"{k}0=+{a[1].upper()},{k}90=+{b[1].upper()}"
 
 
+def equal_setups(setups: dict[str, Setup], attribute: str) -> tuple[Setup, Setup] | None:
+    """The first two set-ups (in the file's order) whose ``attribute`` is equal, else None."""
+    items = list(setups.values())
+    return next(((a, b) for i, a in enumerate(items) for b in items[i + 1:]
+                 if getattr(a, attribute) == getattr(b, attribute)), None)
+
+
 def _distinct_tool_lengths(r: TomlReader, setups: dict[str, Setup], path: str) -> None:
     """Two set-ups of one tool length: the second carries no information."""
-    items = list(setups.values())
-    for i, a in enumerate(items):
-        for b in items[i + 1:]:
-            if a.R_B == b.R_B:
-                r.fail(f"{path}.setups.{b.id}.R_B_mm", f"equal to {path}.setups.{a.id}.R_B_mm ({a.R_B:g} mm): a "
-                       "second tool length equal to the first carries no information")
+    if pair := equal_setups(setups, "R_B"):
+        a, b = pair
+        r.fail(f"{path}.setups.{b.id}.R_B_mm", f"equal to {path}.setups.{a.id}.R_B_mm ({a.R_B:g} mm): a second tool "
+               "length equal to the first carries no information")
 
 
 def _pattern(ctx: _Context, t: dict, path: str) -> str:

@@ -26,7 +26,7 @@ from ...campaign import (
     Setup,
     Stylus,
 )
-from ...io.ballbar_section import read_ballbar
+from ...io.ballbar_section import equal_setups, read_ballbar
 from ...io.probe_readings import probe_readings
 from ...io.toml_reader import TomlReader
 from ...patterns import CR_GEOMETRIES
@@ -69,12 +69,10 @@ class BallbarKeys:
     @staticmethod
     def check_setups(r: TomlReader, setups: dict[str, Setup], path: str) -> None:
         """Z_T + R_B is constant between tool lengths (the B centre's height above the tool ball)."""
-        items = list(setups.values())
-        for i, a in enumerate(items):
-            for b in items[i + 1:]:
-                if a.Z_T == b.Z_T:
-                    r.fail(f"{path}.setups.{b.id}.Z_T_mm", f"equal to {path}.setups.{a.id}.Z_T_mm ({a.Z_T:g} mm) "
-                           "although R_B differs: Z_T + R_B must stay constant between tool lengths")
+        if pair := equal_setups(setups, "Z_T"):
+            a, b = pair
+            r.fail(f"{path}.setups.{b.id}.Z_T_mm", f"equal to {path}.setups.{a.id}.Z_T_mm ({a.Z_T:g} mm) although R_B "
+                   "differs: Z_T + R_B must stay constant between tool lengths")
 
     @staticmethod
     def mount(r: TomlReader, mid: str, path: str, m: dict) -> Mount:
