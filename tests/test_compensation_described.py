@@ -183,3 +183,26 @@ def test_deviations_informed_through_nuisance_priors_are_compensated_with_their_
     gain = msr(xyz_zero) - msr(xyz_used)
     shift = float(np.mean(np.sum(units.from_internal(xyz_used - xyz_zero, "um") ** 2, axis=-1)))
     assert shift > 1.0 and gain == pytest.approx(shift, rel=0.05)
+
+
+@pytest.mark.parametrize("machine", list(ONE_PATH))
+def test_each_value_resting_on_more_than_the_data_is_warned_of_once_with_every_reason(machine):
+    """A deviation compensated with a value the data do not determine one by one and that rests on nuisance priors
+    (the thesis' dz_BT: undetermined, resting on dRB and zT) gets one warning naming both; no deviation is warned of
+    twice; and every deviation compensated "through nuisance priors" is warned of, naming its priors."""
+    from mtmcal_bayes.api import campaign_of
+    from mtmcal_bayes.compensation.compensate import read
+
+    demo, path = ONE_PATH[machine]
+    c = campaign_of(None if demo is None else demo_campaign(demo), measured=True)
+    result = compensate(c, read(c, path), mb.sample(c, sampler="exact", seed=1))
+    named = [w.split(" = ")[0].removeprefix("compensating with ") for w in result.warnings
+             if w.startswith("compensating with ")]
+    assert named and len(named) == len(set(named))
+    why = {d["name"]: d["why"] for d in result.info["not_measured"] if d["status"] == "through nuisance priors"}
+    assert why
+    for name, text in why.items():
+        line = next(w for w in result.warnings if w.startswith(f"compensating with {name} = "))
+        priors = text.split("rests on the nuisance prior")[1].split(":")[0].removeprefix("s").strip()
+        assert "do not identify" in line and f"rests on the nuisance prior{'s' if ' and ' in priors else ''} {priors}:" \
+            in line, line

@@ -115,23 +115,27 @@ def classify_values(campaign, draws: dict[str, np.ndarray], ident,
 
 def value_warnings(ident, through: dict[str, tuple[str, ...]], values: dict[str, float],
                    unit: dict[str, str]) -> list[str]:
-    """A warning for each deviation compensated with a value the data do not determine one by one (the campaign's
-    Jacobian, ``ident``), and, separately, for each whose value rests on nuisance priors (``through``, the
-    prior-sensitivity diagnostic); each among the quantities the diagnostic reports."""
+    """One warning for each deviation compensated with a value that rests on more than the data: one the data do not
+    determine one by one (the campaign's Jacobian, ``ident``), or one whose value rests on nuisance priors
+    (``through``, the prior-sensitivity diagnostic), or both, said in one line; each among the quantities the
+    diagnostic reports."""
     out = []
     for name, value in values.items():
         if name not in through or value == 0.0:
             continue
-        shown = f"{name} = {units.from_internal(value, unit[name]):.3g} {units.SYMBOL[unit[name]]}"
         verdict, combos = ident.of(name)
+        why = []
         if verdict == IN_COMBINATION_VERDICT:
-            out.append(f"compensating with {shown}, which the data determine only in combination ({'; '.join(combos)}): "
-                       "its own value follows the priors")
+            why.append(f"which the data determine only in combination ({'; '.join(combos)}): its own value follows "
+                       "the priors")
         elif verdict != DETERMINED:
-            out.append(f"compensating with {shown}, which the data do not identify (the campaign's Jacobian leaves it "
-                       "undetermined; its value follows the priors)")
+            why.append("which the data do not identify (the campaign's Jacobian leaves it undetermined; its value "
+                       "follows the priors)")
         if through[name]:
-            out.append(f"compensating with {shown}, whose value rests on the nuisance prior"
-                       f"{'s' if len(through[name]) > 1 else ''} {' and '.join(through[name])}: the "
-                       "correction is as good as that set-up knowledge (docs/metrology.md)")
+            why.append(f"whose value rests on the nuisance prior{'s' if len(through[name]) > 1 else ''} "
+                       f"{' and '.join(through[name])}: the correction is as good as that set-up knowledge "
+                       "(docs/metrology.md)")
+        if why:
+            shown = f"{name} = {units.from_internal(value, unit[name]):.3g} {units.SYMBOL[unit[name]]}"
+            out.append(f"compensating with {shown}, " + "; and ".join(why))
     return out
