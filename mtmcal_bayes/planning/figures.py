@@ -21,8 +21,10 @@ SWEEP_CAPTION = (
     "red crosses: differences at which the run leaves the target not identified (its sd still follows "
     "the prior), such as a zero difference; grey band: beyond the axis travels."
 )
+#: one colour per kind of candidate (Okabe-Ito); another W-ball placement is one colour whatever the format calls it
 KIND_COLOURS = {"tool length": "#0072B2", "existing setup": "#56B4E9", "repeats": "#999999",
-                "other pattern": "#E69F00", "other R_C": "#009E73", "bar length": "#CC79A7", "user": "#D55E00"}
+                "other pattern": "#E69F00", "other R_C": "#009E73", "other placement": "#009E73",
+                "held axes": "#F0E442", "bar length": "#CC79A7", "probe": "#000000", "user": "#D55E00"}
 MAX_BARS = 20
 #: width of the ranking's axes, inches (the 11 in figure less the candidates' names): what its texts fit in
 ANNOTATED_AXES_WIDTH_IN = 7.5
