@@ -118,8 +118,8 @@ def test_compensate_on_a_described_machine_names_what_it_cannot_measure(tmp_path
     (lambda t: t.replace("A-25.0000", "A-125.0000", 1), [], "beyond the A travel"),
     (lambda t: t.replace(" A-25.0000", "", 1), [], "position of axis A not known"),
     (lambda t: t.replace(" A-25.0000", " B-25.0000", 1), [], "axis B is not one of"),
-    (None, ["--method", "thesis"], "'thesis': not a compensation method of five-axis trunnion"),
-    (None, ["--values", "ballbar"], "'ballbar': not a compensation values of five-axis trunnion"),
+    (None, ["--method", "thesis"], "'thesis': a compensation method five-axis trunnion"),
+    (None, ["--values", "ballbar"], "'ballbar': a source of the values five-axis trunnion"),
     (None, ["--mount", "M1"], "mount: not used on five-axis trunnion"),
     (None, ["--model", "htm-thesis"], "htm-thesis: five-axis trunnion, w-C'A'bYXZ(C1)-t is compensated through"),
 ])

@@ -48,6 +48,10 @@ def _where(campaign) -> str:
     return f"{desc.name} ({desc.configuration})"
 
 
+#: what each option of ``compensate`` chooses, as its refusal names it
+_WHAT = {"method": "a compensation method", "values": "a source of the values", "point": "a tool point"}
+
+
 def check_options(campaign, *, method: str, values: str, point: str) -> None:
     """A :class:`ParameterError` naming the first option the machine does not offer: ``method`` (exact, or a
     plug-in's), ``values`` (posterior, or a plug-in's), ``point``."""
@@ -56,8 +60,8 @@ def check_options(campaign, *, method: str, values: str, point: str) -> None:
             ("values", values, (POSTERIOR, *provided(campaign.machine, "compensation_values", {}))),
             ("point", point, POINTS)):
         if value not in offered:
-            raise ParameterError(name, f"{value!r}: not a compensation {name} of {_where(campaign)}, which has "
-                                 f"{' or '.join(offered)}")
+            raise ParameterError(name, f"{value!r}: {_WHAT[name]} {_where(campaign)} does not offer (it has "
+                                 f"{' or '.join(offered)})")
 
 
 def kinematics_of(campaign, *, model: str | None = None, point: str = "tcp", setup: str | None = None,
