@@ -1,4 +1,9 @@
 import os
+import sys
+
+# the package's modules compiled once, for every process the tests start (python -m pytest imports them from the
+# source tree, and a shell with PYTHONDONTWRITEBYTECODE set would have each process compile all of them again)
+sys.dont_write_bytecode = False
 
 if os.environ.get("PYTEST_XDIST_WORKER"):  # one process per core already (pytest -n): one BLAS thread each, not two
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
