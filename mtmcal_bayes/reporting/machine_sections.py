@@ -14,7 +14,6 @@ import pandas as pd
 from .. import units
 from ..html_page import Page
 from ..posterior.least_squares import LeastSquares, least_squares
-from . import machine_figure
 
 CHAIN_CAPTION = ("The machine at its home pose: the frame, each rotary axis' nominal line through its point, the "
                  "spindle and a tool of the campaign's length (the key says whose), the linear axes (primed: they "
