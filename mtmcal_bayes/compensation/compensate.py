@@ -43,6 +43,8 @@ from .values import classify_values, deviation_draws, sigma_model_um, value_warn
 
 #: the engine's own method and values
 EXACT, POSTERIOR = "exact", "posterior"
+
+
 def _where(campaign) -> str:
     desc = campaign.machine.description
     return f"{desc.name} ({desc.configuration})"
