@@ -6,7 +6,17 @@ in a function body counts when either set runs it; the table gives, per unit of 
 thesis machine only and how many for described machines only, and the totals, outside the plug-ins (``plugins/``,
 whose code is the thesis machine's by definition) and inside them.
 
-    python bench/kind_coverage.py [--keep DIR]       (needs the coverage package: pip install coverage)
+Each machine gets the same command lines: a history with a step change of one of its deviations, a design within a
+budget besides the default one, a ball-bar program by pattern name and by run number and a touch-probe program, a
+posterior through the machine's chain (``--model chain``) besides its default model's, a compensation with the
+posterior of ``sample -o`` besides the default one, and a report on the first campaign of its simulated history (with
+its truth).  What the thesis campaign has
+in its data, a probe that disagrees with its ball bar, the demos get in a copy of each demo campaign with one group
+of probed positions moved 60 µm along Z (``instruments``, and ``compensate``, refused and then accepted, run on it).  ``--uneven`` measures the
+first, uneven command lines instead (the thesis' history alone stepped, its design alone adding runs, no conflict on
+the demos), as issue 42 was first measured.
+
+    python bench/kind_coverage.py [--keep DIR] [--uneven]      (needs the coverage package: pip install coverage)
 """
 
 from __future__ import annotations
@@ -29,12 +39,65 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "mtmcal_bayes"
 TYPES = ("trunnion", "vertical-turn-mill", "head-head")
 THESIS_PROGRAM = str(PACKAGE / "datasets" / "fig4_30a_bx_original.nc")
+#: the deviation each demo's history steps by 40 (″ or µm) at its third campaign, as the thesis' steps beta_CZ
+STEP = {"trunnion": "E_B0C", "vertical-turn-mill": "E_B0C", "head-head": "E_B0C"}
+#: first word of a command line that must be refused (exit status 2: the instruments disagree)
+REFUSED = "(refused)"
+#: how far one group of a demo's probed positions is moved along Z, mm
+MOVED_MM = 0.060
 
 
-def commands(machine: list[str], out: Path, program: str, pattern: str, history: list[list[str]]) -> list[list[str]]:
+def simulated_report(history: Path, serial: str) -> list[str]:
+    """``report`` on the first campaign of a simulated history (one with its truth)."""
+    first = history / f"{serial}_2026-01-05.toml"
+    return ["report", str(first), "-o", str(history / "report-first"), "--sampler", "exact", "--seed", "1"]
+
+
+def first_pattern(machine: str) -> str:
+    """The pattern of the demo campaign's first ball-bar run."""
+    from mtmcal_bayes import load_campaign
+    from mtmcal_bayes.io.machine_reader import demo_campaign
+
+    return load_campaign(demo_campaign(machine)).ballbar.runs[0].pattern
+
+
+def disagreeing_probe(machine: str, path: Path) -> Path:
+    """The demo campaign of ``machine`` written to ``path`` with the positions of its first probe run at the last
+    angle of its first indexed axis moved :data:`MOVED_MM` along Z: a probe that disagrees with the ball bar."""
+    import ast
+
+    from mtmcal_bayes import load_campaign
+    from mtmcal_bayes.io.machine_reader import demo_campaign
+
+    source = demo_campaign(machine)
+    run = load_campaign(source).probe.runs[0]
+    first = next(iter(run.angles.values()))
+    group = [i for i, v in enumerate(first) if v == first[-1]]
+    text = Path(source).read_text(encoding="utf-8")
+    line = next(ln for ln in text.splitlines() if ln.startswith("centres_mm = "))
+    centres = ast.literal_eval(line.split("=", 1)[1].strip())
+    for repeat in centres:
+        for i in group:
+            repeat[i][2] += MOVED_MM
+    path.write_text(text.replace(line, "centres_mm = " + repr(centres)), encoding="utf-8")
+    return path
+
+
+def commands(machine: list[str], out: Path, program: str, pattern: list[str], history: list[list[str]],
+             even: bool = True) -> list[list[str]]:
     """The README's commands on one machine (``machine``: ``[]`` for the thesis campaign or ``["--machine", T]``),
-    writing below ``out`` (made here)."""
+    writing below ``out`` (made here); ``pattern`` the ``ncgen`` arguments of each ball-bar program; ``even``: with a
+    design within a budget alone besides the default one."""
     out.mkdir(parents=True, exist_ok=True)
+    even_only = [
+        ["design", *machine, "--seed", "1", "--contraction", "0", "--budget-min", "60", "--json", "-o",
+         str(out / "design-budget")],
+        ["sample", *machine, "--model", "chain", "--seed", "1", "--max-steps", "2000", "--json"],
+        ["sample", *machine, "--sampler", "exact", "--seed", "1", "-o", str(out / "post.nc")],
+        ["compensate", *machine, program, "--posterior", str(out / "post.nc"), "-o", str(out / "comp-post.nc"),
+         "--json"],
+        ["ncgen", *machine, "--probe", "1"],
+    ] if even else []
     return [
         ["identify", *machine, "--json"],
         ["sensitivity", *machine, "--json"],
@@ -44,27 +107,32 @@ def commands(machine: list[str], out: Path, program: str, pattern: str, history:
         ["report", *machine, "-o", str(out / "report"), "--seed", "1"],
         ["plan", *machine, "--json"],
         ["design", *machine, "--seed", "1", "--json", "-o", str(out / "design")],
+        *even_only,
         ["instruments", *machine, "--json"],
         ["compensate", *machine, program, "-o", str(out / "comp.nc"), "--json"],
         ["axes", *machine, "--json"],
-        ["ncgen", *machine, pattern],
+        *(["ncgen", *machine, p] for p in pattern),
         ["validate", "sbc", *machine, "--n", "8", "--sampler", "exact", "--workers", "1", "--json"],
         *history,
     ]
 
 
 def run_all(argvs: list[list[str]]) -> None:
-    """Run each command, its output swallowed; a command that fails is named on stderr with its last line."""
+    """Run each command, its output swallowed; a command that fails (or, marked :data:`REFUSED`, is not refused) is
+    named on stderr with its last line."""
     from mtmcal_bayes.cli import main
 
     for argv in argvs:
+        expected = (0, None)
+        if argv[0] == REFUSED:
+            argv, expected = argv[1:], (2,)
         err = io.StringIO()
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
             try:
                 code = main(argv)
             except SystemExit as exit_:
                 code = exit_.code
-        if code not in (0, None):
+        if code not in expected:
             last = (err.getvalue().strip().splitlines() or ["(no message)"])[-1]
             print(f"kind_coverage: {' '.join(argv)} exited {code}: {last}", file=sys.stderr)
 
@@ -117,6 +185,7 @@ def measure_here(workdir: Path) -> None:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--keep", type=Path, default=None, help="keep the outputs in DIR")
+    ap.add_argument("--uneven", action="store_true", help="the first, uneven command lines (module docstring)")
     ap.add_argument("--measure", type=Path, default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.measure is not None:
@@ -125,18 +194,34 @@ def main() -> int:
     work = Path(a.keep or tempfile.mkdtemp(prefix="kind-coverage-"))
     work.mkdir(parents=True, exist_ok=True)
     thesis_hist = [["simulate", "--history", str(work / "th"), "--serial", "M-1", "--campaigns", "3", "--step",
-                    "beta_CZ=40@3", "--seed", "1"], ["history", str(work / "th"), "--json"],
+                    "beta_CZ=40@3", "--start", "2026-01-05", "--seed", "1"], ["history", str(work / "th"), "--json"],
                    ["fleet", str(work / "th"), "-o", str(work / "thf"), "--sampler", "exact", "--workers", "1",
                     "--json"]]
-    thesis = commands([], work / "out" / "thesis", THESIS_PROGRAM, "BX", thesis_hist)
+    even = not a.uneven
+    if even:
+        thesis_hist += [simulated_report(work / "th", "M-1")]
+    thesis = commands([], work / "out" / "thesis", THESIS_PROGRAM, ["BX", "--run=1"] if even else ["BX"],
+                      thesis_hist, even)
     described = []
     for t in TYPES:
-        hist = [["simulate", "--history", str(work / t), "--machine", t, "--campaigns", "3", "--seed", "1"],
+        step = ["--step", f"{STEP[t]}=40@3"] if even else []
+        hist = [["simulate", "--history", str(work / t), "--machine", t, "--campaigns", "3", *step, "--start",
+                 "2026-01-05", "--seed", "1"],
                 ["history", str(work / t), "--json"],
                 ["fleet", str(work / t), "-o", str(work / f"{t}-fleet"), "--sampler", "exact", "--workers", "1",
                  "--json"]]
-        described += commands(["--machine", t], work / "out" / t, str(ROOT / "examples" / "machines" / f"{t}-five-axis.nc"),
-                              "--run=1", hist)
+        if even:
+            hist += [simulated_report(work / t, "SIM-001")]
+        program = str(ROOT / "examples" / "machines" / f"{t}-five-axis.nc")
+        described += commands(["--machine", t], work / "out" / t, program,
+                              [first_pattern(t), "--run=1"] if even else ["--run=1"], hist, even)
+        if even:  # what the thesis campaign has in its data
+            moved = disagreeing_probe(t, work / f"{t}-moved.toml")
+            described += [["instruments", str(moved), "--json"],
+                          [REFUSED, "compensate", str(moved), program, "-o", str(work / f"{t}-refused.nc"),
+                           "--json"],
+                          ["compensate", str(moved), program, "--accept-disagreement", "-o",
+                           str(work / f"{t}-moved.nc"), "--json"]]
     a_lines = measure("thesis", thesis, work)
     b_lines = measure("described", described, work)
     rows = []

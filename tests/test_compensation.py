@@ -150,3 +150,15 @@ def test_thesis_method_corrects_twice(thesis):
     table = resimulate(thesis, ballbar_values(thesis), model="htm-thesis", method="thesis")
     for label in ("ey_CR@RB1/C", "ex_CR@RB2/C", "ey_CR@RB2/C"):
         assert table.loc[label, "after_um"] == pytest.approx(-table.loc[label, "before_um"], rel=0.05)
+
+
+def test_the_chain_of_the_thesis_machine_compensates_as_htm_literal(thesis):
+    """``--model chain`` names the machine's chain on every machine; on the thesis machine that is Eq 2.10 as
+    printed (``htm-literal``): the same program and residuals, and not ``htm-thesis``'s."""
+    import mtmcal_bayes as mb
+
+    chain, literal, pivots = (mb.compensate(FIG, campaign=thesis, model=m) for m in ("chain", "htm-literal",
+                                                                                      "htm-thesis"))
+    assert chain.text == literal.text
+    np.testing.assert_array_equal(chain.error_before_um, literal.error_before_um)
+    assert chain.text != pivots.text

@@ -33,14 +33,19 @@ def geometry_for(campaign, setup_id: str | None, mount_id: str | None) -> Geomet
     return Geometry(s.R_B, s.Z_T, s.X_T, m.Z_C, m.R_C)
 
 
+#: the thesis machine's chain is Eq 2.10 as printed (``htm-literal``; tests/test_ballbar_model.py holds them equal)
+CHAIN_IS = {"chain": "htm-literal"}
+
+
 def kinematics(campaign, *, model: str | None, point: str, setup: str | None,
                mount: str | None) -> ModelFrameKinematics:
-    """The tool point of its model ``model`` (default ``htm-thesis``) at the lever arms of ``setup`` and ``mount``
-    (default the primary set-up, the first mount), the program in its NC frame."""
-    model = "htm-thesis" if model is None else model
+    """The tool point of its model ``model`` (default ``htm-thesis``; ``chain``, the machine's chain, is
+    ``htm-literal``) at the lever arms of ``setup`` and ``mount`` (default the primary set-up, the first mount), the
+    program in its NC frame."""
+    model = "htm-thesis" if model is None else CHAIN_IS.get(model, model)
     if model not in PIVOTS:
         raise ParameterError("model", f"{model}: compensation needs a kinematic model of the thesis machine; use "
-                             f"{' or '.join(PIVOTS)} (default htm-thesis)")
+                             f"{' or '.join(PIVOTS)} (default htm-thesis) or chain (htm-literal)")
     geo = geometry_for(campaign, setup, mount)
     origin = nc_origin(geo)
     info = {"geometry_mm": {"R_B": geo.R_B, "Z_T": geo.Z_T, "X_T": geo.X_T, "Z_C": geo.Z_C},
