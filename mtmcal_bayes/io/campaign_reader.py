@@ -132,7 +132,8 @@ def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:
                    "here, not both")
         desc = referenced_description(r.string(t, "description", "machine"), r.source, "machine.description",
                                       base_dir)
-        return Machine(r.string(t, "name", "machine") or desc.name, desc.configuration, travel, serial, mtype, desc)
+        name = r.string(t, "name", "machine") if "name" in t else desc.name  # an empty name given stays empty
+        return Machine(name, desc.configuration, travel, serial, mtype, desc)
     if set(t) & (DESCRIPTION_KEYS - {"name", "configuration"}):
         desc = parse_description(t, r.source, "machine", extra_keys=frozenset(legacy))
         return Machine(desc.name, desc.configuration, travel, serial, mtype, desc)
@@ -141,9 +142,10 @@ def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:
         r.fail("machine.configuration", f"{configuration!r} is not the thesis machine's ({THESIS_CONFIGURATION}) and "
                "nothing describes it: add [machine.axes.<letter>] and [machine.spindle] (docs/machines.md) or name a "
                f"built-in type with description = \"...\" ({', '.join(BUILTIN_TYPES)})")
-    # a campaign in the thesis' own format is of the thesis machine: its built-in description and plug-in
-    return Machine(r.string(t, "name", "machine"), configuration, travel, serial, mtype,
-                   builtin_description(THESIS_TYPE))
+    # a campaign in the thesis' first format is of the thesis machine: its built-in description and plug-in, as a
+    # campaign naming description = "integrex-i200" (what the writer writes)
+    desc = builtin_description(THESIS_TYPE)
+    return Machine(r.string(t, "name", "machine"), desc.configuration, travel, serial, mtype, desc)
 
 
 def deviation_quantities(machine: Machine) -> dict:

@@ -3,9 +3,9 @@
 One writer for every machine, the inverse of the one reader (:mod:`.campaign_reader`): the format line, date and
 temperature, ``[ballbar]`` (:mod:`.ballbar_writer`), the probe's instrument and repeatability, ``[reported]``,
 ``[priors]``, ``[tolerances]``, ``[truth]`` and ``[design]`` are the engine's; the machine contributes what its
-campaign format has of its own — its ``[machine]`` table (``machine_table``), its keys of ``[ballbar]`` (its
-``ballbar_keys``) and its probe's sections (``probe_document``) — and the engine's are used where it gives none
-(a description, :mod:`.description_writer`; ``[[probe.runs]]``).
+campaign format has of its own — its keys of ``[ballbar]`` (its ``ballbar_keys``) and its probe's sections
+(``probe_document``) — and the engine's are used where it gives none (``[[probe.runs]]``).  ``[machine]`` is the
+engine's on every machine (:mod:`.description_writer`: a built-in type named, any other description written out).
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
     if c.temperature_C is not None:
         doc["temperature_C"] = c.temperature_C
     m = c.machine
-    doc["machine"] = provided(m, "machine_table", machine_table)(m)
+    doc["machine"] = machine_table(m)
     ballbar = ballbar_to_dict(c, provided(m, "ballbar_keys", EngineKeys), save_dir)
     if ballbar is not None:
         doc["ballbar"] = ballbar

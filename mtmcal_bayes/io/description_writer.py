@@ -7,6 +7,7 @@ import numpy as np
 from .. import units
 from ..campaign import Machine
 from ..machines.description import FRAME, MachineDescription
+from .machine_reader import description_of
 
 
 def description_to_dict(desc: MachineDescription) -> dict:
@@ -41,9 +42,10 @@ def _direction(v: np.ndarray) -> str:
 
 def machine_table(m: Machine) -> dict:
     """``[machine]`` of a campaign: its name, serial, type and axis travels, and its description (named where it is
-    a built-in type, else written out)."""
-    machine = {"name": m.name} if m.name else {}
+    a built-in type, else written out; a machine built in Python without one is the thesis machine's)."""
+    desc = description_of(m)
+    machine = {"name": m.name} if m.name or desc.name else {}  # no name read back as the description's
     machine.update({k: v for k, v in (("serial", m.serial), ("type", m.type)) if v})
     machine.update({f"travel_{a}_mm": v for a, v in m.travel.items()})
-    machine.update(description_to_dict(m.description))
+    machine.update(description_to_dict(desc))
     return machine

@@ -19,8 +19,8 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   its mounts' and the table's, read into the engine's set-ups and mounts and written back from them, and the ball
   bar completed in the engine's terms (the members of :class:`mtmcal_bayes.io.ballbar_section.EngineKeys`, the
   engine's own); ``campaign_sections(r, doc, machine, base_dir)`` — its campaign's measurement sections where it
-  reads its own ``[probe]``, ``probe_document(probe, path_of)`` their writing; ``machine_table(machine)`` — the
-  ``[machine]`` table of its campaign format (the engine's: name, serial, type and the description);
+  reads its own ``[probe]``, ``probe_document(probe, path_of)`` their writing (``[machine]`` is the
+  engine's on every machine: name, serial, type, travels and the description, a built-in type by its name);
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
   its tables, ``table("ballbar")``), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
   it;

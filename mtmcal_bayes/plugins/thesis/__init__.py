@@ -10,8 +10,9 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   ``htm-thesis`` is its default kinematic model;
 * **its default data**: the ball bar (the thesis identifies from the ball bar and checks with the probe);
 * **its names**: the thesis' 13 deviation names as aliases of their ISO 230-7 symbols;
-* **its campaign keys**, read and written by the engine's one reader and one writer: its ``[machine]`` table
-  (``machine_table``), in ``[ballbar]`` the thesis' lever arms R_B, Z_T, X_T and mounts Z_C, R_C and its
+* **its campaign keys**, read and written by the engine's one reader and one writer (``[machine]`` names the
+  ``integrex-i200`` description as any built-in type's campaign does; the thesis' first form, ``configuration =
+  "w-C'bZYXB(C1)-t"``, is still read): in ``[ballbar]`` the thesis' lever arms R_B, Z_T, X_T and mounts Z_C, R_C and its
   ``cr_geometry`` (``ballbar_keys``; a run's W ball, arc and bar side in the engine's terms: ``run_placement``,
   :mod:`.translation`); the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2;
   ``campaign_sections``, ``probe_document``), its 13 deviation names and the derived dx_CZ − dx_BT;
@@ -83,13 +84,6 @@ def run_placement(campaign, pattern: str, mount) -> tuple:
     from .translation import run_placement as placement
 
     return placement(campaign, pattern, mount)
-
-
-def machine_table(machine) -> dict:
-    """``[machine]`` of a campaign in the thesis' format: name, configuration, serial, type, travels."""
-    from .campaign_document import machine_table as table
-
-    return table(machine)
 
 
 def probe_document(probe, path_of) -> dict:
@@ -292,7 +286,6 @@ class ThesisPlugin:
     description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
     description_label = "thesis machine"
     campaign_sections = staticmethod(campaign_sections)
-    machine_table = staticmethod(machine_table)
     probe_document = staticmethod(probe_document)
     probe_owners = staticmethod(probe_owners)
     complete_ballbar = staticmethod(complete_ballbar)

@@ -1,4 +1,4 @@
-"""The thesis' own parts of a campaign written (the inverse of :mod:`.campaign_keys`): its ``[machine]`` table and its
+"""The thesis' own parts of a campaign written (the inverse of :mod:`.campaign_keys`): its
 touch probe's ``[probe.b_axis]`` and ``[probe.c_axis]`` (Tables 5.1/5.2).  The engine writes the rest of the document
 alike for every machine (:mod:`mtmcal_bayes.io.campaign_writer`), its keys of ``[ballbar]`` with the plug-in's
 (:class:`.campaign_keys.BallbarKeys`)."""
@@ -7,14 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ...campaign import Machine, Probe
-
-
-def machine_table(m: Machine) -> dict:
-    """``[machine]`` in the thesis' format: name, configuration, serial, type and the linear axes' travels (the
-    configuration names the thesis machine; no description is written)."""
-    return {"name": m.name, "configuration": m.configuration, **({"serial": m.serial} if m.serial else {}),
-            **({"type": m.type} if m.type else {}), **{f"travel_{a}_mm": v for a, v in m.travel.items()}}
+from ...campaign import Probe
 
 
 def probe_document(p: Probe, path_of: Callable[[str], str]) -> dict:
