@@ -118,3 +118,44 @@ def test_no_module_outside_the_plugins_names_the_thesis_probe_sections():
              for k, line in enumerate(path.read_text(encoding="utf-8").splitlines())
              if re.search(r"\b[cb]_axis\b", line)]
     assert not named, named
+
+
+@pytest.mark.parametrize("dropped, says", [("probe.c_axis", "No C-axis touch-probe data"),
+                                           ("probe.b_axis", "No B-axis touch-probe data")])
+def test_the_report_names_the_thesis_probe_run_a_campaign_lacks(dropped, says):
+    """The deterministic method's probe sections are its plug-in's to name: a thesis campaign without one of its
+    runs says which values Eqs 5.1–5.19 then lack, and with both nothing is said."""
+    from mtmcal_bayes.plugins.thesis.identification import identify
+    from mtmcal_bayes.reporting.missing import missing_data
+    from tests.variants import sections_dropped, thesis_text
+
+    full = mb.parse_campaign(thesis_text(), "<thesis>")
+    assert not [s for s in missing_data(full, identify(full)) if "touch-probe data" in s]
+    text = thesis_text().replace('stylus = "short"\n', 'R_B_mm = 382.95\n')  # the C-axis run's own stylus
+    c = mb.parse_campaign(sections_dropped(text, dropped), "<thesis>")
+    assert [s for s in missing_data(c, identify(c)) if "touch-probe data" in s] == \
+        [s for s in identify(c).missing_probe] and says in identify(c).missing_probe[0]
+
+
+def test_a_fleet_digest_follows_the_dprnt_files_of_every_run(tmp_path):
+    """A campaign's content digest covers the DPRNT files its probe runs name (the thesis' C-axis run here): a
+    changed file changes it."""
+    import shutil
+
+    from mtmcal_bayes.datasets import data_path
+    from mtmcal_bayes.fleets.discover import content_digest
+    from tests.variants import thesis_text
+
+    for a in (0, 90, 180, 270):
+        shutil.copy(data_path("fig5_13_dprnt_output.txt"), tmp_path / f"c{a}.txt")
+    text = thesis_text()
+    start, end = text.index("[probe.c_axis]"), text.index("[probe.b_axis]")
+    run = ('[probe.c_axis]\nR_C_mm = 100.0\nZ_C_mm = 64.838\naxis_xy_mm = [-490.0, 0.0]\nstylus = "short"\n'
+           'angles_deg = [0.0, 90.0, 180.0, 270.0]\ndprnt = ["c0.txt", "c90.txt", "c180.txt", "c270.txt"]\n\n')
+    path = tmp_path / "c.toml"
+    path.write_text(text[:start] + run + text[end:], encoding="utf-8")
+    c = mb.load_campaign(path)
+    assert c.probe.dprnt_files() == ["c0.txt", "c90.txt", "c180.txt", "c270.txt"]
+    before = content_digest(path, c)
+    (tmp_path / "c270.txt").write_text((tmp_path / "c270.txt").read_text() + "\n", encoding="utf-8")
+    assert content_digest(path, c) != before
