@@ -35,12 +35,9 @@ def shifted(campaign, axis: int, shift: float = SHIFT_MM):
     """A copy of ``campaign`` whose first probe run's positions at the last angle of its first axis are moved
     ``shift`` mm along machine axis ``axis`` (0, 1, 2)."""
     c = copy.deepcopy(campaign)
-    if c.probe.runs:
-        run = c.probe.runs[0]
-        first = next(iter(run.angles.values()))
-        run.centres[:, np.isclose(first, first[-1]), axis] += shift
-    else:
-        c.probe.c_axis.centres[:, -1, axis] += shift
+    run = c.probe.runs[0]
+    first = next(iter(run.angles.values()))
+    run.centres[:, np.isclose(first, first[-1]), axis] += shift
     return c
 
 

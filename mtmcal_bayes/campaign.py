@@ -22,6 +22,7 @@ from . import units
 from .errors import InputError
 from .machines import MachineDescription
 from .machines.plugins import provided
+from .machines.probe_terms import SPHERE_TERMS, probe_terms
 from .pattern_frames import chain_frame
 from .patterns import B_PATTERNS, C_PATTERNS
 
@@ -166,68 +167,6 @@ class Ballbar:
         return [run for run in self.runs if run.alternative_convention]
 
 
-@dataclass
-class CAxisProbe:
-    """A sphere on the table probed at several C angles with B = 0 (thesis Table 5.2), mm.
-
-    ``centres`` (r, a, 3): r repeats of the sphere centre read at each of the a angles, in the
-    reading frame (machine coordinates of the stylus's tool point).  ``centre_cov`` (r, a, 3, 3),
-    mm², where a centre was fitted from DPRNT points (NaN where given directly).  ``stylus``
-    names a stylus of ``[probe.b_axis.styli]``, or ``R_B`` gives the stylus length of a stylus of
-    this run's own.  ``datum``: ``"machine"`` (the readings are in a frame whose C-axis
-    centreline is ``axis_xy``) or ``"first"`` (the reading frame was zeroed on the sphere; its
-    X, Y position carries no information).
-    """
-
-    R_C: float
-    Z_C: float
-    axis_xy: np.ndarray  # (2,) nominal C-axis centreline in machine X, Y
-    angles_deg: np.ndarray  # (a,)
-    centres: np.ndarray  # (r, a, 3)
-    stylus: str | None = None
-    R_B: float | None = None
-    ball_radius: float = 0.0
-    datum: str = "machine"
-    dprnt: list[str] | None = None
-    centre_cov: np.ndarray | None = None  # (r, a, 3, 3) mm², NaN where not fitted
-
-    def replace_centres(self, centres: np.ndarray) -> None:
-        """Readings ``centres`` (r, a, 3), mm, given directly: the DPRNT files and fit covariances of the old ones
-        dropped."""
-        self.centres, self.centre_cov, self.dprnt = centres, None, None
-
-
-@dataclass
-class Stylus:
-    """A stylus of the B-axis run: length, readings at each B angle (r, b, 3), mm.
-
-    ``R_B`` is the programmed tool length; ``ball_radius`` the stylus-ball radius when that
-    length runs to the ball's tip (0: to its centre).  ``nominal`` (b, 3) is needed only by the
-    thesis equations (5.8–5.19); the likelihood does not use it.
-    """
-
-    id: str
-    R_B: float
-    nominal: np.ndarray | None  # (b, 3) nominal centre readings, or None
-    centres: np.ndarray  # (r, b, 3)
-    ball_radius: float = 0.0
-    dprnt: list[str] | None = None
-    centre_cov: np.ndarray | None = None  # (r, b, 3, 3) mm², NaN where not fitted
-
-    def replace_centres(self, centres: np.ndarray) -> None:
-        """Readings ``centres`` (r, b, 3), mm, given directly: the DPRNT files and fit covariances of the old ones
-        dropped."""
-        self.centres, self.centre_cov, self.dprnt = centres, None, None
-
-
-@dataclass
-class BAxisProbe:
-    X_T: float
-    angles_deg: np.ndarray  # (b,)
-    styli: dict[str, Stylus] = field(default_factory=dict)
-    Z_C: float | None = None  # sphere height above the table, mm (default: the C-axis sphere's)
-
-
 @dataclass(frozen=True)
 class Gap:
     """Something a valid campaign leaves out that some of its analyses need (one verdict for every command).
@@ -258,14 +197,24 @@ class Gap:
 
 @dataclass
 class ProbeRun:
-    """A touch-probe run of a described machine (``[[probe.runs]]``, SPEC §19): a fixed sphere probed at indexed
-    positions of one or more rotary axes, the measurement of the controller cycles that calibrate kinematics.
+    """A touch-probe run (``[[probe.runs]]``, SPEC §19; a plug-in's campaign keys read into the same at read time):
+    a fixed sphere probed at indexed positions of one or more rotary axes, the measurement of the controller cycles
+    that calibrate kinematics.
 
-    ``sphere`` (3,) the sphere's nominal centre at the home pose, on the workpiece side, mm; ``angles``
-    {axis letter: (a,)} rad, position i is the i-th entry of each (axes not named are at 0); ``centres``
-    (r, a, 3) the commanded X, Y, Z at which the stylus centre reached the sphere's centre, mm; ``centre_cov``
-    (r, a, 3, 3) mm² where the centres were fitted through DPRNT points (``dprnt``, one file per position), else
-    None."""
+    ``id`` owns the run's sphere and datum terms (runs of one id share them: one sphere read with several styli);
+    ``stylus`` a stylus of :attr:`Probe.styli`; ``sphere`` (3,) the sphere's nominal centre at the home pose, on the
+    workpiece side, mm; ``angles`` {axis letter: (a,)} rad, position i is the i-th entry of each (axes not named are
+    at 0); ``centres`` (r, a, 3) the commanded X, Y, Z at which the stylus centre reached the sphere's centre, mm;
+    ``centre_cov`` (r, a, 3, 3) mm² where the centres were fitted through DPRNT points (``dprnt``, one file per
+    position), else None.
+
+    What its campaign format states about the run beyond that (defaults: the engine's ``[[probe.runs]]``):
+    ``origin`` (3,) mm, the model frame's origin in the reading frame, NaN where unknown (the frame is then placed at
+    the run's first reading and its datum terms carry the rest; None: the machine frame, zeros); ``sphere_terms``
+    and ``datum_terms`` the nuisance terms of its sphere's placement and of where the sphere is in the reading frame;
+    ``stylus_terms`` those of its stylus (None: the machine's, :func:`~mtmcal_bayes.machines.probe_terms.stylus_terms`);
+    ``key`` the type of its observations' keys (None: the engine's) and ``labels`` (a,) the value naming each
+    position in them (None: its number from 1)."""
 
     id: str
     stylus: str
@@ -274,10 +223,21 @@ class ProbeRun:
     centres: np.ndarray
     dprnt: list[str] | None = None
     centre_cov: np.ndarray | None = None
+    origin: np.ndarray | None = None
+    sphere_terms: tuple[str, ...] = SPHERE_TERMS
+    datum_terms: tuple[str, ...] = ()
+    stylus_terms: tuple[str, ...] | None = None
+    key: type | None = None
+    labels: np.ndarray | None = None
 
     @property
     def positions(self) -> int:
         return self.centres.shape[1]
+
+    @property
+    def angles_deg(self) -> dict[str, np.ndarray]:
+        """The rotary axes' positions {letter: (a,)}, degrees."""
+        return {a: units.from_internal(v, "deg") for a, v in self.angles.items()}
 
     def replace_centres(self, centres: np.ndarray) -> None:
         """Readings ``centres`` (r, a, 3), mm, given directly: the DPRNT files and fit covariances of the old ones
@@ -285,84 +245,39 @@ class ProbeRun:
         self.centres, self.centre_cov, self.dprnt = centres, None, None
 
 
-@dataclass(frozen=True)
-class ReadingRun:
-    """A run of touch-probe readings in the terms every campaign format shares: its ``id``, the ``stylus`` it probes
-    with, ``angles_deg`` {axis letter: (a,)} the rotary axes' positions, degrees (axes not named at 0), and ``run``,
-    the campaign's own record of it, which holds the readings (``centres`` (r, a, 3), mm; ``replace_centres``)."""
-
-    id: str
-    stylus: str
-    angles_deg: dict[str, np.ndarray]
-    run: CAxisProbe | Stylus | ProbeRun
-
-    @property
-    def positions(self) -> int:
-        return self.run.centres.shape[1]
-
-
 @dataclass
 class Probe:
+    """A campaign's touch probe: its instrument, repeatability (mm), styli and runs, whatever format it was read from.
+
+    ``styli`` {id: programmed length, mm}: from the spindle's ``point_mm`` to the stylus-ball centre, or to its tip
+    where ``ball_radii`` gives the ball's radius (mm); ``runs`` in the order of the probe models' positions;
+    ``missing`` what the readings leave out that some analyses need (:meth:`gaps`); ``own`` the record a plug-in
+    keeps of its campaign format's probe sections (the thesis': the keys of its C-axis and B-axis runs, for
+    its own identification and for writing the campaign back), opaque to the engine."""
+
     instrument: str = ""
     repeatability: float | None = None  # mm
-    c_axis: CAxisProbe | None = None
-    b_axis: BAxisProbe | None = None
-    runs: list[ProbeRun] = field(default_factory=list)  # a described machine's runs
-    styli: dict[str, float] = field(default_factory=dict)  # a described machine's styli: id -> length, mm
-
-    #: owner of the C-axis run's own stylus (when it names none of the B-axis run) and of each run's sphere terms
-    C_RUN, B_RUN = "c_axis", "b_axis"
+    runs: list[ProbeRun] = field(default_factory=list)
+    styli: dict[str, float] = field(default_factory=dict)
+    ball_radii: dict[str, float] = field(default_factory=dict)
+    missing: list[Gap] = field(default_factory=list)
+    own: object | None = None
 
     def gaps(self) -> list[Gap]:
-        """What the probe's readings leave out that its likelihood needs: the stylus of a C-axis run that names
-        none (campaigns written before the key existed; the deterministic Eqs 5.1–5.7 do not need it)."""
-        c = self.c_axis
-        if c is None or c.stylus is not None or c.R_B is not None:
-            return []
-        styli = sorted(self.b_axis.styli.values(), key=lambda s: s.R_B) if self.b_axis is not None else []
-        if styli:
-            fix = (f"add stylus = \"{styli[0].id}\" (the shortest of [probe.b_axis.styli]: "
-                   f"{', '.join(s.id for s in styli)}; the one to assume unless you know which probed the C axis) "
-                   "or give its length R_B_mm")
-        else:
-            fix = "give its length R_B_mm (and ball_radius_mm when it is measured to the stylus-ball tip)"
-        return [Gap("probe.c_axis.stylus", "the C-axis run names no stylus",
-                    "the touch-probe likelihood (probe or both data) and the comparison of the instruments", fix)]
+        """What the probe's readings leave out that its likelihood needs (as its campaign format states it)."""
+        return list(self.missing)
 
-    def reading_runs(self) -> list[ReadingRun]:
-        """Every run with readings, in the order of the probe models' positions: the C-axis run (C indexed), then
-        each stylus of the B-axis run (B indexed), then the ``[[probe.runs]]``."""
-        out = []
-        if self.c_axis is not None:
-            out.append(ReadingRun(self.C_RUN, self.stylus_of_c_run(), {"C": self.c_axis.angles_deg}, self.c_axis))
-        if self.b_axis is not None:
-            out += [ReadingRun(self.B_RUN, s.id, {"B": self.b_axis.angles_deg}, s) for s in self.b_axis.styli.values()]
-        return out + [ReadingRun(r.id, r.stylus, {a: units.from_internal(v, "deg") for a, v in r.angles.items()}, r)
-                      for r in self.runs]
+    def centre_length(self, stylus: str) -> float:
+        """The length of ``stylus`` from the spindle's ``point_mm`` to its ball's centre, mm."""
+        return self.styli[stylus] - self.ball_radii.get(stylus, 0.0)
 
-    def stylus_of_c_run(self) -> str:
-        """Owner of the stylus the C-axis run probes with: a B-axis stylus id, or ``"c_axis"``."""
-        return self.c_axis.stylus or self.C_RUN
+    def dprnt_files(self) -> list[str]:
+        """The DPRNT files its runs name, in run order."""
+        return [name for run in self.runs for name in (run.dprnt or [])]
 
-    def styli_used(self) -> list[str]:
-        """Owners of every stylus with readings, C-axis run first."""
-        out = [self.stylus_of_c_run()] if self.c_axis is not None else []
-        if self.b_axis is not None:
-            out += [s for s in self.b_axis.styli if s not in out]
-        return out
-
-    def nuisance_terms(self) -> list[tuple[str, str]]:
-        """The probe's nuisance parameters as ``(owner, base)`` pairs (see ``parameters.PROBE_NUISANCE``):
-        per stylus ``xS, yS, dRS, rS``; the C-axis sphere's placement ``xP, yP`` and the datum of its
-        readings (``zD``; also ``xD, yD`` when the frame was zeroed on the sphere); the B-axis sphere's
-        position ``xD, yD, zD``."""
-        out = [(s, b) for s in self.styli_used() for b in ("xS", "yS", "dRS", "rS")]
-        if self.c_axis is not None:
-            out += [(self.C_RUN, b) for b in ("xP", "yP")]
-            out += [(self.C_RUN, b) for b in (("xD", "yD", "zD") if self.c_axis.datum == "first" else ("zD",))]
-        if self.b_axis is not None and self.b_axis.styli:
-            out += [(self.B_RUN, b) for b in ("xD", "yD", "zD")]
-        return out
+    def nuisance_terms(self, desc: MachineDescription | None) -> list[tuple[str, str]]:
+        """The probe's nuisance parameters as ``(owner, base)`` pairs (:func:`~.machines.probe_terms.probe_terms`)."""
+        return probe_terms(desc, self)
 
 
 @dataclass
@@ -510,10 +425,8 @@ class Campaign:
         return dataclasses.replace(self, ballbar=dataclasses.replace(bb, runs=runs, alternative_reason=""))
 
     def has_probe_readings(self) -> bool:
-        """Whether the campaign has touch-probe readings (a C-axis run or a stylus of the B-axis run)."""
-        p = self.probe
-        return p is not None and (p.c_axis is not None or (p.b_axis is not None and bool(p.b_axis.styli))
-                                  or bool(p.runs))
+        """Whether the campaign has touch-probe readings (a probe run)."""
+        return self.probe is not None and bool(self.probe.runs)
 
     def runs_of(self, pattern: str) -> list[Run]:
         return [r for r in self.ballbar.runs if r.pattern == pattern]

@@ -137,9 +137,10 @@ def with_run_values(campaign, keys, values):
 
 @dataclass(frozen=True)
 class ProbeKey:
-    """Which touch-probe reading an observation is: run (``"c_axis"``/``"b_axis"``), stylus owner, indexed
-    angle (C of the C-axis run, B of the B-axis run, degrees) and component (``X, Y, Z``; ``u1..u3`` along
-    the principal axes of a DPRNT fit's covariance)."""
+    """Which touch-probe reading an observation is: ``run`` the run's id, ``stylus`` its stylus, ``angle_deg`` the
+    value naming its position (the position's number, 1, 2, ...; a campaign format may name positions otherwise,
+    with a key of its own: the thesis' by the indexed angle, degrees) and ``component`` (``X, Y, Z``; ``u1..u3``
+    along the principal axes of a DPRNT fit's covariance)."""
 
     run: str
     stylus: str
@@ -148,21 +149,7 @@ class ProbeKey:
 
     @property
     def group(self) -> str:
-        """The reading group: the C-axis run, or the B-axis run of one stylus."""
-        return "probe C axis" if self.run == "c_axis" else f"probe B axis, stylus {self.stylus}"
-
-    @property
-    def label(self) -> str:
-        axis = "C" if self.run == "c_axis" else "B"
-        return f"{self.component}@{axis}{self.angle_deg:g}/{self.stylus}"
-
-
-@dataclass(frozen=True)
-class DescribedProbeKey(ProbeKey):
-    """A described machine's probe reading: ``run`` is the run's id, ``angle_deg`` the position's number (1, 2, ...)."""
-
-    @property
-    def group(self) -> str:
+        """The reading group: one run with one stylus."""
         return f"probe {self.run}, stylus {self.stylus}"
 
     @property

@@ -223,7 +223,7 @@ class ParameterSpace:
         order; a described machine's from :func:`mtmcal_bayes.machines.deviations.quantities`).
     probe:
         Touch-probe nuisance terms as ``(owner, base)`` pairs, in order (e.g. ``("short", "xS")``,
-        ``("c_axis", "xP")``); see :data:`PROBE_NUISANCE`.
+        ``("run1", "xP")``); see :data:`PROBE_NUISANCE`.
     """
 
     def __init__(self, setups, mounts, deviations=None, probe=(), *, table: dict[str, Quantity] | None = None):
@@ -243,7 +243,8 @@ class ParameterSpace:
         """The space of ``campaign`` for the data ``"ballbar"``, ``"probe"`` or ``"both"``: the
         ball-bar nuisance terms with ball-bar data, the probe terms with probe data."""
         bb = data in ("ballbar", "both")
-        probe = campaign.probe.nuisance_terms() if data in ("probe", "both") and campaign.probe else ()
+        probe = (campaign.probe.nuisance_terms(campaign.machine.description)
+                 if data in ("probe", "both") and campaign.probe else ())
         return cls(list(campaign.ballbar.setups) if bb else [], list(campaign.ballbar.mounts) if bb else [],
                    deviations, probe)
 

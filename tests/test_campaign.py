@@ -23,8 +23,9 @@ def test_builtin_campaign_contents(thesis):
     assert bb.runs[0].repeats["ex"] == pytest.approx([-0.0514, -0.0521, -0.0516])  # mm
     assert thesis.reported["ballbar"]["alpha_CZ"].decimals == 2
     assert thesis.reported["probe"]["alpha_CZ"].decimals == 1
-    assert thesis.probe.c_axis.centres.shape == (2, 4, 3)
-    assert set(thesis.probe.b_axis.styli) == {"short", "long"}
+    assert [(r.id, r.stylus, r.centres.shape) for r in thesis.probe.runs] == \
+        [("c_axis", "short", (2, 4, 3)), ("b_axis", "short", (2, 2, 3)), ("b_axis", "long", (2, 2, 3))]
+    assert set(thesis.probe.styli) == {"short", "long"}
 
 
 def test_round_trip(thesis, tmp_path):
@@ -35,7 +36,8 @@ def test_round_trip(thesis, tmp_path):
     for a, b in zip(thesis.ballbar.runs, again.ballbar.runs):
         for comp in a.repeats:
             np.testing.assert_allclose(a.repeats[comp], b.repeats[comp], rtol=1e-12)
-    np.testing.assert_array_equal(thesis.probe.c_axis.centres, again.probe.c_axis.centres)
+    for a, b in zip(thesis.probe.runs, again.probe.runs, strict=True):
+        np.testing.assert_array_equal(a.centres, b.centres)
     assert {k: v.value for k, v in again.reported["ballbar"].items()} == pytest.approx(
         {k: v.value for k, v in thesis.reported["ballbar"].items()})
     # printed decimals survive: 1.10 stays 1.10

@@ -151,11 +151,11 @@ def test_probe_candidates_index_each_axis_and_their_rows_are_the_chains_derivati
     from mtmcal_bayes.machines.deviations import quantities
     from mtmcal_bayes.models.chain_models import ChainProbeModel
     from mtmcal_bayes.parameters import ParameterSpace
-    from mtmcal_bayes.planning.chain_probe_candidates import described_probe_catalogue
+    from mtmcal_bayes.planning.probe_catalogue import probe_catalogue
 
     c = api.campaign_of(api.demo_campaign("head-head"))
     desc = c.machine.description
-    cands = described_probe_catalogue(c)
+    cands = probe_catalogue(c)
     assert {x.axis for x in cands} == {a.letter for a in desc.rotary_axes}
     for x in cands:
         for letter, angles in x.positions:

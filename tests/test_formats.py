@@ -134,13 +134,16 @@ CHECKS = {("thesis_first_published.toml", "report"): _reports_without_its_probe_
 FIRST = FORMATS / "thesis_first_published.toml"
 
 
-def test_a_ball_bar_plan_on_it_skips_only_the_probe_candidates_that_need_the_stylus(run_cli):
+def test_a_ball_bar_plan_on_it_keeps_every_probe_candidate(run_cli):
+    """The probe candidates are new runs, each with a stylus of the campaign's B-axis run: the C-axis run's missing
+    stylus keeps none of them out (C indexed as well as B), and no note says one was skipped."""
     code, out, err = run_cli("plan", FIRST, "--target", "alpha_BT", "--json")
     assert code == 0, err
     plan = json.loads(out)
-    kinds = {r["name"] for r in plan["candidates"] if r["kind"] == "probe"}
-    assert kinds and all(name.startswith("probe B") for name in kinds)  # the B-axis runs need no C-axis stylus
-    assert any("the touch-probe candidates on the C axis" in n and "probe.c_axis.stylus" in n for n in plan["notes"])
+    probes = [r for r in plan["candidates"] if r["kind"] == "probe"]
+    assert {r["pattern"] for r in probes} == {"probe B", "probe C"}
+    assert "stylus 382.95 mm" in {r["setup"] for r in probes}  # the first stylus, short
+    assert not any("skipped" in n for n in plan["notes"]), plan["notes"]
 
 
 def test_where_the_stylus_is_needed_the_line_says_what_would_be_assumed(run_cli):

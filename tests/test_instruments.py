@@ -40,12 +40,9 @@ def shifted(campaign, shift_um: float = 15.0, axis: int = 0):
     thesis' C-axis run: C = 270°; a demo's: the four positions of its last tilt) are moved ``shift_um`` along
     machine axis ``axis``."""
     c = copy.deepcopy(campaign)
-    if c.probe.runs:
-        run = c.probe.runs[0]
-        first = next(iter(run.angles.values()))
-        run.centres[:, np.isclose(first, first[-1]), axis] += shift_um * UM
-    else:
-        c.probe.c_axis.centres[:, -1, axis] += shift_um * UM
+    run = c.probe.runs[0]
+    first = next(iter(run.angles.values()))
+    run.centres[:, np.isclose(first, first[-1]), axis] += shift_um * UM
     return c
 
 

@@ -258,7 +258,7 @@ def test_simulate_json_and_noise(tmp_path, run_cli):
     assert c.truth.deviations["beta_XB"] == pytest.approx(-24.11 * ARCSEC)
     assert c.truth.mounts["C"]["yW"] == pytest.approx(0.040)
     assert all(len(v) == 3 for r in c.ballbar.runs for v in r.repeats.values())
-    assert c.probe.c_axis.centres.shape == (2, 4, 3) and not c.reported  # probe readings simulated too, 2 repeats
+    assert c.probe.runs[0].centres.shape == (2, 4, 3) and not c.reported  # probe readings simulated too, 2 repeats
 
 
 def test_simulate_bad_truth(tmp_path, run_cli):

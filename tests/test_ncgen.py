@@ -10,6 +10,8 @@ checked here on every built-in type.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
@@ -216,8 +218,9 @@ def test_ncgen_run_counts_the_planned_runs_after_the_measured_ones(run_cli, tmp_
     assert code == 2 and f"--run: the campaign has {n} ball-bar runs" in err, err
 
 
-def test_ncgen_on_a_thesis_campaign_without_runs_writes_from_its_setups(run_cli, tmp_path):
-    """The thesis machine's programs need its set-ups and mounts only: a campaign with no runs yet gets them."""
+def test_ncgen_on_a_thesis_campaign_without_runs_writes_from_its_setups_and_probe_runs(run_cli, tmp_path):
+    """The thesis machine's programs need its set-ups and mounts only: a campaign with no ball-bar runs yet gets
+    them, and its probe runs' too."""
     from mtmcal_bayes.datasets import builtin_campaign_text
 
     text = sections_dropped(builtin_campaign_text()[0], "ballbar.runs")
@@ -227,8 +230,14 @@ def test_ncgen_on_a_thesis_campaign_without_runs_writes_from_its_setups(run_cli,
     code, program, err = run_cli("ncgen", "BX", path)
     code0, builtin, _ = run_cli("ncgen", "BX")
     assert code == code0 == 0 and program == builtin, err
-    code, _, err = run_cli("ncgen", "--probe", "1", path)
-    assert code == 2 and f"{path}: probe.runs: no [[probe.runs]]" in err and "[probe.c_axis]" in err, err
+    code, program, err = run_cli("ncgen", "--probe", "1", path)
+    assert code == 0, err
+    # its C-axis run is a probe run like any other's: by hand, the sphere at R_C 100 mm and 64.838 mm above the
+    # table turned by C, the short stylus' ball centre 382.95 − 3 mm (its radius) below the B centre
+    centres = np.array(re.findall(r"sphere centre at X(\S+) Y(\S+) Z(\S+)\)", program), dtype=float)
+    C = np.radians([0.0, 90.0, 180.0, 270.0])
+    np.testing.assert_allclose(centres, np.column_stack([100 * np.cos(C), 100 * np.sin(C),
+                                                         np.full(4, 64.838 + 379.95)]), atol=1e-4)
 
 
 @pytest.mark.parametrize("machine", [t for t in BUILTIN_TYPES

@@ -25,7 +25,7 @@ from mtmcal_bayes.planning.design import Planner, sigma_contraction
 from mtmcal_bayes.planning.design_make import design_candidates
 from mtmcal_bayes.planning.design_problem import NODE_LEVELS, PROMISE, DesignProblem
 from mtmcal_bayes.planning.preposterior import realised_sd
-from mtmcal_bayes.planning.probe_candidates import probe_catalogue
+from mtmcal_bayes.planning.probe_catalogue import probe_catalogue
 from mtmcal_bayes.planning.scale_priors import learnt_notes, learnt_summary
 from mtmcal_bayes.sigma_prior import SigmaModelPrior
 

@@ -17,6 +17,7 @@ from mtmcal_bayes.io.campaign_reader import parse_campaign
 from mtmcal_bayes.io.campaign_writer import campaign_to_dict
 from mtmcal_bayes.io.tomlio import dumps
 from mtmcal_bayes.models import MODELS, make_model
+from mtmcal_bayes.plugins.thesis.probe_runs import record, run_of
 from mtmcal_bayes.posterior.consistency import instrument_consistency
 from mtmcal_bayes.simulation.simulate import simulated_probe, synthetic_campaign
 from mtmcal_bayes.validation import SBCSettings, run_sbc
@@ -25,17 +26,21 @@ ARCSEC = units.to_internal(1.0, "arcsec")
 UM = units.to_internal(1.0, "um")
 
 
+def _with_machine_datum():
+    """The thesis campaign with the C-axis readings taken as machine coordinates (C axis at axis_xy)."""
+    text = mb.datasets.builtin_text("integrex_i200.toml")
+    assert text.count('datum = "first"') == 1
+    return parse_campaign(text.replace('datum = "first"', 'datum = "machine"'), "<thesis, machine datum>")
+
+
 @pytest.fixture(scope="module")
 def machine_datum():
-    """The thesis campaign with the C-axis readings taken as machine coordinates (C axis at axis_xy)."""
-    c = mb.load_campaign()
-    c.probe.c_axis.datum = "machine"
-    return c
+    return _with_machine_datum()
 
 
 def _c_centres(campaign, truth: Truth, model: str) -> np.ndarray:
     """Noise-free C-axis sphere centres (a, 3) of ``truth``, mm."""
-    return simulated_probe(campaign, truth, model).c_axis.centres[0]
+    return run_of(simulated_probe(campaign, truth, model), "c_axis").centres[0]
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -64,7 +69,7 @@ def test_beta_CZ_tilts_the_c_axis_centres_as_by_hand(machine_datum, model, pivot
     ΔY = 0 and ΔZ = −β R_C cos C (−14.54 µm at C = 0, +14.54 µm at 180°, 0 at 90° and 270°).
     Second-order terms (β² R_C ≈ 2e-6 mm) are below the 5e-6 mm tolerance.
     """
-    c = machine_datum.probe.c_axis
+    c = record(machine_datum.probe).c_axis
     beta = 30 * ARCSEC
     base = _c_centres(machine_datum, Truth(), model)
     moved = _c_centres(machine_datum, Truth(deviations={"beta_CZ": beta}), model)
@@ -109,8 +114,7 @@ def test_probe_data_selection(thesis):
 
 def _synthetic(thesis, seed: int):
     """The thesis design with ball-bar and probe data simulated (noisy) from a known truth (htm-thesis)."""
-    c = copy.deepcopy(thesis)
-    c.probe.c_axis.datum = "machine"
+    c = _with_machine_datum()
     truth = Truth(deviations={"beta_CZ": -25 * ARCSEC, "alpha_CZ": 3 * ARCSEC, "alpha_XB": -20 * ARCSEC,
                               "gamma_XB": 5 * ARCSEC, "beta_XB": -30 * ARCSEC, "dx_CZ": 40 * UM, "dx_BT": 10 * UM,
                               "dy_CZ": -45 * UM, "dz_BT": -50 * UM, "alpha_BT": 10 * ARCSEC})
@@ -137,7 +141,7 @@ def test_consistency_agrees_on_consistent_data_and_flags_a_broken_probe(thesis):
     ok = instrument_consistency(bb, pr)
     assert (ok.groups["verdict"] == "agree").all(), ok.to_text()
     bad = copy.deepcopy(c)
-    bad.probe.b_axis.styli["long"].centres[:, 1, 0] += 150 * UM  # X at B = 90°, long stylus
+    run_of(bad.probe, "b_axis", "long").centres[:, 1, 0] += 150 * UM  # X at B = 90°, long stylus
     flagged = instrument_consistency(mb.sample(bad, seed=2), mb.sample(bad, seed=2, data="probe"))
     verdicts = dict(zip(flagged.groups["group"], flagged.groups["verdict"]))
     assert verdicts["probe B axis, stylus long"] == "disagree", flagged.to_text()
@@ -210,8 +214,8 @@ def test_dprnt_c_axis_run_from_fig_5_13(tmp_path):
              'angles_deg = [0.0, 90.0, 180.0, 270.0]\ndprnt = ["c0.txt", "c90.txt", "c180.txt", "c270.txt"]\n\n')
     c = parse_campaign(thesis_text[:start] + c_run + thesis_text[end:], str(tmp_path / "c.toml"), tmp_path)
     fit = fit_sphere(pts)
-    np.testing.assert_allclose(c.probe.c_axis.centres[0, 0], fit.centre)
-    assert c.probe.c_axis.centre_cov.shape == (1, 4, 3, 3)
+    np.testing.assert_allclose(run_of(c.probe, "c_axis").centres[0, 0], fit.centre)
+    assert run_of(c.probe, "c_axis").centre_cov.shape == (1, 4, 3, 3)
     post = LogPosterior(c, "linear", data="probe")
     obs = post.forward.observations
     c0 = [i for i, k in enumerate(obs.keys) if k.run == "c_axis" and k.angle_deg == 0.0]
@@ -235,7 +239,7 @@ def test_simulate_writes_probe_readings(thesis, tmp_path, run_cli):
     assert code == 0, err
     sim = mb.load_campaign(out)
     assert sim.truth.probe == {"short": {"xS": pytest.approx(3 * UM)}}
-    assert sim.probe.c_axis.centres.shape == (1, 4, 3)
+    assert run_of(sim.probe, "c_axis").centres.shape == (1, 4, 3)
     model = make_model("linear", sim, data="probe")
     theta = mb.simulation.simulate.truth_vector(model.space, sim.truth.probe_part())
     # the readings' datum is where the first reading of each run puts it, so the truth fits them exactly up to

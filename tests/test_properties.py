@@ -23,18 +23,15 @@ from hypothesis.extra.numpy import arrays
 from mtmcal_bayes import InputError, load_campaign, parse_campaign, save_campaign, units
 from mtmcal_bayes.campaign import (
     Ballbar,
-    BAxisProbe,
     Campaign,
-    CAxisProbe,
     Machine,
     Mount,
-    Probe,
     ReportedValue,
     Run,
     Setup,
-    Stylus,
     Truth,
 )
+from mtmcal_bayes.plugins.thesis.probe_runs import BAxisKeys, CAxisKeys, Readings, StylusKeys, record, thesis_probe
 from mtmcal_bayes.errors import MtmcalError
 from mtmcal_bayes.io.dprnt import parse_dprnt
 from mtmcal_bayes.io.gcode import block_line, parse_program, rewrite
@@ -549,12 +546,15 @@ def full_campaigns(draw):
 
     if draw(st.booleans()):
         a = draw(st.integers(3, 4))  # a circle needs three C angles
-        cax = CAxisProbe(draw(st.floats(1.0, 200.0)), draw(st.floats(0.0, 200.0)), np.array([-490.0, 0.0]),
-                         np.arange(a) * 90.0, draw(arrays(np.float64, (2, a, 3), elements=st.floats(-600, 600))))
-        styli = {sid: Stylus(sid, r, draw(arrays(np.float64, (2, 3), elements=st.floats(-600, 600))),
-                             draw(arrays(np.float64, (1, 2, 3), elements=st.floats(-600, 600))))
-                 for sid, r in zip(("short", "long"), (300.0, 350.0))}
-        c.probe = Probe("", units.to_internal(1.0, "um"), cax, BAxisProbe(-490.0, np.array([0.0, 90.0]), styli))
+        cax = CAxisKeys(draw(st.floats(1.0, 200.0)), draw(st.floats(0.0, 200.0)), np.array([-490.0, 0.0]),
+                        np.arange(a) * 90.0)
+        readings = {"c_axis": Readings(draw(arrays(np.float64, (2, a, 3), elements=st.floats(-600, 600))))}
+        styli = {}
+        for sid, r in zip(("short", "long"), (300.0, 350.0)):
+            styli[sid] = StylusKeys(sid, r, draw(arrays(np.float64, (2, 3), elements=st.floats(-600, 600))))
+            readings[sid] = Readings(draw(arrays(np.float64, (1, 2, 3), elements=st.floats(-600, 600))))
+        c.probe = thesis_probe("", units.to_internal(1.0, "um"), c_axis=cax,
+                               b_axis=BAxisKeys(-490.0, np.array([0.0, 90.0]), styli), readings=readings)
     return c
 
 
@@ -605,10 +605,11 @@ def assert_same_campaign(a: Campaign, b: Campaign) -> None:
             np.testing.assert_allclose(v.value, w.value, **RT)
     assert (a.probe is None) == (b.probe is None)
     if a.probe is not None:
-        np.testing.assert_allclose(a.probe.c_axis.centres, b.probe.c_axis.centres, **RT)
-        for sid, s in a.probe.b_axis.styli.items():
-            np.testing.assert_allclose(s.centres, b.probe.b_axis.styli[sid].centres, **RT)
-            np.testing.assert_allclose(s.nominal, b.probe.b_axis.styli[sid].nominal, **RT)
+        assert [(r.id, r.stylus) for r in a.probe.runs] == [(r.id, r.stylus) for r in b.probe.runs]
+        for r1, r2 in zip(a.probe.runs, b.probe.runs):
+            np.testing.assert_allclose(r1.centres, r2.centres, **RT)
+        for sid, s in record(a.probe).b_axis.styli.items():
+            np.testing.assert_allclose(s.nominal, record(b.probe).b_axis.styli[sid].nominal, **RT)
 
 
 @FAST

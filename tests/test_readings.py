@@ -295,12 +295,12 @@ def test_a_probe_run_at_45_degrees_separates_alpha_and_gamma(thesis):
     at 45° R·(0.2929 α + 0.7071 γ).  The candidate's rows show exactly those ratios, and with the probe's data
     alone alpha_XB goes from prior-wide to a few arc seconds."""
     from mtmcal_bayes.planning.design import Planner
-    from mtmcal_bayes.planning.probe_candidates import probe_catalogue
+    from mtmcal_bayes.planning.probe_catalogue import probe_catalogue
 
     cands = [c for c in probe_catalogue(thesis) if c.angles_deg == (0.0, 45.0, 90.0)]
-    assert len(cands) == 2  # one per stylus
+    assert [c.axis for c in cands] == ["B"] * 3  # the short stylus, a longer one, the sphere higher
     planner = Planner(thesis, cands, ["alpha_XB", "gamma_XB"], data="probe")
-    (A, _), _ = planner.candidate_rows()
+    A, _ = planner.candidate_rows()[0]  # the short stylus
     Y = A[[1, 4, 7]]  # X, Y, Z per angle: the Y readings at 0°, 45°, 90°
     step = lambda col: Y[:, planner.space.index(col)] - Y[0, planner.space.index(col)]  # noqa: E731
     assert step("alpha_XB")[1] / step("alpha_XB")[2] == pytest.approx(1 - math.cos(math.pi / 4), rel=1e-6)
@@ -315,6 +315,7 @@ def test_plan_ranks_probe_runs(run_cli):
     assert code == 0, err
     doc = json.loads(out)
     probe = [c for c in doc["candidates"] if c["kind"] == "probe"]
-    assert len(probe) == 7 and doc["candidates"][0]["kind"] == "probe"  # C at eight angles leads for alpha_CZ
-    assert sum(not c["feasible"] for c in probe) == 1  # the sphere at R_C 150 mm: Y span 300 mm > 250 mm
+    # C and B, each with the short stylus, a longer one and the sphere higher; C indexed leads for alpha_CZ
+    assert sorted(c["pattern"] for c in probe) == ["probe B"] * 3 + ["probe C"] * 3
+    assert doc["candidates"][0]["pattern"] == "probe C" and all(c["feasible"] for c in probe)
     assert probe[0]["targets"]["alpha_CZ"]["sd_after"] < probe[0]["targets"]["alpha_CZ"]["sd_before"]

@@ -34,7 +34,7 @@ def _campaign(name: str):
         return mb.load_campaign(DATA / "controller_cycles" / "trunnion-cycle.toml")
     if name == "integrex-i200-fitted":  # as fitted from DPRNT points: a covariance per centre, axes not the frame's
         c = copy.deepcopy(mb.load_campaign())
-        run = c.probe.c_axis
+        run = c.probe.runs[0]  # the C-axis run
         a = np.random.default_rng(5).normal(size=run.centres.shape + (3,)) * 1e-3
         run.centre_cov = a @ np.swapaxes(a, -1, -2)  # (r, a, 3, 3) mm², positive definite
         return c
@@ -49,7 +49,7 @@ def _truth(name: str, campaign) -> Truth:
 
 
 def _positions(probe):
-    return [(run.id, run.stylus, i + 1) for run in probe.reading_runs() for i in range(run.positions)]
+    return [(run.id, run.stylus, i + 1) for run in probe.runs for i in range(run.positions)]
 
 
 @pytest.mark.parametrize("name", CAMPAIGNS)
@@ -67,9 +67,9 @@ def test_the_written_readings_are_what_the_probe_model_predicts(name, tmp_path):
     written = mb.load_campaign(tmp_path / "s.toml")
     assert [(r["run"], r["stylus"], r["position"]) for r in d["probe"]] == _positions(written.probe) \
         == _positions(c.probe)
-    runs = written.probe.reading_runs()
-    assert all(run.run.centres.shape[0] == 1 for run in runs)  # noise-free: one repeat
-    xyz = np.concatenate([run.run.centres[0] for run in runs])
+    runs = written.probe.runs
+    assert all(run.centres.shape[0] == 1 for run in runs)  # noise-free: one repeat
+    xyz = np.concatenate([run.centres[0] for run in runs])
     assert np.abs(np.array([[r[f"{x}_mm"] for x in "XYZ"] for r in d["probe"]]) - xyz).max() < WRITTEN_MM
     angles = [{f"{a}_deg": float(v[i]) for a, v in run.angles_deg.items()} for run in runs for i in range(run.positions)]
     assert [{k: v for k, v in r.items() if k.endswith("_deg")} for r in d["probe"]] == angles
@@ -104,8 +104,8 @@ def test_simulated_readings_scatter_by_the_repeatability(name, stated):
         return
     sd = c.probe.repeatability if stated else DEFAULT_PROBE_SD
     r = 400
-    noisy = synthetic_campaign(c, truth, model, noise=True, seed=11, repeats=r).probe.reading_runs()
-    centres = np.concatenate([run.run.centres for run in noisy], axis=1)  # (r, k, 3)
+    noisy = synthetic_campaign(c, truth, model, noise=True, seed=11, repeats=r).probe.runs
+    centres = np.concatenate([run.centres for run in noisy], axis=1)  # (r, k, 3)
     mean = np.array([[rec[f"{x}_mm"] for x in "XYZ"] for rec in records])
     dev = centres - mean
     assert centres.shape == (r, len(records), 3)
@@ -150,8 +150,8 @@ def test_a_probe_only_thesis_campaign_is_simulated(tmp_path, run_cli):
     code, _, err = run_cli("simulate", path, "--truth", truth, "--noise", "--seed", "2", "-o", tmp_path / "s.toml")
     assert code == 0, err
     written = mb.load_campaign(tmp_path / "s.toml")
-    assert [run.run.centres.shape for run in written.probe.reading_runs()] == \
-        [run.run.centres.shape for run in c.probe.reading_runs()]
+    assert [run.centres.shape for run in written.probe.runs] == \
+        [run.centres.shape for run in c.probe.runs]
 
 
 @pytest.mark.parametrize("name", ("integrex-i200", "trunnion"))

@@ -105,11 +105,8 @@ class Discovery:
 def _referenced(campaign: Campaign) -> list[Path]:
     """The files a campaign names (traces, DPRNT output), resolved as the reader resolved them."""
     names = [n for run in campaign.ballbar.runs for n in (run.trace_csv or [])]
-    p = campaign.probe
-    if p is not None and p.c_axis is not None:
-        names += p.c_axis.dprnt or []
-    if p is not None and p.b_axis is not None:
-        names += [n for s in p.b_axis.styli.values() for n in (s.dprnt or [])]
+    if campaign.probe is not None:
+        names += campaign.probe.dprnt_files()
     base = campaign.base_dir
     return [Path(n) if base is None or os.path.isabs(n) else base / n for n in names]
 

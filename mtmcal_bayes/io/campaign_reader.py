@@ -27,9 +27,8 @@ from ..parameters import (
 )
 from ..machines.deviations import quantities as deviation_table
 from ..machines.plugins import provided
-from ..machines.probe_terms import probe_terms
 from .ballbar_section import read_ballbar
-from .measurement_sections import described_probe
+from .measurement_sections import read_probe
 from .machine_reader import (BUILTIN_TYPES, DESCRIPTION_KEYS, THESIS_TYPE, builtin_description, parse_description,
                              referenced_description)
 from .textfiles import read_user_text
@@ -99,7 +98,7 @@ def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: P
     desc = machine.description
     probe_t = r.table(doc, "probe", "", required=False)
     ballbar = read_ballbar(r, r.table(doc, "ballbar", "", required=False), machine, base_dir)
-    probe = described_probe(r, probe_t, desc, base_dir) if probe_t is not None else None
+    probe = read_probe(r, probe_t, desc, base_dir) if probe_t is not None else None
     if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
         r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]] (or, for a machine to design "
                "a campaign for, its [ballbar.setups] and [ballbar.mounts])")
@@ -282,18 +281,15 @@ def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: P
             r.fail(f"{path}.deviations.{key}", "unknown deviation: expected <name>_arcsec or <name>_um "
                    f"with one of {', '.join(known)}")
         truth.deviations[name] = units.to_internal(r.number(dev, key, f"{path}.deviations"), unit)
-    if machine is None:  # a truth read for a campaign built in code, which names no machine: its probe's own terms
-        probe_owners = {o for o, _ in probe.nuisance_terms()} if probe is not None else set()
-    else:
-        owners_of = provided(machine, "probe_owners", engine_probe_owners)  # a plug-in's probe sections
-        probe_owners = owners_of(machine, probe) if probe is not None else set()
+    probe_owners = {o for o, _ in probe.nuisance_terms(machine.description if machine is not None else None)} \
+        if probe is not None else set()
     for group, table, owners in (("setups", SETUP_NUISANCE, ballbar.setups),
                                  ("mounts", MOUNT_NUISANCE, ballbar.mounts),
                                  ("probe", PROBE_NUISANCE, probe_owners)):
         for oid, vals in (r.table(t, group, path, required=False) or {}).items():
             op = f"{path}.{group}.{oid}"
             if oid not in owners:
-                where = "[probe] (its styli, c_axis, b_axis)" if group == "probe" else f"[ballbar.{group}]"
+                where = "[probe] (its styli and runs)" if group == "probe" else f"[ballbar.{group}]"
                 r.fail(op, f"no such {group.rstrip('s')} in {where} (have: {', '.join(owners) or 'none'})")
             if not isinstance(vals, dict):
                 r.fail(op, f"expected a table, got {kind_of(vals)}")
@@ -324,10 +320,5 @@ def load_truth(path, campaign: Campaign) -> Truth:
 
 #: the tables of a truth
 TRUTH_TABLES = {"deviations", "setups", "mounts", "probe"}
-
-
-def engine_probe_owners(machine: Machine, probe: Probe) -> set[str]:
-    """The owners of a described machine's probe nuisance terms (its styli and spheres)."""
-    return {o for o, _ in probe_terms(machine.description, probe)}
 
 

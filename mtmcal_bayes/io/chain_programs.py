@@ -343,6 +343,8 @@ def probe_centres(campaign, probe_run) -> tuple[dict, np.ndarray, np.ndarray]:
     reading), and the stylus' direction, machine frame."""
     desc = description_of(campaign.machine)
     probe = campaign.probe
+    if probe_run.stylus not in probe.styli and (gap := campaign.probe_gap()) is not None:
+        raise gap.error(campaign.source)
     if probe_run.stylus not in probe.styli:
         raise ParameterError("probe", f"run {probe_run.id!r}: no stylus {probe_run.stylus!r} in the campaign")
     lengths = {a: len(v) for a, v in probe_run.angles.items()}
@@ -357,7 +359,7 @@ def probe_centres(campaign, probe_run) -> tuple[dict, np.ndarray, np.ndarray]:
     for letter in probe_run.angles:
         if letter not in q_rot:
             raise ParameterError("probe", f"run {probe_run.id!r}: {letter} is not a rotary axis of this machine")
-    tool = tool_home(desc, probe.styli[probe_run.stylus])
+    tool = tool_home(desc, probe.centre_length(probe_run.stylus))
     zero = {a: np.zeros(n) for a in FRAME}
     centres = -relative_position(desc, {**q_rot, **zero}, tool=tool, ball=np.asarray(probe_run.sphere, float))
     return q_rot, centres, _tool_direction(desc, q_rot)
@@ -401,7 +403,8 @@ def probe_program(campaign, probe_run, *, touch_radius_mm: float = TOUCH_RADIUS_
     header = [
         f"mtmcal-bayes measuring program: touch-probe run {probe_run.id} of {_name(campaign)}",
         f"machine: {desc.name or 'described machine'}, {desc.configuration}",
-        f"stylus {probe_run.stylus}: length {campaign.probe.styli[probe_run.stylus]:g} mm from the spindle point; "
+        f"stylus {probe_run.stylus}: length {campaign.probe.centre_length(probe_run.stylus):g} mm from the spindle "
+        "point; "
         "sphere at " + " ".join(f"{a}{v:g}" for a, v in zip(FRAME, probe_run.sphere)) + " mm at the home pose; "
         f"{n} positions of " + " ".join(rotary),
         _COMMANDS_NOTE,
@@ -485,11 +488,8 @@ def campaign_program(campaign, *, pattern: str | None = None, run: int | None = 
 def _probe_run(campaign, probe: str):
     runs = campaign.probe.runs if campaign.probe is not None else []
     if not runs:
-        other = provided(campaign.machine, "probe_sections") if campaign.has_probe_readings() else None
         raise InputError(campaign.source, "probe.runs", f"no [[probe.runs]]: no probe run {probe!r} to write a "
-                         "program of (a ball-bar run's program: give its number or a pattern instead)"
-                         + (f"; its probe readings ({other}) are not runs at positions a program commands"
-                            if other else ""))
+                         "program of (a ball-bar run's program: give its number or a pattern instead)")
     ids = [r.id for r in runs]
     if probe in ids:
         return runs[ids.index(probe)]

@@ -1,5 +1,6 @@
-"""The touch-probe section of a campaign on a described machine (SPEC §19, docs/machines.md); every machine's
-``[ballbar]`` is read by :mod:`.ballbar_section`.
+"""The touch-probe section of a campaign (SPEC §19, docs/machines.md), the engine's one reader of probe runs; every
+machine's ``[ballbar]`` is read by :mod:`.ballbar_section`.  A plug-in whose campaign format has probe sections of
+its own (the thesis': its C-axis and B-axis runs) reads them into the same runs and styli.
 
 ``[probe]``: ``[probe.styli.<id>] length_mm`` (spindle point to stylus-ball centre; with ``ball_radius_mm``, to its
 tip); ``[[probe.runs]]`` with ``stylus`` (or its length ``R_B_mm``: a stylus of the run's own), ``sphere_mm`` (its nominal centre at the home pose, workpiece side),
@@ -16,9 +17,8 @@ from .probe_readings import probe_readings
 from .toml_reader import TomlReader
 
 
-def described_probe(r: TomlReader, t: dict, desc: MachineDescription, base_dir=None) -> Probe:
-    """``[probe]`` of a described machine: styli and ``[[probe.runs]]`` (DPRNT files named relative to
-    ``base_dir``)."""
+def read_probe(r: TomlReader, t: dict, desc: MachineDescription, base_dir=None) -> Probe:
+    """``[probe]``: styli and ``[[probe.runs]]`` (DPRNT files named relative to ``base_dir``)."""
     P = "probe"
     r.check_keys(t, {"instrument", "repeatability_um", "styli", "runs"}, P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
@@ -81,4 +81,4 @@ def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, s
                     dprnt=files, centre_cov=cov)
 
 
-__all__ = ["described_probe"]
+__all__ = ["read_probe"]

@@ -8,8 +8,8 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   ``make_model(name, campaign, space, data, observations=, probe_layout=)`` and ``first_order_gap(...)``;
 * ``default_data`` — which instruments a likelihood uses when none is asked for (the engine's rule: every
   instrument the campaign has);
-* ``probe_runs(campaign)``, ``probe_layout(campaign)``, ``probe_noise`` — its campaign format's probe runs in the
-  terms of the engine's one probe model, the layout whose nominal readings its own kernel gives, and the rule of
+* ``probe_layout(campaign)``, ``probe_noise`` — the layout of the campaign's probe runs whose nominal readings its
+  own kernel gives, and the rule of
   the probe's noise (:data:`mtmcal_bayes.models.probe.NOISE_RULES`; one that takes only a stated repeatability:
   a probe that states none is not simulated; the engine's: the pooled repeat scatter, 1 µm assumed);
 * ``patterns``, ``pattern_components(pattern)``, ``mount_conflict(pattern, mount)`` — its patterns in its own
@@ -19,8 +19,10 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   its mounts' and the table's, read into the engine's set-ups and mounts and written back from them, and the ball
   bar completed in the engine's terms (the members of :class:`mtmcal_bayes.io.ballbar_section.EngineKeys`, the
   engine's own); ``campaign_sections(r, doc, machine, base_dir)`` — its campaign's measurement sections where it
-  reads its own ``[probe]``, ``probe_document(probe, path_of)`` their writing (``[machine]`` is the
-  engine's on every machine: name, serial, type, travels and the description, a built-in type by its name);
+  reads its own ``[probe]`` (into the engine's probe runs and styli, :class:`mtmcal_bayes.campaign.Probe`, with
+  whatever record of its own keys it needs in ``Probe.own``), ``probe_document(probe, path_of)`` their writing
+  (``[machine]`` is the engine's on every machine: name, serial, type, travels and the description, a built-in type
+  by its name);
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
   its tables, ``table("ballbar")``), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
   it;

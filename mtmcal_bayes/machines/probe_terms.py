@@ -1,9 +1,11 @@
-"""The touch-probe nuisance terms of a described machine's campaign (SPEC §19, docs/machines.md).
+"""The touch probe's nuisance terms: one owner rule for every campaign (SPEC §19, docs/machines.md).
 
-Per stylus: the stylus-ball centre's offset across the spindle axis (``xS, yS, zS`` less the one along the
-spindle: that one is the length error ``dRS``).  Per run: where its sphere sits on the workpiece side
-(``xP, yP, zP``, at the home pose): placed by hand, a few hundred µm; the indexed positions turn it about the
-axes and so tell it from their location errors.
+Per stylus (owner: its id): the stylus-ball centre's offset across the spindle axis (``xS, yS, zS`` less the one
+along the spindle: that one is the length error ``dRS``), unless its runs state their own (the thesis' ``xS, yS,
+dRS, rS``).  Per run id (owner: the id; runs of one id share them): where its sphere sits on the workpiece side
+(``xP, yP, zP``, at the home pose: placed by hand, a few hundred µm; the indexed positions turn it about the axes and
+so tell it from their location errors) and, for readings in a frame zeroed somewhere unknown, where the sphere is in
+that frame (``xD, yD, zD``); each run states which of these it has.
 """
 
 from __future__ import annotations
@@ -20,8 +22,14 @@ def stylus_terms(desc: MachineDescription) -> tuple[str, ...]:
     return tuple(f"{a}S" for a in "xyz" if a != along) + ("dRS",)
 
 
-def probe_terms(desc: MachineDescription, probe) -> list[tuple[str, str]]:
-    """``(owner, base)`` pairs of a described campaign's probe: each stylus used, then each run's sphere."""
-    used = list(dict.fromkeys(run.stylus for run in probe.runs))
-    return [(s, b) for s in used for b in stylus_terms(desc)] + \
-        [(run.id, b) for run in probe.runs for b in SPHERE_TERMS]
+def probe_terms(desc: MachineDescription | None, probe) -> list[tuple[str, str]]:
+    """``(owner, base)`` pairs of a campaign's probe: each stylus in the order its runs first use it, with the terms
+    its first run states (else the machine's, :func:`stylus_terms`), then each run id's sphere and datum terms."""
+    styli: dict[str, tuple[str, ...]] = {}
+    spheres: dict[str, tuple[str, ...]] = {}
+    for run in probe.runs:
+        if run.stylus not in styli:
+            styli[run.stylus] = run.stylus_terms if run.stylus_terms is not None else stylus_terms(desc)
+        spheres.setdefault(run.id, tuple(run.sphere_terms) + tuple(run.datum_terms))
+    return [(s, b) for s, terms in styli.items() for b in terms] + \
+        [(rid, b) for rid, terms in spheres.items() for b in terms]

@@ -37,7 +37,7 @@ from ..machines.patterns import nominal_down, tool_home
 from ..machines.plugins import provided
 from ..machines.probe_terms import stylus_terms
 from ..machines.space import described_space
-from ..observations import DescribedProbeKey, ProbeObservations
+from ..observations import ProbeKey, ProbeObservations
 from ..parameters import PROBE_NUISANCE, STYLUS_NUISANCE
 from .ballbar import as_numbers, extended, nuisance_columns
 from .chain import Chain
@@ -88,7 +88,7 @@ class LayoutRun:
     centre_cov: np.ndarray | None = None
     ball_radius: float = 0.0
     origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    key: type = DescribedProbeKey
+    key: type = ProbeKey
     labels: np.ndarray | None = None
 
     @property
@@ -97,17 +97,21 @@ class LayoutRun:
 
 
 def layout_runs(campaign) -> list[LayoutRun]:
-    """The ``[[probe.runs]]`` of a campaign: their readings in the machine frame (origin known)."""
+    """The campaign's probe runs in the layout's terms: each with its stylus' programmed length and ball radius, its
+    reading frame's origin (default the machine frame), its observations' key type and position labels."""
     probe = campaign.probe
-    return [LayoutRun(run.id, run.stylus, run.angles, np.asarray(run.sphere, dtype=float), probe.styli[run.stylus],
-                      run.centres, run.centre_cov) for run in probe.runs]
+    return [LayoutRun(run.id, run.stylus, run.angles, np.asarray(run.sphere, dtype=float),
+                      probe.styli.get(run.stylus, np.nan), run.centres, run.centre_cov,
+                      probe.ball_radii.get(run.stylus, 0.0),
+                      np.zeros(3) if run.origin is None else np.asarray(run.origin, dtype=float),
+                      run.key or ProbeKey, run.labels)
+            for run in probe.runs]
 
 
 class ProbeLayout:
     """The probed positions of a campaign's runs (k of them), their readings, frames and observations.
 
-    ``runs`` the :class:`LayoutRun` list (default: the machine's, ``provided(machine, "probe_runs")``, else the
-    ``[[probe.runs]]``); ``kernel`` gives the nominal readings (default the chain's); ``noise`` one of
+    ``runs`` the :class:`LayoutRun` list (default: the campaign's probe runs, :func:`layout_runs`); ``kernel`` gives the nominal readings (default the chain's); ``noise`` one of
     :data:`NOISE_RULES` (default the machine's).  Per position: ``run``, ``stylus`` (k,) owners; ``angles``
     {letter: (k,)} rad of every rotary axis of the machine; ``sphere`` (k, 3), ``length``, ``ball_radius`` (k,) mm;
     ``reading_mean`` (k, 3) mm; ``fitted`` (k,); ``rotation`` (k, 3, 3) (observation = Qᵀ (reading − nominal));
@@ -119,7 +123,7 @@ class ProbeLayout:
     def __init__(self, campaign, runs: list[LayoutRun] | None = None, kernel=None, *, noise: str | None = None):
         machine, src, probe = campaign.machine, campaign.source, campaign.probe
         if runs is None:
-            runs = provided(machine, "probe_runs", layout_runs)(campaign) if probe is not None else []
+            runs = layout_runs(campaign) if probe is not None else []
         noise = noise or noise_rule(machine)
         if not runs:
             raise InputError(src, "probe", f"no touch-probe readings "
@@ -165,7 +169,7 @@ class ProbeLayout:
     def _frame(self) -> np.ndarray:
         """Offset ``(k, 3)`` mm from the model frame to the reading frame: a run's ``origin`` where known, else where
         its id's first reading puts it (its datum term, broad, is then centred at zero: the readings' absolute
-        value carries no information there).  Runs of one id (a B-axis run's styli) share their datum."""
+        value carries no information there).  Runs of one id (one sphere read with several styli) share their datum."""
         frame = np.zeros((len(self.run), 3))
         first: dict[str, int] = {}
         for r, sl in zip(self.runs, self.slices):

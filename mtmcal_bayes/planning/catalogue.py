@@ -81,7 +81,9 @@ class CatalogueRules:
     bars; ``hold`` whether a run may hold the other rotary axes away from 0; ``label_mount`` whether labels name
     the mount; ``extended_setup(base, e) -> Setup``; ``pattern_mounts(campaign, patterns) -> [(pattern, Mount)]``
     the mounts each pattern may use, in catalogue order (a pattern's first is its mount for the sweep and the bar
-    lengths); ``placements(campaign) -> [(kind, label, Mount, patterns or None)]`` the other W-ball placements."""
+    lengths); ``placements(campaign) -> [(kind, label, Mount, patterns or None)]`` the other W-ball placements;
+    ``probe_positions`` {rotary axis letter: angles, degrees} where the format indexes an axis' probe runs at
+    positions of its own (else the engine's, from the axis' travel: :mod:`.probe_catalogue`)."""
 
     extensions_mm: tuple[float, ...] = EXTENSIONS_MM
     tool_length_patterns: tuple[str, ...] | None = None
@@ -92,6 +94,7 @@ class CatalogueRules:
     extended_setup: Callable = new_tool_setup
     pattern_mounts: Callable = every_mount
     placements: Callable = placed_from_first
+    probe_positions: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
 
 def rules_of(campaign) -> CatalogueRules:

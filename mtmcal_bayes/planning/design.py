@@ -57,7 +57,7 @@ from ..observations import Observations
 from ..parameters import ParameterSpace, weights
 from .candidates import Candidate
 from .chain_candidates import arc_of
-from .probe_candidates import ProbeCandidate
+from .probe_catalogue import ProbeCandidate
 from .scale_priors import contraction_reference, default_sigma_model, scale_prior
 
 #: a candidate that changes no target's sd by this fraction identifies nothing new

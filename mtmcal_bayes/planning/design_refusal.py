@@ -40,10 +40,9 @@ def beyond_travels(campaign, cands: list[Candidate]) -> list[tuple[Candidate, st
 
 def probe_candidates(campaign) -> list:
     """The catalogue's feasible touch-probe runs (none without a ``[probe]`` to take them from)."""
-    from .machine_kit import kit_of
+    from .probe_catalogue import probe_catalogue, probe_feasibility
 
-    kit = kit_of(campaign)
-    return [c for c in kit.probe_catalogue(campaign) if kit.probe_feasibility(c, campaign)[0]]
+    return [c for c in probe_catalogue(campaign) if probe_feasibility(c, campaign)[0]]
 
 
 def _wider(problem, extra: list, target: str):

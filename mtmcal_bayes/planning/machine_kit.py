@@ -1,11 +1,12 @@
-"""What planning asks of a campaign's machine (SPEC §20): its catalogue's rules, probe runs, clock and the
-shape of its planned runs, in one object.
+"""What planning asks of a campaign's machine (SPEC §20): its catalogue's rules, clock and the shape of its planned
+runs, in one object.
 
-The ball-bar catalogue, its feasibility and the tool-length sweep are one for every machine (:mod:`.catalogue`);
-the kit holds the rules of the campaign format they follow.  The engine's own kit serves every machine from its
+The ball-bar catalogue, its feasibility and the tool-length sweep are one for every machine (:mod:`.catalogue`),
+and so is the touch-probe catalogue (:mod:`.probe_catalogue`); the kit holds the rules of the campaign format they
+follow.  The engine's own kit serves every machine from its
 description (the chain's patterns ``<axis><R|T|A|X|Y|Z>``, its arcs, held axes and W-ball positions).  A machine
 whose plug-in has a campaign format of its own contributes ``planning``, a :class:`PlanningKit` built from its
-functions (the thesis plug-in: its catalogue rules, its probe runs, :mod:`.probe_candidates`).  The planner is one
+functions (the thesis plug-in: its catalogue rules, clock and run records).  The planner is one
 for every machine (:class:`~.design.Planner`): it asks the machine what it provides.  Planning asks
 :func:`kit_of` and never which kind of machine it holds.
 """
@@ -25,22 +26,18 @@ class PlanningKit:
     """The planning contributions of one campaign format.
 
     ``catalogue_rules`` what its ball-bar catalogue varies (:class:`.catalogue.CatalogueRules`);
-    ``probe_catalogue(campaign)`` and ``probe_feasibility(candidate, campaign)`` the touch-probe runs;
     ``clock(time_model, campaign)`` the machine minutes of runs; ``where(candidate)`` the geometry
     columns of the plan's table; ``sweep_pattern(table, campaign)`` the sweep's pattern when none is asked for;
-    ``feasibility_note`` and ``probe_note`` (``{sigma_probe}``: µm) what the plan says of them; ``run_columns`` and
+    ``feasibility_note`` what the plan says of it; ``run_columns`` and
     ``run_records(design, programs)`` the design's runs as records; ``planned_geometry(planned, candidate,
     campaign)`` what a planned run records beyond pattern, set-up and mount (the arc and held axes);
     ``read_candidates(path, campaign)`` the user's candidates from a ``--candidates`` file."""
 
     catalogue_rules: object
-    probe_catalogue: Callable
-    probe_feasibility: Callable
     clock: Callable
     where: Callable
     sweep_pattern: Callable
     feasibility_note: str
-    probe_note: str
     run_columns: list
     run_records: Callable
     planned_geometry: Callable
@@ -56,7 +53,6 @@ def engine_kit() -> PlanningKit:
     """The engine's planning, for any machine from its description."""
     from . import chain_candidates as dc
     from .catalogue import CatalogueRules
-    from .chain_probe_candidates import described_probe_catalogue, described_probe_feasibility
     from .chain_clock import engine_clock
     from .run_records import DESCRIBED_RUN_COLUMNS, described_records
 
@@ -77,14 +73,9 @@ def engine_kit() -> PlanningKit:
         planned.hold_deg = dict(candidate.hold_deg) or None
 
     return PlanningKit(
-        catalogue_rules=CatalogueRules(), probe_catalogue=described_probe_catalogue,
-        probe_feasibility=described_probe_feasibility, clock=engine_clock, where=where, sweep_pattern=sweep_pattern,
+        catalogue_rules=CatalogueRules(), clock=engine_clock, where=where, sweep_pattern=sweep_pattern,
         feasibility_note="feasible = every command of every point (the arc, the held axes, the linear axes) lies "
                          "within the travels of the machine's description",
-        probe_note="touch-probe runs (kind 'probe'): each rotary axis indexed to 0° and up to three more positions, "
-                   "alone, with the others held, with a longer stylus or the sphere higher; each a new run with its "
-                   "own stylus and sphere terms, readings with the probe's repeatability and sigma_model_probe = "
-                   "{sigma_probe:.2f} µm (rms of its prior)",
         run_columns=DESCRIBED_RUN_COLUMNS, run_records=described_records,
         planned_geometry=planned_geometry, read_candidates=dc.read_chain_candidates)
 

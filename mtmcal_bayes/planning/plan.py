@@ -13,7 +13,7 @@ from .catalogue import sweep_candidates
 from .machine_kit import catalogue_of, feasibility_of, kit_of, planner_for
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
-from .probe_candidates import ProbeCandidate, probe_skipped
+from .probe_catalogue import PROBE_NOTE, ProbeCandidate, probe_catalogue, probe_feasibility
 from .scale_priors import learnt_notes, learnt_summary, scale_prior
 
 #: tool-length differences of the sweep, mm
@@ -108,7 +108,7 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd
     fits = feasibility_of(campaign)
     for k, c in enumerate(candidates):
         probe = isinstance(c, ProbeCandidate)
-        ok, why = kit.probe_feasibility(c, campaign) if probe else fits(c)
+        ok, why = probe_feasibility(c, campaign) if probe else fits(c)
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
         where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
                   "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else kit.where(c))
@@ -210,7 +210,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     and the Monte-Carlo check use it (:class:`.design.Planner`)."""
     kit = kit_of(campaign)
     ballbar = [c for c in catalogue_of(campaign) if data != "probe" or c.repeat_of is None]
-    candidates = ballbar + kit.probe_catalogue(campaign) + list(extra or [])
+    candidates = ballbar + probe_catalogue(campaign) + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
     planner = planner_for(campaign, candidates, targets, sigma_model=sigma, model=model, data=data,
                           sigma_prior=sigma_prior)
@@ -227,7 +227,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
              f"{units.from_internal(planner.pooled_sd, 'um'):.2f} µm (pooled from the campaign) and instrument "
              f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm",
              kit.feasibility_note,
-             (kit.probe_note.format(sigma_probe=units.from_internal(planner.sigma_probe, 'um'))
+             (PROBE_NOTE.format(sigma_probe=units.from_internal(planner.sigma_probe, 'um'))
               if any(isinstance(c, ProbeCandidate) for c in candidates) else
               "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus")]
     cols = [c for c in sweep.columns if c.endswith(" sd_after")]
@@ -237,7 +237,6 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     if planner.not_targeted and not targets:
         notes.append(f"not targeted: {', '.join(planner.not_targeted)} — no run of the catalogue determines them one "
                      "by one (identifiability of the campaign and every candidate together, the T ball centred)")
-    notes += probe_skipped(campaign)
     if data != "ballbar":
         notes.append(f"the current posterior rests on {'both instruments' if data == 'both' else 'the probe'}: the "
                      "sigma_model information and the Monte-Carlo check (one scale for all data) are for ball-bar "

@@ -17,11 +17,8 @@ def missing_data(campaign, ident) -> list[str]:
                    "probe columns of summary.csv are empty." if ident is not None else
                    "No touch-probe data in this campaign: nothing checks the ball bar's deviations against a second "
                    "instrument.")
-    elif ident is not None:
-        if probe.c_axis is None:
-            out.append("No C-axis touch-probe data: alpha_CZ, beta_CZ, dx_CZ and dy_CZ have no probe value.")
-        if probe.b_axis is None or not probe.b_axis.styli:
-            out.append("No B-axis touch-probe data: alpha_XB, beta_XB, gamma_XB, dx_BT and dz_BT have no probe value.")
+    elif ident is not None:  # the probe sections its deterministic method needs (the thesis': Eqs 5.1–5.19)
+        out += list(getattr(ident, "missing_probe", ()))
     if not campaign.ballbar.runs:
         out.append("No ball-bar runs in this campaign: no ball-bar trajectories, no predictive check of "
                    "eccentricities and no comparison of the instruments.")

@@ -193,7 +193,7 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
     the probe as measured where it has no readings or no repeatability its model can take (:func:`probe_noise`).
 
     The readings are the probe model's (:func:`probe_readings`), handed to the runs in order
-    (:meth:`~mtmcal_bayes.campaign.Probe.reading_runs`).  Noise-free: one repeat equal to the prediction.  With
+    (:attr:`~mtmcal_bayes.campaign.Probe.runs`).  Noise-free: one repeat equal to the prediction.  With
     ``noise``: as many repeats as measured (or ``repeats``), each scattered by the probe's repeatability.  DPRNT file
     names and fit covariances are dropped: the readings are centres now.
     """
@@ -205,13 +205,13 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
     readings = probe_readings(campaign, truth, model)
     out = copy.deepcopy(campaign.probe)
     start = 0
-    for run in out.reading_runs():
+    for run in out.runs:
         a = run.positions
-        r = (repeats or run.run.centres.shape[0]) if noise else 1
+        r = (repeats or run.centres.shape[0]) if noise else 1
         centres = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
         if noise:
             centres += rng.normal(0.0, sd, size=centres.shape)
-        run.run.replace_centres(centres)
+        run.replace_centres(centres)
         start += a
     return out
 
@@ -230,7 +230,7 @@ def probe_noise(campaign: Campaign) -> float | None:
 def probe_readings(campaign: Campaign, truth: Truth, model: str = "htm-thesis") -> np.ndarray | None:
     """Noise-free readings ``(k, 3)``, mm, of every probed position for ``truth`` under the probe model of ``model``
     (``linear``: its first order), in the campaign's reading frame and in the order of
-    :meth:`~mtmcal_bayes.campaign.Probe.reading_runs`; None where the campaign has none to simulate (no readings, a
+    :attr:`~mtmcal_bayes.campaign.Probe.runs`; None where the campaign has none to simulate (no readings, a
     gap, no repeatability its model can take: :func:`probe_noise`)."""
     if probe_noise(campaign) is None or campaign.probe_gap() is not None:
         return None
@@ -242,7 +242,7 @@ def probe_records(campaign: Campaign, readings: np.ndarray) -> list[dict]:
     """JSON records of ``readings`` (k, 3), mm (:func:`probe_readings`), one per probed position: run, stylus,
     position (from 1), each rotary axis' angle (``<letter>_deg``) and ``X_mm``, ``Y_mm``, ``Z_mm``."""
     out, start = [], 0
-    for run in campaign.probe.reading_runs():
+    for run in campaign.probe.runs:
         out += [{"run": run.id, "stylus": run.stylus, "position": i + 1,
                  **{f"{a}_deg": float(v[i]) for a, v in run.angles_deg.items()},
                  **{f"{x}_mm": float(readings[start + i, j]) for j, x in enumerate("XYZ")}}

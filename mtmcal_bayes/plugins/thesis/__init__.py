@@ -40,7 +40,8 @@ from __future__ import annotations
 
 def campaign_sections(r, doc: dict, machine, base_dir):
     """``[ballbar]`` (required; the engine's reader with :func:`ballbar_keys`) and ``[probe]`` of a campaign in the
-    thesis' format (``[probe.c_axis]`` and ``[probe.b_axis]``)."""
+    thesis' format (``[probe.c_axis]`` and ``[probe.b_axis]``, read into the engine's probe runs,
+    :mod:`.probe_runs`)."""
     from .campaign_keys import campaign_sections as sections
 
     return sections(r, doc, machine, base_dir)
@@ -69,13 +70,6 @@ def complete_ballbar(ballbar, machine) -> None:
         ballbar.pattern_frames = functools.partial(chain_frame, desc)
     else:
         complete(ballbar, desc)
-
-
-def probe_owners(machine, probe) -> set[str]:
-    """The owners of the probe's nuisance terms in the thesis' format: its styli, ``c_axis`` and ``b_axis``."""
-    from .campaign_keys import probe_owners as owners
-
-    return owners(machine, probe)
 
 
 def run_placement(campaign, pattern: str, mount) -> tuple:
@@ -164,12 +158,10 @@ def assumption_effect(analysis, *, sigma_model_um: float):
 def planning():
     """The planning of the thesis' campaign format: the engine's catalogue under its rules (Step 5's extension bars
     with Z_T − e, its other R_C and bar lengths, B patterns with R_C = 0, its labels: :mod:`.catalogue_rules`), its
-    probe runs (B at indexed angles, more C angles, another sphere or stylus), Table 4.5's eight reported by
-    default."""
+    clock and run records; its probe runs are the engine's catalogue's, like every machine's."""
     from ...planning.candidates import read_candidates
     from ...planning.run_records import RUN_COLUMNS, thesis_records
     from ...planning.machine_kit import PlanningKit
-    from ...planning.probe_candidates import probe_catalogue, probe_feasibility
     from .catalogue_rules import catalogue_rules
     from .timing import campaign_clock
 
@@ -182,14 +174,9 @@ def planning():
         return str(best.iloc[0]["pattern"]) if len(best) else "CR"
 
     return PlanningKit(
-        catalogue_rules=catalogue_rules(), probe_catalogue=probe_catalogue, probe_feasibility=probe_feasibility,
-        clock=campaign_clock, where=where, sweep_pattern=sweep_pattern,
+        catalogue_rules=catalogue_rules(), clock=campaign_clock, where=where, sweep_pattern=sweep_pattern,
         feasibility_note="feasible = the span of each linear-axis command fits the axis travel of [machine] (the "
                          "campaign does not give where the C axis sits within the travels)",
-        probe_note="touch-probe runs (kind 'probe') are valued through the probe likelihood: each a new run with its "
-                   "own stylus and datum terms, readings with the probe's repeatability and sigma_model_probe = "
-                   "{sigma_probe:.2f} µm (rms of its prior); a B-axis run at 45° separates alpha_XB and gamma_XB, "
-                   "which a B = 90° reading sees only as their sum",
         run_columns=RUN_COLUMNS,
         run_records=thesis_records, planned_geometry=lambda planned, candidate, campaign: None,
         read_candidates=read_candidates)
@@ -254,13 +241,6 @@ def probe_layout(campaign):
     return thesis_layout(campaign)
 
 
-def probe_runs(campaign):
-    """The thesis' ``[probe.c_axis]`` and ``[probe.b_axis]`` as the probe layout's runs."""
-    from .probe_model import probe_runs as runs
-
-    return runs(campaign)
-
-
 def report_section(page, ident, effect, sigma_um: float) -> None:
     """The report's section "Thesis values recomputed": ``ident`` (its identification) beside the printed values,
     its checks and assumptions, and ``effect`` (a DataFrame or ``None``), that of dx_BT = 0 at ``sigma_um`` µm."""
@@ -287,7 +267,6 @@ class ThesisPlugin:
     description_label = "thesis machine"
     campaign_sections = staticmethod(campaign_sections)
     probe_document = staticmethod(probe_document)
-    probe_owners = staticmethod(probe_owners)
     complete_ballbar = staticmethod(complete_ballbar)
     run_placement = staticmethod(run_placement)
     pattern_components = staticmethod(pattern_components)
@@ -299,7 +278,6 @@ class ThesisPlugin:
     first_order_gap = staticmethod(first_order_gap)
     parameter_space = staticmethod(parameter_space)
     probe_layout = staticmethod(probe_layout)
-    probe_runs = staticmethod(probe_runs)
     probe_noise = "run scatter plus repeatability"  # each run's repeat scatter plus the stated one, which it needs
     # its published method, programs and compensation
     identify = staticmethod(identify)

@@ -8,18 +8,21 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from ...campaign import Probe
+from .probe_runs import B_RUN, C_RUN, record, run_of
 
 
 def probe_document(p: Probe, path_of: Callable[[str], str]) -> dict:
     """``[probe.b_axis]`` (styli at indexed B angles) and ``[probe.c_axis]`` (a sphere at indexed C angles), each with
-    its centres or its DPRNT files (``path_of``: a file's name as seen from the saved campaign)."""
+    its centres or its DPRNT files (``path_of``: a file's name as seen from the saved campaign): the plug-in's record
+    of its keys, each run's readings."""
     d: dict = {}
+    own = record(p)
 
     def readings(run) -> dict:  # DPRNT files relative to the saved file, else the centres
         return {"dprnt": [path_of(f) for f in run.dprnt]} if run.dprnt else {"centres_mm": run.centres}
 
-    if p.b_axis is not None:
-        b = p.b_axis
+    if own.b_axis is not None:
+        b = own.b_axis
         styli = {}
         for s in b.styli.values():
             sd = {"R_B_mm": s.R_B}
@@ -27,11 +30,11 @@ def probe_document(p: Probe, path_of: Callable[[str], str]) -> dict:
                 sd["ball_radius_mm"] = s.ball_radius
             if s.nominal is not None:
                 sd["nominal_mm"] = s.nominal
-            styli[s.id] = {**sd, **readings(s)}
+            styli[s.id] = {**sd, **readings(run_of(p, B_RUN, s.id))}
         d["b_axis"] = {"X_T_mm": b.X_T, **({"Z_C_mm": b.Z_C} if b.Z_C is not None else {}),
                        "angles_deg": b.angles_deg, "styli": styli}
-    if p.c_axis is not None:
-        x = p.c_axis
+    if own.c_axis is not None:
+        x = own.c_axis
         cd = {"R_C_mm": x.R_C, "Z_C_mm": x.Z_C, "axis_xy_mm": x.axis_xy, "angles_deg": x.angles_deg}
         if x.stylus:
             cd["stylus"] = x.stylus
@@ -41,5 +44,5 @@ def probe_document(p: Probe, path_of: Callable[[str], str]) -> dict:
             cd["ball_radius_mm"] = x.ball_radius
         if x.datum != "machine":
             cd["datum"] = x.datum
-        d["c_axis"] = {**cd, **readings(x)}
+        d["c_axis"] = {**cd, **readings(run_of(p, C_RUN))}
     return d

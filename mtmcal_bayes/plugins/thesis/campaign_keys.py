@@ -5,8 +5,8 @@ tool set-ups by their lever arms (``R_B_mm``, ``Z_T_mm``, ``X_T_mm``), its W-bal
 ``R_C_mm``, its ``cr_geometry`` (:class:`BallbarKeys`); its 12 patterns, their components and Table 2.2's rule on
 mounts are the plug-in's ``patterns``, ``pattern_components`` and ``mount_conflict``.  The touch probe's
 ``[probe.b_axis]`` (styli at indexed B angles) and ``[probe.c_axis]`` (a sphere at indexed C angles), their centres or
-DPRNT files, are read here.  The engine asks the machine for these (its ``campaign_sections``, ``ballbar_keys`` and
-``probe_owners``).
+DPRNT files, are read here into the engine's probe runs (:mod:`.probe_runs`).  The engine asks the machine for these
+(its ``campaign_sections`` and ``ballbar_keys``).
 """
 
 from __future__ import annotations
@@ -16,20 +16,12 @@ from pathlib import Path
 import numpy as np
 
 from ... import units
-from ...campaign import (
-    Ballbar,
-    BAxisProbe,
-    CAxisProbe,
-    Machine,
-    Mount,
-    Probe,
-    Setup,
-    Stylus,
-)
+from ...campaign import Ballbar, Machine, Mount, Probe, Setup
 from ...io.ballbar_section import equal_setups, read_ballbar
 from ...io.probe_readings import probe_readings
 from ...io.toml_reader import TomlReader
 from ...patterns import CR_GEOMETRIES
+from .probe_runs import C_RUN, BAxisKeys, CAxisKeys, Readings, StylusKeys, b_mount_height, thesis_probe
 from .translation import complete
 
 
@@ -39,7 +31,7 @@ def campaign_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path
     thesis Tables 5.1–5.2)."""
     probe_t = r.table(doc, "probe", "", required=False)
     ballbar = read_ballbar(r, r.table(doc, "ballbar", ""), machine, base_dir)
-    return ballbar, _probe(r, probe_t, base_dir) if probe_t is not None else None
+    return ballbar, _probe(r, probe_t, base_dir, b_mount_height(ballbar)) if probe_t is not None else None
 
 
 class BallbarKeys:
@@ -96,11 +88,15 @@ class BallbarKeys:
         return {"Z_C_mm": m.Z_C, "R_C_mm": m.R_C}
 
 
-def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
+def _probe(r: TomlReader, t: dict, base_dir: Path | None, mount_Z: float) -> Probe:
+    """``[probe]`` in the thesis' format, read into the engine's probe runs (:func:`.probe_runs.thesis_probe`;
+    ``mount_Z`` the B patterns' mount's height, mm)."""
     P = "probe"
     r.check_keys(t, {"instrument", "repeatability_um", "c_axis", "b_axis"}, P)
+    instrument = r.string(t, "instrument", P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
-    probe = Probe(r.string(t, "instrument", P), units.to_internal(rep, "um") if rep is not None else None)
+    readings: dict[str, Readings] = {}
+    bax = cax = None
     b = r.table(t, "b_axis", P, required=False)
     if b is not None:
         path = f"{P}.b_axis"
@@ -109,21 +105,20 @@ def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
         if len(np.unique(angles)) < 2:
             r.fail(f"{path}.angles_deg", f"needs at least two different B angles (only differences between indexed "
                    f"positions inform the deviations), got [{', '.join(f'{a:g}' for a in angles)}]")
-        bax = BAxisProbe(r.number(b, "X_T_mm", path), angles, Z_C=r.number(b, "Z_C_mm", path, required=False))
+        bax = BAxisKeys(r.number(b, "X_T_mm", path), angles, Z_C=r.number(b, "Z_C_mm", path, required=False))
         for sid, sp, st in r.subtables(b, "styli", path, what="stylus",
                                        allowed={"R_B_mm", "nominal_mm", "centres_mm", "dprnt", "ball_radius_mm"}):
             centres, cov, files = probe_readings(r, st, sp, len(angles), base_dir=base_dir, position="angle")
-            bax.styli[sid] = Stylus(sid, r.number(st, "R_B_mm", sp, positive=True),
-                                    r.array(st, "nominal_mm", sp, (len(angles), 3), required=False), centres,
-                                    ball_radius=r.number(st, "ball_radius_mm", sp, required=False, nonnegative=True,
-                                                         default=0.0),
-                                    dprnt=files, centre_cov=cov)
+            bax.styli[sid] = StylusKeys(sid, r.number(st, "R_B_mm", sp, positive=True),
+                                        r.array(st, "nominal_mm", sp, (len(angles), 3), required=False),
+                                        ball_radius=r.number(st, "ball_radius_mm", sp, required=False,
+                                                             nonnegative=True, default=0.0))
+            readings[sid] = Readings(centres, cov, files)
         for i, (sa, a) in enumerate(bax.styli.items()):
             for sb, bb in list(bax.styli.items())[i + 1:]:
                 if a.R_B == bb.R_B:
                     r.fail(f"{path}.styli.{sb}.R_B_mm", f"equal to styli.{sa}.R_B_mm ({a.R_B:g} mm): "
                            "a second stylus length equal to the first carries no information")
-        probe.b_axis = bax
     c = r.table(t, "c_axis", P, required=False)
     if c is not None:
         path = f"{P}.c_axis"
@@ -137,8 +132,8 @@ def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
         stylus = r.string(c, "stylus", path, default="") or None
         R_B = r.number(c, "R_B_mm", path, required=False, positive=True)
         if stylus is not None:
-            if probe.b_axis is None or stylus not in probe.b_axis.styli:
-                have = ", ".join(probe.b_axis.styli) if probe.b_axis else "none"
+            if bax is None or stylus not in bax.styli:
+                have = ", ".join(bax.styli) if bax else "none"
                 r.fail(f"{path}.stylus", f"no stylus {stylus!r} in [probe.b_axis.styli] (have: {have})")
             if R_B is not None:
                 r.fail(f"{path}.R_B_mm", "give either stylus (a stylus of [probe.b_axis.styli]) or R_B_mm, not both")
@@ -146,14 +141,11 @@ def _probe(r: TomlReader, t: dict, base_dir: Path | None) -> Probe:
         if datum not in ("machine", "first"):
             r.fail(f"{path}.datum", f"unknown datum {datum!r} (expected \"machine\": the readings are machine "
                    "coordinates with the C axis at axis_xy_mm, or \"first\": the reading frame was zeroed on the sphere)")
-        probe.c_axis = CAxisProbe(
+        cax = CAxisKeys(
             r.number(c, "R_C_mm", path, positive=True), r.number(c, "Z_C_mm", path, nonnegative=True),
-            r.array(c, "axis_xy_mm", path, (2,)), angles, centres, stylus=stylus, R_B=R_B,
+            r.array(c, "axis_xy_mm", path, (2,)), angles, stylus=stylus, R_B=R_B,
             ball_radius=r.number(c, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0),
-            datum=datum, dprnt=files, centre_cov=cov)
-    return probe
-
-
-def probe_owners(machine: Machine | None, probe: Probe) -> set[str]:
-    """The owners of the probe nuisance terms in the thesis' campaign format (its styli, ``c_axis``, ``b_axis``)."""
-    return {o for o, _ in probe.nuisance_terms()}
+            datum=datum)
+        readings[C_RUN] = Readings(centres, cov, files)
+    return thesis_probe(instrument, units.to_internal(rep, "um") if rep is not None else None,
+                        c_axis=cax, b_axis=bax, readings=readings, mount_Z=mount_Z)

@@ -10,7 +10,9 @@ only what is the thesis' own:
   goes to the campaign's mount for B patterns, or to a new placement at R_C = 0 at that mount's height;
 * its **other R_C** (50, 100, 150 mm, CR and CA) and **bar lengths** (50, 100, 150 mm) in place of the engine's
   placements and bars, no held axes (its campaign format holds the other axis at 0), and its published labels
-  (``BZ @ RB1``, ``CA @ RB1, R_C 100 mm``: the mount follows from the pattern, docs/planning.md).
+  (``BZ @ RB1``, ``CA @ RB1, R_C 100 mm``: the mount follows from the pattern, docs/planning.md);
+* its **probe positions** (Table 5.2, Sec 5.2): B indexed within its patterns' 0–90° (the description states no B
+  travel), with 45° between, whose Y step separates alpha_XB from gamma_XB (at 90° the probe sees only their sum).
 """
 
 from __future__ import annotations
@@ -25,6 +27,8 @@ OTHER_R_C_MM = (50.0, 100.0, 150.0)
 OTHER_L_B_MM = (50.0, 100.0, 150.0)
 #: patterns measured at additional tool lengths and bar lengths
 TOOL_LENGTH_PATTERNS = ("CR", "CA", "BX", "BY")
+#: the indexed positions of its probe candidates, degrees, by axis (the others: the engine's)
+PROBE_POSITIONS = (("B", (0.0, 45.0, 90.0)),)
 
 
 def extended_setup(base: Setup, extension: float) -> Setup:
@@ -62,4 +66,4 @@ def catalogue_rules():
     return CatalogueRules(extensions_mm=EXTENSIONS_MM, tool_length_patterns=TOOL_LENGTH_PATTERNS,
                           bar_lengths_mm=OTHER_L_B_MM, bar_length_patterns=TOOL_LENGTH_PATTERNS, hold=False,
                           label_mount=False, extended_setup=extended_setup, pattern_mounts=pattern_mounts,
-                          placements=other_R_C)
+                          placements=other_R_C, probe_positions=PROBE_POSITIONS)

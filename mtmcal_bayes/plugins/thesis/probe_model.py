@@ -1,5 +1,6 @@
-"""The thesis' touch-probe kernel of the engine's one probe model (:class:`~mtmcal_bayes.models.probe.ProbeModel`),
-and its campaign's probe runs in the layout's terms (SPEC §12): parameter batches ``(n, p)`` -> ``(n, m)``.
+"""The thesis' touch-probe kernel of the engine's one probe model (:class:`~mtmcal_bayes.models.probe.ProbeModel`)
+(SPEC §12): parameter batches ``(n, p)`` -> ``(n, m)``; its campaign's probe runs are read as the engine's
+(:mod:`.probe_runs`).
 
 A reading is the commanded tool point (X, Y, Z, in the reading frame) at which the actual stylus-ball
 centre coincides with the actual sphere centre, at the indexed B and C.  The stylus is a tool of the
@@ -36,47 +37,21 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...campaign import Probe
 from ...models.chain_models import FirstOrderModel
-from ...models.probe import LayoutRun, ProbeLayout
+from ...models.probe import ProbeLayout
 from ...models.probe import ProbeModel as EngineProbeModel
-from ...observations import ProbeKey
 from ...parameters import DEVIATIONS, ParameterSpace
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
 from .pattern_tables import Commands
+from .probe_runs import C_RUN, record
 
 #: the thesis' rule of the probe's noise (:data:`mtmcal_bayes.models.probe.NOISE_RULES`)
 NOISE = "run scatter plus repeatability"
 
 
-def probe_runs(campaign) -> list[LayoutRun]:
-    """The thesis' probe runs in the layout's terms: the C-axis run (its sphere at (R_C, 0, Z_C) in the C frame, the
-    reading frame's X, Y at ``axis_xy`` with ``datum = "machine"``), then the B-axis run of each stylus (its sphere
-    at (0, 0, Z_C)); every other datum component placed at the run's first reading.  Keys by indexed angle."""
-    probe = campaign.probe
-    if probe is None:
-        return []
-    b, c = probe.b_axis, probe.c_axis
-    out = []
-    if c is not None:
-        st = b.styli[c.stylus] if c.stylus else None
-        # a run naming no stylus (a gap of the campaign, Probe.gaps) has no length: the layout refuses it by its gap
-        length, rb = (st.R_B, st.ball_radius) if st else (np.nan if c.R_B is None else c.R_B, c.ball_radius)
-        origin = np.array([*c.axis_xy, np.nan]) if c.datum == "machine" else np.full(3, np.nan)
-        out.append(LayoutRun(Probe.C_RUN, probe.stylus_of_c_run(), {"C": np.radians(c.angles_deg)},
-                             np.array([c.R_C, 0.0, c.Z_C]), length, c.centres, c.centre_cov, rb, origin,
-                             ProbeKey, c.angles_deg))
-    if b is not None:
-        Z_sphere = b.Z_C if b.Z_C is not None else (c.Z_C if c is not None else campaign.mount_for("BX").Z_C)
-        out += [LayoutRun(Probe.B_RUN, s.id, {"B": np.radians(b.angles_deg)}, np.array([0.0, 0.0, Z_sphere]),
-                          s.R_B, s.centres, s.centre_cov, s.ball_radius, np.full(3, np.nan), ProbeKey, b.angles_deg)
-                for s in b.styli.values()]
-    return out
-
-
 def thesis_layout(campaign) -> ProbeLayout:
     """The engine's probe layout of a thesis-format campaign, its nominal readings through ``htm-thesis``."""
-    return ProbeLayout(campaign, probe_runs(campaign), PivotsProbeKernel(campaign, PIVOTS["htm-thesis"]), noise=NOISE)
+    return ProbeLayout(campaign, kernel=PivotsProbeKernel(campaign, PIVOTS["htm-thesis"]), noise=NOISE)
 
 
 class PivotsProbeKernel:
@@ -91,7 +66,7 @@ class PivotsProbeKernel:
         self.name = self.pivots.name
         primary = campaign.primary_setup()
         self.head = primary.R_B + primary.Z_T
-        b = campaign.probe.b_axis
+        b = record(campaign.probe).b_axis
         self.X_T = b.X_T if b is not None else primary.X_T
         self._arms = None
 
@@ -116,7 +91,7 @@ class PivotsProbeKernel:
         dev = {d: dev.get(d, np.zeros(n)) for d in DEVIATIONS}
         g = self.geometry(L)
         B, C = L.angles["B"], L.angles["C"]
-        is_c = L.run == Probe.C_RUN
+        is_c = L.run == C_RUN
         # the actual sphere centre, model frame (n, k, 3)
         S = np.zeros((n, k, 3))
         S[..., 2] = g.Z_C

@@ -20,7 +20,7 @@ import numpy as np
 from ....campaign import Campaign
 from ....conventions import machine_repeats, reads_as_thesis, run_convention, run_matrix
 from .ballbar import identify_ballbar, thesis_checks
-from .probe import identify_probe
+from .probe import identify_probe, missing_probe
 from .result import IdentificationResult, Identified
 
 
@@ -56,7 +56,7 @@ def identify(campaign: Campaign) -> IdentificationResult:
     used = sorted({f"{run.pattern}: {run_convention(run, bb)}" for run in bb.runs
                    if not np.allclose(run_matrix(run, bb), np.eye(2))})
     return IdentificationResult(ballbar, probe, thesis_checks(campaign, ballbar), assumptions, campaign.source,
-                                own, "; ".join(used) if used else bb.convention)
+                                own, "; ".join(used) if used else bb.convention, missing_probe(campaign))
 
 
 __all__ = ["identify", "identify_ballbar", "identify_probe", "thesis_checks", "IdentificationResult", "Identified"]

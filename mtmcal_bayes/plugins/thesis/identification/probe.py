@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ....campaign import Campaign
+from ..probe_runs import B_RUN, C_RUN, record, run_of
 from .result import Identified
 
 
@@ -16,6 +17,19 @@ def _rot_x(a):
 def _rot_y(b):
     c, s = np.cos(b), np.sin(b)
     return np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def missing_probe(campaign: Campaign) -> list[str]:
+    """Sentences naming the probe sections a campaign with a ``[probe]`` lacks, and the values Eqs 5.1–5.19 then do
+    not give (the report's list of what a campaign lacks)."""
+    if campaign.probe is None:
+        return []
+    own, out = record(campaign.probe), []
+    if own.c_axis is None:
+        out.append("No C-axis touch-probe data: alpha_CZ, beta_CZ, dx_CZ and dy_CZ have no probe value.")
+    if own.b_axis is None or not own.b_axis.styli:
+        out.append("No B-axis touch-probe data: alpha_XB, beta_XB, gamma_XB, dx_BT and dz_BT have no probe value.")
+    return out
 
 
 def identify_probe(campaign: Campaign) -> tuple[dict[str, Identified], list[str]]:
@@ -34,14 +48,15 @@ def identify_probe(campaign: Campaign) -> tuple[dict[str, Identified], list[str]
     if probe is None:
         return out, ["the campaign has no touch-probe data"]
 
-    c = probe.c_axis
+    own = record(probe)
+    c = own.c_axis
     if c is not None:
         ang = np.round(np.mod(c.angles_deg, 360.0), 6)
         idx = [int(np.flatnonzero(ang == a)[0]) if np.any(ang == a) else -1 for a in (0.0, 90.0, 180.0, 270.0)]
         if -1 in idx:
             assumptions.append("C-axis probe angles are not 0/90/180/270°: Eqs 5.1–5.7 not applied")
         else:
-            P = c.centres.mean(axis=0)[idx]  # (4, 3) averaged centres P1..P4, mm
+            P = run_of(probe, C_RUN).centres.mean(axis=0)[idx]  # (4, 3) averaged centres P1..P4, mm
             N = np.cross(P[2] - P[0], P[3] - P[1])  # Eq 5.1
             beta, alpha = N[0] / N[2], N[1] / N[2]  # Eqs 5.5, 5.6
             out["beta_CZ"] = Identified("beta_CZ", beta, "5.5")
@@ -57,14 +72,14 @@ def identify_probe(campaign: Campaign) -> tuple[dict[str, Identified], list[str]
                 f"relative to the nominal C-axis centreline axis_xy_mm = ({c.axis_xy[0]:g}, {c.axis_xy[1]:g}) mm "
                 "(the thesis does not say how it formed ΔX_center, ΔY_center)")
 
-    b = probe.b_axis
+    b = own.b_axis
     if b is not None and b.styli and (list(b.angles_deg) != [0.0, 90.0]
                                       or any(s.nominal is None for s in b.styli.values())):
         assumptions.append("B-axis probe: Eqs 5.8–5.19 need B = 0° and 90° and every stylus's nominal_mm: not applied")
     elif b is not None and b.styli:
         styli = sorted(b.styli.values(), key=lambda s: s.R_B)
         short = styli[0]
-        D = {s.id: s.centres.mean(axis=0) - s.nominal for s in styli}  # (2, 3): rows B=0°, 90°
+        D = {s.id: run_of(probe, B_RUN, s.id).centres.mean(axis=0) - s.nominal for s in styli}  # (2, 3): rows B=0°, 90°
         d = D[short.id]
         dX1, dY1, dZ1 = d[0]
         dX2, dY2, dZ2 = d[1]

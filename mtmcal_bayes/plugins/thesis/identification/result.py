@@ -77,6 +77,8 @@ class IdentificationResult:
     #: the thesis' (``None`` otherwise), and the convention in words
     ballbar_in_convention: dict[str, Identified] | None = None
     convention: str = "thesis"
+    #: sentences naming the probe sections the campaign lacks and the probe values that costs
+    missing_probe: list[str] = field(default_factory=list)
 
     def to_json(self) -> dict:
         out = {

@@ -1,8 +1,8 @@
-"""Touch-probe runs as candidates on a described machine (SPEC §19): indexed positions of each rotary axis, the
-measurement of the controllers' kinematics cycles, valued through the probe likelihood.
+"""Touch-probe runs as candidate measurements, one catalogue for every machine (SPEC §6, §19): indexed positions of
+each rotary axis, the measurement of the controllers' kinematics cycles, valued through the probe likelihood.
 
-The catalogue of :func:`described_probe_catalogue` (a campaign with a ``[probe]`` giving a repeatability and a
-stylus), with the campaign's first stylus and its first run's sphere:
+The catalogue of :func:`probe_catalogue` (a campaign with a ``[probe]`` giving a repeatability, a stylus and a run),
+with the campaign's first stylus and its first run's sphere:
 
 * each rotary axis K indexed to 0° and up to three of 90°, −90°, 45°, −45°, 30°, −30° (those its travel
   allows; a fully turning axis to 0/90/180/270°), the other rotary axes at 0;
@@ -28,25 +28,48 @@ from ..campaign import Probe, ProbeRun
 from ..machines.probe_terms import probe_terms
 from ..models.chain_models import ChainProbeModel, FirstOrderModel
 from ..parameters import ParameterSpace
-from .catalogue import HOLD_DEG, hold_for, travel_problems
-from .probe_candidates import PROBE_REPEATS, ProbeCandidate
+from .catalogue import HOLD_DEG, hold_for, rules_of, travel_problems
 
+#: repeats of each reading of a probe candidate
+PROBE_REPEATS = 2
 #: a longer stylus of the catalogue, mm added to the campaign's first
 LONGER_STYLUS_MM = 100.0
 #: the sphere raised by this much (along Z) in the catalogue, mm
 HIGHER_SPHERE_MM = 100.0
+#: what the plan says of its probe candidates (``{sigma_probe}``: µm)
+PROBE_NOTE = ("touch-probe runs (kind 'probe'): each rotary axis indexed to 0° and up to three more positions, alone, "
+              "with the others held, with a longer stylus or the sphere higher; each a new run with its own stylus "
+              "and sphere terms, readings with the probe's repeatability and sigma_model_probe = {sigma_probe:.2f} µm "
+              "(rms of its prior)")
 
 
 @dataclass(frozen=True)
-class DescribedProbeCandidate(ProbeCandidate):
-    """A touch-probe run of a described machine: ``positions`` ``((letter, (angles°...)), ...)`` (each axis one
-    angle per position), ``sphere`` (3,) mm at the home pose, ``stylus`` the campaign's stylus it re-sets, of
-    ``stylus_length`` mm; ``axis`` the indexed axis, for the table."""
+class ProbeCandidate:
+    """One candidate probe run: ``name``; ``id`` the owner of its sphere terms; ``positions``
+    ``((letter, (angles°...)), ...)`` (each axis one angle per position), ``angles_deg`` the indexed axis' angles;
+    ``sphere`` (3,) mm at the home pose (``Z_C`` its height, ``R_C`` 0: the plan's table columns); ``stylus`` the
+    campaign's stylus it re-sets, of ``stylus_length`` mm to the ball's centre; ``axis`` the indexed axis;
+    ``repeats`` per reading."""
 
+    name: str
+    id: str
+    angles_deg: tuple[float, ...]
+    stylus_length: float
+    R_C: float
+    Z_C: float
+    repeats: int = PROBE_REPEATS
     positions: tuple = ()
     sphere: tuple = (0.0, 0.0, 0.0)
     stylus: str = ""
     axis: str = ""
+    kind: str = "probe"
+    repeat_of: int | None = None
+    extension: float | None = None
+
+    @property
+    def length(self) -> float:
+        """No bar: the candidate's "length" is nan (a ball-bar candidate's bar length)."""
+        return float("nan")
 
     @property
     def pattern(self) -> str:
@@ -97,29 +120,32 @@ def _positions(ax) -> tuple[float, ...]:
     return (0.0,) + tuple(h for h in HOLD_DEG if lo - 1e-9 <= h <= hi + 1e-9)[:3]
 
 
-def described_probe_catalogue(campaign) -> list[DescribedProbeCandidate]:
-    """The probe candidates of a described campaign (module docstring); none without a usable ``[probe]``."""
+def probe_catalogue(campaign) -> list[ProbeCandidate]:
+    """The probe candidates of a campaign (module docstring); none without a usable ``[probe]``."""
     p = campaign.probe
     if p is None or p.repeatability is None or not p.styli or not p.runs:
         return []
     desc = campaign.machine.description
-    stylus, length = next(iter(p.styli.items()))
+    rules = rules_of(campaign)
+    positions = dict(rules.probe_positions)
+    stylus = next(iter(p.styli))
+    length = p.centre_length(stylus)
     sphere = np.asarray(p.runs[0].sphere, float)
-    out: list[DescribedProbeCandidate] = []
+    out: list[ProbeCandidate] = []
 
     def add(name, ax, angles, *, held=(), length_mm=length, at=sphere):
         k = len(angles)
         pos = [(ax.letter, tuple(angles))] + [(a, (v,) * k) for a, v in held]
         cid = f"candidate{len(out) + 1}"  # the owner of its sphere terms: no campaign run is named so
-        out.append(DescribedProbeCandidate(name, cid, "described", tuple(angles), float(length_mm), 0.0, 0.0,
-                                           float(at[2]), PROBE_REPEATS, positions=tuple(pos),
-                                           sphere=tuple(float(x) for x in at), stylus=stylus, axis=ax.letter))
+        out.append(ProbeCandidate(name, cid, tuple(angles), float(length_mm), 0.0, float(at[2]), PROBE_REPEATS,
+                                  positions=tuple(pos), sphere=tuple(float(x) for x in at), stylus=stylus,
+                                  axis=ax.letter))
 
     for ax in desc.rotary_axes:
-        angles = _positions(ax)
+        angles = positions.get(ax.letter) or _positions(ax)
         shown = "/".join(f"{a:g}" for a in angles)
         add(f"probe {ax.letter} {shown}° ({stylus} stylus)", ax, angles)
-        held = hold_for(desc, ax.letter)
+        held = hold_for(desc, ax.letter) if rules.hold else None
         if held:
             add(f"probe {ax.letter} {shown}°, " + ", ".join(f"{a} at {v:g}°" for a, v in held), ax, angles,
                 held=held)
@@ -130,9 +156,9 @@ def described_probe_catalogue(campaign) -> list[DescribedProbeCandidate]:
     return out
 
 
-def described_probe_feasibility(candidate: DescribedProbeCandidate, campaign) -> tuple[bool, str]:
+def probe_feasibility(candidate: ProbeCandidate, campaign) -> tuple[bool, str]:
     """Whether every position's commands lie within the described travels."""
     return travel_problems(campaign.machine.description, candidate.commands(campaign))
 
 
-__all__ = ["DescribedProbeCandidate", "described_probe_catalogue", "described_probe_feasibility"]
+__all__ = ["ProbeCandidate", "probe_catalogue", "probe_feasibility", "PROBE_NOTE", "PROBE_REPEATS"]
