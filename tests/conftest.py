@@ -105,13 +105,18 @@ def _made(folder: Path, make) -> tuple[Path, str]:
     return folder, make(folder)
 
 
-def report_cli(*argv) -> str:
-    """``mtmcal-bayes report ...`` in this process: its stdout (the exit status must be 0)."""
+def cli_stdout(*argv) -> str:
+    """``mtmcal-bayes ARGV`` in this process: its stdout (the exit status must be 0)."""
     stdout, stderr = io.StringIO(), io.StringIO()
     with redirect_stdout(stdout), redirect_stderr(stderr):
-        code = main(["report", *map(str, argv)])
+        code = main([str(a) for a in argv])
     assert code == 0, stderr.getvalue()
     return stdout.getvalue()
+
+
+def report_cli(*argv) -> str:
+    """``mtmcal-bayes report ...`` in this process: its stdout (the exit status must be 0)."""
+    return cli_stdout("report", *argv)
 
 
 @pytest.fixture(scope="session")
@@ -167,6 +172,22 @@ def demo_report(tmp_path_factory):
 
             folder, stdout = shared_output(tmp_path_factory, f"report-{machine}", make)
             made[machine] = folder / "rep", stdout
+        return made[machine]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def demo_plan(tmp_path_factory):
+    """``demo_plan(machine)`` → the JSON text ``plan --machine MACHINE --json`` prints (the demo campaign's default
+    data), made once per test run (:func:`shared_output`) for the tests that read it (tests/test_workflow_described.py,
+    tests/test_candidates_file_machines.py, tests/test_design_described.py)."""
+    made = {}
+
+    def get(machine: str) -> str:
+        if machine not in made:
+            made[machine] = shared_output(tmp_path_factory, f"plan-{machine}",
+                                          lambda folder: cli_stdout("plan", "--machine", machine, "--json"))[1]
         return made[machine]
 
     return get

@@ -75,13 +75,19 @@ def _resolve(module: str, is_package: bool, node: ast.ImportFrom | ast.Import) -
     return out
 
 
+@functools.cache
+def _nodes(module: str) -> tuple[ast.AST, ...]:
+    """Every node of ``module``'s syntax tree (``ast.walk`` order), parsed once for all the tests of this file (each
+    reads every module; the nodes are only read)."""
+    return tuple(ast.walk(ast.parse(FILES[module].read_text(encoding="utf-8"))))
+
+
 def _imports() -> dict[str, set[str]]:
     """module -> the package modules it imports."""
     graph = {}
     for module, path in FILES.items():
-        tree = ast.parse(path.read_text(encoding="utf-8"))
         targets = set()
-        for node in ast.walk(tree):
+        for node in _nodes(module):
             if isinstance(node, (ast.Import, ast.ImportFrom)):
                 targets.update(_resolve(module, path.name == "__init__.py", node))
         graph[module] = {t for t in targets if t in FILES and t != module}
@@ -214,10 +220,10 @@ def test_cli_calls_the_api_only():
 def test_library_errors_do_not_name_cli_flags():
     """Messages name API parameters (``ParameterError``); only the CLI knows its flags."""
     offenders = []
-    for module, path in FILES.items():
+    for module in FILES:
         if module == "mtmcal_bayes.cli":
             continue
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in _nodes(module):
             if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", "")).endswith("Error"):
                 for arg in node.args:
                     for s in ast.walk(arg):
@@ -228,8 +234,8 @@ def test_library_errors_do_not_name_cli_flags():
 
 # --------------------------------------------------------------------------- signatures and single sources
 def _functions():
-    for module, path in FILES.items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for module in FILES:
+        for node in _nodes(module):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 yield module, node
 
@@ -246,8 +252,8 @@ def test_long_signatures_are_keyword_only():
 
 
 def _literals(kind):
-    for module, path in FILES.items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for module in FILES:
+        for node in _nodes(module):
             if isinstance(node, kind):
                 yield module, node
 

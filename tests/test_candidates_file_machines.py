@@ -13,12 +13,10 @@ TYPES = ("trunnion", "vertical-turn-mill", "head-head")
 
 
 @pytest.mark.parametrize("machine", TYPES)
-def test_a_user_candidate_equal_to_a_catalogue_run_is_valued_as_it(machine, run_cli, tmp_path):
+def test_a_user_candidate_equal_to_a_catalogue_run_is_valued_as_it(machine, run_cli, demo_plan, tmp_path):
     """The catalogue's first held-axes run written as a user's candidate (its pattern, set-up, mount and held axes):
     the same information gain and the same sd after it for every target, to 1e-9 relative (the same rows)."""
-    code, out, err = run_cli("plan", "--machine", machine, "--json")
-    assert code == 0, err
-    doc = json.loads(out)
+    doc = json.loads(demo_plan(machine))  # plan --machine MACHINE --json (conftest.demo_plan)
     held = next(c for c in doc["candidates"] if c["kind"] == "held axes")
     # "AR @ T1/W1, C held at 90°": pattern, set-up, mount and held positions as the catalogue names them
     where, hold = held["name"].split(", ", 1)

@@ -84,12 +84,10 @@ def test_a_candidates_rows_are_the_chains_derivatives(trunnion):
         assert np.allclose(fd[:, -m:].T, A, atol=1e-6 * np.abs(A).max())
 
 
-def test_plan_on_a_described_machine_ranks_its_own_deviations(run_cli, tmp_path):
-    code, out, err = run_cli("plan", "--machine", "trunnion", "--json")
-    assert code == 0, err
+def test_plan_on_a_described_machine_ranks_its_own_deviations(demo_plan):
     import json
 
-    doc = json.loads(out)
+    doc = json.loads(demo_plan("trunnion"))  # plan --machine trunnion --json (conftest.demo_plan)
     assert doc["targets"] and all(t.startswith("E_") for t in doc["targets"])
     best = doc["candidates"][0]
     assert best["feasible"] and best["verdict"] == "ok"

@@ -82,7 +82,9 @@ def test_false_alarm_rate_without_change(base):
     promise, one-sided Kolmogorov–Smirnov against the uniform (too many small π fail), size 1 %.  Power: a rule
     twice as liberal at every level (P(π ≤ t) = 2t) puts every π below 0.5, D⁺ ≥ 0.5 against the critical 0.33 of
     n = 20: it fails with probability 1.  (Counting flags at α alone, ≤ 2 of 20, passed such a rule with
-    probability 0.68; a doubled rate at α = 5 % only is out of reach of 20 histories, see bench/history_alarms.py.)"""
+    probability 0.68; a doubled rate at α = 5 % only is out of reach of 20 histories, see bench/history_alarms.py.)
+    Nor does any of them keep a drift rate (docs/history.md: a flat history keeps random walks, the rate's prior
+    costing an Occam factor the data do not pay back), so no forecast extrapolates noise."""
     from scipy import stats
 
     pi = []
@@ -92,6 +94,8 @@ def test_false_alarm_rate_without_change(base):
         K = len(r.changes)
         pi.append(min(1.0, K * (1.0 - max(c["probability"] for c in r.changes))))
         assert bool(r.flagged) == (pi[-1] < ALPHA)
+        assert r.fit.trend["trended"] == [], (seed, r.fit.trend)
+        assert {t["model"] for t in r.trend().values()} == {"random-walk"}, seed
     test = stats.kstest(pi, "uniform", alternative="greater")
     assert test.pvalue > 0.01, (test, sorted(pi))
 

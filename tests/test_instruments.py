@@ -35,6 +35,21 @@ def campaigns():
     return {name: mb.load_campaign(demo_campaign(name)) for name in TYPES}
 
 
+@pytest.fixture(scope="module")
+def checks(campaigns):
+    """``checks(name, shift_um)``: ``check_instruments(..., explain=False)`` of the type's demo campaign (``shift_um``
+    0) or of its :func:`shifted` copy, made once for the tests that read it (read only)."""
+    made = {}
+
+    def get(name: str, shift_um: float = 0.0):
+        if (name, shift_um) not in made:
+            c = campaigns[name]
+            made[name, shift_um] = check_instruments(shifted(c, shift_um) if shift_um else c, explain=False)
+        return made[name, shift_um]
+
+    return get
+
+
 def shifted(campaign, shift_um: float = 15.0, axis: int = 0):
     """A copy of ``campaign`` whose first probe run's positions at the last angle of its first indexed axis (the
     thesis' C-axis run: C = 270°; a demo's: the four positions of its last tilt) are moved ``shift_um`` along
@@ -62,12 +77,12 @@ UNMET = pytest.mark.xfail(strict=True, reason="15 µm: p = 0.02–0.05 under the
 
 @pytest.mark.parametrize("name, shift_um", [(n, 25.0) for n in TYPES] + [pytest.param(n, 15.0, marks=UNMET)
                                                                            for n in TYPES])
-def test_a_shifted_group_of_probe_positions_is_flagged_and_every_sentence_follows(campaigns, name, shift_um):
+def test_a_shifted_group_of_probe_positions_is_flagged_and_every_sentence_follows(campaigns, checks, name, shift_um):
     """A group of probe positions moved along X: its reading group disagrees at p < 0.01 (the unmoved campaign's
     agrees at p ≥ 0.01), the check's verdict, its sentence and the disputed deviations say the same, and the
     disputed deviations are the machine's own (its estimated deviations, by its names)."""
     c = campaigns[name]
-    before, after = check_instruments(c, explain=False), check_instruments(shifted(c, shift_um), explain=False)
+    before, after = checks(name), checks(name, shift_um)
     group = _moved_group(before, after)
     p_before = before.consistency.groups.set_index("group").loc[group, "p_value"]
     p_after = after.consistency.groups.set_index("group").loc[group, "p_value"]
@@ -133,13 +148,12 @@ def test_instruments_explains_a_conflict_on_every_machine(campaigns, name, run_c
 
 
 @pytest.mark.parametrize("name", TYPES)
-def test_compensate_refuses_the_disputed_deviations_on_every_machine(campaigns, name, run_cli, tmp_path):
+def test_compensate_refuses_the_disputed_deviations_on_every_machine(campaigns, checks, name, run_cli, tmp_path):
     """Exit 2 and one line naming a disputed deviation and the way out; with --accept-disagreement it compensates
     and warns."""
     path = tmp_path / "shifted.toml"
-    shifted_c = shifted(campaigns[name], 25.0)
-    save_campaign(shifted_c, path)
-    disputed = check_instruments(shifted_c, explain=False).disputed
+    save_campaign(shifted(campaigns[name], 25.0), path)
+    disputed = checks(name, 25.0).disputed
     out_nc = tmp_path / "out.nc"
     code, out, err = run_cli("compensate", path, PROGRAM[name], "-o", out_nc)
     assert code == 2 and len(err.strip().splitlines()) == 1, err

@@ -73,29 +73,34 @@ def test_unconverged_report_says_so(run_cli, tmp_path):
     assert "WARNING: step budget of 50 reached" in err
 
 
-def test_corner_lists_reference_values_it_cannot_draw(thesis_report, tmp_path):
+@pytest.fixture(scope="module")
+def thesis_corner(thesis_report):
+    """``(idata, summary, figure, off)``: the corner figure of the shared report's posterior, drawn again here
+    (:func:`corner_figure`) once for the two tests that read it; neither changes it (drawing it to pixels does
+    not)."""
     import arviz as az
 
     idata = az.from_netcdf(thesis_report / "posterior.nc")
     comp = pd.read_csv(thesis_report / "summary.csv", index_col="quantity")
     fig, off = corner_figure(idata, comp)
+    return idata, comp, fig, off
+
+
+def test_corner_lists_reference_values_it_cannot_draw(thesis_corner, tmp_path):
+    _, _, fig, off = thesis_corner
     save_png(fig, tmp_path / "corner_again.png")  # not into the shared report, which other tests list
     # the recomputed probe gamma_XB (about −91″, Eq 5.17 with assumed nominals) is tens of sd away
     assert any(o.startswith("gamma_XB: touch probe, recomputed") for o in off)
     assert not any(o.startswith("beta_XB") for o in off)
 
 
-def test_corner_leaves_out_only_the_draws_its_fill_hides(thesis_report, monkeypatch):
+def test_corner_leaves_out_only_the_draws_its_fill_hides(thesis_corner, monkeypatch):
     """The corner plot draws only the draws not under corner's opaque fill of the densest region (a twentieth of
     them); drawn with every draw instead, the PNG is the same, pixel for pixel."""
-    import arviz as az
-
     from mtmcal_bayes.figure_style import _canvas_rgb, png_dpi
     from mtmcal_bayes.reporting import corner_plot
 
-    idata = az.from_netcdf(thesis_report / "posterior.nc")
-    comp = pd.read_csv(thesis_report / "summary.csv", index_col="quantity")
-    fig, _ = corner_figure(idata, comp)
+    idata, comp, fig, _ = thesis_corner
     lines = [ln for ax in fig.axes for ln in ax.lines if ln.get_marker() == "o" and ln.get_alpha() == 0.02]
     shown = sum(len(ln.get_xdata()) for ln in lines)
     n = len(corner_plot._draws(idata, list(corner_plot.IDENTIFIABLE)))

@@ -19,6 +19,7 @@ from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.iso import iso_symbol
 from mtmcal_bayes.machines.plugins import provided
 from mtmcal_bayes.models import models_of
+from mtmcal_bayes.sigma_prior import SigmaModelPrior
 from tests.conftest import DEMO_REPORT_TOLERANCES, SHARED_REPORT_TOLERANCES
 
 TYPES = ("thesis", "trunnion", "vertical-turn-mill", "head-head")
@@ -168,18 +169,40 @@ def test_a_described_machine_report_reuses_a_given_posterior(tmp_path):
     np.testing.assert_array_equal(np.asarray(written.posterior[q]), np.asarray(post.idata.posterior[q]))
 
 
-def test_a_described_machine_report_takes_a_learnt_sigma_model_prior(tmp_path):
-    """``report(sigma_model_prior=...)`` on a described machine: every posterior of the report (the main one and
-    the instruments' side posteriors) is sampled under the learnt prior, and the budget names its source."""
-    from mtmcal_bayes.sigma_prior import SigmaModelPrior
+#: the σ_model prior learnt elsewhere that the shifted trunnion's report is made under (:func:`shifted_report`)
+LEARNT = SigmaModelPrior({"sigma_model": (1.0, 0.1)}, "fleet of test trunnions")
 
-    learnt = SigmaModelPrior({"sigma_model": (1.0, 0.1)}, "fleet of test trunnions")
-    c = mb.load_campaign(demo_campaign("trunnion"))
-    rep = mb.report(c, output=tmp_path / "rep", sigma_model_prior=learnt, sampler="exact", seed=1)
-    assert rep.posterior.log_posterior.sigma_prior == learnt
-    priors = pd.read_csv(tmp_path / "rep" / "priors.csv", index_col="parameter")
+
+@pytest.fixture(scope="module")
+def shifted_report(tmp_path_factory):
+    """``(report, directory)``: one report (exact draws, seed 1) of the trunnion demo with one group of probed
+    positions (A = −30°) moved 60 µm along Z, under the learnt σ_model prior :data:`LEARNT`, read by the two tests
+    below (read only; one report where each made its own): the learnt prior is the ball bar's σ_model's alone, so
+    the probe's 60 µm conflict stays a conflict under it (its test checks the verdict), and a prior learnt elsewhere
+    is taken the same whether or not the instruments agree."""
+    import ast
+
+    text = open(demo_campaign("trunnion"), encoding="utf-8").read()
+    line = next(ln for ln in text.splitlines() if ln.startswith("centres_mm = "))
+    centres = ast.literal_eval(line.split("=", 1)[1].strip())
+    for repeat in centres:
+        for i in range(4, 8):  # the positions at A = −30°
+            repeat[i][2] += 0.060
+    folder = tmp_path_factory.mktemp("shifted")
+    path = folder / "shifted.toml"
+    path.write_text(text.replace(line, "centres_mm = " + repr(centres)), encoding="utf-8")
+    return mb.report(path, output=folder / "rep", sigma_model_prior=LEARNT, sampler="exact", seed=1), folder / "rep"
+
+
+def test_a_described_machine_report_takes_a_learnt_sigma_model_prior(shifted_report):
+    """``report(sigma_model_prior=...)`` on a described machine (the shifted trunnion's shared report): every
+    posterior of the report (the main one and the instruments' side posteriors) is sampled under the learnt prior,
+    and the budget names its source."""
+    rep, out = shifted_report
+    assert rep.posterior.log_posterior.sigma_prior == LEARNT
+    priors = pd.read_csv(out / "priors.csv", index_col="parameter")
     assert "fleet of test trunnions" in priors.loc["sigma_model", "reason"]
-    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    html = unescape((out / "index.html").read_text(encoding="utf-8"))
     assert "fleet of test trunnions" in html.split('<h2 id="budget">')[1].split("<h2")[0]
 
 
@@ -202,23 +225,13 @@ def test_a_probe_only_campaign_gets_the_sections_it_has_what_they_need_for(tmp_p
     assert any("No ball-bar runs" in m for m in rep.missing) and any("No ball-bar set-up" in m for m in rep.missing)
 
 
-def test_a_described_campaign_whose_probe_disagrees_gets_the_explanations(tmp_path):
-    """The trunnion demo with one group of probed positions (A = −30°) moved 60 µm along Z: the consistency check
-    finds the disagreement, and the report then weighs the explanations of the conflict (begun only once the
-    comparison finds it: the runs read as the thesis reads them) and shows them."""
-    import ast
-
-    text = open(demo_campaign("trunnion"), encoding="utf-8").read()
-    line = next(ln for ln in text.splitlines() if ln.startswith("centres_mm = "))
-    centres = ast.literal_eval(line.split("=", 1)[1].strip())
-    for repeat in centres:
-        for i in range(4, 8):  # the positions at A = −30°
-            repeat[i][2] += 0.060
-    path = tmp_path / "shifted.toml"
-    path.write_text(text.replace(line, "centres_mm = " + repr(centres)), encoding="utf-8")
-    rep = mb.report(path, output=tmp_path / "rep", sampler="exact", seed=1)
-    verdicts = pd.read_csv(tmp_path / "rep" / "consistency.csv").set_index("given")["verdict"]
+def test_a_described_campaign_whose_probe_disagrees_gets_the_explanations(shifted_report):
+    """The trunnion demo with one group of probed positions (A = −30°) moved 60 µm along Z (the shared report):
+    the consistency check finds the disagreement, and the report then weighs the explanations of the conflict
+    (begun only once the comparison finds it: the runs read as the thesis reads them) and shows them."""
+    rep, out = shifted_report
+    verdicts = pd.read_csv(out / "consistency.csv").set_index("given")["verdict"]
     assert (verdicts == "disagree").any()
-    assert "explanations.csv" in rep.files and len(pd.read_csv(tmp_path / "rep" / "explanations.csv")) > 1
-    html = unescape((tmp_path / "rep" / "index.html").read_text(encoding="utf-8"))
+    assert "explanations.csv" in rep.files and len(pd.read_csv(out / "explanations.csv")) > 1
+    html = unescape((out / "index.html").read_text(encoding="utf-8"))
     assert "Where a conflict could come from" in html

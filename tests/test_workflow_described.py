@@ -45,16 +45,14 @@ def test_plan_states_todays_sd_exactly(machine, run_cli):
 
 
 @pytest.mark.parametrize("machine", TYPES)
-def test_plan_rests_on_every_instrument_by_default(machine, run_cli):
+def test_plan_rests_on_every_instrument_by_default(machine, demo_plan):
     """Without --data, plan rests on the campaign's default data, as sample does (one rule: every instrument the
     campaign has): its sd today is the exact posterior's of both instruments at plan's σ_model scales, not the ball
     bar's alone (to 1e-6 relative, against the closed form of the same log posterior)."""
     from mtmcal_bayes.inference.analytic import gaussian_posterior
     from mtmcal_bayes.inference.log_posterior import LogPosterior
 
-    code, out, err = run_cli("plan", "--machine", machine, "--json")
-    assert code == 0, err
-    doc = json.loads(out)
+    doc = json.loads(demo_plan(machine))  # plan --machine MACHINE --json (conftest.demo_plan)
     c = api.campaign_of(demo_campaign(machine))
     assert api.data_of(None, c) == "both"
     sigma = units.to_internal(doc["sigma_model_um"], "um")
