@@ -116,6 +116,12 @@ def test_history_cli_json_and_files(run_cli, tmp_path):
     assert [c["quantity"] for c in doc["changes"]] == ["beta_CZ"] and doc["changes"][0]["date"] == "2026-07-06"
     for name in ("index.html", "history.json", "history_summary.csv", "changes.csv", "trend.png"):
         assert (tmp_path / "out" / name).exists(), name
+    # every deviation the history does not show as measured is named with why, as on every machine (the thesis
+    # machine reports Table 4.5's eight; of the rest the ball bar determines dx_BT and dx_CZ, not dz_BT)
+    left = {x["quantity"]: x["why"] for x in doc["not_determined"]}
+    assert set(left) == {"dx_BT", "dz_BT", "dx_CZ"}
+    assert left["dz_BT"].startswith("undetermined") and left["dx_BT"].startswith("determined, but not among")
+    assert all(not set(left) & set(at) for at in doc["summary"].values())
 
 
 def test_history_bad_inputs_are_one_line(run_cli, tmp_path, base):
