@@ -52,10 +52,11 @@ def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballb
     if any(k in t for k in own_keys):
         provided(machine, "read_probe_keys")(r, t, probe, ballbar=ballbar, base_dir=base_dir)
     own_styli, own_runs = dict(probe.styli), [run.id for run in probe.runs]
+    sections = provided(machine, "probe_sections", "the machine's own sections of [probe]")
     for sid, path, s in (r.subtables(t, "styli", P, allowed={"length_mm", "ball_radius_mm"}, what="stylus")
                          if "styli" in t else ()):
         if sid in own_styli:
-            r.fail(path, f"{sid!r} names a stylus of {provided(machine, 'probe_sections')} too")
+            r.fail(path, f"{sid!r} names a stylus of {sections} too")
         radius = r.number(s, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0)
         length = r.number(s, "length_mm", path, positive=True) - radius
         if length <= 0:
@@ -73,7 +74,7 @@ def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballb
     ids = [run.id for run in probe.runs]
     for i, rid in enumerate(ids[len(own_runs):]):
         if rid in ids[:len(own_runs) + i]:
-            where = "a run of " + provided(machine, "probe_sections") if rid in own_runs else "another run"
+            where = f"a run of {sections}" if rid in own_runs else "another run"
             r.fail(f"{P}.runs[{i}].id", f"{rid!r} names {where} too")
     return probe
 
