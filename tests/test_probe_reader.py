@@ -24,7 +24,6 @@ from mtmcal_bayes.io.tomlio import dumps
 from mtmcal_bayes.machines.plugins import provided
 from mtmcal_bayes.models import make_model
 from mtmcal_bayes.models.probe import ChainProbeKernel, ProbeModel
-from mtmcal_bayes.simulation.simulate import truth_vector
 from mtmcal_bayes.units import ARCSEC
 
 #: an extra run on the thesis machine: a sphere on the C table off its axis, probed at C and B positions
@@ -130,9 +129,9 @@ def test_an_added_run_on_the_thesis_machine_is_simulated_sampled_and_written_bac
     """The campaign with its added run simulated at a truth by ``htm-thesis`` (deviations of 15–20″ / 20 µm, the
     added run's sphere off by 40 / −30 µm, its stylus 15 µm long; seeded noise as measured): the exact (``linear``)
     posterior of the probe data, its likelihood holding the added run's 18 readings, recovers where the added run's
-    sphere sits across the table within 4 posterior sd, each sd below 10 µm against a prior of hundreds; ``sample --data probe`` (exact
-    sampler) gives those terms the same mean within 4 Monte-Carlo errors; the simulated campaign written and read
-    back has the same runs and readings."""
+    sphere sits across the table within 4 posterior sd, each sd below 10 µm against a prior of hundreds;
+    ``sample --data probe`` (exact sampler) gives those terms the same mean within 4 Monte-Carlo errors; the
+    simulated campaign written and read back has the same runs and readings."""
     c, _ = _with_extra(tmp_path)
     truth = mb.campaign.Truth({"alpha_XB": 20 * ARCSEC, "beta_XB": -20 * ARCSEC, "gamma_XB": 15 * ARCSEC,
                                "dx_CZ": 0.02}, probe={"table": {"xP": 0.04, "yP": -0.03}, "mid": {"dRS": 0.015}})

@@ -49,8 +49,7 @@ def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballb
     r.check_keys(t, set(PROBE_KEYS) | set(own_keys), P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
     probe = Probe(r.string(t, "instrument", P), units.to_internal(rep, "um") if rep is not None else None)
-    if any(k in t for k in own_keys):
-        provided(machine, "read_probe_keys")(r, t, probe, ballbar=ballbar, base_dir=base_dir)
+    provided(machine, "read_probe_keys", _no_keys)(r, t, probe, ballbar=ballbar, base_dir=base_dir)
     own_styli, own_runs = dict(probe.styli), [run.id for run in probe.runs]
     sections = provided(machine, "probe_sections", "the machine's own sections of [probe]")
     for sid, path, s in (r.subtables(t, "styli", P, allowed={"length_mm", "ball_radius_mm"}, what="stylus")
@@ -62,10 +61,8 @@ def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballb
         if length <= 0:
             r.fail(f"{path}.ball_radius_mm", "longer than the stylus")
         probe.styli[sid] = length
-    if "runs" not in t and probe.runs:
-        return probe  # the machine's own sections hold its runs
-    raw = t.get("runs")
-    if not isinstance(raw, list) or not raw or not all(isinstance(x, dict) for x in raw):
+    raw = t.get("runs", [])  # none where the machine's own sections hold its runs
+    if not isinstance(raw, list) or not (raw or probe.runs) or not all(isinstance(x, dict) for x in raw):
         also = provided(machine, "probe_sections")
         r.fail(f"{P}.runs", "expected one or more [[probe.runs]] tables" + (f" (or {also})" if also else ""))
     for i, x in enumerate(raw):
@@ -77,6 +74,10 @@ def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballb
             where = f"a run of {sections}" if rid in own_runs else "another run"
             r.fail(f"{P}.runs[{i}].id", f"{rid!r} names {where} too")
     return probe
+
+
+def _no_keys(r: TomlReader, t: dict, probe: Probe, **_) -> None:
+    """The engine's own sections of ``[probe]`` beyond ``[probe.styli]`` and ``[[probe.runs]]``: none."""
 
 
 def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, styli: dict,
