@@ -14,7 +14,9 @@ its truth).  What the thesis campaign has
 in its data, a probe that disagrees with its ball bar, the demos get in a copy of each demo campaign with one group
 of probed positions moved 60 µm along Z (``instruments``, and ``compensate``, refused and then accepted, run on it).  ``--uneven`` measures the
 first, uneven command lines instead (the thesis' history alone stepped, its design alone adding runs, no conflict on
-the demos), as issue 42 was first measured.
+the demos), as issue 42 was first measured.  What the demos have in their data, a touch-probe run of
+``[[probe.runs]]``, the thesis machine gets in a copy of its campaign with one such run added (``sample --data probe``
+and ``ncgen --probe`` run on it).
 
     python bench/kind_coverage.py [--keep DIR] [--uneven]      (needs the coverage package: pip install coverage)
 """
@@ -80,6 +82,33 @@ def disagreeing_probe(machine: str, path: Path) -> Path:
         for i in group:
             repeat[i][2] += MOVED_MM
     path.write_text(text.replace(line, "centres_mm = " + repr(centres)), encoding="utf-8")
+    return path
+
+
+def added_probe_run(path: Path) -> Path:
+    """The thesis campaign written to ``path`` with a ``[[probe.runs]]`` run added (what the demo campaigns' probes
+    are): a sphere on the C table off its axis, read at four C and two more B positions with a stylus of
+    ``[probe.styli]``, its readings the machine's nominal ones, twice."""
+    import tomllib
+
+    import numpy as np
+
+    from mtmcal_bayes import load_campaign
+    from mtmcal_bayes.datasets import builtin_campaign_text
+    from mtmcal_bayes.io.tomlio import dumps
+    from mtmcal_bayes.models.probe import ChainProbeKernel, ProbeLayout
+
+    doc = tomllib.loads(builtin_campaign_text()[0])
+    doc["probe"]["styli"] = {"mid": {"length_mm": 400.0}}
+    run = {"id": "table", "stylus": "mid", "sphere_mm": [150.0, 50.0, 60.0],
+           "angles_deg": {"C": [0.0, 90.0, 180.0, 270.0, 0.0, 0.0], "B": [0.0, 0.0, 0.0, 0.0, 30.0, 60.0]},
+           "centres_mm": np.zeros((2, 6, 3)).tolist()}
+    doc["probe"]["runs"] = [run]
+    path.write_text(dumps(doc), encoding="utf-8")
+    c = load_campaign(path)
+    zero = ProbeLayout(c, kernel=ChainProbeKernel(c.machine.description)).zero[-6:]
+    run["centres_mm"] = np.stack([zero, zero]).tolist()
+    path.write_text(dumps(doc), encoding="utf-8")
     return path
 
 
@@ -222,6 +251,10 @@ def main() -> int:
                            "--json"],
                           ["compensate", str(moved), program, "--accept-disagreement", "-o",
                            str(work / f"{t}-moved.nc"), "--json"]]
+    if even:  # what the demo campaigns have in their data: a run of [[probe.runs]]
+        added = added_probe_run(work / "thesis-probe-run.toml")
+        thesis += [["sample", str(added), "--data", "probe", "--sampler", "exact", "--seed", "1", "--json"],
+                   ["ncgen", "--probe", "table", str(added)]]
     a_lines = measure("thesis", thesis, work)
     b_lines = measure("described", described, work)
     rows = []

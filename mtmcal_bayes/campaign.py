@@ -214,7 +214,8 @@ class ProbeRun:
     and ``datum_terms`` the nuisance terms of its sphere's placement and of where the sphere is in the reading frame;
     ``stylus_terms`` those of its stylus (None: the machine's, :func:`~mtmcal_bayes.machines.probe_terms.stylus_terms`);
     ``key`` the type of its observations' keys (None: the engine's) and ``labels`` (a,) the value naming each
-    position in them (None: its number from 1)."""
+    position in them (None: its number from 1); ``section`` the sub-table of ``[probe]`` of a plug-in's it was read
+    from and is written back to (None: ``[[probe.runs]]``, the engine's)."""
 
     id: str
     stylus: str
@@ -229,6 +230,7 @@ class ProbeRun:
     stylus_terms: tuple[str, ...] | None = None
     key: type | None = None
     labels: np.ndarray | None = None
+    section: str | None = None
 
     @property
     def positions(self) -> int:

@@ -33,6 +33,9 @@ from .processes import dask_cluster, scheduler_address, stop, wait_for
 VENV_BIN = Path(sys.executable).parent
 BROKEN = 'format = "mtmcal-campaign/1"\n[machine]\nserial = "M-2"\n'
 N_UNITS = 5  # 4 campaigns + 1 history
+#: the reader's one line for a campaign that measures nothing (every machine's)
+NO_MEASUREMENTS = ("no measurements: give [[ballbar.runs]] or [probe] with its runs (or, for a machine to design a "
+                   "campaign for, its [ballbar.setups] and [ballbar.mounts])")
 
 
 def _cmp(result_json: dict) -> dict:
@@ -81,7 +84,7 @@ def test_one_and_two_local_workers_give_identical_results_and_a_bad_campaign_is_
     assert _cmp(two.to_json()) == _cmp(ref.to_json())
     # the malformed campaign: one error with the loader's one-line message; everything else completed
     bad = tree / "M-2" / "broken.toml"
-    assert ref.errors == [{"file": str(bad), "message": f"{bad}: ballbar: missing table"}]
+    assert ref.errors == [{"file": str(bad), "message": f"{bad}: ballbar: {NO_MEASUREMENTS}"}]
     assert ref.exit_status == 3 and ref.run["failed"] == 0
     by_id = {m["id"]: m for m in ref.machines}
     assert list(by_id) == ["M-1", "M-2", "file:loose/bench-test.toml"]
@@ -117,7 +120,7 @@ def test_cli_json_interface_and_text(run_cli, tree, reference):
     _, _, cache = reference
     code, out, err = run_cli("fleet", tree, "--json", "--cache", cache, "--quiet")
     assert code == 3, err
-    assert err.splitlines() == [f"mtmcal-bayes fleet: error: {tree / 'M-2' / 'broken.toml'}: ballbar: missing table"]
+    assert err.splitlines() == [f"mtmcal-bayes fleet: error: {tree / 'M-2' / 'broken.toml'}: ballbar: {NO_MEASUREMENTS}"]
     doc = json.loads(out)
     assert doc["run"]["cached"] == N_UNITS and doc["run"]["computed"] == 0 and doc["run"]["workers"] == 0
     m = doc["machines"][0]

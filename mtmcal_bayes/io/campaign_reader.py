@@ -27,8 +27,7 @@ from ..parameters import (
 )
 from ..machines.deviations import quantities as deviation_table
 from ..machines.plugins import provided
-from .ballbar_section import read_ballbar
-from .measurement_sections import read_probe
+from .measurement_sections import measurement_sections
 from .machine_reader import (BUILTIN_TYPES, DESCRIPTION_KEYS, THESIS_TYPE, builtin_description, parse_description,
                              referenced_description)
 from .textfiles import read_user_text
@@ -74,9 +73,11 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
         r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
 
     machine = _machine(r, doc.get("machine"), base_dir)
-    read_sections = provided(machine, "campaign_sections", measurement_sections)  # a plug-in's campaign keys
-    ballbar, probe = read_sections(r, doc, machine, base_dir)
+    ballbar, probe = measurement_sections(r, doc, machine, base_dir)
     deviations = deviation_quantities(machine)
+    if "reported" in doc and provided(machine, "reported_quantities") is None:
+        r.fail("reported", "not read for this machine: it has no reported quantities (a plug-in's published "
+               "values, docs/machines.md)")
     reported = _reported(r, r.table(doc, "reported", "", required=False) or {}, text)
     priors = _priors(r, r.table(doc, "priors", "", required=False) or {}, deviations)
     truth_t = r.table(doc, "truth", "", required=False)
@@ -90,21 +91,6 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     design = _design(r, design_t, provided(machine, "quantity_table", deviations)) if design_t is not None else None
     return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances,
                     _date(r, doc), temperature, design)
-
-
-def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path | None) -> tuple[Ballbar, Probe]:
-    """``[ballbar]`` and ``[probe]`` of a campaign of any described machine: set-ups, mounts (the W ball's
-    ``position_mm``), runs ``<axis><R|T|A|X|Y|Z>`` with ``arc_deg`` and ``hold_deg``, ``[[probe.runs]]``."""
-    desc = machine.description
-    probe_t = r.table(doc, "probe", "", required=False)
-    ballbar = read_ballbar(r, r.table(doc, "ballbar", "", required=False), machine, base_dir)
-    probe = read_probe(r, probe_t, desc, base_dir) if probe_t is not None else None
-    if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
-        r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [[probe.runs]] (or, for a machine to design "
-               "a campaign for, its [ballbar.setups] and [ballbar.mounts])")
-    if "reported" in doc:
-        r.fail("reported", "not read for a described machine yet (docs/machines.md)")
-    return ballbar, probe
 
 
 def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:

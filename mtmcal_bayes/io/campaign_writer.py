@@ -4,7 +4,8 @@ One writer for every machine, the inverse of the one reader (:mod:`.campaign_rea
 temperature, ``[ballbar]`` (:mod:`.ballbar_writer`), the probe's instrument and repeatability, ``[reported]``,
 ``[priors]``, ``[tolerances]``, ``[truth]`` and ``[design]`` are the engine's; the machine contributes what its
 campaign format has of its own — its keys of ``[ballbar]`` (its ``ballbar_keys``) and its probe's sections
-(``probe_document``) — and the engine's are used where it gives none (``[[probe.runs]]``).  ``[machine]`` is the
+(``probe_document``, for the runs read from them) — and the engine writes every other probe run as
+``[[probe.runs]]``.  ``[machine]`` is the
 engine's on every machine (:mod:`.description_writer`: a built-in type named, any other description written out).
 """
 
@@ -67,26 +68,31 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
 
 
 def _probe(c: Campaign, path_of: Callable[[str], str]) -> dict:
-    """``[probe]``: its instrument and repeatability, then its runs in the machine's format (a plug-in's
-    ``probe_document``, else ``[probe.styli]`` and ``[[probe.runs]]``); ``path_of`` writes a file's name as seen
-    from the saved file."""
+    """``[probe]``: its instrument and repeatability, the runs read from a plug-in's sections in them (its
+    ``probe_document``), the others as ``[probe.styli]`` and ``[[probe.runs]]``; ``path_of`` writes a file's name as
+    seen from the saved file."""
     p = c.probe
     d: dict = {"instrument": p.instrument} if p.instrument else {}
     if p.repeatability is not None:
         d["repeatability_um"] = units.from_internal(p.repeatability, "um")
-    d.update(provided(c.machine, "probe_document", probe_runs)(p, path_of))
+    d.update(provided(c.machine, "probe_document", lambda probe, path_of: {})(p, path_of))
+    d.update(probe_runs(p, path_of))
     return d
 
 
 def probe_runs(p: Probe, path_of: Callable[[str], str]) -> dict:
     """The engine's keys of ``[probe]`` (:mod:`.measurement_sections`): ``[probe.styli.<id>] length_mm`` and
     ``[[probe.runs]]`` with their stylus, sphere, angles and centres or DPRNT files (``path_of``: a file's name as seen
-    from the saved campaign)."""
-    return {"styli": {sid: {"length_mm": float(length)} for sid, length in p.styli.items()},
-            "runs": [{"id": r.id, "stylus": r.stylus, "sphere_mm": [float(x) for x in r.sphere],
-                      "angles_deg": {k: [float(x) for x in units.from_internal(v, "deg")] for k, v in r.angles.items()},
-                      **({"dprnt": [path_of(f) for f in r.dprnt]} if r.dprnt else {"centres_mm": r.centres})}
-                     for r in p.runs]}
+    from the saved campaign), for the runs read from no plug-in's section and the styli none of those use (none
+    where there are neither)."""
+    theirs = [r for r in p.runs if r.section is not None]
+    used = {r.stylus for r in theirs}
+    styli = {sid: {"length_mm": float(length)} for sid, length in p.styli.items() if sid not in used}
+    runs = [{"id": r.id, "stylus": r.stylus, "sphere_mm": [float(x) for x in r.sphere],
+             "angles_deg": {k: [float(x) for x in units.from_internal(v, "deg")] for k, v in r.angles.items()},
+             **({"dprnt": [path_of(f) for f in r.dprnt]} if r.dprnt else {"centres_mm": r.centres})}
+            for r in p.runs if r.section is None]
+    return {**({"styli": styli} if styli else {}), **({"runs": runs} if runs else {})}
 
 
 def _tolerance(t, unit: str):

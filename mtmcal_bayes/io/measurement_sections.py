@@ -1,46 +1,83 @@
-"""The touch-probe section of a campaign (SPEC §19, docs/machines.md), the engine's one reader of probe runs; every
-machine's ``[ballbar]`` is read by :mod:`.ballbar_section`.  A plug-in whose campaign format has probe sections of
-its own (the thesis': its C-axis and B-axis runs) reads them into the same runs and styli.
+"""A campaign's measurement sections, ``[ballbar]`` and ``[probe]``: one reader for every machine (SPEC §19, §20,
+docs/machines.md).  ``[ballbar]`` is read by :mod:`.ballbar_section`; ``[probe]`` here.  A plug-in whose campaign
+format has probe sections of its own (the thesis': its C-axis and B-axis runs) names them (``probe_keys``) and reads
+them into the same runs and styli (``read_probe_keys``); everything else of ``[probe]`` is the engine's on every
+machine, beside them or instead of them.
 
-``[probe]``: ``[probe.styli.<id>] length_mm`` (spindle point to stylus-ball centre; with ``ball_radius_mm``, to its
-tip); ``[[probe.runs]]`` with ``stylus`` (or its length ``R_B_mm``: a stylus of the run's own), ``sphere_mm`` (its nominal centre at the home pose, workpiece side),
-``angles_deg`` (axis letter -> list, all one length) and ``centres_mm`` (repeats × positions × 3: the commanded
-X, Y, Z at which the stylus centre reached the sphere's centre).
+``[probe]``: ``instrument``, ``repeatability_um``; ``[probe.styli.<id>] length_mm`` (spindle point to stylus-ball
+centre; with ``ball_radius_mm``, to its tip); ``[[probe.runs]]`` with ``stylus`` (a stylus of ``[probe.styli]`` or of
+the plug-in's sections, or its length ``R_B_mm``: a stylus of the run's own), ``sphere_mm`` (its nominal centre at the
+home pose, workpiece side), ``angles_deg`` (axis letter -> list, all one length) and ``centres_mm`` (repeats ×
+positions × 3: the commanded X, Y, Z at which the stylus centre reached the sphere's centre).
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from .. import units
-from ..campaign import Probe, ProbeRun
+from ..campaign import Ballbar, Machine, Probe, ProbeRun
 from ..machines.description import MachineDescription
+from ..machines.plugins import provided
+from .ballbar_section import read_ballbar
 from .probe_readings import probe_readings
 from .toml_reader import TomlReader
 
+#: the engine's keys of ``[probe]``
+PROBE_KEYS = ("instrument", "repeatability_um", "styli", "runs")
 
-def read_probe(r: TomlReader, t: dict, desc: MachineDescription, base_dir=None) -> Probe:
-    """``[probe]``: styli and ``[[probe.runs]]`` (DPRNT files named relative to ``base_dir``)."""
+
+def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path | None) -> tuple[Ballbar, Probe]:
+    """``[ballbar]`` (:func:`~.ballbar_section.read_ballbar`, with the machine's own keys) and ``[probe]``
+    (:func:`read_probe`) of a campaign on ``machine``; a campaign measures something (ball-bar or probe runs) or
+    gives a ball bar's set-ups and mounts to design a campaign for."""
+    probe_t = r.table(doc, "probe", "", required=False)
+    ballbar = read_ballbar(r, r.table(doc, "ballbar", "", required=False), machine, base_dir)
+    probe = read_probe(r, probe_t, machine, base_dir, ballbar=ballbar) if probe_t is not None else None
+    if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
+        r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [probe] with its runs (or, for a machine to "
+               "design a campaign for, its [ballbar.setups] and [ballbar.mounts])")
+    return ballbar, probe
+
+
+def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballbar: Ballbar | None = None) -> Probe:
+    """``[probe]``: instrument, repeatability, the machine's own sections (its plug-in's ``probe_keys``, read by its
+    ``read_probe_keys`` into the probe's runs and styli; ``ballbar`` is the campaign's, which they may refer to),
+    then ``[probe.styli]`` and ``[[probe.runs]]`` (DPRNT files named relative to ``base_dir``)."""
     P = "probe"
-    r.check_keys(t, {"instrument", "repeatability_um", "styli", "runs"}, P)
+    own_keys = tuple(provided(machine, "probe_keys", ()))
+    r.check_keys(t, set(PROBE_KEYS) | set(own_keys), P)
     rep = r.number(t, "repeatability_um", P, required=False, positive=True)
     probe = Probe(r.string(t, "instrument", P), units.to_internal(rep, "um") if rep is not None else None)
+    provided(machine, "read_probe_keys", _no_keys)(r, t, probe, ballbar=ballbar, base_dir=base_dir)
+    own_styli, own_runs = dict(probe.styli), [run.id for run in probe.runs]
+    sections = provided(machine, "probe_sections", "the machine's own sections of [probe]")
     for sid, path, s in (r.subtables(t, "styli", P, allowed={"length_mm", "ball_radius_mm"}, what="stylus")
                          if "styli" in t else ()):
+        if sid in own_styli:
+            r.fail(path, f"{sid!r} names a stylus of {sections} too")
         radius = r.number(s, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0)
         length = r.number(s, "length_mm", path, positive=True) - radius
         if length <= 0:
             r.fail(f"{path}.ball_radius_mm", "longer than the stylus")
         probe.styli[sid] = length
-    raw = t.get("runs")
-    if not isinstance(raw, list) or not raw or not all(isinstance(x, dict) for x in raw):
-        r.fail(f"{P}.runs", "expected one or more [[probe.runs]] tables")
+    raw = t.get("runs", [])  # none where the machine's own sections hold its runs
+    if not isinstance(raw, list) or not (raw or probe.runs) or not all(isinstance(x, dict) for x in raw):
+        also = provided(machine, "probe_sections")
+        r.fail(f"{P}.runs", "expected one or more [[probe.runs]] tables" + (f" (or {also})" if also else ""))
     for i, x in enumerate(raw):
-        probe.runs.append(_probe_run(r, x, f"{P}.runs[{i}]", desc, styli=probe.styli, number=i + 1,
+        probe.runs.append(_probe_run(r, x, f"{P}.runs[{i}]", machine.description, styli=probe.styli, number=i + 1,
                                      base_dir=base_dir))
     ids = [run.id for run in probe.runs]
-    for i, rid in enumerate(ids):
-        if rid in ids[:i]:
-            r.fail(f"{P}.runs[{i}].id", f"{rid!r} names another run too")
+    for i, rid in enumerate(ids[len(own_runs):]):
+        if rid in ids[:len(own_runs) + i]:
+            where = f"a run of {sections}" if rid in own_runs else "another run"
+            r.fail(f"{P}.runs[{i}].id", f"{rid!r} names {where} too")
     return probe
+
+
+def _no_keys(r: TomlReader, t: dict, probe: Probe, **_) -> None:
+    """The engine's own sections of ``[probe]`` beyond ``[probe.styli]`` and ``[[probe.runs]]``: none."""
 
 
 def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, styli: dict,
@@ -81,4 +118,4 @@ def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, s
                     dprnt=files, centre_cov=cov)
 
 
-__all__ = ["read_probe"]
+__all__ = ["measurement_sections", "read_probe", "PROBE_KEYS"]

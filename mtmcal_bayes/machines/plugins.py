@@ -18,9 +18,12 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
 * ``ballbar_keys`` — its own keys of ``[ballbar]`` in the engine's one reader and one writer of it: its set-ups',
   its mounts' and the table's, read into the engine's set-ups and mounts and written back from them, and the ball
   bar completed in the engine's terms (the members of :class:`mtmcal_bayes.io.ballbar_section.EngineKeys`, the
-  engine's own); ``campaign_sections(r, doc, machine, base_dir)`` — its campaign's measurement sections where it
-  reads its own ``[probe]`` (into the engine's probe runs and styli, :class:`mtmcal_bayes.campaign.Probe`, with
-  whatever record of its own keys it needs in ``Probe.own``), ``probe_document(probe, path_of)`` their writing
+  engine's own); ``probe_keys`` — the names of its own sub-tables of ``[probe]``, which
+  ``read_probe_keys(r, table, probe, ballbar=, base_dir=)`` reads into the engine's probe runs and styli
+  (:class:`mtmcal_bayes.campaign.Probe`, each run with its ``section``, and whatever record of its own keys it needs
+  in ``Probe.own``; the engine reads the rest of ``[probe]``, its instrument, ``[probe.styli]`` and
+  ``[[probe.runs]]``, on every machine), ``probe_document(probe, path_of)`` their writing (its runs; the engine's
+  writes the others)
   (``[machine]`` is the engine's on every machine: name, serial, type, travels and the description, a built-in type
   by its name);
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives

@@ -15,7 +15,8 @@ The thesis machine is the built-in description ``integrex-i200`` plus this plug-
   "w-C'bZYXB(C1)-t"``, is still read): in ``[ballbar]`` the thesis' lever arms R_B, Z_T, X_T and mounts Z_C, R_C and its
   ``cr_geometry`` (``ballbar_keys``; a run's W ball, arc and bar side in the engine's terms: ``run_placement``,
   :mod:`.translation`); the touch probe's ``[probe.c_axis]`` and ``[probe.b_axis]`` (Tables 4.2–4.4, 5.1/5.2;
-  ``campaign_sections``, ``probe_document``), its 13 deviation names and the derived dx_CZ − dx_BT;
+  ``probe_keys``, ``read_probe_keys``, ``probe_document``; the engine reads and writes the rest of ``[probe]``,
+  ``[[probe.runs]]`` among it), its 13 deviation names and the derived dx_CZ − dx_BT;
 * **its patterns**: its 12 in the order of Tables 2.2/2.3 (B before C), their components, B patterns only with the
   W ball on the C axis (Table 2.2), and the geometry line of its sensitivity table (Tables 2.4–2.6);
 * **its deterministic identification**: Eqs 4.10–4.18 and 5.1–5.19 beside Tables 4.5 and 5.3, and the report's
@@ -38,13 +39,12 @@ plug-in costs nothing.
 from __future__ import annotations
 
 
-def campaign_sections(r, doc: dict, machine, base_dir):
-    """``[ballbar]`` (required; the engine's reader with :func:`ballbar_keys`) and ``[probe]`` of a campaign in the
-    thesis' format (``[probe.c_axis]`` and ``[probe.b_axis]``, read into the engine's probe runs,
-    :mod:`.probe_runs`)."""
-    from .campaign_keys import campaign_sections as sections
+def read_probe_keys(r, t: dict, probe, *, ballbar=None, base_dir=None) -> None:
+    """Its sub-tables of ``[probe]``, ``[probe.c_axis]`` and ``[probe.b_axis]`` (``probe_keys``), read into the
+    engine's probe runs and styli of ``probe`` (:mod:`.probe_runs`); the engine reads the rest of ``[probe]``."""
+    from .campaign_keys import read_probe_keys as read
 
-    return sections(r, doc, machine, base_dir)
+    read(r, t, probe, ballbar=ballbar, base_dir=base_dir)
 
 
 def ballbar_keys():
@@ -81,8 +81,8 @@ def run_placement(campaign, pattern: str, mount) -> tuple:
 
 
 def probe_document(probe, path_of) -> dict:
-    """``[probe.b_axis]`` and ``[probe.c_axis]`` written (the inverse of the probe's part of
-    :func:`campaign_sections`); ``path_of`` gives a DPRNT file's name as seen from the saved campaign."""
+    """``[probe.b_axis]`` and ``[probe.c_axis]`` written (the inverse of :func:`read_probe_keys`: its runs; the
+    engine writes the others as ``[[probe.runs]]``); ``path_of`` gives a DPRNT file's name as seen from the saved campaign."""
     from .campaign_document import probe_document as document
 
     return document(probe, path_of)
@@ -265,7 +265,8 @@ class ThesisPlugin:
     selection_source = "the thesis' 13 deviations (Table 2.1)"
     description_key = "thesis"  # a history's or a fleet's key of the machine's kinematics
     description_label = "thesis machine"
-    campaign_sections = staticmethod(campaign_sections)
+    probe_keys = ("c_axis", "b_axis")
+    read_probe_keys = staticmethod(read_probe_keys)
     probe_document = staticmethod(probe_document)
     complete_ballbar = staticmethod(complete_ballbar)
     run_placement = staticmethod(run_placement)

@@ -5,8 +5,9 @@ tool set-ups by their lever arms (``R_B_mm``, ``Z_T_mm``, ``X_T_mm``), its W-bal
 ``R_C_mm``, its ``cr_geometry`` (:class:`BallbarKeys`); its 12 patterns, their components and Table 2.2's rule on
 mounts are the plug-in's ``patterns``, ``pattern_components`` and ``mount_conflict``.  The touch probe's
 ``[probe.b_axis]`` (styli at indexed B angles) and ``[probe.c_axis]`` (a sphere at indexed C angles), their centres or
-DPRNT files, are read here into the engine's probe runs (:mod:`.probe_runs`).  The engine asks the machine for these
-(its ``campaign_sections`` and ``ballbar_keys``).
+DPRNT files, are read here into the engine's probe runs (:mod:`.probe_runs`), beside whatever ``[[probe.runs]]`` the
+campaign has too.  The engine asks the machine for these (its ``ballbar_keys``, ``probe_keys`` and
+``read_probe_keys``).
 """
 
 from __future__ import annotations
@@ -15,23 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ... import units
-from ...campaign import Ballbar, Machine, Mount, Probe, Setup
-from ...io.ballbar_section import equal_setups, read_ballbar
+from ...campaign import Ballbar, Mount, Probe, Setup
+from ...io.ballbar_section import equal_setups
 from ...io.probe_readings import probe_readings
 from ...io.toml_reader import TomlReader
 from ...patterns import CR_GEOMETRIES
-from .probe_runs import C_RUN, BAxisKeys, CAxisKeys, Readings, StylusKeys, b_mount_height, thesis_probe
+from .probe_runs import C_RUN, BAxisKeys, CAxisKeys, Readings, StylusKeys, add_thesis_runs, b_mount_height
 from .translation import complete
-
-
-def campaign_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path | None) -> tuple[Ballbar, Probe]:
-    """``[ballbar]`` (required; read by the engine, :func:`~mtmcal_bayes.io.ballbar_section.read_ballbar`, with
-    :class:`BallbarKeys`) and ``[probe]`` in the thesis' campaign format (``[probe.c_axis]`` and ``[probe.b_axis]``,
-    thesis Tables 5.1–5.2)."""
-    probe_t = r.table(doc, "probe", "", required=False)
-    ballbar = read_ballbar(r, r.table(doc, "ballbar", ""), machine, base_dir)
-    return ballbar, _probe(r, probe_t, base_dir, b_mount_height(ballbar)) if probe_t is not None else None
 
 
 class BallbarKeys:
@@ -88,13 +79,12 @@ class BallbarKeys:
         return {"Z_C_mm": m.Z_C, "R_C_mm": m.R_C}
 
 
-def _probe(r: TomlReader, t: dict, base_dir: Path | None, mount_Z: float) -> Probe:
-    """``[probe]`` in the thesis' format, read into the engine's probe runs (:func:`.probe_runs.thesis_probe`;
-    ``mount_Z`` the B patterns' mount's height, mm)."""
+def read_probe_keys(r: TomlReader, t: dict, probe: Probe, *, ballbar: Ballbar | None = None,
+                    base_dir: Path | None = None) -> None:
+    """``[probe.b_axis]`` and ``[probe.c_axis]`` of ``[probe]`` ``t`` (thesis Tables 5.1–5.2), read into ``probe``'s
+    runs and styli (:func:`.probe_runs.add_thesis_runs`); ``ballbar`` the campaign's: its B patterns' mount's height
+    is the B-axis sphere's where the sections give none."""
     P = "probe"
-    r.check_keys(t, {"instrument", "repeatability_um", "c_axis", "b_axis"}, P)
-    instrument = r.string(t, "instrument", P)
-    rep = r.number(t, "repeatability_um", P, required=False, positive=True)
     readings: dict[str, Readings] = {}
     bax = cax = None
     b = r.table(t, "b_axis", P, required=False)
@@ -147,5 +137,5 @@ def _probe(r: TomlReader, t: dict, base_dir: Path | None, mount_Z: float) -> Pro
             ball_radius=r.number(c, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0),
             datum=datum)
         readings[C_RUN] = Readings(centres, cov, files)
-    return thesis_probe(instrument, units.to_internal(rep, "um") if rep is not None else None,
-                        c_axis=cax, b_axis=bax, readings=readings, mount_Z=mount_Z)
+    add_thesis_runs(probe, c_axis=cax, b_axis=bax, readings=readings,
+                    mount_Z=b_mount_height(ballbar) if ballbar is not None else np.nan)

@@ -38,7 +38,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...models.chain_models import FirstOrderModel
-from ...models.probe import ProbeLayout
+from ...models.probe import ChainProbeKernel, ProbeLayout
 from ...models.probe import ProbeModel as EngineProbeModel
 from ...parameters import DEVIATIONS, ParameterSpace
 from .htm import PIVOTS, CAxis, Geometry, Pivots, t_ball
@@ -51,7 +51,63 @@ NOISE = "run scatter plus repeatability"
 
 def thesis_layout(campaign) -> ProbeLayout:
     """The engine's probe layout of a thesis-format campaign, its nominal readings through ``htm-thesis``."""
-    return ProbeLayout(campaign, kernel=PivotsProbeKernel(campaign, PIVOTS["htm-thesis"]), noise=NOISE)
+    return ProbeLayout(campaign, kernel=thesis_kernel(campaign, PIVOTS["htm-thesis"]), noise=NOISE)
+
+
+def thesis_kernel(campaign, pivots: Pivots | str = "htm-thesis"):
+    """The probe kernel of a thesis campaign: :class:`PivotsProbeKernel` for the runs of its own sections, the
+    engine's chain for its ``[[probe.runs]]`` (:class:`RunsOfTwoKernels` where it has both)."""
+    runs = campaign.probe.runs if campaign.probe is not None else []
+    theirs = {r.id for r in runs if r.section is None}
+    if not theirs:
+        return PivotsProbeKernel(campaign, pivots)
+    chain = ChainProbeKernel(campaign.machine.description)
+    if len(theirs) == len({r.id for r in runs}):
+        return chain
+    return RunsOfTwoKernels(PivotsProbeKernel(campaign, pivots), chain, theirs)
+
+
+class RunsOfTwoKernels:
+    """A probe kernel that reads the positions of the runs ``other_runs`` (ids) through ``other`` and the rest
+    through ``own``: each kernel sees its positions as a layout of their own (:class:`_Part`)."""
+
+    complex_step = False
+
+    def __init__(self, own, other, other_runs):
+        self.own, self.other, self.other_runs = own, other, tuple(other_runs)
+        self.name = own.name
+        self._parts = None
+
+    def parts(self, L: ProbeLayout):
+        """``(mask (k,) of the other kernel's positions, own part, other part)`` of layout ``L``."""
+        if self._parts is None or self._parts[0] is not L:
+            mask = np.isin(L.run, self.other_runs)
+            self._parts = (L, mask, _Part(L, ~mask), _Part(L, mask))
+        return self._parts[1:]
+
+    def zero(self, L: ProbeLayout) -> np.ndarray:
+        mask, own, other = self.parts(L)
+        out = np.empty((len(mask), 3))
+        out[~mask], out[mask] = self.own.zero(own), self.other.zero(other)
+        return out
+
+    def readings(self, L: ProbeLayout, dev: dict, terms: dict, n: int) -> np.ndarray:
+        mask, own, other = self.parts(L)
+        own.zero, other.zero = L.zero[~mask], L.zero[mask]
+        out = np.empty((n, len(mask), 3))
+        for part, at, kernel in ((own, ~mask, self.own), (other, mask, self.other)):
+            out[:, at] = kernel.readings(part, dev, {b: v[..., at] for b, v in terms.items()}, n)
+        return out
+
+
+class _Part:
+    """The positions ``at`` (k,) bool of a probe layout, as a layout of their own for one kernel."""
+
+    def __init__(self, L: ProbeLayout, at: np.ndarray):
+        self.run, self.stylus = L.run[at], L.stylus[at]
+        self.angles = {a: v[at] for a, v in L.angles.items()}
+        self.sphere, self.length, self.ball_radius = L.sphere[at], L.length[at], L.ball_radius[at]
+        self.zero = None
 
 
 class PivotsProbeKernel:
@@ -128,7 +184,7 @@ def ProbeModel(campaign, pivots: Pivots | str = "htm-thesis", space: ParameterSp
     :class:`~.htm.Pivots`): the engine's probe model with :class:`PivotsProbeKernel`; ``space`` default: the
     deviations and the probe's nuisance terms."""
     return EngineProbeModel(campaign, space or ParameterSpace.for_campaign(campaign, data="probe"),
-                            kernel=PivotsProbeKernel(campaign, pivots), layout=layout or thesis_layout(campaign))
+                            kernel=thesis_kernel(campaign, pivots), layout=layout or thesis_layout(campaign))
 
 
 def LinearProbeModel(campaign, space: ParameterSpace | None = None,

@@ -119,7 +119,16 @@ def thesis_probe(instrument: str, repeatability: float | None, *, c_axis: CAxisK
 
     ``readings`` {``"c_axis"`` or a B-axis stylus id: :class:`Readings`}; ``mount_Z`` the height, mm, of the B
     patterns' mount, the B-axis sphere's where neither section gives one."""
-    probe = Probe(instrument, repeatability, own=ThesisProbe(c_axis, b_axis))
+    probe = Probe(instrument, repeatability)
+    add_thesis_runs(probe, c_axis=c_axis, b_axis=b_axis, readings=readings, mount_Z=mount_Z)
+    return probe
+
+
+def add_thesis_runs(probe: Probe, *, c_axis: CAxisKeys | None = None, b_axis: BAxisKeys | None = None,
+                    readings: dict, mount_Z: float = np.nan) -> None:
+    """The runs, styli, gap and record of the thesis' sections added to ``probe`` (before any ``[[probe.runs]]``:
+    the C-axis run, then the B-axis run of each stylus; arguments as :func:`thesis_probe`'s)."""
+    probe.own = ThesisProbe(c_axis, b_axis)
     b = b_axis
     for s in (b.styli.values() if b is not None else ()):
         probe.styli[s.id], probe.ball_radii[s.id] = s.R_B, s.ball_radius
@@ -137,13 +146,12 @@ def thesis_probe(instrument: str, repeatability: float | None, *, c_axis: CAxisK
         Z = b.Z_C if b.Z_C is not None else (c.Z_C if c is not None else mount_Z)
         probe.runs += [_run(B_RUN, s.id, {"B": b.angles_deg}, sphere=np.array([0.0, 0.0, Z]), given=readings[s.id],
                             origin=np.full(3, np.nan), sphere_terms=(), datum_terms=DATUM) for s in b.styli.values()]
-    return probe
 
 
 def _run(rid: str, stylus: str, angles_deg: dict, *, sphere: np.ndarray, given: Readings, **frame) -> ProbeRun:
     (letter, deg), = angles_deg.items()
     return ProbeRun(rid, stylus, sphere, {letter: np.radians(deg)}, given.centres, given.dprnt, given.centre_cov,
-                    stylus_terms=STYLUS_TERMS, key=ThesisProbeKey, labels=deg, **frame)
+                    stylus_terms=STYLUS_TERMS, key=ThesisProbeKey, labels=deg, section=rid, **frame)
 
 
 def _gaps(c: CAxisKeys, b: BAxisKeys | None) -> list[Gap]:
