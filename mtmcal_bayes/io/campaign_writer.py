@@ -44,8 +44,9 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
     ballbar = ballbar_to_dict(c, provided(m, "ballbar_keys", EngineKeys), save_dir)
     if ballbar is not None:
         doc["ballbar"] = ballbar
-    if c.probe is not None:
-        doc["probe"] = _probe(c, lambda name: relative_path(c, name, save_dir))
+    probe = _probe(c, lambda name: relative_path(c, name, save_dir)) if c.probe is not None else {}
+    if probe:  # a probe that states nothing (no instrument, repeatability, stylus or run) is not written
+        doc["probe"] = probe
     quantities = provided(m, "quantity_table") or deviation_quantities(m)  # the names the reader takes
 
     def unit(name: str) -> str:  # a quantity's, a nuisance term's or a discrepancy scale's
