@@ -10,15 +10,14 @@ Each machine gets the same command lines: a history with a step change of one of
 budget besides the default one, a ball-bar program by pattern name and by run number and a touch-probe program, a
 posterior through the machine's chain (``--model chain``) besides its default model's, a compensation with the
 posterior of ``sample -o`` besides the default one, and a report on the first campaign of its simulated history (with
-its truth).  What the thesis campaign has
-in its data, a probe that disagrees with its ball bar, the demos get in a copy of each demo campaign with one group
-of probed positions moved 60 µm along Z (``instruments``, and ``compensate``, refused and then accepted, run on it).  ``--uneven`` measures the
-first, uneven command lines instead (the thesis' history alone stepped, its design alone adding runs, no conflict on
-the demos), as issue 42 was first measured.  What the demos have in their data, a touch-probe run of
-``[[probe.runs]]``, the thesis machine gets in a copy of its campaign with one such run added (``sample --data probe``
-and ``ncgen --probe`` run on it).
+its truth).  What one kind has in its data the other gets in a copy of its campaigns: the demos a probe that
+disagrees with its ball bar, as the thesis campaign's does (one group of probed positions moved 60 µm along Z;
+``instruments``, and ``compensate``, refused and then accepted, run on it); the thesis machine a touch-probe run of
+``[[probe.runs]]``, as the demos have (``sample --data probe`` and ``ncgen --probe`` run on it).  ``--uneven``
+measures the first, uneven command lines instead (the thesis' history alone stepped, its design alone adding runs,
+no copies), as issue 42 was first measured; ``--no-copies`` the same command lines without the copies.
 
-    python bench/kind_coverage.py [--keep DIR] [--uneven]      (needs the coverage package: pip install coverage)
+    python bench/kind_coverage.py [--keep DIR] [--uneven | --no-copies]      (needs the coverage package: pip install coverage)
 """
 
 from __future__ import annotations
@@ -215,6 +214,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--keep", type=Path, default=None, help="keep the outputs in DIR")
     ap.add_argument("--uneven", action="store_true", help="the first, uneven command lines (module docstring)")
+    ap.add_argument("--no-copies", action="store_true", help="the same command lines, without the copies of the "
+                    "campaigns that give one kind what the other has in its data")
     ap.add_argument("--measure", type=Path, default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.measure is not None:
@@ -227,6 +228,7 @@ def main() -> int:
                    ["fleet", str(work / "th"), "-o", str(work / "thf"), "--sampler", "exact", "--workers", "1",
                     "--json"]]
     even = not a.uneven
+    copies = even and not a.no_copies
     if even:
         thesis_hist += [simulated_report(work / "th", "M-1")]
     thesis = commands([], work / "out" / "thesis", THESIS_PROGRAM, ["BX", "--run=1"] if even else ["BX"],
@@ -244,14 +246,14 @@ def main() -> int:
         program = str(ROOT / "examples" / "machines" / f"{t}-five-axis.nc")
         described += commands(["--machine", t], work / "out" / t, program,
                               [first_pattern(t), "--run=1"] if even else ["--run=1"], hist, even)
-        if even:  # what the thesis campaign has in its data
+        if copies:  # what the thesis campaign has in its data
             moved = disagreeing_probe(t, work / f"{t}-moved.toml")
             described += [["instruments", str(moved), "--json"],
                           [REFUSED, "compensate", str(moved), program, "-o", str(work / f"{t}-refused.nc"),
                            "--json"],
                           ["compensate", str(moved), program, "--accept-disagreement", "-o",
                            str(work / f"{t}-moved.nc"), "--json"]]
-    if even:  # what the demo campaigns have in their data: a run of [[probe.runs]]
+    if copies:  # what the demo campaigns have in their data: a run of [[probe.runs]]
         added = added_probe_run(work / "thesis-probe-run.toml")
         thesis += [["sample", str(added), "--data", "probe", "--sampler", "exact", "--seed", "1", "--json"],
                    ["ncgen", "--probe", "table", str(added)]]
