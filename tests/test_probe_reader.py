@@ -181,9 +181,19 @@ def test_one_rule_of_measurements_and_of_reported_values_on_every_machine(machin
     bare = {k: v for k, v in doc.items() if k not in ("ballbar", "probe", "truth", "reported", "design")}
     err = _error(bare, tmp_path)
     assert err.key == "ballbar" and "no measurements" in str(err)
-    empty = {**bare, "probe": {"instrument": "probe", "repeatability_um": 1.0}}
+    empty = {**bare, "probe": {}}
     err = _error(empty, tmp_path)
     assert err.key == "probe.runs" and "expected one or more [[probe.runs]]" in str(err)
+    # a probe declared without runs (to plan its runs with) is read, but measures nothing
+    declared = {**bare, "probe": {"instrument": "probe", "repeatability_um": 1.0}}
+    err = _error(declared, tmp_path)
+    assert err.key == "ballbar" and "no measurements" in str(err)
+    planned = {**doc, "probe": {"instrument": "probe", "repeatability_um": 1.0}}
+    c = _load(planned, tmp_path)
+    assert c.probe.repeatability == pytest.approx(1e-3) and not c.probe.runs and not c.has_probe_readings()
+    again = tmp_path / "again.toml"
+    mb.save_campaign(c, again)
+    assert mb.load_campaign(again).probe.repeatability == pytest.approx(1e-3)
     reported = {**doc, "reported": {"ballbar": {"alpha_XB_arcsec": 1.0}}}
     if provided(mb.load_campaign(path).machine, "reported_quantities") is None:
         err = _error(reported, tmp_path)

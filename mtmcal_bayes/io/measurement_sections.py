@@ -34,7 +34,8 @@ def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: P
     probe_t = r.table(doc, "probe", "", required=False)
     ballbar = read_ballbar(r, r.table(doc, "ballbar", "", required=False), machine, base_dir)
     probe = read_probe(r, probe_t, machine, base_dir, ballbar=ballbar) if probe_t is not None else None
-    if not ballbar.runs and not ballbar.planned and probe is None and not (ballbar.setups and ballbar.mounts):
+    if not ballbar.runs and not ballbar.planned and not (probe and probe.runs) and not (ballbar.setups and
+                                                                                      ballbar.mounts):
         r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [probe] with its runs (or, for a machine to "
                "design a campaign for, its [ballbar.setups] and [ballbar.mounts])")
     return ballbar, probe
@@ -61,10 +62,12 @@ def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballb
         if length <= 0:
             r.fail(f"{path}.ball_radius_mm", "longer than the stylus")
         probe.styli[sid] = length
-    raw = t.get("runs", [])  # none where the machine's own sections hold its runs
-    if not isinstance(raw, list) or not (raw or probe.runs) or not all(isinstance(x, dict) for x in raw):
+    raw = t.get("runs", [])  # none where the machine's own sections hold its runs, or the probe is declared only
+    declared = probe.instrument or probe.repeatability is not None or probe.styli  # a probe to plan runs with
+    if not isinstance(raw, list) or not (raw or probe.runs or declared) or not all(isinstance(x, dict) for x in raw):
         also = provided(machine, "probe_sections")
-        r.fail(f"{P}.runs", "expected one or more [[probe.runs]] tables" + (f" (or {also})" if also else ""))
+        r.fail(f"{P}.runs", "expected one or more [[probe.runs]] tables" + (f" (or {also})" if also else "")
+               + ", or the probe's instrument, repeatability_um or [probe.styli] to plan its runs with")
     for i, x in enumerate(raw):
         probe.runs.append(_probe_run(r, x, f"{P}.runs[{i}]", machine.description, styli=probe.styli, number=i + 1,
                                      base_dir=base_dir))
