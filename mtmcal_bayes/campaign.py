@@ -162,6 +162,17 @@ class Ballbar:
         None: the axis' default grid."""
         return run.arc_deg if run.arc_deg is not None else self.pattern_arcs.get(run.pattern)
 
+    def mount_for(self, pattern: str) -> Mount:
+        """The mount the runs use for patterns of the same axis (B or C) as ``pattern``, else a sensible one: the
+        first with R_C = 0 for B patterns, with R_C > 0 for C patterns (an ``IndexError`` without mounts)."""
+        family = B_PATTERNS if pattern in B_PATTERNS else C_PATTERNS
+        for run in self.runs:
+            if run.pattern in family:
+                return self.mounts[run.mount]
+        mounts = list(self.mounts.values())
+        want_zero = pattern in B_PATTERNS
+        return next((m for m in mounts if (m.R_C == 0) == want_zero), mounts[0])
+
     def reading_choices(self) -> list[Run]:
         """The measured runs whose reading was a choice (they name an ``alternative_convention``), in file order."""
         return [run for run in self.runs if run.alternative_convention]
@@ -447,13 +458,5 @@ class Campaign:
         return next(iter(bb.setups.values()))
 
     def mount_for(self, pattern: str) -> Mount:
-        """The mount the campaign uses for patterns of the same axis (B or C) as ``pattern``, else a
-        sensible one: the first with R_C = 0 for B patterns, with R_C > 0 for C patterns."""
-        bb = self.ballbar
-        family = B_PATTERNS if pattern in B_PATTERNS else C_PATTERNS
-        for run in bb.runs:
-            if run.pattern in family:
-                return bb.mounts[run.mount]
-        mounts = list(bb.mounts.values())
-        want_zero = pattern in B_PATTERNS
-        return next((m for m in mounts if (m.R_C == 0) == want_zero), mounts[0])
+        """:meth:`Ballbar.mount_for` of the campaign's ball bar."""
+        return self.ballbar.mount_for(pattern)

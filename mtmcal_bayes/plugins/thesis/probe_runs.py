@@ -181,14 +181,6 @@ def run_of(probe: Probe, rid: str, stylus: str | None = None) -> ProbeRun:
 
 
 def b_mount_height(ballbar) -> float:
-    """The height, mm, of the mount the campaign's B patterns use (else the first on the C axis, else the first;
+    """The height, mm, of the mount the campaign's B patterns use (:meth:`~mtmcal_bayes.campaign.Ballbar.mount_for`;
     NaN without mounts): where the B-axis sphere is where the probe sections give no height."""
-    from ...patterns import B_PATTERNS
-
-    for run in ballbar.runs:
-        if run.pattern in B_PATTERNS:
-            return ballbar.mounts[run.mount].Z_C
-    mounts = list(ballbar.mounts.values())
-    if not mounts:
-        return np.nan
-    return next((m for m in mounts if m.R_C == 0), mounts[0]).Z_C
+    return ballbar.mount_for("BX").Z_C if ballbar.mounts else np.nan
