@@ -5,8 +5,8 @@ temperature, ``[ballbar]`` (:mod:`.ballbar_writer`), the probe's instrument and 
 ``[priors]``, ``[tolerances]``, ``[truth]`` and ``[design]`` are the engine's; the machine contributes what its
 campaign format has of its own — its keys of ``[ballbar]`` (its ``ballbar_keys``) and its probe's sections
 (``probe_document``, for the runs read from them) — and the engine writes every other probe run as
-``[[probe.runs]]``.  ``[machine]`` is the
-engine's on every machine (:mod:`.description_writer`: a built-in type named, any other description written out).
+``[[probe.runs]]``.  ``[machine]`` is the engine's on every machine (:mod:`.description_writer`: a built-in type
+named, any other description written out).
 """
 
 from __future__ import annotations

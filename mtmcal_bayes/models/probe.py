@@ -111,13 +111,14 @@ def layout_runs(campaign) -> list[LayoutRun]:
 class ProbeLayout:
     """The probed positions of a campaign's runs (k of them), their readings, frames and observations.
 
-    ``runs`` the :class:`LayoutRun` list (default: the campaign's probe runs, :func:`layout_runs`); ``kernel`` gives the nominal readings (default the chain's); ``noise`` one of
-    :data:`NOISE_RULES` (default the machine's).  Per position: ``run``, ``stylus`` (k,) owners; ``angles``
-    {letter: (k,)} rad of every rotary axis of the machine; ``sphere`` (k, 3), ``length``, ``ball_radius`` (k,) mm;
-    ``reading_mean`` (k, 3) mm; ``fitted`` (k,); ``rotation`` (k, 3, 3) (observation = Qᵀ (reading − nominal));
-    ``zero`` (k, 3) the nominal readings in the model frame, ``frame`` (k, 3) the reading frame's offset from it,
-    ``nominal`` (k, 3) the nominal readings; ``observations``.  Raises :class:`InputError` (naming the campaign and
-    key) for probe data the likelihood cannot use.
+    ``runs`` the :class:`LayoutRun` list (default: the campaign's probe runs, :func:`layout_runs`); ``kernel`` gives
+    the nominal readings (default the chain's); ``noise`` one of :data:`NOISE_RULES` (default the machine's).  Per
+    position: ``run``, ``stylus`` (k,) owners; ``angles`` {letter: (k,)} rad of every rotary axis of the machine;
+    ``sphere`` (k, 3), ``length``, ``ball_radius`` (k,) mm; ``reading_mean`` (k, 3) mm; ``fitted`` (k,);
+    ``rotation`` (k, 3, 3) (observation = Qᵀ (reading − nominal)); ``zero`` (k, 3) the nominal readings in the model
+    frame, ``frame`` (k, 3) the reading frame's offset from it, ``nominal`` (k, 3) the nominal readings;
+    ``observations``.  Raises :class:`InputError` (naming the campaign and key) for probe data the likelihood cannot
+    use.
     """
 
     def __init__(self, campaign, runs: list[LayoutRun] | None = None, kernel=None, *, noise: str | None = None):
