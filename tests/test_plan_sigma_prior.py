@@ -209,7 +209,8 @@ def test_a_design_without_runs_is_written_whole_and_replaces_an_earlier_one(run_
     under a tight learnt prior (no run): every file written, the earlier run's program gone, the timeline saying
     why it is empty; a design that fails while writing leaves the folder as it was."""
     from mtmcal_bayes.planning import design_figures
-    from mtmcal_bayes.planning.design_output import RUN_COLUMNS
+    from mtmcal_bayes.io.campaign_reader import load_campaign
+    from mtmcal_bayes.planning.machine_kit import kit_of
 
     out, prior = tmp_path / "design", tmp_path / "prior.toml"
     write_sigma_model_prior(prior, SMALL)
@@ -217,7 +218,9 @@ def test_a_design_without_runs_is_written_whole_and_replaces_an_earlier_one(run_
     assert code == 0, err
     first = json.loads((out / "design.json").read_text())
     assert [p.name for p in (out / "programs").iterdir()] == [r["program"].split("/")[-1] for r in first["runs"]]
-    assert first["runs"] and list(first["runs"][0]) == RUN_COLUMNS  # the columns an empty design's table has too
+    # the columns an empty design's table has too: the thesis campaign format's lever arms
+    assert first["runs"] and list(first["runs"][0]) == kit_of(load_campaign(None)).run_columns
+    assert {"Z_T_mm", "R_C_mm"} <= set(first["runs"][0])
     code, text, err = run_cli("design", "-o", out, "--sigma-model-prior", prior)
     assert code == 0, err
     doc = json.loads((out / "design.json").read_text())

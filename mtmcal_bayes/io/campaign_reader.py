@@ -15,14 +15,13 @@ import os
 from pathlib import Path
 
 from .. import units
-from ..campaign import Ballbar, Campaign, DesignGoal, Machine, Probe, ReportedValue, Truth
+from ..campaign import Ballbar, Campaign, DesignGoal, Machine, Probe, Truth
 from ..datasets import builtin_campaign_text
 from ..parameters import (
     DEVIATIONS,
     DISCREPANCY_SCALES,
     MOUNT_NUISANCE,
     PROBE_NUISANCE,
-    QUANTITIES,
     SETUP_NUISANCE,
 )
 from ..machines.deviations import quantities as deviation_table
@@ -33,7 +32,6 @@ from .machine_reader import (BUILTIN_TYPES, DESCRIPTION_KEYS, THESIS_TYPE, built
 from .textfiles import read_user_text
 from .tolerances import machine_names, parse_tolerances
 from .toml_reader import TomlReader, kind_of, parse_toml
-from .tomlio import printed_decimals
 
 FORMAT = "mtmcal-campaign/1"
 #: the discrepancy scales a [priors] entry may name (sigma_model, sigma_model_probe)
@@ -75,10 +73,13 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     machine = _machine(r, doc.get("machine"), base_dir)
     ballbar, probe = measurement_sections(r, doc, machine, base_dir)
     deviations = deviation_quantities(machine)
-    if "reported" in doc and provided(machine, "reported_quantities") is None:
-        r.fail("reported", "not read for this machine: it has no reported quantities (a plug-in's published "
-               "values, docs/machines.md)")
-    reported = _reported(r, r.table(doc, "reported", "", required=False) or {}, text)
+    reported = {}
+    if "reported" in doc:  # a plug-in's published values (the thesis': Tables 4.5 and 5.3), read by the plug-in
+        read_reported = provided(machine, "read_reported")
+        if read_reported is None:
+            r.fail("reported", "not read for this machine: it has no reported quantities (a plug-in's published "
+                   "values, docs/machines.md)")
+        reported = read_reported(r, r.table(doc, "reported", ""), text)
     priors = _priors(r, r.table(doc, "priors", "", required=False) or {}, deviations)
     truth_t = r.table(doc, "truth", "", required=False)
     truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe, machine=machine) if truth_t is not None else None
@@ -150,25 +151,6 @@ def _date(r: TomlReader, doc: dict) -> datetime.datetime | None:
     if isinstance(v, datetime.date):
         return datetime.datetime(v.year, v.month, v.day)
     r.fail("date", f"expected a TOML date such as 2026-03-15 or a date-time 2026-03-15T08:30:00, got {kind_of(v)}")
-
-
-def _reported(r: TomlReader, t: dict, text: str) -> dict[str, dict[str, ReportedValue]]:
-    out: dict[str, dict[str, ReportedValue]] = {}
-    for method, vals in t.items():
-        path = f"reported.{method}"
-        if not isinstance(vals, dict):
-            r.fail(path, f"expected a table, got {kind_of(vals)}")
-        decimals = printed_decimals(text, path)
-        out[method] = {}
-        for key in vals:
-            name, unit = units.split_unit_key(key)
-            q = QUANTITIES.get(name)
-            if q is None or unit != q.unit:
-                r.fail(f"{path}.{key}", "unknown quantity: expected <name>_arcsec for angles or <name>_um "
-                       "for lengths, with a canonical deviation name")
-            v = r.number(vals, key, path)
-            out[method][name] = ReportedValue(units.to_internal(v, unit), unit, decimals.get(key, 2))
-    return out
 
 
 def _prior_bounds(r: TomlReader, v: float, key: str, *, unit: str, sd: bool) -> None:

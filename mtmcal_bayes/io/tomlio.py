@@ -101,27 +101,3 @@ def _emit_table(table: dict, path: list[str], out: list[str]) -> None:
                 out.append("")
                 out.append(f"[[{'.'.join(sub)}]]")
                 _emit_table(item, sub, out)
-
-
-_HEADER = re.compile(r"^\s*\[\s*([^\[\]]+?)\s*\]\s*(#.*)?$")
-_NUMBER = re.compile(r"^\s*([A-Za-z0-9_-]+)\s*=\s*([-+]?\d[\d_]*(?:\.(\d[\d_]*))?)\s*(#.*)?$")
-
-
-def printed_decimals(text: str, table: str) -> dict[str, int]:
-    """Decimals written for each plain number key of ``[table]`` in TOML ``text``.
-
-    Used to know how a published value was rounded (``1.10`` has two
-    decimals, which ``tomllib`` forgets).
-    """
-    current = None
-    found: dict[str, int] = {}
-    for line in text.splitlines():
-        h = _HEADER.match(line)
-        if h:
-            current = h.group(1).replace(" ", "")
-            continue
-        if current == table:
-            m = _NUMBER.match(line)
-            if m:
-                found[m.group(1)] = len((m.group(3) or "").replace("_", ""))
-    return found

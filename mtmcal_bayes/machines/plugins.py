@@ -27,7 +27,8 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
   (``[machine]`` is the engine's on every machine: name, serial, type, travels and the description, a built-in type
   by its name);
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
-  its tables, ``table("ballbar")``), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
+  its tables, ``table("ballbar")``), ``read_reported(r, table, text)`` — the campaign's ``[reported]`` table of those
+  values (a machine without it refuses the table), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
   it;
 * ``compensation_kinematics(campaign, model=, point=, setup=, mount=)`` — the tool point its compensation inverts
   (the engine's: the description's chain), ``compensation_methods`` and ``compensation_values`` (``{name:

@@ -14,7 +14,7 @@ from ..campaign import DesignGoal, PlannedRun
 from .design_make import Design
 from .design_problem import PROMISE
 from .design_runs import geometry_of
-from .run_records import RUN_COLUMNS, program_name  # noqa: F401  (RUN_COLUMNS: a design's table)
+from .run_records import program_name
 from .machine_kit import kit_of
 from .next_run import NextStep
 

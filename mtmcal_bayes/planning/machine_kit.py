@@ -54,7 +54,7 @@ def engine_kit() -> PlanningKit:
     from . import chain_candidates as dc
     from .catalogue import CatalogueRules
     from .chain_clock import engine_clock
-    from .run_records import DESCRIBED_RUN_COLUMNS, described_records
+    from .run_records import RUN_COLUMNS, chain_records
 
     def where(c) -> dict:
         return {"setup": c.setup.id, "R_B_mm": c.setup.R_B, "Z_T_mm": np.nan, "mount": c.mount.id, "R_C_mm": np.nan}
@@ -76,7 +76,7 @@ def engine_kit() -> PlanningKit:
         catalogue_rules=CatalogueRules(), clock=engine_clock, where=where, sweep_pattern=sweep_pattern,
         feasibility_note="feasible = every command of every point (the arc, the held axes, the linear axes) lies "
                          "within the travels of the machine's description",
-        run_columns=DESCRIBED_RUN_COLUMNS, run_records=described_records,
+        run_columns=RUN_COLUMNS, run_records=chain_records,
         planned_geometry=planned_geometry, read_candidates=dc.read_chain_candidates)
 
 

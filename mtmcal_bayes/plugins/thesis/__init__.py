@@ -47,6 +47,13 @@ def read_probe_keys(r, t: dict, probe, *, ballbar=None, base_dir=None) -> None:
     read(r, t, probe, ballbar=ballbar, base_dir=base_dir)
 
 
+def read_reported(r, t: dict, text: str) -> dict:
+    """``[reported]``: the values it published, with their printed decimals (:mod:`.reported`)."""
+    from .reported import read_reported as read
+
+    return read(r, t, text)
+
+
 def ballbar_keys():
     """Its keys of ``[ballbar]`` in the engine's reader: set-ups by R_B, Z_T, X_T, mounts by Z_C, R_C, cr_geometry
     (:class:`.campaign_keys.BallbarKeys`)."""
@@ -160,7 +167,7 @@ def planning():
     with Z_T − e, its other R_C and bar lengths, B patterns with R_C = 0, its labels: :mod:`.catalogue_rules`), its
     clock and run records; its probe runs are the engine's catalogue's, like every machine's."""
     from ...planning.candidates import read_candidates
-    from ...planning.run_records import RUN_COLUMNS, thesis_records
+    from .run_records import RUN_COLUMNS, thesis_records
     from ...planning.machine_kit import PlanningKit
     from .catalogue_rules import catalogue_rules
     from .timing import campaign_clock
@@ -267,6 +274,7 @@ class ThesisPlugin:
     description_label = "thesis machine"
     probe_keys = ("c_axis", "b_axis")
     read_probe_keys = staticmethod(read_probe_keys)
+    read_reported = staticmethod(read_reported)
     probe_document = staticmethod(probe_document)
     complete_ballbar = staticmethod(complete_ballbar)
     run_placement = staticmethod(run_placement)
