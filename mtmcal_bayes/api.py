@@ -594,7 +594,6 @@ def _history_truth(c: Campaign, truth):
 
     from .campaign import Truth
     from .io.campaign_reader import load_truth
-    from .parameters import DEVIATIONS
 
     if isinstance(truth, Truth):
         return truth, "the truth given"
@@ -605,7 +604,7 @@ def _history_truth(c: Campaign, truth):
     analysis = CampaignAnalysis(c)  # linear, ball bar: its σ-marginal posterior is exact, its mean without draws
     post = analysis.log_posterior
     names = [q.name for q in post.space.parameters]
-    devs = [n for n in DEVIATIONS if n in names]
+    devs = [q.name for q in post.space.parameters if q.group == "deviation"]  # the machine's own names
     T = np.eye(post.p)[[names.index(n) for n in devs]]
     mean, _ = analysis.marginal.target_moments(post.likelihood.y[None], T)
     return Truth(dict(zip(devs, mean[0].tolist()))), (f"the posterior mean of {c.source} (no --truth, and no [truth] "

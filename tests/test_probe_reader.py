@@ -174,7 +174,7 @@ def test_a_run_of_the_engine_clashing_with_the_thesis_sections_is_refused_by_nam
 @pytest.mark.parametrize("machine", BUILTIN_TYPES)
 def test_one_rule_of_measurements_and_of_reported_values_on_every_machine(machine, tmp_path):
     """A campaign with neither [ballbar] nor [probe] is refused alike on every machine, naming ``ballbar``; a
-    [probe] without runs names ``probe.runs``; ``[reported]`` is read where the machine has reported quantities
+    [probe] without runs names ``probe.runs``; ``[reported]`` is read where a plug-in of the machine reads it
     (the thesis') and refused by name where it has none."""
     path = demo_campaign(machine)
     doc = tomllib.loads(open(path, encoding="utf-8").read()) if path is not None else _thesis_doc()
