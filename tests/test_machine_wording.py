@@ -10,6 +10,7 @@ import pytest
 import mtmcal_bayes as mb
 from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, demo_campaign, description_of
 from mtmcal_bayes.machines import selected
+from mtmcal_bayes.parameters import IDENTIFIABLE
 from mtmcal_bayes.units import in_words
 
 #: the columns of the thesis' deterministic values beside the posterior
@@ -64,7 +65,7 @@ def test_the_report_sampler_paragraph_counts_the_quantities_its_rule_is_over(sam
 def test_the_sigma_model_caption_and_figure_follow_the_quantities_drawn(samples):
     from mtmcal_bayes.reporting import budget_plot
 
-    assert budget_plot.SIGMA_CAPTION.startswith("Posterior sd of each of the eight quantities")  # the thesis'
+    assert budget_plot.sigma_caption(IDENTIFIABLE).startswith("Posterior sd of each of the eight quantities")  # the thesis'
     r = samples["vertical-turn-mill"]
     names = _machine_deviations(r)
     assert budget_plot.sigma_caption(names).startswith(f"Posterior sd of each of the {in_words(len(names))} ")

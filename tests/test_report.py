@@ -82,7 +82,7 @@ def thesis_corner(thesis_report):
 
     idata = az.from_netcdf(thesis_report / "posterior.nc")
     comp = pd.read_csv(thesis_report / "summary.csv", index_col="quantity")
-    fig, off = corner_figure(idata, comp)
+    fig, off = corner_figure(idata, comp, IDENTIFIABLE)
     return idata, comp, fig, off
 
 
@@ -103,10 +103,10 @@ def test_corner_leaves_out_only_the_draws_its_fill_hides(thesis_corner, monkeypa
     idata, comp, fig, _ = thesis_corner
     lines = [ln for ax in fig.axes for ln in ax.lines if ln.get_marker() == "o" and ln.get_alpha() == 0.02]
     shown = sum(len(ln.get_xdata()) for ln in lines)
-    n = len(corner_plot._draws(idata, list(corner_plot.IDENTIFIABLE)))
+    n = len(corner_plot._draws(idata, list(IDENTIFIABLE)))
     assert len(lines) == 28 and 0 < shown < 0.2 * 28 * n
     monkeypatch.setattr(corner_plot, "_shown_draws", lambda ax, xy: xy)
-    every, _ = corner_figure(idata, comp)
+    every, _ = corner_figure(idata, comp, IDENTIFIABLE)
     np.testing.assert_array_equal(_canvas_rgb(fig, png_dpi(fig)), _canvas_rgb(every, png_dpi(every)))
 
 

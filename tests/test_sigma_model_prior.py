@@ -269,12 +269,12 @@ def test_the_budget_names_the_source(thesis, run_cli, tmp_path):
 
     # the report's budget section and its opening sentence (the figures it embeds drawn as the report draws them)
     save_png(budget_plot.budget_figure(learnt.summary), tmp_path / "budget.png")
-    save_png(budget_plot.sigma_figure(learnt), tmp_path / "sigma_model.png")
+    save_png(budget_plot.sigma_figure(learnt, IDENTIFIABLE), tmp_path / "sigma_model.png")
     page = Page("test")
-    build._budget_section(page, learnt, tmp_path)
+    build._budget_section(page, learnt, tmp_path, sigma_names=IDENTIFIABLE)
     html = "".join(page.parts)
     assert statement.replace('"', "&quot;") in html
     assert "σ_model of the ball bar (its prior learnt elsewhere) dominates" in \
-        budget_plot.dominant_sentence(learnt.summary, post=learnt.log_posterior)
+        budget_plot.dominant_sentence(learnt.summary, IDENTIFIABLE, post=learnt.log_posterior)
     assert "assumed model-discrepancy scale σ_model of the ball bar dominates" in \
-        budget_plot.dominant_sentence(assumed.summary, post=assumed.log_posterior)
+        budget_plot.dominant_sentence(assumed.summary, IDENTIFIABLE, post=assumed.log_posterior)

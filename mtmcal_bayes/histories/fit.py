@@ -37,7 +37,7 @@ from scipy.stats import norm
 from .. import units
 from ..errors import MtmcalError, ParameterError
 from ..inference.priors import PriorSet
-from ..parameters import IDENTIFIABLE, quantity_unit, weights
+from ..parameters import quantity_unit, weights
 from .model import SECONDS_PER_YEAR, THERMAL_SCALE, HistoryModel  # noqa: F401 - THERMAL_SCALE re-exported for the docs
 
 #: half-Cauchy scale of each drift rate, display units per √year
@@ -170,9 +170,9 @@ def trend_bayes_factors(hm: HistoryModel, q2: np.ndarray, s2: np.ndarray) -> np.
     return out
 
 
-def fit(hm: HistoryModel, *, seed: int = 1, quantities=IDENTIFIABLE, trend: str = "auto") -> HistoryFit:
+def fit(hm: HistoryModel, *, quantities, seed: int = 1, trend: str = "auto") -> HistoryFit:
     """Sample the scales, choose the trends (``trend="auto"``; ``"off"``: random walks only) and condition the
-    states on the scales (see the module docstring)."""
+    states on the scales (see the module docstring) of ``quantities`` (the machine's names)."""
     if trend not in TREND_CHOICES:
         raise ParameterError("trend", f"{trend!r} (expected {' or '.join(TREND_CHOICES)})")
     rng = np.random.default_rng(seed)

@@ -10,7 +10,7 @@ from dataclasses import asdict, dataclass
 from .. import units
 from ..inference.sampling import SamplingResult
 from ..models import default_kinematic_model, first_order_gap
-from ..parameters import IDENTIFIABLE
+from ..machines.plugins import provided
 
 
 def linear_model_check(result: SamplingResult) -> list[str]:
@@ -82,8 +82,8 @@ def reference_check(result: SamplingResult, summary) -> ReferenceCheck | None:
     ref = {n: v for n, v in approx.moments(list(summary.index)).items()
            if all(map(math.isfinite, v)) and v[1] > 0}
     names = [n for n in summary.index if n in ref]
-    eight = [n for n in IDENTIFIABLE if n in names] or [  # a described machine: its deviations
-        n for n in names if n in result.posterior.space.names]
+    own = provided(result.posterior.campaign.machine, "reported_quantities")  # a plug-in's (the thesis' eight)
+    eight = [n for n in own if n in names] if own is not None else [n for n in names if n in result.posterior.space.names]
     if not eight:
         return None
     mean = {n: float((summary.loc[n, "mean"] - ref[n][0]) / ref[n][1]) for n in names}

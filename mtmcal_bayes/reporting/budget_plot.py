@@ -9,7 +9,7 @@ from matplotlib.patches import Patch
 from .. import units
 from ..figure_style import COLOURS, figure, label, new_figure, symbol
 from ..inference.budget import linearisation_point, meaning, sd_against_sigma
-from ..parameters import IDENTIFIABLE, SCALE_LABEL
+from ..parameters import SCALE_LABEL
 
 #: colour of each budget source (Okabe–Ito and greys; priors in warm colours, noise in cool ones)
 SOURCE_COLOURS = {"repeatability": "#56B4E9", "instrument": "#0072B2", "probe readings": "#009E73",
@@ -25,15 +25,13 @@ BUDGET_CAPTION = (
     "W-ball clamping). Exact for the linear model at each σ_model (Σ = Σ_g ΣP_gΣ + Σ_k K R_k Kᵀ), averaged over "
     "σ_model's posterior; kinematic models linearised at the posterior mean. Table: summary.csv, budget:* columns."
 )
-def sigma_caption(names=IDENTIFIABLE) -> str:
+def sigma_caption(names) -> str:
     """The caption of :func:`sigma_figure` drawn for ``names``."""
     return (f"Posterior sd of each of the {units.in_words(len(names))} quantities if σ_model were known, from 0 to "
             "4 µm (closed form), and beneath, σ_model's prior (line) and posterior (histogram). Where the posterior is "
             "the prior, the data do not choose σ_model: the intervals then rest on the assumed prior, and this figure "
             "shows how much. The dashed line is σ_model's posterior median (or its fixed value).")
 
-
-SIGMA_CAPTION = sigma_caption()
 
 
 def budget_figure(summary: pd.DataFrame):
@@ -73,7 +71,7 @@ def sigma_contraction(rep) -> float:
     return float(1.0 - np.var(draws) / post.priors.priors[post.p].sd ** 2)
 
 
-def sigma_figure(rep, names=IDENTIFIABLE):
+def sigma_figure(rep, names):
     """Posterior sd against a fixed sigma_model (0–4 µm) for each of ``names``, σ_model's prior and posterior beneath."""
     post = rep.log_posterior
     grid = units.to_internal(np.linspace(0.0, 4.0, 17), "um")  # every 0.25 µm: the curves are smooth
@@ -123,7 +121,7 @@ def sigma_figure(rep, names=IDENTIFIABLE):
     return fig
 
 
-def dominant_sentence(summary: pd.DataFrame, names=IDENTIFIABLE, *, post=None) -> str:
+def dominant_sentence(summary: pd.DataFrame, names, *, post=None) -> str:
     """For each quantity of ``names``, the source that dominates its variance, grouped by source: "σ_model …
     dominates the variance of alpha_CZ (89 %), …" (``post``, the log posterior: a σ_model prior learnt elsewhere
     is said so)."""

@@ -31,7 +31,6 @@ from ..io.machine_reader import description_of
 from ..io.netcdf import write_netcdf_atomic
 from ..machines.plugins import provided
 from ..models import models_of
-from ..parameters import IDENTIFIABLE
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.comparison import comparison, references
@@ -634,7 +633,7 @@ def budget_table(summary: pd.DataFrame) -> pd.DataFrame:
     return out.rename(columns=lambda c: c.split(":", 1)[1]).rename_axis("quantity")
 
 
-def _budget_section(page: Page, rep: PosteriorResult, tmp: Path, *, sigma_names=IDENTIFIABLE) -> None:
+def _budget_section(page: Page, rep: PosteriorResult, tmp: Path, *, sigma_names) -> None:
     """The uncertainty budget's section; ``sigma_names``: the quantities ``sigma_model.png`` was drawn for."""
     post = rep.log_posterior
     page.section("budget", "Uncertainty budget")

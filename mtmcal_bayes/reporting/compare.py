@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import pandas as pd
 
-from ..parameters import IDENTIFIABLE
 from .ppc import ppc_table
 
 CAPTION_FOREST = (
@@ -22,7 +21,7 @@ CAPTION_PPC = (
 )
 
 
-def model_comparison_table(reports: dict, names=IDENTIFIABLE) -> pd.DataFrame:
+def model_comparison_table(reports: dict, names) -> pd.DataFrame:
     """Long table: one row per (quantity of ``names``, model) with mean, sd, 95 % HDI, R-hat and bulk ESS."""
     rows = []
     for model, rep in reports.items():
@@ -46,7 +45,7 @@ def model_fit_table(reports: dict, campaign) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index("model")
 
 
-def disagreements(reports: dict, names=IDENTIFIABLE) -> list[str]:
+def disagreements(reports: dict, names) -> list[str]:
     """Quantities of ``names`` whose 95 % HDIs under two models do not overlap, as sentences."""
     out = []
     models = list(reports)

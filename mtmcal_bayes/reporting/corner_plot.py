@@ -10,7 +10,6 @@ from matplotlib.contour import ContourSet
 from matplotlib.lines import Line2D
 
 from ..figure_style import COLOURS, REFERENCE_LABELS, figure, label, symbol, unit_symbol
-from ..parameters import IDENTIFIABLE
 from ..posterior.comparison import REFERENCES
 
 #: probability mass inside the 2-D contours (corner's own default is 0.5σ…2σ of a 2-D Gaussian)
@@ -148,7 +147,7 @@ def caption(comparison: pd.DataFrame, names) -> str:
     return CAPTION if _line_key(reference_values(comparison, names)) == "ballbar" else LEAST_SQUARES_CAPTION
 
 
-def corner_figure(idata, comparison: pd.DataFrame, names=IDENTIFIABLE):
+def corner_figure(idata, comparison: pd.DataFrame, names):
     """The corner figure and a list of reference values left off the axes (too far away)."""
     names = [n for n in names if n in idata.posterior]
     x = _draws(idata, names)

@@ -17,7 +17,6 @@ from ..figure_style import (
     tight_layout,
     unit_symbol,
 )
-from ..parameters import IDENTIFIABLE
 from .corner_plot import OFF_SCALE_SD, reference_values
 from .widths import IDENTIFICATION_COLOUR
 
@@ -85,7 +84,7 @@ def _legend_height(entries: int) -> float:
     return max(0.7, 0.25 + 0.2 * -(-entries // 2))
 
 
-def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame | None, names=IDENTIFIABLE):
+def forest_figure(summaries: dict[str, pd.DataFrame], comparison: pd.DataFrame | None, names):
     """One row per quantity, one interval per entry of ``summaries`` (label → summary table).
 
     ``comparison`` (from :func:`~mtmcal_bayes.posterior.comparison.comparison`) supplies the

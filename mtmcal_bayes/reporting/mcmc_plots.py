@@ -9,7 +9,6 @@ import pandas as pd
 from ..arviz_import import az
 from ..figure_style import label, new_figure, symbol
 from ..inference.results import ESS_MIN, RHAT_MAX, display_draws
-from ..parameters import IDENTIFIABLE
 
 RANK_CAPTION = (
     "Rank plots (ArviZ, vertical-line form): for each quantity the draws of all ensembles are ranked together, "
@@ -27,7 +26,7 @@ WALKERS_SHOWN = 4
 POINTS_SHOWN = 600
 
 
-def rank_figure(idata, names=IDENTIFIABLE):
+def rank_figure(idata, names):
     names = [n for n in names if n in idata.posterior]
     ncols = 4
     nrows = int(np.ceil(len(names) / ncols))
@@ -45,7 +44,7 @@ def rank_figure(idata, names=IDENTIFIABLE):
     return fig
 
 
-def trace_figure(result, names=IDENTIFIABLE):
+def trace_figure(result, names):
     """Traces of :data:`WALKERS_SHOWN` walkers per ensemble, thinned to about :data:`POINTS_SHOWN` points."""
     post = result.posterior
     K, S, W, _ = result.chains.shape

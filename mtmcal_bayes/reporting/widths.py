@@ -9,7 +9,6 @@ from matplotlib.lines import Line2D
 from ..figure_style import COLOURS, label, new_figure
 from ..inference.analytic import NOT_IDENTIFIED_GROWTH, WIDEN
 from ..inference.identifiability import DETERMINED, IN_COMBINATION, UNDETERMINED
-from ..parameters import IDENTIFIABLE
 
 CAPTION = (
     "Prior sd (grey) and posterior sd (blue) of each quantity on a logarithmic axis, with the ratio "
@@ -27,7 +26,7 @@ CAPTION = (
 IDENTIFICATION_COLOUR = {DETERMINED: "black", IN_COMBINATION: "#B25E00", UNDETERMINED: "#C00000", None: "black"}
 
 
-def widths_figure(summary: pd.DataFrame, names=IDENTIFIABLE):
+def widths_figure(summary: pd.DataFrame, names):
     names = [n for n in names if n in summary.index]
     s = summary.loc[names]
     y = np.arange(len(names))[::-1]

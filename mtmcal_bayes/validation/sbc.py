@@ -36,7 +36,6 @@ from ..inference.identifiability import Identifiability
 from ..inference.log_posterior import LogPosterior
 from ..inference.sampling import SamplerSettings
 from ..models import check_data, check_model
-from ..parameters import IDENTIFIABLE
 from ..progress import Progress, ProgressEvent, emit
 from .criteria import (  # noqa: F401  (re-exported)
     INTERVALS,
@@ -101,7 +100,7 @@ class SBCResult:
     output: str | None = None  # directory written by :meth:`write`
     files: list[str] = field(default_factory=list)
     #: the quantities the verdict is over (:attr:`Checked.identified`: what the campaign's Jacobian determines)
-    identified: tuple[str, ...] = IDENTIFIABLE
+    identified: tuple[str, ...] = ()
     #: what its campaign determines (undetermined deviations are not ranked)
     identifiability: Identifiability | None = None
 
