@@ -6,7 +6,8 @@ import pytest
 
 import mtmcal_bayes as mb
 from mtmcal_bayes import units
-from mtmcal_bayes.inference.analytic import REPORTED, gaussian_posterior, linearisation
+from mtmcal_bayes.inference.analytic import gaussian_posterior, linearisation
+from mtmcal_bayes.plugins.thesis.names import REPORTED
 from mtmcal_bayes.inference.budget import conditional_budget, source_of, variance_budget
 from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.parameters import weights

@@ -54,7 +54,7 @@ def test_the_report_sampler_paragraph_counts_the_quantities_its_rule_is_over(sam
 
     r = samples[machine]
     text = sampler_paragraph(r)
-    from mtmcal_bayes.inference.analytic import REPORTED
+    from mtmcal_bayes.plugins.thesis.names import REPORTED
 
     # the stopping rule is over every reported quantity: on the thesis machine the eight of Table 4.5 and dx_CZ,
     # dx_BT, dz_BT (eleven); on a described machine its deviations

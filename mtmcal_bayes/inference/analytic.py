@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import MtmcalError
 from ..machines.plugins import provided
 from ..models import jacobian
-from ..parameters import IDENTIFIABLE, weights
+from ..parameters import weights
 from .log_posterior import LogPosterior
 
 
@@ -101,12 +101,8 @@ REMOVED = 1e4
 #: a nuisance prior whose ``WIDEN``-fold widening alone widens a quantity this much is named among those the
 #: quantity rests on, where no single prior's removal leaves it unidentified
 NAMED_GROWTH = 1.1
-#: the quantities a posterior summary reports (the thesis machine's, in Table 4.5's order)
-REPORTED: tuple[str, ...] = IDENTIFIABLE + ("dx_CZ", "dx_BT", "dz_BT")
-
-
 def reported(post) -> tuple[str, ...]:
-    """The quantities a posterior reports: its machine's plug-in's (the thesis': :data:`REPORTED`), else the
+    """The quantities a posterior reports: its machine's plug-in's (the thesis' eight of Table 4.5 and dx_CZ, dx_BT, dz_BT), else the
     machine's deviations."""
     own = provided(post.campaign.machine, "summary_quantities")
     return own if own is not None else tuple(p.name for p in post.space.parameters if p.group == "deviation")

@@ -340,7 +340,7 @@ class ThesisPlugin:
     @property
     def summary_quantities(self) -> tuple[str, ...]:
         """What a posterior summary reports: the eight, and dx_CZ, dx_BT and dz_BT apart."""
-        from ...inference.analytic import REPORTED
+        from .names import REPORTED
 
         return REPORTED
 
