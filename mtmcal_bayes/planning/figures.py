@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+import matplotlib
+from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
-from matplotlib.ticker import ScalarFormatter
 
-from ..figure_style import label, new_figure, symbol, tight_layout
+from ..figure_style import new_figure, symbol
 
 RANKING_CAPTION = (
     "Candidate measurements ranked by the expected information they give about the targets "
@@ -16,16 +17,23 @@ RANKING_CAPTION = (
     "or more are left out (see plan.csv)."
 )
 SWEEP_CAPTION = (
-    "Expected posterior sd of each target against the tool-length difference of an extra run of the "
-    "swept pattern (extension bar on the primary tool setup, Z_T following). Dashed: the sd today; "
-    "red crosses: differences at which the run leaves the target not identified (its sd still follows "
-    "the prior), such as a zero difference; grey band: beyond the axis travels."
+    "Expected posterior sd of each target after an extra run of the swept pattern at the tool-length difference Δ "
+    "(extension bar on the primary tool setup, Z_T following), as a fraction of its sd today (dashed line: today; "
+    "the legend gives today's sd, and says 'unchanged' where no Δ moves it by 1 % or more). Crosses: differences "
+    "at which the run leaves the target not identified (its sd still follows the prior), such as a zero "
+    "difference; grey band: beyond the axis travels. The sds themselves are in plan_sweep.csv."
 )
 #: one colour per kind of candidate (Okabe-Ito); another W-ball placement is one colour whatever the format calls it
 KIND_COLOURS = {"tool length": "#0072B2", "existing setup": "#56B4E9", "repeats": "#999999",
                 "other pattern": "#E69F00", "other R_C": "#009E73", "other placement": "#009E73",
                 "held axes": "#F0E442", "bar length": "#CC79A7", "probe": "#000000", "user": "#D55E00"}
 MAX_BARS = 20
+#: a target whose sd no Δ moves by this fraction is said to be unchanged in the sweep's legend
+UNCHANGED = 0.01
+#: display unit symbols of the targets' units
+UNIT_SYMBOLS = {"arcsec": "″", "um": "µm"}
+#: line styles of the sweep's targets beyond the ten colours
+LINE_STYLES = ("-", "--", ":")
 #: width of the ranking's axes, inches (the 11 in figure less the candidates' names): what its texts fit in
 ANNOTATED_AXES_WIDTH_IN = 7.5
 
@@ -65,40 +73,36 @@ def ranking_figure(result):
 
 
 def sweep_figure(result):
+    """Every target's expected sd after the swept run against Δ, relative to its sd today, on one axes."""
     s = result.sweep
-    k = len(result.targets)
-    ncols = min(k, 2)
-    nrows = int(np.ceil(k / ncols))
-    fig, axes = new_figure(nrows, ncols, figsize=(6.2 * ncols, 3.6 * nrows), squeeze=False)
     x = s["extension_mm"].to_numpy()
-    for ax, t in zip(axes.ravel(), result.targets):
-        ax.plot(x, s[f"{t} sd_after"], color="#0072B2", lw=2, label=f"after {result.sweep_pattern} at R_B + Δ")
-        ax.axhline(s[f"{t} sd_before"].iloc[0], color="0.3", ls="--", lw=1, label="today")
+    fig, ax = new_figure(figsize=(11, 5.4))
+    colours = matplotlib.colormaps["tab10"].colors
+    top = 1.0
+    for i, (t, unit) in enumerate(zip(result.targets, result.target_units)):
+        before = float(s[f"{t} sd_before"].iloc[0])
+        ratio = s[f"{t} sd_after"].to_numpy() / before
+        top = max(top, float(np.nanmax(ratio)))
+        unchanged = bool(np.all(np.abs(ratio - 1.0) < UNCHANGED))
+        text = f"{symbol(t)}: today {before:.3g}{'' if unit == 'arcsec' else ' '}{UNIT_SYMBOLS[unit]}"
+        ax.plot(x, ratio, color=colours[i % 10], ls=LINE_STYLES[i // 10 % len(LINE_STYLES)], lw=2,
+                label=text + (", unchanged" if unchanged else ""))
         bad = ~s[f"{t} identified"].to_numpy()
         if bad.any():
-            ax.plot(x[bad], s.loc[bad, f"{t} sd_after"], "x", color="#C00000", ms=7, mew=2,
-                    label="not identified")
-        infeasible = ~s["feasible"].to_numpy()
-        if infeasible.any():
-            ax.axvspan(x[infeasible].min(), x.max(), color="0.85", zorder=0, label="beyond the travels")
-        values = s[f"{t} sd_after"].to_numpy()
-        if values.max() / values.min() > 3:  # log scale only for a wide range: it hides small changes
-            ax.set_yscale("log")
-            ax.yaxis.set_major_formatter(ScalarFormatter(useOffset=False))
-            ax.yaxis.set_minor_formatter(ScalarFormatter(useOffset=False))
-            ax.tick_params(axis="y", which="minor", labelsize=7)
-        else:  # from zero, so that a change of a fraction of a per cent looks like one
-            ax.set_ylim(0, 1.12 * max(values.max(), s[f"{t} sd_before"].iloc[0]))
-        ax.set_xlabel("tool-length difference Δ [mm]")
-        ax.set_ylabel(f"sd of {label(t)}")
-        ax.set_title(symbol(t))
-        ax.grid(alpha=0.3, which="both")
-    for ax in axes.ravel()[k:]:
-        ax.set_visible(False)
-    shown = {}  # one legend for every panel: each kind of line once, in the order first drawn
-    for ax in axes.ravel()[:k]:
-        for handle, text in zip(*ax.get_legend_handles_labels()):
-            shown.setdefault(text, handle)
-    fig.legend(shown.values(), shown.keys(), loc="lower center", ncol=len(shown), fontsize=9, frameon=False)
-    tight_layout(fig, (0, 0.4 / fig.get_figheight(), 1, 1))
+            ax.plot(x[bad], ratio[bad], "x", color=colours[i % 10], ms=7, mew=2)
+    ax.axhline(1.0, color="0.3", ls="--", lw=1)
+    infeasible = ~s["feasible"].to_numpy()
+    if infeasible.any():
+        ax.axvspan(x[infeasible].min(), x.max(), color="0.85", zorder=0, label="beyond the travels")
+    handles, labels = ax.get_legend_handles_labels()
+    if any((~s[f"{t} identified"]).any() for t in result.targets):
+        handles.append(Line2D([], [], ls="none", marker="x", color="0.2", ms=7, mew=2))
+        labels.append("not identified")
+    ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9, frameon=False)
+    ax.set_ylim(0, 1.08 * top)
+    ax.set_xlabel("tool-length difference Δ [mm]")
+    ax.set_ylabel("expected sd after / sd today")
+    ax.set_title(f"after {result.sweep_pattern} at R_B + Δ", fontsize=11)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
     return fig
