@@ -29,7 +29,7 @@ contributions the engine asks for (an attribute per contribution; one it lacks i
 * ``identify(campaign)`` — a deterministic identification with the values its source published (its result gives
   its tables, ``table("ballbar")``), ``read_reported(r, table, text)`` — the campaign's ``[reported]`` table of those
   values (a machine without it refuses the table), and ``report_section(page, ident, effect, sigma_um)`` — the report's section of
-  it;
+  it, ``report_tables(ident, effect)`` — that section's CSVs;
 * ``compensation_kinematics(campaign, model=, point=, setup=, mount=)`` — the tool point its compensation inverts
   (the engine's: the description's chain), ``compensation_methods`` and ``compensation_values`` (``{name:
   function}``, beside the engine's exact method and posterior values), ``compensation_posterior(campaign)`` — its

@@ -473,14 +473,12 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident,
     csv("loo.csv", loo.table)
     csv("diagnostics.csv", c.diagnostics)
     csv("priors.csv", priors_table(rep.log_posterior))
-    if ident is not None:
-        csv("identification_ballbar.csv", ident.table("ballbar"), index=False)
-        if ident.probe:
-            csv("identification_probe.csv", ident.table("probe"), index=False)
+    own = provided(rep.log_posterior.campaign.machine, "report_tables")  # a plug-in's sections' (the thesis')
+    if own is not None:
+        for name, df, index in own(ident, c.effect):
+            csv(name, df, index=index)
     for name, df in c.machine_tables.items():
         csv(name, df, index=False)
-    if c.effect is not None:
-        csv("thesis_assumption_dx_BT.csv", c.effect)
     if len(c.reports) > 1:
         csv("compare_models.csv", compare.model_comparison_table(c.reports, shown.listed), index=False)
         if ppc_df is not None and rep.data != "probe":  # the fit of each model's ball-bar predictions

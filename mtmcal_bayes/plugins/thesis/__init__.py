@@ -256,6 +256,19 @@ def report_section(page, ident, effect, sigma_um: float) -> None:
     section(page, ident, effect, sigma_um)
 
 
+def report_tables(ident, effect) -> list:
+    """The CSVs of its report section, ``(file name, table, with its index)``: its identification beside the printed
+    values (``ident``, None: none) and the effect of dx_BT = 0 (``effect``, None: not computed)."""
+    tables = []
+    if ident is not None:
+        tables.append(("identification_ballbar.csv", ident.table("ballbar"), False))
+        if ident.probe:
+            tables.append(("identification_probe.csv", ident.table("probe"), False))
+    if effect is not None:
+        tables.append(("thesis_assumption_dx_BT.csv", effect, True))
+    return tables
+
+
 def identify(campaign):
     """Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch probe), each value beside the published one."""
     from .identification import identify as identify_campaign
@@ -293,6 +306,7 @@ class ThesisPlugin:
     sample_notes = staticmethod(sample_notes)
     assumption_effect = staticmethod(assumption_effect)
     report_section = staticmethod(report_section)
+    report_tables = staticmethod(report_tables)
     compensation_kinematics = staticmethod(compensation_kinematics)
     compensation_methods = {"thesis": printed_method}
     compensation_values = {"ballbar": ballbar_values}
