@@ -354,3 +354,68 @@ def test_a_nutating_head_is_the_hand_written_kinematics(seed):
                                         w_off=np.zeros((1, n_pts + 1, 3)), dev={})[0]
         np.testing.assert_allclose(nominal[1:], bar, atol=1e-9)  # the nominal pattern keeps the bar's length
         assert np.max(np.abs(got - nominal)) > 1e-3, pattern
+
+
+# ------------------------------------------------------------------------------------------------- the axes command
+
+PROBE_CAMPAIGN = """[probe]
+instrument = "touch-trigger probe"
+repeatability_um = 1.0
+
+[probe.styli.S1]
+length_mm = 150.0
+
+[[probe.runs]]
+id = "sphere"
+stylus = "S1"
+sphere_mm = [0.0, 100.0, 0.0]
+centres_mm = [{centres}]
+
+[probe.runs.angles_deg]
+B = [0.0, 60.0, 120.0, 180.0, 0.0, 60.0, 120.0, 180.0, 0.0, 90.0, -90.0, -60.0]
+C = [0.0, 0.0, 0.0, 0.0, 90.0, 90.0, 90.0, 90.0, 180.0, 270.0, 180.0, 270.0]
+"""
+
+
+def _probe_campaign(tmp_path) -> str:
+    """A probe-only campaign on the nutating head: one sphere read at 12 positions of B and C, the readings its
+    nominal ones plus 1 µm scatter (seeded)."""
+    from mtmcal_bayes.io.tomlio import dumps
+
+    def write(centres: np.ndarray) -> str:
+        path = tmp_path / "nutating.toml"
+        rows = "[" + ", ".join("[" + ", ".join(repr(float(x)) for x in r) + "]" for r in centres) + "]"
+        path.write_text('format = "mtmcal-campaign/1"\n\n' + dumps({"machine": nutating_table()}) + "\n" +
+                        PROBE_CAMPAIGN.format(centres=rows), encoding="utf-8")
+        return str(path)
+
+    first = write(np.zeros((12, 3)))
+    kernel = ChainProbeKernel(nutating())
+    zero = kernel.zero(ProbeLayout(mb.load_campaign(first), kernel=kernel))
+    return write(zero + np.random.default_rng(5).normal(0.0, 0.001, zero.shape))
+
+
+def test_axes_gives_the_inclined_axis_line_and_basis_in_the_machine_frame(tmp_path, run_cli):
+    """``axes`` on a campaign of the nutating head: the JSON's ``inclined`` entry gives B's nominal direction
+    [0, 1, 1]/√2 through (0, 0, 150) and its basis u = +X, v = [0, 1, −1]/√2; its table's nominal direction and point
+    of B are that line; the text prints the line and the basis; the C table (along +Z) has no such entry."""
+    import json
+
+    path = _probe_campaign(tmp_path)
+    code, out, err = run_cli("axes", path, "--json")
+    assert code == 0, err
+    got = json.loads(out)
+    r = np.sqrt(0.5)
+    b = got["inclined"]["B"]
+    assert set(got["inclined"]) == {"B"}
+    np.testing.assert_allclose(b["direction"], [0.0, r, r], atol=1e-12)
+    np.testing.assert_allclose(b["point_mm"], [0.0, 0.0, 150.0], atol=1e-12)
+    np.testing.assert_allclose(b["u"], [1.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(b["v"], [0.0, r, -r], atol=1e-12)
+    nominal = {(row["element"], row["quantity"]): row["nominal"] for row in got["lines"]}
+    np.testing.assert_allclose([nominal["B", f"direction_{a}"] for a in "xyz"], [0.0, r, r], atol=1e-12)
+    np.testing.assert_allclose([nominal["B", f"point_{a}"] for a in "xyz"], [0.0, 0.0, 150.0], atol=1e-9)
+    code, text, err = run_cli("axes", path)
+    assert code == 0, err
+    assert ("inclined B axis: nominal line along [0, 0.707106781, 0.707106781] through [0, 0, 150] mm; its basis "
+            "u = [1, 0, 0], v = [0, 0.707106781, -0.707106781]") in text

@@ -124,6 +124,12 @@ def spindle_basis(desc: MachineDescription) -> tuple[np.ndarray, np.ndarray] | N
     return u, np.cross(s, u)
 
 
+def spindle_own_basis(desc: MachineDescription) -> bool:
+    """Whether the spindle's errors are named in its own basis (:func:`spindle_basis` not along frame axes)."""
+    basis = spindle_basis(desc)
+    return basis is not None and (_frame_index(basis[0]) is None or _frame_index(basis[1]) is None)
+
+
 def _rotary(desc: MachineDescription) -> list[_Row]:
     """The location errors of every rotary axis, work side first (bed outwards), then tool side."""
     out: list[_Row] = []
@@ -150,7 +156,7 @@ def _spindle(desc: MachineDescription) -> list[_Row]:
     K, tail = desc.spindle.carrier, f"(0{SPINDLE}){desc.spindle.carrier}"
     u, v = basis
     words = dict(line="the spindle axis", axis="the spindle axis", relative=f" relative to the {K} axis")
-    if _frame_index(u) is not None and _frame_index(v) is not None:  # §19's frame names, signed along +X, +Y, +Z
+    if not spindle_own_basis(desc):  # §19's frame names, signed along +X, +Y, +Z
         s = desc.spindle.frame_axis
         return _across(tail, SPINDLE, s, **words) + [
             (f"E_{FRAME[s]}{tail}", "length", SPINDLE, "position", s, _unit(s),
