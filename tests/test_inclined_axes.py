@@ -419,3 +419,24 @@ def test_axes_gives_the_inclined_axis_line_and_basis_in_the_machine_frame(tmp_pa
     assert code == 0, err
     assert ("inclined B axis: nominal line along [0, 0.707106781, 0.707106781] through [0, 0, 150] mm; its basis "
             "u = [1, 0, 0], v = [0, 0.707106781, -0.707106781]") in text
+
+
+def test_the_machine_figures_give_an_inclined_axis_by_its_vector_and_basis(tmp_path):
+    """The report's machine figure names the B head's direction as its vector (not the frame axis nearest it), and the
+    deviations figure gives B's line, its basis and its five errors in words (their drawing in the basis is not made
+    yet) and draws the rest as before."""
+    import matplotlib.text
+
+    from mtmcal_bayes.reporting.machine_figure import figure_jobs
+
+    c = mb.load_campaign(_probe_campaign(tmp_path))
+    texts = {}
+    for name, job in figure_jobs(c):
+        fig = job()
+        texts[name] = "\n".join(t.get_text() for t in fig.findobj(matplotlib.text.Text))
+    assert "B: rotary, [0, 0.7071, 0.7071] through" in texts["machine.png"]
+    assert "+Y through" not in texts["machine.png"]
+    words = texts["deviations.png"]
+    assert "its basis: u = [1, 0, 0], v = [0, 0.7071, -0.7071]" in words
+    for sym in ("E_U0B", "E_V0B", "E_RU0B", "E_RV0B", "E_B0B"):
+        assert f"{sym}: " in words
