@@ -440,3 +440,19 @@ def test_the_machine_figures_give_an_inclined_axis_by_its_vector_and_basis(tmp_p
     assert "its basis: u = [1, 0, 0], v = [0, 0.7071, -0.7071]" in words
     for sym in ("E_U0B", "E_V0B", "E_RU0B", "E_RV0B", "E_B0B"):
         assert f"{sym}: " in words
+
+
+def test_a_radial_pattern_with_the_ball_on_the_inclined_line_swings_the_bar_across_it():
+    """BR with the T ball on B's line: r̂ is taken as B's u (across B), so the bar stays perpendicular to B's
+    direction as B turns, and the nominal bar keeps its length."""
+    desc = nutating(b_point=(0.0, 0.0, 0.0))
+    b = desc.axes["B"]
+    # the tool ball at length 0 sits at the spindle point (0, 0, 0), on B's line through the origin
+    cmd = pattern_commands(desc, "BR", length=0.0, ball=np.array([0.0, 0.0, -100.0]), bar=100.0,
+                           arc_deg=np.linspace(0.0, 90.0, 5))
+    chain = Chain(desc, [])
+    t = chain.tool_point(np.zeros((1, 5, 3)), cmd.q, {})[0]
+    w = chain.work_point(np.broadcast_to([0.0, 0.0, -100.0], (1, 5, 3)), cmd.q, {})[0]  # the W ball on the table
+    bar = t - w
+    np.testing.assert_allclose(np.linalg.norm(bar, axis=1), 100.0, atol=1e-9)
+    np.testing.assert_allclose(bar @ b.direction, 0.0, atol=1e-9)

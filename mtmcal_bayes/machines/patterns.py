@@ -176,6 +176,8 @@ def pattern_commands(desc: MachineDescription, pattern: str, *, length: float, b
             if norm < 1e-9:  # the ball on K's line: r̂ along the first component's frame axis at the home pose
                 r_hat = np.zeros(3)
                 r_hat[(ax.frame_axis + 1) % 3] = 1.0
+                if ax.inclined:  # across K: its basis' u
+                    r_hat = ax.basis[0]
             else:
                 r_hat = radial / norm
             u0 = -r_hat if d == "R" else np.cross(kvec, r_hat)
