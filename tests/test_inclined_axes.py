@@ -456,3 +456,25 @@ def test_a_radial_pattern_with_the_ball_on_the_inclined_line_swings_the_bar_acro
     bar = t - w
     np.testing.assert_allclose(np.linalg.norm(bar, axis=1), 100.0, atol=1e-9)
     np.testing.assert_allclose(bar @ b.direction, 0.0, atol=1e-9)
+
+
+def test_the_docs_table_of_a_frame_aligned_axis_is_the_codes():
+    """docs/machines.md's table of a frame-aligned axis in the basis: each row's u and v are the basis rule's and its
+    five entries are FRAME_TABLE's (which the forced path's test holds to the code), every direction present."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "machines.md").read_text(encoding="utf-8")
+    rows = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 8 and cells[0] in {"+X", "−X", "+Y", "−Y", "+Z", "−Z"}:
+            rows[cells[0].replace("−", "-")] = cells
+    assert set(rows) == set(FRAME_TABLE)
+    for direction, cells in rows.items():
+        u, v = inclined_basis(_unit(direction))
+        assert [_unit(cells[1].replace("−", "-")), _unit(cells[2].replace("−", "-"))] == [pytest.approx(u),
+                                                                                        pytest.approx(v)]
+        axis = "XYZ".index(direction[1])
+        for (sign, letter), cell in zip(FRAME_TABLE[direction], cells[3:]):
+            want = f"{'−' if sign < 0 else ''}`E_{letter or ZERO_OF['XYZ'[axis]]}0K`"
+            assert cell == want, (direction, cell, want)
