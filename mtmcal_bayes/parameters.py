@@ -178,9 +178,14 @@ def quantity_unit(name: str) -> str:
 
 def iso_kind(symbol: str) -> str | None:
     """``"length"`` or ``"angle"`` of an ISO 230-7 location-error symbol (``E_X0C``, ``E_A(0C1)B``), else None:
-    E_X/E_Y/E_Z are positions, E_A/E_B/E_C orientations."""
-    if len(symbol) > 4 and symbol.startswith("E_") and symbol[2] in "XYZABC" and symbol[3] in "0(":
-        return "length" if symbol[2] in "XYZ" else "angle"
+    E_X/E_Y/E_Z are positions, E_A/E_B/E_C orientations; an inclined axis' (SPEC §21): E_U/E_V/E_W positions,
+    E_RU/E_RV orientations."""
+    if not symbol.startswith("E_"):
+        return None
+    if len(symbol) > 5 and symbol[2] == "R" and symbol[3] in "UV" and symbol[4] in "0(":
+        return "angle"
+    if len(symbol) > 4 and symbol[2] in "XYZUVWABC" and symbol[3] in "0(":
+        return "length" if symbol[2] in "XYZUVW" else "angle"
     return None
 
 

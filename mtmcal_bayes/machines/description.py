@@ -11,8 +11,9 @@ so that a positive command moves the tool positively relative to the workpiece (
 
 What the model assumes and this module enforces: the three linear axes X, Y, Z are all present, each sits
 nearer the bed than every rotary axis of its side (the usual build; a linear axis carried by a rotary one is
-not supported), and every rotary axis and the spindle lie along a frame axis at the home pose (ISO 230-7
-names the location errors by the frame axes they lie along).
+not supported).  A rotary axis or the spindle may lie along any unit direction at the home pose: one along a
+frame axis keeps ISO 230-7's frame names for its location errors, an inclined one has the basis of
+:func:`inclined_basis` (SPEC §21).
 """
 
 from __future__ import annotations
@@ -53,11 +54,24 @@ class Axis:
     direction: np.ndarray
     point: np.ndarray
     travel: tuple[float, float] | None = None
+    #: for tests only (never read from a description): take this axis through the inclined path even where it lies
+    #: along a frame axis, its location errors then named and signed by :func:`inclined_basis`
+    force_inclined: bool = False
 
     @property
     def frame_axis(self) -> int:
-        """Index (0, 1, 2) of the frame axis the axis lies along."""
+        """Index (0, 1, 2) of the frame axis the axis lies along (an inclined axis: the one nearest it)."""
         return int(np.argmax(np.abs(self.direction)))
+
+    @property
+    def inclined(self) -> bool:
+        """Whether the axis is taken through the inclined path: its direction not along a frame axis, or forced."""
+        return self.force_inclined or not along_frame(self.direction)
+
+    @property
+    def basis(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(u, v)`` (3,) each: the axis' own basis across its direction (:func:`inclined_basis`)."""
+        return inclined_basis(self.direction)
 
     @property
     def sign(self) -> float:
@@ -179,12 +193,32 @@ def parse_configuration(text: str, fail: Fail, key: str = "machine.configuration
 UNIT_TOLERANCE = 1e-6
 #: largest off-axis component, after normalising, of a direction that lies along a frame axis
 ALONG_TOLERANCE = 1e-9
+#: how nearly two frame axes must tie for the basis rule's order (X before Y before Z) to decide between them
+TIE_TOLERANCE = 1e-12
+
+
+def along_frame(direction: np.ndarray) -> bool:
+    """Whether a (3,) unit vector is exactly a signed frame axis (as :func:`parse_direction` snaps one)."""
+    return int(np.count_nonzero(direction)) == 1
+
+
+def inclined_basis(k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The basis across an axis of direction ``k`` (3,) unit (SPEC §21): ``u`` the unit projection onto the plane
+    ⊥ k of the frame axis eᵢ with the smallest |eᵢ·k| (ties within :data:`TIE_TOLERANCE`: X before Y before Z),
+    ``v = k × u``.  For +Y: u = +X, v = −Z."""
+    k = np.asarray(k, dtype=float)
+    a = np.abs(k)
+    i = int(np.flatnonzero(a <= a.min() + TIE_TOLERANCE)[0])
+    u = np.eye(3)[i] - k[i] * k
+    u = u / np.linalg.norm(u)
+    return u, np.cross(k, u)
 
 
 def parse_direction(value, fail: Fail, key: str) -> np.ndarray:
-    """A direction: ``"+Y"``/``"-Z"`` or a 3-vector within :data:`UNIT_TOLERANCE` of unit length (normalised) along
-    a frame axis -> (3,) unit vector.  A zero vector, one further from unit length, and a unit vector not along a
-    frame axis (an inclined axis, not supported yet) each fail with their own reason."""
+    """A direction: ``"+Y"``/``"-Z"`` or a 3-vector within :data:`UNIT_TOLERANCE` of unit length -> (3,) unit vector
+    (normalised; snapped onto the frame axis it lies along when its off-axis parts are ≤ :data:`ALONG_TOLERANCE`
+    after normalising, else kept: an inclined axis, SPEC §21).  A zero vector and one further from unit length each
+    fail with their own reason."""
     if isinstance(value, str):
         m = re.fullmatch(r"\s*([+-]?)([XYZ])\s*", value.upper())
         if not m:
@@ -202,9 +236,7 @@ def parse_direction(value, fail: Fail, key: str) -> np.ndarray:
     u = v / norm
     i = int(np.argmax(np.abs(u)))
     if np.delete(np.abs(u), i).max() > ALONG_TOLERANCE:
-        fail(key, f"{_shown(v)} does not lie along a frame axis: inclined axes are not supported yet (ISO 230-7 "
-                  "names location errors by the frame axes they lie along; give an axis or spindle along ±X, ±Y or "
-                  "±Z)")
+        return u
     out = np.zeros(3)
     out[i] = np.sign(u[i])
     return out

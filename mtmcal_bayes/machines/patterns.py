@@ -44,7 +44,9 @@ ARC_STEP_DEG, TURN_STEP_DEG = 1.0, 5.0
 
 def turn(v: np.ndarray, ax: Axis, angle, *, about_origin: bool = False) -> np.ndarray:
     """``v`` (..., k, 3) turned by ``angle`` (k,) rad about rotary axis ``ax``'s nominal line (through the origin
-    instead: a direction)."""
+    instead: a direction); an inclined axis by Rodrigues' formula about its direction."""
+    if ax.inclined:
+        return _rodrigues(v, ax.direction, np.zeros(3) if about_origin else ax.point, angle)
     axis, point = ax.frame_axis, np.zeros(3) if about_origin else ax.point
     j, m = (axis + 1) % 3, (axis + 2) % 3
     c, s = np.cos(angle), ax.sign * np.sin(angle)
@@ -53,6 +55,15 @@ def turn(v: np.ndarray, ax: Axis, angle, *, about_origin: bool = False) -> np.nd
     out[..., j] = c * vj - s * vm + point[j]
     out[..., m] = s * vj + c * vm + point[m]
     return out
+
+
+def _rodrigues(v: np.ndarray, k: np.ndarray, point: np.ndarray, angle) -> np.ndarray:
+    """``v`` (..., k, 3) turned by ``angle`` (k,) rad right-handedly about the line through ``point`` (3,) along the
+    unit vector ``k`` (3,): ``p + r cos θ + (k × r) sin θ + k (k·r)(1 − cos θ)``, r = v − p."""
+    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    r = np.asarray(v) - point
+    along = (r @ k)[..., None] * k
+    return point + c * r + s * np.cross(k, r) + (1.0 - c) * along
 
 
 def components(desc: MachineDescription, pattern: str) -> tuple[str, str]:
@@ -165,6 +176,8 @@ def pattern_commands(desc: MachineDescription, pattern: str, *, length: float, b
             if norm < 1e-9:  # the ball on K's line: r̂ along the first component's frame axis at the home pose
                 r_hat = np.zeros(3)
                 r_hat[(ax.frame_axis + 1) % 3] = 1.0
+                if ax.inclined:  # across K: its basis' u
+                    r_hat = ax.basis[0]
             else:
                 r_hat = radial / norm
             u0 = -r_hat if d == "R" else np.cross(kvec, r_hat)

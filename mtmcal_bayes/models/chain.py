@@ -10,7 +10,9 @@ to the bed::
 ``point_mm``; a linear axis: a translation along its direction of motion, the opposite way on the workpiece
 side) and ``D_i`` the location errors of the body it carries (:mod:`mtmcal_bayes.machines.deviations`): the
 rigid displacement ``v ↦ R(ε)(v − p) + p + δ`` with ε the orientation errors (one rotation vector, exact:
-``expm([ε]×)``), p the axis' ``point_mm`` and δ its position errors; it sits outside the axis' own motion, so
+``expm([ε]×)``: the sum of each error times the unit vector it turns about), p the axis' ``point_mm`` and δ its
+position errors (the sum of each times the unit vector it lies along: a frame axis, or an inclined axis' own basis
+vector, SPEC §21); it sits outside the axis' own motion, so
 a position error moves the axis line and everything the axes below it do carries it along.
 
 The squareness of the linear axes acts in one of two forms: ``"motion"`` (ISO 230-1): it tilts the axis'
@@ -39,25 +41,35 @@ def _step(command: np.ndarray, direction: np.ndarray) -> np.ndarray:
     return np.asarray(command)[..., None] * (direction if direction.ndim == 1 else direction[:, None, :])
 
 
+def _stack(cols: list[tuple[np.ndarray, str]], dev: dict[str, np.ndarray], n: int) -> np.ndarray | None:
+    """``Σ dev[name] · direction`` (n, 3) over columns ``(direction (3,), name)`` (absent names: zero); None if
+    nothing is displaced.  A frame axis' column adds its value to that component alone (the arithmetic of a
+    frame-named error is the component's own)."""
+    if not cols or not any(name in dev for _, name in cols):
+        return None
+    out = np.zeros((n, 3), dtype=np.result_type(*(dev[name] for _, name in cols if name in dev)))
+    for direction, name in cols:
+        if name not in dev:
+            continue
+        nonzero = np.flatnonzero(direction)
+        if len(nonzero) == 1 and direction[nonzero[0]] == 1.0:
+            out[:, nonzero[0]] += dev[name]
+        else:
+            out += dev[name][:, None] * direction
+    return out if out.any() else None
+
+
 class Body:
-    """The location errors of one body: rotation vector and displacement columns ``(component, name)``."""
+    """The location errors of one body: rotation vector and displacement columns ``(direction (3,), name)``."""
 
     def __init__(self, point: np.ndarray):
         self.point = point
-        self.rot: list[tuple[int, str]] = []
-        self.pos: list[tuple[int, str]] = []
+        self.rot: list[tuple[np.ndarray, str]] = []
+        self.pos: list[tuple[np.ndarray, str]] = []
 
     def vectors(self, dev: dict[str, np.ndarray], n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
         """``(ε (n, 3) or None, δ (n, 3) or None)`` from the deviation values (absent names: zero)."""
-        def stack(cols):
-            if not cols or not any(name in dev for _, name in cols):
-                return None
-            out = np.zeros((n, 3), dtype=np.result_type(*(dev[name] for _, name in cols if name in dev)))
-            for comp, name in cols:
-                if name in dev:
-                    out[:, comp] += dev[name]
-            return out if out.any() else None
-        return stack(self.rot), stack(self.pos)
+        return _stack(self.rot, dev, n), _stack(self.pos, dev, n)
 
     def displace(self, v: np.ndarray, dev: dict[str, np.ndarray]) -> np.ndarray:
         """``R(ε)(v − p) + p + δ`` for ``v`` (n, k, 3)."""
@@ -91,13 +103,13 @@ class Chain:
         for d in deviations:
             if d.role == "squareness":
                 if self.squareness == "rigid":
-                    self.bodies[rigid_body[d.symbol]].rot.append((d.component, d.name))
+                    self.bodies[rigid_body[d.symbol]].rot.append((d.vector, d.name))
                 else:
                     self.tilts[d.body].append((d.component, d.name))
             elif d.role == "orientation":
-                self.bodies[d.body].rot.append((d.component, d.name))
+                self.bodies[d.body].rot.append((d.vector, d.name))
             else:
-                self.bodies[d.body].pos.append((d.component, d.name))
+                self.bodies[d.body].pos.append((d.vector, d.name))
 
     def _rigid_bodies(self) -> dict[str, str]:
         """Squareness symbol -> the linear axis whose body it turns in the rigid form."""

@@ -7,6 +7,11 @@ foot of the perpendicular from the description's ``point_mm`` (so a point's offs
 there, as ISO 230-7 states it).  And the distance between the lines of successive rotary axes of one side (and
 between the spindle and the axis carrying it): the pivot distances of a kinematic description.
 
+An inclined rotary axis (SPEC §21) is given with its basis u, v in the machine frame, the directions its location
+errors are named by (``E_U0K``, ``E_V0K`` along them, ``E_RU0K``, ``E_RV0K`` about them), beside its nominal line
+(direction and point, as a controller's kinematic table takes an oblique axis); so is a spindle whose basis relative
+to its carrier leaves the frame axes (``E_U(0C1)K`` ...).
+
 Each number is a function of the deviations; its posterior comes from the draws.  A number the data do not
 determine — its first-order change with the deviations has a part along a direction the measurements cannot see
 (:meth:`~mtmcal_bayes.inference.identifiability.Identifiability.estimable`) — is marked ``determined = False``:
@@ -26,7 +31,7 @@ from ..arviz_import import az
 from ..inference.results import HDI_PROB
 from ..iso import iso_symbol
 from ..machines.description import SPINDLE, MachineDescription
-from ..machines.deviations import generated
+from ..machines.deviations import generated, spindle_basis, spindle_own_basis
 from ..models.chain import Chain
 
 #: columns of the table, per row
@@ -117,17 +122,40 @@ def _distance_parts(desc: MachineDescription, lines: dict) -> dict[str, np.ndarr
     return {f"{a}-{b}": _gap_parts(*lines[a], *lines[b]) for a, b in _pairs(desc, lines)}
 
 
+def inclined_bases(desc: MachineDescription) -> dict[str, dict[str, list[float]]]:
+    """Per element named in its own basis (an inclined rotary axis; the spindle where its basis relative to its
+    carrier is not along frame axes): its nominal line (``direction``, ``point_mm``) and basis (``u``, ``v``), each
+    a list of 3 floats in the machine frame at the home pose.  Empty on a machine whose axes lie along frame axes."""
+    out = {}
+    for ax in desc.rotary_axes:
+        if ax.inclined:
+            u, v = ax.basis
+            out[ax.letter] = {"direction": ax.direction, "point_mm": ax.point, "u": u, "v": v}
+    if spindle_own_basis(desc):
+        u, v = spindle_basis(desc)
+        out[SPINDLE] = {"direction": desc.spindle.direction, "point_mm": desc.spindle.point, "u": u, "v": v}
+    return {k: {name: [float(x) + 0.0 for x in vec] for name, vec in b.items()} for k, b in out.items()}
+
+
+def _shown(v: list[float]) -> str:
+    return "[" + ", ".join(f"{x:.9g}" for x in v) + "]"
+
+
 @dataclass
 class AxisLines:
     """The identified axis lines: ``table`` (:data:`COLUMNS`; lengths in mm, direction components unitless),
-    ``machine`` its configuration."""
+    ``machine`` its configuration, ``bases`` :func:`inclined_bases` of its description."""
 
     table: pd.DataFrame
     machine: str
+    bases: dict | None = None
 
     def to_json(self) -> dict:
         rows = self.table.to_dict(orient="records")
-        return {"machine": self.machine, "hdi_prob": HDI_PROB, "lines": rows}
+        out = {"machine": self.machine, "hdi_prob": HDI_PROB, "lines": rows}
+        if self.bases:
+            out["inclined"] = self.bases
+        return out
 
     def to_csv(self) -> str:
         return self.table.to_csv(index=False, float_format="%.9g")
@@ -136,6 +164,11 @@ class AxisLines:
         lines = [f"Identified axis lines of {self.machine} at the home pose (machine frame; point: the line's point "
                  "nearest the described point_mm; nominal: the description's; identified: mean ± sd, 95 % HDI)",
                  f"  {'':6s} {'':15s} {'nominal':>14s} {'identified':>14s}"]
+        for element, b in (self.bases or {}).items():
+            what = "spindle" if element == SPINDLE else f"{element} axis"
+            lines.insert(1, f"  {element:6s} inclined {what}: nominal line along {_shown(b['direction'])} through "
+                            f"{_shown(b['point_mm'])} mm; its basis u = {_shown(b['u'])}, v = {_shown(b['v'])} "
+                            "(its position errors along u, v, its orientation errors about them)")
         for _, r in self.table.iterrows():
             mark = "" if r["determined"] else "   not determined: the prior's, not a measurement"
             lines.append(f"  {r['element']:6s} {r['quantity']:15s} {r['nominal']:14.6f} {r['mean']:14.6f} ± "
@@ -184,7 +217,7 @@ def axis_lines(result) -> AxisLines:
                      "nominal": float(nominal[element, quantity][0][0]), "mean": float(v.mean()),
                      "sd": float(v.std(ddof=1)), "hdi_low": float(low), "hdi_high": float(high),
                      "determined": bool(determined)})
-    return AxisLines(pd.DataFrame(rows, columns=COLUMNS), desc.configuration)
+    return AxisLines(pd.DataFrame(rows, columns=COLUMNS), desc.configuration, inclined_bases(desc))
 
 
 def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:

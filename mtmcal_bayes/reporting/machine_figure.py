@@ -22,8 +22,16 @@ from matplotlib.patches import FancyBboxPatch
 
 from ..figure_style import figure, save_png, tight_layout
 from ..io.machine_reader import description_of
-from ..machines.description import FRAME, SPINDLE, MachineDescription
-from ..machines.deviations import SQUARENESS_ERRORS, Deviation, generated, redundant, selected
+from ..machines.description import FRAME, SPINDLE, MachineDescription, along_frame, inclined_basis
+from ..machines.deviations import (
+    SQUARENESS_ERRORS,
+    Deviation,
+    generated,
+    redundant,
+    selected,
+    spindle_basis,
+    spindle_own_basis,
+)
 from ..machines.plugins import provided
 from ..models.chain import Chain
 from ..models.rotations import rotation
@@ -49,6 +57,9 @@ def _unit(i: int) -> np.ndarray:
 
 
 def _direction_text(v: np.ndarray) -> str:
+    """``+Y`` for a frame axis, the vector ``[0, 0.7071, 0.7071]`` for an inclined direction."""
+    if not along_frame(v):
+        return "[" + ", ".join(f"{float(c):.4g}" for c in np.asarray(v) + 0.0) + "]"
     i = int(np.argmax(np.abs(v)))
     return f"{'+' if v[i] > 0 else '−'}{FRAME[i]}"
 
@@ -110,6 +121,8 @@ def _arc3d(ax, centre: np.ndarray, d: np.ndarray, *, radius: float, colour: str)
     u, w = _unit((k + 1) % 3), _unit((k + 2) % 3)
     if d[k] < 0:
         u, w = w, u  # (u, w, d) right-handed
+    if not along_frame(d):
+        u, w = inclined_basis(d)  # (u, v, d) right-handed
     t = np.deg2rad(np.linspace(20.0, 300.0, 40))
     pts = centre + radius * (np.cos(t)[:, None] * u + np.sin(t)[:, None] * w)
     ax.plot(*pts.T, color=colour, lw=1.2)
@@ -400,7 +413,13 @@ def deviations_figure(desc: MachineDescription) -> Figure:
 
     for r, (kind, item) in enumerate(rows):
         row = axes[r]
-        if kind == "axis":
+        if kind == "axis" and item.inclined:
+            _basis_row(row, f"{_prime(item.letter, item.work_side)} axis (inclined)", direction=item.direction,
+                       point=item.point, basis=item.basis, errs=by_body[item.letter], grey=grey)
+        elif kind == "spindle" and spindle_own_basis(desc):
+            _basis_row(row, f"spindle, relative to the {desc.spindle.carrier} axis", direction=desc.spindle.direction,
+                       point=desc.spindle.point, basis=spindle_basis(desc), errs=by_body[SPINDLE], grey=grey)
+        elif kind == "axis":
             a = item
             colour = WORK if a.work_side else TOOL
             errs, k = by_body[a.letter], a.frame_axis
@@ -456,6 +475,21 @@ def deviations_figure(desc: MachineDescription) -> Figure:
     bottom = (0.155 * len(notes) + 0.2) / fig.get_figheight()  # 8 pt lines, 1.35 apart, in inches
     tight_layout(fig, (0.0, bottom, 1.0, 1.0 - 0.55 / fig.get_figheight()), h_pad=2.0)
     return fig
+
+
+def _basis_row(row, title: str, *, direction: np.ndarray, point: np.ndarray, basis, errs: list[Deviation],
+               grey: set[str]) -> None:
+    """An element named in its own basis (SPEC §21): its line, its basis u, v and its errors in words; the drawing in
+    its basis is not made yet, so the row says so rather than draw it in frame axes it does not lie along."""
+    u, v = basis
+    shown = (lambda x: "[" + ", ".join(f"{float(c):.4g}" for c in np.asarray(x) + 0.0) + "]")  # noqa: E731
+    lines = [f"{title}: line along {shown(direction)} through {shown(point)} mm", f"its basis: u = {shown(u)}, "
+             f"v = {shown(v)}", ""] + [f"{d.symbol}: {d.meaning}" + ("  (not estimated by default)" if d.name in grey
+                                                                       else "") for d in errs]
+    lines += ["", "(drawn in words: the drawing of an inclined axis' errors in its basis is not made yet)"]
+    for ax in row:
+        ax.set_axis_off()
+    row[0].text(0.0, 1.0, "\n".join(lines), transform=row[0].transAxes, fontsize=9, va="top", ha="left")
 
 
 def _squareness_row(row, gen: list[Deviation], grey: set[str], *, form: str, length: float) -> None:
