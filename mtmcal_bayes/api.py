@@ -78,6 +78,8 @@ def data_of(data: str | None, c: Campaign) -> str:
     stated = provided(c.machine, "default_data")
     if stated is not None:
         return stated
+    if c.has_rtest_readings():
+        return "all"
     return "both" if c.ballbar.runs and c.has_probe_readings() else "probe" if not c.ballbar.runs else "ballbar"
 
 
