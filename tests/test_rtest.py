@@ -9,9 +9,12 @@ written out here, and the displacement taken in the nest frame."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+import mtmcal_bayes
 from mtmcal_bayes import api
 from mtmcal_bayes.errors import InputError
 from mtmcal_bayes.inference.identifiability import DETERMINED
@@ -305,6 +308,45 @@ def test_data_choices_keep_their_meaning():
     demo = load_campaign(None)
     with pytest.raises(ParameterError, match="R-test"):
         make_model("linear", demo, data="rtest")
+
+
+def _with_rtest(text: str, machine: str) -> str:
+    """``text`` (a campaign) with an ``[rtest]`` of one run on ``machine`` appended."""
+    axes = _rotary(machine)
+    run = dict(GOOD_RUN, angles={axes[0]: [0.0, 20.0, 40.0], axes[1]: [0.0, 90.0, 180.0]})
+    rtest = campaign_text(machine, [run], nests={"N1": (120.0, False)})
+    return text + "\n" + rtest[rtest.index("[rtest]"):]
+
+
+@pytest.mark.parametrize("machine", [THESIS_TYPE, "trunnion"])
+def test_combinations_stack_the_instruments_unchanged(machine):
+    """On a campaign with all three instruments (the thesis campaign, the trunnion's demo, each with an R-test run
+    added): ``ballbar+rtest``, ``probe+rtest`` and ``all`` stack the ball bar's, the probe's and the R-test's own
+    models (their observations in that order, each part's prediction of a random batch equal to the part's own on its
+    own space), ``both`` keeps the ball bar and the probe alone, and ``all`` has one discrepancy scale per
+    instrument."""
+    from mtmcal_bayes.datasets import builtin_campaign_text
+    from mtmcal_bayes.inference.log_posterior import LogPosterior
+
+    base = builtin_campaign_text()[0] if machine == THESIS_TYPE else \
+        (Path(mtmcal_bayes.__file__).parent / "datasets" / "machines" / f"{machine}-demo.toml").read_text()
+    c = parse_campaign(_with_rtest(base, machine))
+    rng = np.random.default_rng(3)
+    alone = {d: LogPosterior(c, "linear", data=d) for d in ("ballbar", "probe", "rtest")}
+    for data, parts in (("ballbar+rtest", ("ballbar", "rtest")), ("probe+rtest", ("probe", "rtest")),
+                        ("all", ("ballbar", "probe", "rtest")), ("both", ("ballbar", "probe"))):
+        post = LogPosterior(c, "linear", data=data)
+        assert post.scales == tuple({"ballbar": "sigma_model"}.get(i, f"sigma_model_{i}") for i in parts)
+        theta = rng.normal(0.0, 1e-3, (3, post.p))
+        got = post.forward.predict(theta)
+        start = 0
+        for instrument in parts:
+            own = alone[instrument]
+            cols = [post.space.index(n) for n in own.space.names]
+            want = own.forward.predict(theta[:, cols])
+            np.testing.assert_allclose(got[:, start:start + want.shape[1]], want, rtol=1e-12, atol=1e-15)
+            start += want.shape[1]
+        assert start == got.shape[1]
 
 
 # --------------------------------------------------------------------------- the posterior against a truth

@@ -108,9 +108,9 @@ def build_model(name: str, campaign, space=None, data: str = "ballbar", *, obser
     machine."""
     used = data_instruments(data, campaign)
     part = ballbar_probe_data(used)
-    if "rtest" not in used:
+    if "rtest" not in used:  # the ball bar, the probe or both, by the name a machine's own models know ("all" too)
         build = provided(campaign.machine, "make_model", _engine_model)
-        return build(name, campaign, space, data, observations=observations, probe_layout=probe_layout)
+        return build(name, campaign, space, part or data, observations=observations, probe_layout=probe_layout)
     if space is None:
         own = provided(campaign.machine, "make_model") is not None  # its own models lay out their own space
         space = ParameterSpace.for_campaign(campaign, data=data) if own else described_space(campaign, data=data)
