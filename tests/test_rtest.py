@@ -409,3 +409,16 @@ def test_thesis_type_rtest_keeps_the_thesis_names():
                                      nests={"N1": (120.0, False)}))
     m = make_model("linear", c, data="rtest")
     assert "dx_BT" in m.space.names and "xPR[r1]" in m.space.names
+
+
+def test_identify_and_report_of_an_rtest_campaign(run_cli, tmp_path):
+    """``identify`` of a campaign of R-test runs alone is the least squares of its R-test readings; ``report``, which
+    has no R-test sections yet, refuses R-test data in one line (exit 2) and writes nothing."""
+    path = tmp_path / "c.toml"
+    last = "[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]]"  # the second repeat: some scatter
+    path.write_text(_good_text().replace(last, "[[0.4, -0.3, 0.2], [0.1, 0.0, 0.3], [0.0, 0.2, -0.1]]]"))
+    code, out, err = run_cli("identify", path)
+    assert code == 0 and "all data" in out, err
+    code, out, err = run_cli("report", path, "-o", tmp_path / "report")
+    assert code == 2 and out == "" and len(err.splitlines()) == 1 and "no R-test sections yet" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
