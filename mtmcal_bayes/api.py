@@ -78,6 +78,8 @@ def data_of(data: str | None, c: Campaign) -> str:
     stated = provided(c.machine, "default_data")
     if stated is not None:
         return stated
+    if c.has_rtest_readings():
+        return "all"
     return "both" if c.ballbar.runs and c.has_probe_readings() else "probe" if not c.ballbar.runs else "ballbar"
 
 
@@ -151,11 +153,12 @@ def identify(campaign: CampaignLike = None):
     method of its own, that beside it: on the thesis machine its Eqs 4.10–4.18 (ball bar) and 5.1–5.19 (touch
     probe), each value beside the published one (:class:`~mtmcal_bayes.posterior.least_squares.Identification`; its
     ``ballbar``, ``probe``, ``table()`` are the plug-in result's).  A campaign without ball-bar runs gets the least
-    squares of its touch-probe readings whatever the machine's default data."""
+    squares of its touch-probe readings (and R-test readings, where it has them) whatever the machine's default
+    data."""
     from .posterior.least_squares import identify as identify_campaign
 
     c = campaign_of(campaign, measured=True)
-    return identify_campaign(c, data_of(None, c) if c.ballbar.runs else "probe")
+    return identify_campaign(c, data_of(None, c) if c.ballbar.runs else "all" if c.has_rtest_readings() else "probe")
 
 
 def probe_fit(path, *, stylus_radius_mm: float | None = None) -> ProbeFit:
@@ -274,16 +277,19 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     ``sigma_model_um`` and ``sigma_model_prior`` as for :func:`sample` (the learnt prior for every posterior of
     the report; with ``posterior``, it must be the one that posterior was sampled with).
     """
+    from .errors import ParameterError
     from .models import check_data, check_model
+    from .parameters import data_instruments
     from .reporting.start import begin
 
     c = campaign_of(campaign, measured=True)
     check_model(model)
     data = check_data(data_of(data, c), c)
+    if "rtest" in data_instruments(data, c):  # docs/rtest.md, "Not done yet"
+        raise ParameterError("data", f"{data!r}: the report has no R-test sections yet (docs/rtest.md); give the data "
+                             "ballbar, probe or both, or use sample for the R-test")
     learnt = sigma_model_prior_of(sigma_model_prior, c, sigma_model_um)
     if posterior is not None and learnt is not None and learnt != posterior.log_posterior.sigma_prior:
-        from .errors import ParameterError
-
         raise ParameterError("sigma_model_prior", "is not the prior the given posterior was sampled with")
     tol, sigma = tolerances_of(tolerances, c), sigma_model_of(sigma_model_um)
     # the machine's figures begun before the report's computation is imported (reporting.start)

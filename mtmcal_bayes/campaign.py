@@ -22,7 +22,7 @@ from . import units
 from .errors import InputError
 from .machines import MachineDescription
 from .machines.plugins import provided
-from .machines.probe_terms import SPHERE_TERMS, probe_terms
+from .machines.probe_terms import SPHERE_TERMS, probe_terms, rtest_terms
 from .pattern_frames import chain_frame
 from .patterns import B_PATTERNS, C_PATTERNS
 
@@ -293,6 +293,86 @@ class Probe:
         return probe_terms(desc, self)
 
 
+#: how an R-test run's readings are read (SPEC §22): in the sensors' frame carried by the spindle, or turned back
+#: by the device's software with the nominal rotation
+RTEST_FRAMES = ("tool", "machine")
+#: where an R-test run's sensors were zeroed: at its first position (a free zero per run), or absolutely
+RTEST_ZEROS = ("first", "absolute")
+#: the prior sds of the R-test's nuisance terms where ``[rtest]`` states none, µm (SPEC §22)
+RTEST_PRIOR_SD_UM = {"placement_um": 50.0, "nest_length_um": 10.0, "nest_offset_um": 10.0}
+
+
+@dataclass
+class RTestNest:
+    """An R-test nest (``[rtest.nests.<id>]``): ``length`` mm from the spindle's ``point_mm`` to the nest centre,
+    along the spindle; ``calibrated``: its length and centre are known (no nuisance terms)."""
+
+    length: float
+    calibrated: bool = False
+
+
+@dataclass
+class RTestRun:
+    """An R-test run (``[[rtest.runs]]``, SPEC §22): the sphere at ``sphere`` (3,) mm (its nominal centre at the
+    home pose, workpiece side), read by the sensors of ``nest`` at the positions ``angles`` {axis letter: (a,)} rad
+    (axes not named at 0), the linear axes commanded through the nominal chain to put the nest centre on the
+    sphere; ``displacements`` (r, a, 3) mm, sphere − nest, in the reading ``frame`` (:data:`RTEST_FRAMES`), zeroed
+    as ``zero`` says (:data:`RTEST_ZEROS`); ``placement`` the sphere's placement it shares with other runs (None:
+    the runs with an equal ``sphere`` share one, :meth:`RTest.placement_of`)."""
+
+    id: str
+    nest: str
+    sphere: np.ndarray
+    angles: dict[str, np.ndarray]
+    displacements: np.ndarray
+    frame: str = "tool"
+    zero: str = "first"
+    placement: str | None = None
+
+    @property
+    def positions(self) -> int:
+        return self.displacements.shape[1]
+
+    @property
+    def angles_deg(self) -> dict[str, np.ndarray]:
+        """The rotary axes' positions {letter: (a,)}, degrees."""
+        return {a: units.from_internal(v, "deg") for a, v in self.angles.items()}
+
+
+@dataclass
+class RTest:
+    """A campaign's R-test (``[rtest]``, SPEC §22): instrument, sensors' repeatability (mm, None: not stated), the
+    prior sds of its nuisance terms as stated (mm, None: :data:`RTEST_PRIOR_SD_UM`), nests and runs."""
+
+    instrument: str = ""
+    repeatability: float | None = None
+    placement_sd: float | None = None
+    nest_length_sd: float | None = None
+    nest_offset_sd: float | None = None
+    nests: dict[str, RTestNest] = field(default_factory=dict)
+    runs: list[RTestRun] = field(default_factory=list)
+
+    def placement_of(self, run: RTestRun) -> str:
+        """The placement ``run``'s sphere has: its own ``placement``, else that of the first run with an equal
+        ``sphere`` that names none (its id)."""
+        if run.placement is not None:
+            return run.placement
+        return next(r.id for r in self.runs if r.placement is None and np.array_equal(r.sphere, run.sphere))
+
+    def nuisance_terms(self, desc: MachineDescription) -> list[tuple[str, str]]:
+        """The R-test's nuisance parameters as ``(owner, base)`` pairs (:func:`~.machines.probe_terms.rtest_terms`)."""
+        return rtest_terms(desc, self)
+
+    def prior_sds(self) -> dict[str, float]:
+        """The prior sd (mm) of each nuisance base of the R-test, as ``[rtest]`` states it (else SPEC §22's)."""
+        sd = {k: units.to_internal(v, "um") for k, v in RTEST_PRIOR_SD_UM.items()}
+        place = self.placement_sd if self.placement_sd is not None else sd["placement_um"]
+        length = self.nest_length_sd if self.nest_length_sd is not None else sd["nest_length_um"]
+        offset = self.nest_offset_sd if self.nest_offset_sd is not None else sd["nest_offset_um"]
+        return {"xPR": place, "yPR": place, "zPR": place, "dLR": length, "xNR": offset, "yNR": offset,
+                "zNR": offset}
+
+
 @dataclass
 class ReportedValue:
     """A published value (internal units) and the decimals it was printed with."""
@@ -310,6 +390,7 @@ class Truth:
     setups: dict[str, dict[str, float]] = field(default_factory=dict)
     mounts: dict[str, dict[str, float]] = field(default_factory=dict)
     probe: dict[str, dict[str, float]] = field(default_factory=dict)  # owner -> {base: value}
+    rtest: dict[str, dict[str, float]] = field(default_factory=dict)  # owner -> {base: value}
 
     def ballbar_part(self) -> Truth:
         """The deviations and the ball-bar nuisance terms."""
@@ -318,6 +399,10 @@ class Truth:
     def probe_part(self) -> Truth:
         """The deviations and the touch-probe nuisance terms."""
         return Truth(self.deviations, probe=self.probe)
+
+    def rtest_part(self) -> Truth:
+        """The deviations and the R-test's nuisance terms."""
+        return Truth(self.deviations, rtest=self.rtest)
 
 
 @dataclass(frozen=True)
@@ -380,6 +465,7 @@ class Campaign:
     date: datetime.datetime | None = None  # when the campaign was measured (a TOML date is taken at 00:00)
     temperature_C: float | None = None  # workshop temperature during the campaign, °C
     design: DesignGoal | None = None  # what the campaign was designed for ([design]), if it was
+    rtest: RTest | None = None  # its R-test ([rtest]), if it has one
 
     def __post_init__(self) -> None:
         """A campaign built in Python gets what a read one has: its runs' reading frames from its machine's chain
@@ -406,7 +492,7 @@ class Campaign:
         """An :class:`~mtmcal_bayes.errors.InputError` (the file, key ``ballbar.runs``) when the campaign has no
         measured run of either instrument: a campaign designed but not yet measured, or a machine with set-ups
         only."""
-        if self.ballbar.runs or self.has_probe_readings():
+        if self.ballbar.runs or self.has_probe_readings() or self.has_rtest_readings():
             return
         n = len(self.ballbar.planned)
         if n:
@@ -440,6 +526,10 @@ class Campaign:
     def has_probe_readings(self) -> bool:
         """Whether the campaign has touch-probe readings (a probe run)."""
         return self.probe is not None and bool(self.probe.runs)
+
+    def has_rtest_readings(self) -> bool:
+        """Whether the campaign has R-test readings (an R-test run)."""
+        return self.rtest is not None and bool(self.rtest.runs)
 
     def runs_of(self, pattern: str) -> list[Run]:
         return [r for r in self.ballbar.runs if r.pattern == pattern]

@@ -19,7 +19,8 @@ from .version import __version__
 PROG = "mtmcal-bayes"
 #: API parameters set by something other than the flag of the same name
 FLAG_OF = {"start": "--x0/--y0/--z0", "steps": "--step", "ramps": "--ramp", "n": "--campaigns"}
-DATA_OPTION = dict(choices=DATA, default=None, help="measurements in the likelihood: ball bar, probe, or both (default: "
+DATA_OPTION = dict(choices=DATA, default=None, help="measurements in the likelihood: ball bar, probe, both (the two), "
+                   "rtest, ballbar+rtest, probe+rtest, or all (every instrument the campaign has) (default: "
                    "every instrument the campaign has; the thesis machine: the ball bar, as the thesis identifies)")
 
 

@@ -193,6 +193,37 @@ class ProbeObservations:
 
 
 @dataclass(frozen=True)
+class RTestKey:
+    """Which R-test reading an observation is: ``run`` the run's id, ``position`` its number from 1, ``component``
+    the sensors' axis (``X, Y, Z``: the machine frame's at the home pose, carried as the run's frame says)."""
+
+    run: str
+    position: int
+    component: str
+
+    @property
+    def group(self) -> str:
+        """The reading group: one run."""
+        return f"R-test {self.run}"
+
+    @property
+    def label(self) -> str:
+        return f"{self.component}@{self.run}#{self.position}"
+
+
+@dataclass(frozen=True)
+class RTestObservations(ProbeObservations):
+    """R-test readings as observations (SPEC §22): each position's mean displacement (sphere − nest), mm; ``keys``
+    :class:`RTestKey`, ``base_var`` their noise variance without the discrepancy scale, ``n`` the repeats."""
+
+    instrument = "rtest"
+
+    def noise_components(self, accuracy: float | None = None) -> dict[str, np.ndarray]:
+        """:meth:`noise_variance` by source: all of it ``"R-test readings"`` (repeat scatter, repeatability)."""
+        return {"R-test readings": self.base_var}
+
+
+@dataclass(frozen=True)
 class JointObservations:
     """Ball-bar eccentricities followed by touch-probe readings: ``parts`` in order, one vector."""
 
@@ -237,7 +268,7 @@ class JointObservations:
 
 
 def observation_instruments(observations) -> list[str]:
-    """The instrument (``"ballbar"`` or ``"probe"``) of each observation of ``observations`` (any of the three
+    """The instrument (``"ballbar"``, ``"probe"`` or ``"rtest"``) of each observation of ``observations`` (any of the three
     kinds), in order."""
     if isinstance(observations, JointObservations):
         return observations.instruments

@@ -82,10 +82,42 @@ SIGMA_MODEL = Quantity("sigma_model", "length", "sd of what the model leaves out
 #: the touch probe's own discrepancy scale (SPEC §17): a conflict between the instruments widens the one that causes it
 SIGMA_MODEL_PROBE = Quantity("sigma_model_probe", "length", "sd of what the model leaves out of the touch-probe "
                              "readings (thermal drift between indexed positions, stylus bending, pre-travel lobing)")
+#: the R-test's own discrepancy scale (SPEC §22), like the probe's
+SIGMA_MODEL_RTEST = Quantity("sigma_model_rtest", "length", "sd of what the model leaves out of the R-test "
+                             "readings (thermal drift between positions, sensor non-linearity, the sphere's form)")
 #: the discrepancy scale of each instrument's observations, by instrument
-DISCREPANCY_SCALES: dict[str, Quantity] = {"ballbar": SIGMA_MODEL, "probe": SIGMA_MODEL_PROBE}
+DISCREPANCY_SCALES: dict[str, Quantity] = {"ballbar": SIGMA_MODEL, "probe": SIGMA_MODEL_PROBE,
+                                           "rtest": SIGMA_MODEL_RTEST}
 #: what each scale is called in sentences
-SCALE_LABEL = {"sigma_model": "σ_model (ball bar)", "sigma_model_probe": "σ_model (probe)"}
+SCALE_LABEL = {"sigma_model": "σ_model (ball bar)", "sigma_model_probe": "σ_model (probe)",
+               "sigma_model_rtest": "σ_model (R-test)"}
+
+#: which measurements a likelihood uses (``data``), by value: the instruments of each, in the order of the
+#: observation vector; ``"both"`` keeps its meaning (ball bar and probe), ``"all"`` is every instrument the campaign
+#: has (:func:`data_instruments`)
+DATA_INSTRUMENTS: dict[str, tuple[str, ...] | None] = {
+    "ballbar": ("ballbar",), "probe": ("probe",), "both": ("ballbar", "probe"), "rtest": ("rtest",),
+    "ballbar+rtest": ("ballbar", "rtest"), "probe+rtest": ("probe", "rtest"), "all": None}
+
+
+def data_instruments(data: str, campaign=None) -> tuple[str, ...]:
+    """The instruments whose observations the likelihood of ``data`` (a key of :data:`DATA_INSTRUMENTS`) uses:
+    ``"all"`` the ones ``campaign`` has readings of (every instrument without a campaign)."""
+    fixed = DATA_INSTRUMENTS[data]
+    if fixed is not None:
+        return fixed
+    if campaign is None:
+        return ("ballbar", "probe", "rtest")
+    has = {"ballbar": bool(campaign.ballbar.runs), "probe": campaign.has_probe_readings(),
+           "rtest": campaign.has_rtest_readings()}
+    return tuple(i for i, ok in has.items() if ok)
+
+
+def ballbar_probe_data(instruments) -> str | None:
+    """The ``data`` value (``"ballbar"``, ``"probe"``, ``"both"``) of the ball-bar and probe part of
+    ``instruments``, None where they have neither: what a machine's own models (a plug-in's) are asked for."""
+    have = tuple(i for i in ("ballbar", "probe") if i in instruments)
+    return {("ballbar",): "ballbar", ("probe",): "probe", ("ballbar", "probe"): "both"}.get(have)
 
 
 def is_scale(name: str) -> bool:
@@ -151,6 +183,21 @@ SPHERE_NUISANCE: dict[str, Quantity] = {
 #: every touch-probe nuisance quantity, by base name
 PROBE_NUISANCE: dict[str, Quantity] = {**STYLUS_NUISANCE, **SPHERE_NUISANCE}
 
+#: nuisance quantities of the R-test (SPEC §22): per run its sensors' zero (``zero = "first"``), per placement the
+#: sphere's placement error, per nest its length error and its centre's offset across the spindle
+RTEST_NUISANCE: dict[str, Quantity] = {
+    "xZR": Quantity("xZR", "length", "R-test zero of a run along the sensors' first axis (X at the home pose)"),
+    "yZR": Quantity("yZR", "length", "R-test zero of a run along the sensors' second axis (Y at the home pose)"),
+    "zZR": Quantity("zZR", "length", "R-test zero of a run along the sensors' third axis (Z at the home pose)"),
+    "xPR": Quantity("xPR", "length", "R-test sphere placement along X, workpiece side at the home pose"),
+    "yPR": Quantity("yPR", "length", "R-test sphere placement along Y, workpiece side at the home pose"),
+    "zPR": Quantity("zPR", "length", "R-test sphere placement along Z, workpiece side at the home pose"),
+    "xNR": Quantity("xNR", "length", "R-test nest centre offset along X of the spindle frame"),
+    "yNR": Quantity("yNR", "length", "R-test nest centre offset along Y of the spindle frame"),
+    "zNR": Quantity("zNR", "length", "R-test nest centre offset along Z of the spindle frame"),
+    "dLR": Quantity("dLR", "length", "R-test nest length error, true minus stated (+ = longer)"),
+}
+
 #: what each nuisance base name stands for, in a calibration engineer's words (for sentences naming a prior)
 NUISANCE_MEANING: dict[str, str] = {
     "xT": "T-ball centring, X", "yT": "T-ball centring, Y", "zT": "T-ball centre along the spindle axis",
@@ -158,7 +205,10 @@ NUISANCE_MEANING: dict[str, str] = {
     "zW": "W-ball clamping, Z", "xS": "stylus centring, X", "yS": "stylus centring, Y",
     "zS": "stylus centring, Z", "zP": "sphere placement, Z", "dRS": "stylus length", "rS": "stylus-ball radius / pre-travel", "xP": "sphere placement, radial",
     "yP": "sphere placement, tangential", "xD": "reading datum, X", "yD": "reading datum, Y",
-    "zD": "reading datum, Z",
+    "zD": "reading datum, Z", "xZR": "R-test zero, X", "yZR": "R-test zero, Y", "zZR": "R-test zero, Z",
+    "xPR": "R-test sphere placement, X", "yPR": "R-test sphere placement, Y", "zPR": "R-test sphere placement, Z",
+    "xNR": "R-test nest centring, X", "yNR": "R-test nest centring, Y", "zNR": "R-test nest centring, Z",
+    "dLR": "R-test nest length",
 }
 
 
@@ -167,7 +217,7 @@ def quantity_unit(name: str) -> str:
     (base name ``"xT"`` or full name ``"xT[RB1]"``) or a discrepancy scale."""
     base = name.split("[")[0]
     scales = {q.name: q for q in DISCREPANCY_SCALES.values()}
-    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, PROBE_NUISANCE, scales):
+    for table in (QUANTITIES, SETUP_NUISANCE, MOUNT_NUISANCE, PROBE_NUISANCE, RTEST_NUISANCE, scales):
         if base in table:
             return table[base].unit
     kind = iso_kind(base)
@@ -199,7 +249,7 @@ class Parameter:
 
     name: str
     base: str
-    group: str  # "deviation", "setup", "mount" or "probe"
+    group: str  # "deviation", "setup", "mount", "probe" or "rtest"
     owner: str | None
     kind: str
 
@@ -229,9 +279,12 @@ class ParameterSpace:
     probe:
         Touch-probe nuisance terms as ``(owner, base)`` pairs, in order (e.g. ``("short", "xS")``,
         ``("run1", "xP")``); see :data:`PROBE_NUISANCE`.
+    rtest:
+        R-test nuisance terms as ``(owner, base)`` pairs, in order, after the probe's; see :data:`RTEST_NUISANCE`.
     """
 
-    def __init__(self, setups, mounts, deviations=None, probe=(), *, table: dict[str, Quantity] | None = None):
+    def __init__(self, setups, mounts, deviations=None, probe=(), *, table: dict[str, Quantity] | None = None,
+                 rtest=()):
         table = DEVIATIONS if table is None else table
         names = list(table) if deviations is None else [d for d in table if d in set(deviations)]
         params = [Parameter(n, n, "deviation", None, table[n].kind) for n in names]
@@ -240,18 +293,22 @@ class ParameterSpace:
         for m in mounts:
             params += [Parameter(nuisance_name(q.name, m), q.name, "mount", m, q.kind) for q in MOUNT_NUISANCE.values()]
         params += [Parameter(nuisance_name(b, o), b, "probe", o, PROBE_NUISANCE[b].kind) for o, b in probe]
+        params += [Parameter(nuisance_name(b, o), b, "rtest", o, RTEST_NUISANCE[b].kind) for o, b in rtest]
         self.parameters: tuple[Parameter, ...] = tuple(params)
         self._index = {p.name: i for i, p in enumerate(self.parameters)}
 
     @classmethod
     def for_campaign(cls, campaign, deviations=None, data: str = "ballbar") -> ParameterSpace:
-        """The space of ``campaign`` for the data ``"ballbar"``, ``"probe"`` or ``"both"``: the
-        ball-bar nuisance terms with ball-bar data, the probe terms with probe data."""
-        bb = data in ("ballbar", "both")
+        """The space of ``campaign`` for ``data`` (:data:`DATA_INSTRUMENTS`): the ball-bar nuisance terms with
+        ball-bar data, the probe terms with probe data, the R-test terms with R-test data."""
+        used = data_instruments(data, campaign)
+        bb = "ballbar" in used
         probe = (campaign.probe.nuisance_terms(campaign.machine.description)
-                 if data in ("probe", "both") and campaign.probe else ())
+                 if "probe" in used and campaign.probe else ())
+        rtest = campaign.rtest.nuisance_terms(campaign.machine.description) \
+            if "rtest" in used and campaign.rtest else ()
         return cls(list(campaign.ballbar.setups) if bb else [], list(campaign.ballbar.mounts) if bb else [],
-                   deviations, probe)
+                   deviations, probe, rtest=rtest)
 
     def __len__(self) -> int:
         return len(self.parameters)

@@ -38,13 +38,18 @@ from .log_posterior import LogPosterior
 #: quantiles of sigma_model's posterior the budget is averaged over
 N_SIGMA = 64
 #: the noise sources, in display order (the probe's only with probe data)
-NOISE_SOURCES = ("repeatability", "instrument", "probe readings", "sigma_model", "sigma_model_probe")
+NOISE_SOURCES = ("repeatability", "instrument", "probe readings", "R-test readings", "sigma_model",
+                 "sigma_model_probe", "sigma_model_rtest")
 #: prior groups of the nuisance parameters, by base name (``prior:<group>`` in the budget)
 PRIOR_GROUP = {"xT": "T-ball centring", "yT": "T-ball centring", "zT": "T-ball centring", "dRB": "dRB",
                "xW": "W-ball clamping", "yW": "W-ball clamping", "zW": "W-ball clamping",
                "xS": "stylus centring", "yS": "stylus centring", "zS": "stylus centring", "dRS": "dRS", "rS": "rS",
                "xP": "sphere placement", "yP": "sphere placement", "zP": "sphere placement",
-               "xD": "reading datum", "yD": "reading datum", "zD": "reading datum"}
+               "xD": "reading datum", "yD": "reading datum", "zD": "reading datum",
+               "xZR": "R-test zero", "yZR": "R-test zero", "zZR": "R-test zero",
+               "xPR": "R-test sphere placement", "yPR": "R-test sphere placement", "zPR": "R-test sphere placement",
+               "xNR": "R-test nest centring", "yNR": "R-test nest centring", "zNR": "R-test nest centring",
+               "dLR": "R-test nest length"}
 #: what each source is, for sentences ("87 % of the variance comes from …")
 MEANING = {"repeatability": "the repeatability of the measurements (scatter of the repeats)",
            "instrument": "the ball bar's accuracy", "probe readings": "the touch-probe readings' own noise",
@@ -56,7 +61,13 @@ MEANING = {"repeatability": "the repeatability of the measurements (scatter of t
            "prior:dRB": "the tool-length prior dRB (dial gauge, 10 µm)",
            "prior:W-ball clamping": "the W-ball clamping prior", "prior:stylus centring": "the stylus centring prior",
            "prior:dRS": "the stylus-length prior", "prior:rS": "the stylus-radius (pre-travel) prior",
-           "prior:sphere placement": "the sphere-placement prior", "prior:reading datum": "the reading-datum prior"}
+           "prior:sphere placement": "the sphere-placement prior", "prior:reading datum": "the reading-datum prior",
+           "R-test readings": "the R-test readings' own noise",
+           "sigma_model_rtest": "the assumed model-discrepancy scale of the R-test, σ_model (R-test)",
+           "prior:R-test zero": "the R-test zero prior (broad)",
+           "prior:R-test sphere placement": "the R-test sphere-placement prior",
+           "prior:R-test nest centring": "the R-test nest-centring prior",
+           "prior:R-test nest length": "the R-test nest-length prior"}
 
 
 def sigma_prior_sources(post: LogPosterior) -> dict[str, dict]:

@@ -58,7 +58,9 @@ class LogPosterior:
     model : ``"linear"``, ``"htm-literal"`` or ``"htm-thesis"``
     fix_dx_BT : impose the thesis assumption dx_BT = 0 (Eq 4.2)
     sigma_model : fix the model-discrepancy scales (mm; one value for every scale) instead of sampling them
-    data : ``"ballbar"`` (eccentricities), ``"probe"`` (touch-probe readings) or ``"both"``
+    data : ``"ballbar"`` (eccentricities), ``"probe"`` (touch-probe readings), ``"both"`` (the two), ``"rtest"``
+        (R-test readings), their combinations ``"ballbar+rtest"``, ``"probe+rtest"``, or ``"all"``
+        (:data:`~mtmcal_bayes.parameters.DATA_INSTRUMENTS`)
     sigma_prior : a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere: the prior of each scale it
         names (log-normal) instead of the assumed default; None: the defaults (or the campaign's ``[priors]``)
     space, observations, probe_layout : the :func:`parameter_space` of these choices, the campaign's ball-bar
@@ -90,14 +92,15 @@ class LogPosterior:
         self.forward = make_model(model, campaign, self.space, data, observations=observations,
                                   probe_layout=probe_layout)
         #: the campaign's ball-bar observations (None for probe data alone)
-        self.ballbar_observations = observations or (
-            self.forward.parts[0].observations if isinstance(self.forward, JointModel) else
-            self.forward.observations if data == "ballbar" else None)
+        parts = self.forward.parts if isinstance(self.forward, JointModel) else [self.forward]
+        self.ballbar_observations = observations or next(
+            (p.observations for p in parts if p.observations.instrument == "ballbar"), None)
         instruments = observation_instruments(self.forward.observations)
         self.scales = tuple(DISCREPANCY_SCALES[i].name for i in dict.fromkeys(instruments))
         self.scale_of = np.array([self.scales.index(DISCREPANCY_SCALES[i].name) for i in instruments], dtype=int)
         self.likelihood = GaussianMeanLikelihood(self.forward.observations, campaign.ballbar.accuracy, self.scale_of)
-        priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
+        stated = campaign.rtest.prior_sds() if campaign.rtest is not None else None
+        priors = [make_prior(p.name, p.base, p.kind, campaign.priors, stated=stated) for p in self.space.parameters]
         self.fixed_sigma = sigma_model
         self.sigma_prior = sigma_prior
         self.p = len(self.space)

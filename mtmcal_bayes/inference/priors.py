@@ -46,7 +46,15 @@ DEFAULTS = {
     "sigma_model": ("halfnormal", 2.0, "dynamics, thermal drift and pitch error are not in the model"),
     "sigma_model_probe": ("halfnormal", 2.0, "thermal drift between indexed positions, stylus bending and pre-travel "
                           "lobing are not in the probe model"),
+    "xZR": ("normal", 1000.0, "broad: the sensors were zeroed at the run's first position, wherever the sphere was"),
+    "yZR": ("normal", 1000.0, "broad: the sensors were zeroed at the run's first position, wherever the sphere was"),
+    "zZR": ("normal", 1000.0, "broad: the sensors were zeroed at the run's first position, wherever the sphere was"),
+    "sigma_model_rtest": ("halfnormal", 2.0, "thermal drift between positions, sensor non-linearity and the sphere's "
+                          "form are not in the R-test model"),
 }
+#: the R-test's placement and nest terms take the prior sds its ``[rtest]`` states (SPEC §22; ``stated`` of
+#: :func:`make_prior`), normal about zero
+STATED_REASON = "stated in the campaign's [rtest] (its default where not given, SPEC §22)"
 
 
 @dataclass(frozen=True)
@@ -114,9 +122,14 @@ class Prior:
         return f"Uniform({d(self.loc)}, {d(self.loc + self.scale)} {sym})"
 
 
-def make_prior(name: str, base: str, kind: str, overrides: dict[str, dict]) -> Prior:
-    """The prior of parameter ``name`` (base name ``base``): campaign override, else default."""
+def make_prior(name: str, base: str, kind: str, overrides: dict[str, dict], *,
+               stated: dict[str, float] | None = None) -> Prior:
+    """The prior of parameter ``name`` (base name ``base``): campaign override, else the sd an instrument's section
+    states for it (``stated`` {base: sd, internal units}: the R-test's, :meth:`~mtmcal_bayes.campaign.RTest.prior_sds`),
+    else default."""
     unit = "arcsec" if kind == "angle" else "um"
+    if base not in overrides and stated and base in stated:
+        return Prior(name, "normal", 0.0, stated[base], unit, STATED_REASON)
     if base in overrides:
         spec = overrides[base]
         reason = "set in the campaign's [priors]"

@@ -22,6 +22,7 @@ from ..parameters import (
     DISCREPANCY_SCALES,
     MOUNT_NUISANCE,
     PROBE_NUISANCE,
+    RTEST_NUISANCE,
     SETUP_NUISANCE,
 )
 from ..machines.deviations import quantities as deviation_table
@@ -64,14 +65,14 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     """Parse and validate campaign TOML ``text``; ``source`` names it in error messages."""
     r = TomlReader(source)
     doc = parse_toml(text, source, f"a campaign TOML with format = \"{FORMAT}\"")
-    r.check_keys(doc, {"format", "machine", "ballbar", "probe", "reported", "priors", "truth", "tolerances", "date",
+    r.check_keys(doc, {"format", "machine", "ballbar", "probe", "rtest", "reported", "priors", "truth", "tolerances", "date",
                        "temperature_C", "design"}, "")
     fmt = r.string(doc, "format", "", required=True)
     if fmt != FORMAT:
         r.fail("format", f"unknown format {fmt!r} (this version reads {FORMAT!r})")
 
     machine = _machine(r, doc.get("machine"), base_dir)
-    ballbar, probe = measurement_sections(r, doc, machine, base_dir)
+    ballbar, probe, rtest = measurement_sections(r, doc, machine, base_dir)
     deviations = deviation_quantities(machine)
     reported = {}
     if "reported" in doc:  # a plug-in's published values (the thesis': Tables 4.5 and 5.3), read by the plug-in
@@ -82,7 +83,8 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
         reported = read_reported(r, r.table(doc, "reported", ""), text)
     priors = _priors(r, r.table(doc, "priors", "", required=False) or {}, deviations)
     truth_t = r.table(doc, "truth", "", required=False)
-    truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe, machine=machine) if truth_t is not None else None
+    truth = parse_truth(r, truth_t, "truth", ballbar, probe=probe, machine=machine, rtest=rtest) \
+        if truth_t is not None else None
     tolerances = parse_tolerances(r, r.table(doc, "tolerances", "", required=False) or {},
                                   names=machine_names(machine))
     temperature = r.number(doc, "temperature_C", "", required=False)
@@ -91,7 +93,7 @@ def parse_campaign(text: str, source: str = "<campaign>", base_dir: Path | None 
     design_t = r.table(doc, "design", "", required=False)
     design = _design(r, design_t, provided(machine, "quantity_table", deviations)) if design_t is not None else None
     return Campaign(machine, ballbar, probe, reported, priors, truth, source, base_dir, tolerances,
-                    _date(r, doc), temperature, design)
+                    _date(r, doc), temperature, design, rtest)
 
 
 def _machine(r: TomlReader, t, base_dir: Path | None) -> Machine:
@@ -167,14 +169,15 @@ def _prior_bounds(r: TomlReader, v: float, key: str, *, unit: str, sd: bool) -> 
 
 def _priors(r: TomlReader, t: dict, deviations: dict | None = None) -> dict[str, dict]:
     known = {**{k: q.unit for k, q in (DEVIATIONS if deviations is None else deviations).items()},
-             **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE, **PROBE_NUISANCE}.items()},
+             **{k: q.unit for k, q in {**SETUP_NUISANCE, **MOUNT_NUISANCE, **PROBE_NUISANCE,
+                                       **RTEST_NUISANCE}.items()},
              **{scale: "um" for scale in SCALES}}
     out = {}
     for name, spec in t.items():
         path = f"priors.{name}"
         if name not in known:
             r.fail(path, "unknown parameter (expected a deviation name, one of xT yT zT dRB xW yW zW, "
-                   f"a probe term ({' '.join(PROBE_NUISANCE)}) or a discrepancy scale ({' '.join(SCALES)}))")
+                   f"a probe term ({' '.join(PROBE_NUISANCE)}), an R-test term ({' '.join(RTEST_NUISANCE)}) or a discrepancy scale ({' '.join(SCALES)}))")
         if not isinstance(spec, dict):
             r.fail(path, "expected an inline table such as {dist = \"normal\", sd_arcsec = 30}")
         dist = r.string(spec, "dist", path, required=True)
@@ -235,10 +238,11 @@ def _design(r: TomlReader, t: dict, known: dict) -> DesignGoal:
 
 
 def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: Probe | None = None,
-                machine: Machine | None = None) -> Truth:
-    """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``, ``probe.<owner>``) located at ``path``;
-    a described ``machine``'s deviations by their ISO symbols (its thesis names on the thesis machine)."""
-    r.check_keys(t, {"deviations", "setups", "mounts", "probe"}, path)
+                machine: Machine | None = None, rtest=None) -> Truth:
+    """Parse truth tables (``deviations``, ``setups.<id>``, ``mounts.<id>``, ``probe.<owner>``, ``rtest.<owner>``)
+    located at ``path``; a described ``machine``'s deviations by their ISO symbols (its thesis names on the thesis
+    machine)."""
+    r.check_keys(t, set(TRUTH_TABLES), path)
     truth = Truth()
     known = deviation_quantities(machine) if machine is not None else DEVIATIONS
     dev = r.table(t, "deviations", path, required=False) or {}
@@ -251,13 +255,16 @@ def parse_truth(r: TomlReader, t: dict, path: str, ballbar: Ballbar, *, probe: P
         truth.deviations[name] = units.to_internal(r.number(dev, key, f"{path}.deviations"), unit)
     probe_owners = {o for o, _ in probe.nuisance_terms(machine.description if machine is not None else None)} \
         if probe is not None else set()
+    rtest_owners = {o for o, _ in rtest.nuisance_terms(machine.description)} if rtest is not None else set()
     for group, table, owners in (("setups", SETUP_NUISANCE, ballbar.setups),
                                  ("mounts", MOUNT_NUISANCE, ballbar.mounts),
-                                 ("probe", PROBE_NUISANCE, probe_owners)):
+                                 ("probe", PROBE_NUISANCE, probe_owners),
+                                 ("rtest", RTEST_NUISANCE, rtest_owners)):
         for oid, vals in (r.table(t, group, path, required=False) or {}).items():
             op = f"{path}.{group}.{oid}"
             if oid not in owners:
-                where = "[probe] (its styli and runs)" if group == "probe" else f"[ballbar.{group}]"
+                where = {"probe": "[probe] (its styli and runs)", "rtest": "[rtest] (its runs, placements and "
+                         "nests)"}.get(group, f"[ballbar.{group}]")
                 r.fail(op, f"no such {group.rstrip('s')} in {where} (have: {', '.join(owners) or 'none'})")
             if not isinstance(vals, dict):
                 r.fail(op, f"expected a table, got {kind_of(vals)}")
@@ -282,11 +289,12 @@ def load_truth(path, campaign: Campaign) -> Truth:
             r.fail("truth", f"both [truth.…] and top-level [{'], ['.join(sorted(TRUTH_TABLES & set(doc)))}]: write "
                    "the truth one way")
         return parse_truth(r, r.table(doc, "truth", ""), "truth", campaign.ballbar, probe=campaign.probe,
-                           machine=campaign.machine)
-    return parse_truth(r, doc, "", campaign.ballbar, probe=campaign.probe, machine=campaign.machine)
+                           machine=campaign.machine, rtest=campaign.rtest)
+    return parse_truth(r, doc, "", campaign.ballbar, probe=campaign.probe, machine=campaign.machine,
+                       rtest=campaign.rtest)
 
 
 #: the tables of a truth
-TRUTH_TABLES = {"deviations", "setups", "mounts", "probe"}
+TRUTH_TABLES = {"deviations", "setups", "mounts", "probe", "rtest"}
 
 

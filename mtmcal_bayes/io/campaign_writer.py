@@ -1,7 +1,8 @@
 """Writing campaigns as TOML (``mtmcal-campaign/1``): file units, traces relative to the file, atomically.
 
 One writer for every machine, the inverse of the one reader (:mod:`.campaign_reader`): the format line, date and
-temperature, ``[ballbar]`` (:mod:`.ballbar_writer`), the probe's instrument and repeatability, ``[reported]``,
+temperature, ``[ballbar]`` (:mod:`.ballbar_writer`), the probe's instrument and repeatability, ``[rtest]``
+(:mod:`.rtest_section`), ``[reported]``,
 ``[priors]``, ``[tolerances]``, ``[truth]`` and ``[design]`` are the engine's; the machine contributes what its
 campaign format has of its own — its keys of ``[ballbar]`` (its ``ballbar_keys``) and its probe's sections
 (``probe_document``, for the runs read from them) — and the engine writes every other probe run as
@@ -24,6 +25,7 @@ from .ballbar_writer import ballbar_to_dict, relative_path
 from .campaign_reader import FORMAT, deviation_quantities
 from .description_writer import machine_table
 from .design_table import design_to_dict
+from .rtest_section import rtest_document
 from .textfiles import write_text_atomic
 from .tomlio import Fixed, dumps
 from .truth_table import truth_to_dict
@@ -47,6 +49,8 @@ def campaign_to_dict(c: Campaign, save_dir: Path | None = None) -> dict:
     probe = _probe(c, lambda name: relative_path(c, name, save_dir)) if c.probe is not None else {}
     if probe:  # a probe that states nothing (no instrument, repeatability, stylus or run) is not written
         doc["probe"] = probe
+    if c.rtest is not None:
+        doc["rtest"] = rtest_document(c.rtest)
     quantities = provided(m, "quantity_table") or deviation_quantities(m)  # the names the reader takes
 
     def unit(name: str) -> str:  # a quantity's, a nuisance term's or a discrepancy scale's

@@ -1,5 +1,6 @@
-"""A campaign's measurement sections, ``[ballbar]`` and ``[probe]``: one reader for every machine (SPEC §19, §20,
-docs/machines.md).  ``[ballbar]`` is read by :mod:`.ballbar_section`; ``[probe]`` here.  A plug-in whose campaign
+"""A campaign's measurement sections, ``[ballbar]``, ``[probe]`` and ``[rtest]``: one reader for every machine (SPEC §19, §20,
+docs/machines.md).  ``[ballbar]`` is read by :mod:`.ballbar_section`, ``[rtest]`` by :mod:`.rtest_section`;
+``[probe]`` here.  A plug-in whose campaign
 format has probe sections of its own (the thesis': its C-axis and B-axis runs) names them (``probe_keys``) and reads
 them into the same runs and styli (``read_probe_keys``); everything else of ``[probe]`` is the engine's on every
 machine, beside them or instead of them.
@@ -16,29 +17,34 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import units
-from ..campaign import Ballbar, Machine, Probe, ProbeRun
+from ..campaign import Ballbar, Machine, Probe, ProbeRun, RTest
 from ..machines.description import MachineDescription
 from ..machines.plugins import provided
 from .ballbar_section import read_ballbar
 from .probe_readings import probe_readings
+from .rtest_section import read_rtest
 from .toml_reader import TomlReader
 
 #: the engine's keys of ``[probe]``
 PROBE_KEYS = ("instrument", "repeatability_um", "styli", "runs")
 
 
-def measurement_sections(r: TomlReader, doc: dict, machine: Machine, base_dir: Path | None) -> tuple[Ballbar, Probe]:
-    """``[ballbar]`` (:func:`~.ballbar_section.read_ballbar`, with the machine's own keys) and ``[probe]``
-    (:func:`read_probe`) of a campaign on ``machine``; a campaign measures something (ball-bar or probe runs) or
-    gives a ball bar's set-ups and mounts to design a campaign for."""
+def measurement_sections(r: TomlReader, doc: dict, machine: Machine,
+                         base_dir: Path | None) -> tuple[Ballbar, Probe, RTest | None]:
+    """``[ballbar]`` (:func:`~.ballbar_section.read_ballbar`, with the machine's own keys), ``[probe]``
+    (:func:`read_probe`) and ``[rtest]`` (:func:`~.rtest_section.read_rtest`) of a campaign on ``machine``; a campaign
+    measures something (ball-bar, probe or R-test runs) or gives a ball bar's set-ups and mounts to design a campaign
+    for."""
     probe_t = r.table(doc, "probe", "", required=False)
+    rtest_t = r.table(doc, "rtest", "", required=False)
     ballbar = read_ballbar(r, r.table(doc, "ballbar", "", required=False), machine, base_dir)
     probe = read_probe(r, probe_t, machine, base_dir, ballbar=ballbar) if probe_t is not None else None
-    if not ballbar.runs and not ballbar.planned and not (probe and probe.runs) and not (ballbar.setups and
-                                                                                      ballbar.mounts):
-        r.fail("ballbar", "no measurements: give [[ballbar.runs]] or [probe] with its runs (or, for a machine to "
-               "design a campaign for, its [ballbar.setups] and [ballbar.mounts])")
-    return ballbar, probe
+    rtest = read_rtest(r, rtest_t, machine.description) if rtest_t is not None else None
+    if not ballbar.runs and not ballbar.planned and not (probe and probe.runs) and not rtest and \
+            not (ballbar.setups and ballbar.mounts):
+        r.fail("ballbar", "no measurements: give [[ballbar.runs]], [probe] with its runs or [rtest] with its runs "
+               "(or, for a machine to design a campaign for, its [ballbar.setups] and [ballbar.mounts])")
+    return ballbar, probe, rtest
 
 
 def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballbar: Ballbar | None = None) -> Probe:

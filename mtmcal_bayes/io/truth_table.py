@@ -10,7 +10,7 @@ from ..parameters import quantity_unit
 def truth_to_dict(t: Truth) -> dict:
     unit = {n: quantity_unit(n) for n in t.deviations}  # the thesis' names, or a described machine's ISO symbols
     d: dict = {"deviations": {f"{n}_{unit[n]}": units.from_internal(v, unit[n]) for n, v in t.deviations.items()}}
-    for group in ("setups", "mounts", "probe"):
+    for group in ("setups", "mounts", "probe", "rtest"):
         vals = getattr(t, group)
         if vals:
             d[group] = {oid: {f"{k}_um": units.from_internal(v, "um") for k, v in kv.items()}

@@ -33,3 +33,26 @@ def probe_terms(desc: MachineDescription | None, probe) -> list[tuple[str, str]]
         spheres.setdefault(run.id, tuple(run.sphere_terms) + tuple(run.datum_terms))
     return [(s, b) for s, terms in styli.items() for b in terms] + \
         [(rid, b) for rid, terms in spheres.items() for b in terms]
+
+
+#: the R-test's zero of a run (``zero = "first"``) and a sphere's placement, by frame axis (SPEC §22)
+RTEST_ZERO_TERMS = ("xZR", "yZR", "zZR")
+RTEST_PLACEMENT_TERMS = ("xPR", "yPR", "zPR")
+
+
+def nest_terms(desc: MachineDescription) -> tuple[str, ...]:
+    """The nuisance terms of one R-test nest: its centre's offset across the spindle, then its length error."""
+    along = FRAME[desc.spindle.frame_axis].lower()
+    return tuple(f"{a}NR" for a in "xyz" if a != along) + ("dLR",)
+
+
+def rtest_terms(desc: MachineDescription, rtest) -> list[tuple[str, str]]:
+    """``(owner, base)`` pairs of a campaign's R-test (SPEC §22): each run's zero (``zero = "first"``), each
+    placement's sphere error (in the order its runs first name it), each nest's terms unless it is calibrated (in
+    the order its runs first use it)."""
+    zeros = [(run.id, b) for run in rtest.runs if run.zero == "first" for b in RTEST_ZERO_TERMS]
+    places = [(p, b) for p in dict.fromkeys(rtest.placement_of(run) for run in rtest.runs)
+              for b in RTEST_PLACEMENT_TERMS]
+    nests = [(n, b) for n in dict.fromkeys(run.nest for run in rtest.runs) if not rtest.nests[n].calibrated
+             for b in nest_terms(desc)]
+    return zeros + places + nests

@@ -15,11 +15,13 @@ import numpy as np
 from ..errors import ParameterError
 from ..machines.plugins import provided
 from ..machines.space import described_space
+from ..parameters import DATA_INSTRUMENTS, ParameterSpace, ballbar_probe_data, data_instruments
 from .ballbar import BallbarModel, ChainBallbarModel
 from .chain_models import ChainProbeModel, FirstOrderModel
 from .jacobian import jacobian, jacobian_at_zero
 from .joint import JointModel
 from .probe import ProbeModel
+from .rtest import RTestModel
 
 #: the kinematic (homogeneous-transform) models of the thesis machine, which can also compensate NC programs (their
 #: code is the thesis plug-in's: ``mtmcal_bayes.plugins.thesis``)
@@ -52,19 +54,37 @@ def default_kinematic_model(machine) -> str:
     return provided(machine, "kinematic_model", CHAIN)
 
 
-#: which measurements a likelihood uses: ball-bar eccentricities, touch-probe readings, or both
-DATA = ("ballbar", "probe", "both")
+#: which measurements a likelihood uses: ball-bar eccentricities, touch-probe readings, both of them, R-test
+#: readings, the R-test with one of the others, or every instrument the campaign has
+#: (:data:`~mtmcal_bayes.parameters.DATA_INSTRUMENTS`)
+DATA = tuple(DATA_INSTRUMENTS)
 
 
 def check_data(data: str, campaign=None, parameter: str = "data") -> str:
     """``data`` if it is one of :data:`DATA` (and ``campaign`` has the readings it asks for)."""
     if data not in DATA:
         raise ParameterError(parameter, f"unknown data {data!r} (expected one of {', '.join(DATA)})")
-    if data != "ballbar" and campaign is not None and not campaign.has_probe_readings():
+    used = data_instruments(data, campaign)
+    if campaign is not None and not used:
+        raise ParameterError(parameter, f"{data!r}: the campaign {campaign.source} has no readings of any instrument")
+    if "rtest" in used and campaign is not None and not campaign.has_rtest_readings():
+        raise ParameterError(parameter, f"{data!r} needs R-test readings, and the campaign {campaign.source} has no "
+                             "[[rtest.runs]]")
+    if "rtest" in used and campaign is not None and campaign.machine.description is None:
+        raise ParameterError(parameter, f"{data!r}: the R-test model needs the machine's description, and the "
+                             f"campaign {campaign.source} names none")
+    if DATA_INSTRUMENTS[data] is not None and ("ballbar" in used or "probe" in used):
+        return _check_ballbar_probe(ballbar_probe_data(used), data, campaign, parameter)
+    return data
+
+
+def _check_ballbar_probe(part: str, data: str, campaign, parameter: str) -> str:
+    """The checks of the ball-bar and probe part ``part`` (``"ballbar"``, ``"probe"``, ``"both"``) of ``data``."""
+    if part != "ballbar" and campaign is not None and not campaign.has_probe_readings():
         where = provided(campaign.machine, "probe_sections", "[[probe.runs]]")
         raise ParameterError(parameter, f"{data!r} needs touch-probe readings, and the campaign {campaign.source} "
                              f"has no {where}")
-    if data != "probe" and campaign is not None and not campaign.ballbar.runs and campaign.has_probe_readings():
+    if part != "probe" and campaign is not None and not campaign.ballbar.runs and campaign.has_probe_readings():
         raise ParameterError(parameter, f"{data!r} needs ball-bar runs, and the campaign {campaign.source} has no "
                              "[[ballbar.runs]] (a probe-only campaign: use the probe data)")
     return data
@@ -83,9 +103,25 @@ def make_model(name: str, campaign, space=None, data: str = "ballbar", *, observ
 
 def build_model(name: str, campaign, space=None, data: str = "ballbar", *, observations=None, probe_layout=None):
     """:func:`make_model` without its checks of ``name`` and ``data``: for a caller that checked them against the
-    campaign it plans for and builds the rows of other campaigns (a planner's candidate runs)."""
-    build = provided(campaign.machine, "make_model", _engine_model)
-    return build(name, campaign, space, data, observations=observations, probe_layout=probe_layout)
+    campaign it plans for and builds the rows of other campaigns (a planner's candidate runs).  The ball-bar and
+    probe part is the machine's (its plug-in's where it builds its own), the R-test part the engine's on every
+    machine."""
+    used = data_instruments(data, campaign)
+    part = ballbar_probe_data(used)
+    if "rtest" not in used:  # the ball bar, the probe or both, by the name a machine's own models know ("all" too)
+        build = provided(campaign.machine, "make_model", _engine_model)
+        return build(name, campaign, space, part or data, observations=observations, probe_layout=probe_layout)
+    if space is None:
+        own = provided(campaign.machine, "make_model") is not None  # its own models lay out their own space
+        space = ParameterSpace.for_campaign(campaign, data=data) if own else described_space(campaign, data=data)
+    parts = []
+    if part is not None:
+        build = provided(campaign.machine, "make_model", _engine_model)
+        first = build(name, campaign, space, part, observations=observations, probe_layout=probe_layout)
+        parts += first.parts if isinstance(first, JointModel) else [first]
+    rtest = RTestModel(campaign, space)
+    parts.append(FirstOrderModel(rtest) if name == "linear" else rtest)
+    return parts[0] if len(parts) == 1 else JointModel(parts)
 
 
 def _engine_model(name: str, campaign, space, data: str, *, observations, probe_layout=None):
@@ -93,9 +129,10 @@ def _engine_model(name: str, campaign, space, data: str, *, observations, probe_
     if space is None:
         space = described_space(campaign, data=data)
     parts = []
-    if data in ("ballbar", "both"):
+    used = data_instruments(data, campaign)
+    if "ballbar" in used:
         parts.append(ChainBallbarModel(campaign, space, observations=observations))
-    if data in ("probe", "both"):
+    if "probe" in used:
         parts.append(ProbeModel(campaign, space, layout=probe_layout))
     if name == "linear":
         parts = [FirstOrderModel(p) for p in parts]
@@ -121,6 +158,6 @@ def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -
 
 
 __all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "BallbarModel", "ChainBallbarModel",
-           "ProbeModel", "ChainProbeModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
+           "ProbeModel", "ChainProbeModel", "RTestModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
            "models_of", "default_kinematic_model", "JointModel", "first_order_gap", "jacobian",
            "jacobian_at_zero"]

@@ -94,7 +94,8 @@ def format_posterior(result) -> str:
     """Human-readable posterior summary, comparison with the deterministic results, diagnostics."""
     r = result.sampling
     s = result.summary
-    data = {"ballbar": "", "probe": ", touch-probe data", "both": ", ball-bar and touch-probe data"}[result.data]
+    data = {"ballbar": "", "probe": ", touch-probe data", "both": ", ball-bar and touch-probe data"}.get(
+        result.data, f", {result.data} data")
     lines = [f"Posterior, model {result.model}{data} ({r.chains.shape[0]} ensembles × {r.chains.shape[2]} walkers, "
              f"{r.n_steps} steps, {r.wall_time:.0f} s); 95 % HDI"]
     choice = reading_choice.has_choice(s)
@@ -166,7 +167,9 @@ def gum_block(s) -> str:
 
 #: short column heads of the budget table
 BUDGET_HEADS = {"repeatability": "repeat", "instrument": "instr.", "probe readings": "probe", "sigma_model": "σ_model",
-                "sigma_model_probe": "σ_probe",
+                "sigma_model_probe": "σ_probe", "R-test readings": "R-test", "sigma_model_rtest": "σ_rtest",
+                "prior:R-test zero": "R zero", "prior:R-test sphere placement": "R sphere",
+                "prior:R-test nest centring": "R nest", "prior:R-test nest length": "R length",
                 "sigma_model_uncertainty": "σ unknown", "prior:deviations": "dev.prior", "prior:T-ball centring": "T-ball",
                 "prior:dRB": "dRB", "prior:W-ball clamping": "W-ball", "prior:stylus centring": "stylus",
                 "prior:dRS": "dRS", "prior:rS": "rS", "prior:sphere placement": "sphere", "prior:reading datum": "datum"}

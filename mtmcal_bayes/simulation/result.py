@@ -87,12 +87,13 @@ def simulate_truth(campaign: Campaign, truth: Truth, *, model: str = "htm-thesis
                    seed: int | None = None, source: str = "<truth>") -> Simulation:
     """The eccentricities of every measured and planned ball-bar run for ``truth`` (with a warning where the linear
     model is asked for a truth too large for it) and the probe model's readings of every probed position, on any
-    machine.  A campaign with neither runs nor probe readings is an error (nothing to simulate)."""
+    machine.  A campaign with no runs and neither probe nor R-test readings is an error (nothing to simulate); the
+    R-test's readings are written by :meth:`Simulation.save` (its synthetic campaign)."""
     bb = campaign.ballbar
-    if bb.runs or bb.planned or not campaign.has_probe_readings():  # neither: ballbar_prediction says so
+    if bb.runs or bb.planned or not (campaign.has_probe_readings() or campaign.has_rtest_readings()):
         fm, theta, pred = ballbar_prediction(campaign, truth, model, source=source)
         obs, warnings = fm.observations, first_order_warnings(fm, theta)
-    else:  # a probe-only campaign
+    else:  # a campaign of the probe or the R-test alone (none of the three: ballbar_prediction says so)
         obs, pred, warnings = Observations((), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int)), np.zeros(0), []
     readings = probe_readings(campaign, truth, model)
     records = probe_records(campaign, readings) if readings is not None else None

@@ -35,7 +35,7 @@ RESOLUTION_UM = 0.1
 def truth_vector(space: ParameterSpace, truth: Truth, source: str = "<truth>") -> np.ndarray:
     """Parameter vector ``(p,)`` (internal units) of a truth; missing values are zero."""
     values = dict(truth.deviations)
-    for group in (truth.setups, truth.mounts, truth.probe):
+    for group in (truth.setups, truth.mounts, truth.probe, truth.rtest):
         for owner, kv in group.items():
             values.update({nuisance_name(k, owner): v for k, v in kv.items()})
     missing = [k for k in values if k not in space.names]
@@ -61,7 +61,7 @@ def truth_from_vector(space: ParameterSpace, theta: np.ndarray) -> Truth:
         if p.group == "deviation":
             t.deviations[p.name] = float(theta[i])
         else:
-            table = t.probe if p.group == "probe" else getattr(t, p.group + "s")
+            table = getattr(t, p.group) if p.group in ("probe", "rtest") else getattr(t, p.group + "s")
             table.setdefault(p.owner, {})[p.base] = float(theta[i])
     return t
 
@@ -161,15 +161,16 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
     as described in the module docstring.  Planned runs are filled: measured runs after the others, in measuring
     order, with every component of their pattern and their planned number of repeats (one without ``noise``),
     so the copy plans nothing.  ``sigma_model`` (mm, with ``noise``): a model discrepancy, one N(0, σ²) offset per
-    observed eccentricity shared by its repeats (what the model leaves out).  Touch-probe readings are simulated too
-    (:func:`simulated_probe`) when the campaign has them; published results are
-    dropped (they belong to the real measurement).
+    observed eccentricity shared by its repeats (what the model leaves out).  Touch-probe and R-test readings are
+    simulated too (:func:`simulated_probe`, :func:`simulated_rtest`) when the campaign has them; published results
+    are dropped (they belong to the real measurement).
     """
     campaign = planned_as_runs(campaign)
     rng = np.random.default_rng(seed) if noise else None
-    if not campaign.ballbar.runs and campaign.has_probe_readings():  # a probe-only campaign
-        out = copy.deepcopy(campaign)
+    if not campaign.ballbar.runs and (campaign.has_probe_readings() or campaign.has_rtest_readings()):
+        out = copy.deepcopy(campaign)  # a campaign of the probe or the R-test alone
         out.probe = simulated_probe(campaign, truth, model, noise=noise, rng=rng, repeats=repeats)
+        out.rtest = simulated_rtest(campaign, truth, model, noise=noise, rng=rng, repeats=repeats)
         out.truth = copy.deepcopy(truth)
         return out
     obs, pred = predict_truth(campaign, truth, model)
@@ -182,8 +183,40 @@ def synthetic_campaign(campaign: Campaign, truth: Truth, model: str = "htm-thesi
         values = [np.array([v]) for v in pred]
     out = with_run_values(campaign, obs.keys, values)
     out.probe = simulated_probe(campaign, truth, model, noise=noise, rng=rng if noise else None, repeats=repeats)
+    out.rtest = simulated_rtest(campaign, truth, model, noise=noise, rng=rng if noise else None, repeats=repeats)
     out.truth = copy.deepcopy(truth)
     return out
+
+
+def simulated_rtest(campaign: Campaign, truth: Truth, model: str = "chain", *, noise: bool = False,
+                    rng: np.random.Generator | None = None, repeats: int | None = None):
+    """The campaign's ``[rtest]`` with its runs' displacements simulated for ``truth`` (SPEC §22), in the order of
+    :attr:`~mtmcal_bayes.campaign.RTest.runs`: the R-test model's (``linear``: its first order; any other name: the
+    chain).  Noise-free: one repeat equal to the prediction.  With ``noise``: as many repeats as measured (or
+    ``repeats``), each scattered by the sensors' repeatability (:data:`DEFAULT_PROBE_SD` where none is stated).
+    None without an ``[rtest]``."""
+    if not campaign.has_rtest_readings():
+        return copy.deepcopy(campaign.rtest)
+    readings = rtest_readings(campaign, truth, model)
+    sd = campaign.rtest.repeatability if campaign.rtest.repeatability is not None else DEFAULT_PROBE_SD
+    out = copy.deepcopy(campaign.rtest)
+    start = 0
+    for run in out.runs:
+        a = run.positions
+        r = (repeats or run.displacements.shape[0]) if noise else 1
+        d = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
+        if noise:
+            d += rng.normal(0.0, sd, size=d.shape)
+        run.displacements = d
+        start += a
+    return out
+
+
+def rtest_readings(campaign: Campaign, truth: Truth, model: str = "chain") -> np.ndarray:
+    """Noise-free R-test readings ``(k, 3)``, mm, of every position for ``truth`` under the R-test model of
+    ``model``, in the order of :attr:`~mtmcal_bayes.campaign.RTest.runs`."""
+    fm = make_model(model, campaign, simulation_space(campaign, truth, "rtest"), data="rtest")
+    return fm.predict(truth_vector(fm.space, truth.rtest_part())).reshape(-1, 3)
 
 
 def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis", *, noise: bool = False,
