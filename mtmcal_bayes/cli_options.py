@@ -259,8 +259,9 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
                    help="a held rotary axis' position, e.g. A=-45 (repeatable; default 0)")
     s.add_argument("-o", "--output", metavar="FILE.nc", help="write the program to FILE (default: print)")
 
-    _command(sub, "instruments", handlers["instruments"], "do the ball bar and the touch probe agree? consistency, each "
-             "instrument's σ_model, disputed deviations, explanations weighed by the data (docs/probe.md)",
+    _command(sub, "instruments", handlers["instruments"], "do the instruments agree (every pair of the ball bar, the "
+             "touch probe and the R-test the campaign has)? consistency, each instrument's σ_model, disputed "
+             "deviations, explanations weighed by the data (docs/probe.md, docs/rtest.md)",
              json_help="print JSON: agree, scales_um, disputed, consistency, explanations")
     s = _command(sub, "axes", handlers["axes"], "the identified axis lines: direction and point of each rotary axis and "
                  "the spindle, pivot distances, each with its uncertainty (a controller's kinematic description)")
