@@ -340,10 +340,11 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
 
 def ncgen(pattern: str | None = None, *, campaign: CampaignLike = None, R_B_mm: float | None = None, start=None,
           step_deg: float | None = None, feed: float | None = None, n: int | None = None, setup: str | None = None,
-          mount: str | None = None, run: int | None = None, probe: str | None = None, arc_deg=None,
-          hold_deg: dict | None = None, output=None) -> str:
+          mount: str | None = None, run: int | None = None, probe: str | None = None, rtest: str | None = None,
+          arc_deg=None, hold_deg: dict | None = None, dwell_ms: int | None = None, output=None) -> str:
     """The measuring NC program of ``pattern`` at ``setup`` and ``mount``, of the campaign's ``run``-th ball-bar run
-    (1-based, measured then planned) or of its probe run ``probe`` (id or number), as text; ``output`` receives it.
+    (1-based, measured then planned), of its probe run ``probe`` or of its R-test run ``rtest`` (id or number; a
+    dwell of ``dwell_ms`` at each position, default 2000 ms), as text; ``output`` receives it.
 
     One path on every machine (:func:`~mtmcal_bayes.io.chain_programs.campaign_program`): the pattern over
     ``arc_deg`` = (start, end) degrees by ``step_deg`` with the other rotary axes at ``hold_deg`` {letter: degrees},
@@ -360,17 +361,19 @@ def ncgen(pattern: str | None = None, *, campaign: CampaignLike = None, R_B_mm: 
     if campaign is None:  # the built-in campaign, or one its program format makes of its own options
         c = program_format(c.machine).alone(c, {k: v for k, v in options.items() if v is not None})
     _writable(output, "program")
-    text = campaign_program(c, pattern=pattern, run=run, probe=probe, setup=setup, mount=mount, arc_deg=arc_deg,
-                            step_deg=step_deg, hold_deg=hold_deg, feed=feed, options=options)
+    text = campaign_program(c, pattern=pattern, run=run, probe=probe, rtest=rtest, setup=setup, mount=mount,
+                            arc_deg=arc_deg, step_deg=step_deg, hold_deg=hold_deg, feed=feed, dwell_ms=dwell_ms,
+                            options=options)
     if output is not None:
         write_text_atomic(output, text)
     return text
 
 
 def instruments(campaign: CampaignLike = None, *, explain: bool = True) -> InstrumentCheck:
-    """Do the ball bar and the touch probe of a campaign agree?  The consistency check on the exact linear
-    posteriors, each instrument's discrepancy scale in the fused posterior, the deviations they disagree on
-    (which ``compensate`` refuses), and with ``explain`` the candidate explanations of a conflict weighed by the
+    """Do the instruments of a campaign agree?  The consistency check of every pair of them (the ball bar, the
+    touch probe, the R-test: each against the other's posterior) on the exact linear posteriors, each instrument's
+    discrepancy scale in the fused posterior, the deviations they disagree on (which ``compensate`` refuses), and
+    with ``explain`` the candidate explanations of a conflict between the ball bar and the probe weighed by the
     marginal likelihood (readings of the B patterns, the stylus length, a difference between the sessions)."""
     from .posterior.instrument_check import check_instruments
 

@@ -138,11 +138,12 @@ def cmd_next(args) -> int:
 def cmd_ncgen(args) -> int:
     if (args.x0 is None) != (args.z0 is None):
         raise MtmcalError("--x0 and --z0 go together (the NC position of the first block)")
-    if (args.run is not None or args.probe is not None) and args.campaign is None:  # the one positional: CAMPAIGN
+    if (args.run is not None or args.probe is not None or args.rtest is not None) and args.campaign is None:  # the one positional: CAMPAIGN
         args.campaign, args.pattern = args.pattern, None
     text = api.ncgen(args.pattern, campaign=args.campaign, R_B_mm=args.R_B_mm, start=None if args.x0 is None else (
         args.x0, args.y0, args.z0), step_deg=args.step_deg, feed=args.feed, n=args.n, setup=args.setup, mount=args.mount,
-        run=args.run, probe=args.probe, arc_deg=args.arc_deg, hold_deg=dict(args.hold_deg or {}) or None, output=args.output)
+        run=args.run, probe=args.probe, rtest=args.rtest, arc_deg=args.arc_deg, hold_deg=dict(args.hold_deg or {}) or None,
+        dwell_ms=args.dwell_ms, output=args.output)
     sys.stdout.write("" if args.output else text)
     return 0
 

@@ -223,10 +223,10 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", metavar="DIR", help="write the re-planned campaign.toml and programs to DIR")
 
     s = _command(sub, "ncgen", handlers["ncgen"], "measuring NC program of a ball-bar pattern, of a campaign's "
-                 "ball-bar run or of a probe run, in the machine's program format (the thesis machine's: Fig 4.30(a))",
+                 "ball-bar run, of a probe run or of an R-test run, in the machine's program format (the thesis machine's: Fig 4.30(a))",
                  campaign=None, json_help=None)
     s.add_argument("pattern", nargs="?", metavar="PATTERN", help="<rotary axis><R|T|A|X|Y|Z>, e.g. BX on the thesis "
-                   "machine, AR on a trunnion (with --run/--probe: the campaign)")
+                   "machine, AR on a trunnion (with --run/--probe/--rtest: the campaign)")
     s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign whose setup geometry to use (default: thesis)")
     s.add_argument("--machine", choices=list(BUILTIN_TYPES), default=None, metavar="TYPE",
                    help="instead of CAMPAIGN, the demo campaign of a built-in machine type: " + ", ".join(BUILTIN_TYPES))
@@ -239,7 +239,7 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--step-deg", type=float, default=None, help="the swivelled axis' step, degrees (default: the "
                    "format's, 2.5 on the thesis machine; else the run's arc, or 1 with --arc-deg)")
     s.add_argument("--feed", type=float, default=None, help="feed word F (default: the campaign's feed_mm_per_min "
-                   "where the format takes it, none on the thesis machine; the probing moves F100)")
+                   "where the format takes it, none on the thesis machine; the probing moves F100, an R-test run's F200)")
     s.add_argument("-n", type=int, default=None, help="a format that takes it (the thesis machine's): number of "
                    "blocks (default: the arc's span, B 0–90°, C one turn)")
     s.add_argument("--setup", default=None, help="campaign setup for the tool length (default: that of the pattern's "
@@ -249,14 +249,19 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--run", type=int, default=None, metavar="N", help="the campaign's N-th ball-bar run (from 1; "
                    "measured, then planned)")
     s.add_argument("--probe", default=None, metavar="ID", help="the probe run ID (or its number) of [[probe.runs]]")
+    s.add_argument("--rtest", default=None, metavar="RUN", help="the R-test run RUN (its id or number) of "
+                   "[[rtest.runs]]: one block per position through the nominal inverse chain, a dwell at each")
+    s.add_argument("--dwell-ms", type=int, default=None, metavar="MS", help="with --rtest: the dwell at each "
+                   "position for the reading, G04 P in ms (default 2000)")
     s.add_argument("--arc-deg", type=float, nargs=2, default=None, metavar=("START", "END"),
                    help="the swivelled axis' arc, degrees (default: the campaign format's or the axis' grid)")
     s.add_argument("--hold", dest="hold_deg", type=_hold, action="append", default=None, metavar="AXIS=DEG",
                    help="a held rotary axis' position, e.g. A=-45 (repeatable; default 0)")
     s.add_argument("-o", "--output", metavar="FILE.nc", help="write the program to FILE (default: print)")
 
-    _command(sub, "instruments", handlers["instruments"], "do the ball bar and the touch probe agree? consistency, each "
-             "instrument's σ_model, disputed deviations, explanations weighed by the data (docs/probe.md)",
+    _command(sub, "instruments", handlers["instruments"], "do the instruments agree (every pair of the ball bar, the "
+             "touch probe and the R-test the campaign has)? consistency, each instrument's σ_model, disputed "
+             "deviations, explanations weighed by the data (docs/probe.md, docs/rtest.md)",
              json_help="print JSON: agree, scales_um, disputed, consistency, explanations")
     s = _command(sub, "axes", handlers["axes"], "the identified axis lines: direction and point of each rotary axis and "
                  "the spindle, pivot distances, each with its uncertainty (a controller's kinematic description)")

@@ -42,23 +42,22 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from numbers import Real
-from pathlib import Path
 
 import numpy as np
 
-from .. import units
 from ..campaign import Run, Setup
 from ..errors import InputError, ParameterError
 from ..machines.description import FRAME, Axis, MachineDescription
-from ..machines.patterns import (PatternCommands, axis_of, default_arc_deg, nominal_down, pattern_commands,
+from ..machines.patterns import (PatternCommands, axis_of, default_arc_deg, pattern_commands,
                                  placement_commands, tool_home)
 from ..machines.plugins import provided
 from ..units import fixed
 from .machine_reader import description_of
 from .nc_axes import DECIMALS, axis_block, axis_letters, comment
+from .program_parts import (RETRACT_MM, _deg, _linear_notes, _name, _positive, _rotary_travel, _shift,
+                            _tool_direction, _words, relative_position)
+from .rtest_program import rtest_program, rtest_run
 
-#: how far the tool backs off along its axis before the rotary axes move, mm
-RETRACT_MM = 50.0
 #: probing: centre distance of stylus ball and sphere at contact (sphere radius + stylus-ball radius), mm —
 #: e.g. a 25 mm sphere and a 5 mm stylus ball; give the real one
 TOUCH_RADIUS_MM = 15.0
@@ -75,73 +74,6 @@ _DIRECTION = {"R": "radial from the {K} line", "T": "tangential about the {K} li
               "X": "along the machine X axis", "Y": "along the machine Y axis", "Z": "along the machine Z axis"}
 _COMMANDS_NOTE = ("axis words: the description's commands, mm and deg, absolute, every axis 0 at the home pose; "
                   "run in the coordinate system in which these are the axis positions")
-
-
-# --------------------------------------------------------------------------- shared
-def _name(campaign) -> str:
-    """The campaign's file name (not its folder: a program travels to the machine without it)."""
-    return Path(campaign.source).name if campaign.source else "the campaign"
-
-
-def _deg(x):
-    return units.from_internal(x, "deg")
-
-
-def _rotary_travel(ax, angles_deg, parameter: str) -> None:
-    """ParameterError naming ``parameter`` if an angle (degrees) of rotary axis ``ax`` leaves its travel."""
-    if ax.travel is None:
-        return
-    lo, hi = _deg(np.asarray(ax.travel))
-    a = np.atleast_1d(angles_deg)
-    if a.min() < lo - 1e-9 or a.max() > hi + 1e-9:
-        at = f"at {a[0]:g} deg" if len(a) == 1 else f"reaches {a.min():g}..{a.max():g} deg"
-        raise ParameterError(parameter, f"{ax.letter} {at}, beyond its travel [{lo:g}, {hi:g}] deg")
-
-
-def _linear_notes(desc, q: dict) -> list[str]:
-    """A header note per linear axis whose commands (mm) leave its described travel."""
-    notes = []
-    for a in FRAME:
-        ax = desc.axes[a]
-        v = np.asarray(q[a])
-        if ax.travel is not None and (v.min() < ax.travel[0] - 1e-9 or v.max() > ax.travel[1] + 1e-9):
-            notes.append(f"note: {a} commands reach {v.min():.3f}..{v.max():.3f} mm, outside the described {a} travel "
-                         f"[{ax.travel[0]:g}, {ax.travel[1]:g}] mm: check the description's travels and origin")
-    return notes
-
-
-def _words(letters, q: dict, i: int) -> dict:
-    """Block words {letter: value} of point ``i`` of commands ``q`` (mm, rad -> mm, degrees)."""
-    return {a: float(q[a][i]) if a in FRAME else float(_deg(q[a][i])) for a in letters}
-
-
-def _tool_direction(desc, q_rot: dict) -> np.ndarray:
-    """The spindle's direction ``(k, 3)`` at rotary commands ``q_rot`` {letter: (k,)}, machine frame."""
-    k = len(next(iter(q_rot.values())))
-    return nominal_down(np.broadcast_to(desc.spindle.direction, (k, 3)), desc.tool_chain, q_rot, directions=True)
-
-
-def _shift(q: dict, i: int, offset: np.ndarray) -> dict:
-    """Commands (each (1,)) of point ``i`` of ``q`` with the linear axes moved by ``offset`` (3,) mm: the tool
-    moves by ``offset`` relative to the workpiece (either side's linear axes, ISO 841)."""
-    out = {a: np.atleast_1d(v[i]) for a, v in q.items()}
-    for j, a in enumerate(FRAME):
-        out[a] = out[a] + offset[j]
-    return out
-
-
-def relative_position(desc, q: dict, *, tool: np.ndarray, ball: np.ndarray) -> np.ndarray:
-    """Nominal tool point minus workpiece point ``(k, 3)`` mm at commands ``q`` {letter: (k,)} (mm, rad): ``tool``
-    (3,) and ``ball`` (3,) given at the home pose on their sides."""
-    k = len(np.atleast_1d(q["X"]))
-    t = nominal_down(np.broadcast_to(tool, (k, 3)), desc.tool_chain, q)
-    w = nominal_down(np.broadcast_to(ball, (k, 3)), desc.work_chain, q)
-    return t - w + np.stack([np.atleast_1d(q[a]) for a in FRAME], axis=-1)
-
-
-def _positive(name: str, value) -> None:
-    if not (np.isfinite(value) and value > 0):
-        raise ParameterError(name, f"must be a positive number, got {value}")
 
 
 # --------------------------------------------------------------------------- ball bar: what the engine computes
@@ -443,10 +375,12 @@ def probe_program(campaign, probe_run, *, touch_radius_mm: float = TOUCH_RADIUS_
 
 # --------------------------------------------------------------------------- one program of a campaign
 def campaign_program(campaign, *, pattern: str | None = None, run: int | None = None, probe: str | None = None,
-                     setup: str | None = None, mount: str | None = None, arc_deg=None, step_deg: float | None = None,
-                     hold_deg: dict | None = None, feed: float | None = None, options: dict | None = None) -> str:
+                     rtest: str | None = None, setup: str | None = None, mount: str | None = None, arc_deg=None,
+                     step_deg: float | None = None, hold_deg: dict | None = None, feed: float | None = None,
+                     dwell_ms: int | None = None, options: dict | None = None) -> str:
     """The program ``ncgen`` writes, on every machine: of the campaign's ``run``-th ball-bar run (1-based, the
-    measured then the planned ones), of its probe run ``probe`` (id, or 1-based number), or of ``pattern`` at
+    measured then the planned ones), of its probe run ``probe`` (id, or 1-based number), of its R-test run ``rtest``
+    (id, or 1-based number; ``dwell_ms`` its dwell at each position, :mod:`.rtest_program`), or of ``pattern`` at
     ``setup``/``mount`` (default: those of the campaign's first run of the pattern, else its first set-up and the
     first mount that serves the pattern) over ``arc_deg`` = (start, end) degrees by ``step_deg``
     (default the format's step, else 1°; without ``arc_deg`` the campaign format's or the axis' grid) with
@@ -458,15 +392,25 @@ def campaign_program(campaign, *, pattern: str | None = None, run: int | None = 
         if name not in fmt.options:
             raise ParameterError(name, f"not an option of this machine's program format ({fmt.name}, which takes "
                                  + (", ".join(fmt.options) if fmt.options else "no options of its own") + ")")
-    chosen = [name for name, v in (("pattern", pattern), ("run", run), ("probe", probe)) if v is not None]
+    chosen = [name for name, v in (("pattern", pattern), ("run", run), ("probe", probe), ("rtest", rtest))
+              if v is not None]
     if len(chosen) != 1:
-        raise ParameterError("pattern", "give one of a pattern, a run number (run) or a probe run (probe)"
-                             + (f", not {' and '.join(chosen)}" if chosen else ""))
+        raise ParameterError("pattern", "give one of a pattern, a run number (run), a probe run (probe) or an R-test "
+                             "run (rtest)" + (f", not {' and '.join(chosen)}" if chosen else ""))
+    if dwell_ms is not None and rtest is None:
+        raise ParameterError("dwell_ms", "only with an R-test run: the dwell at its positions")
     if pattern is None:
         extra = next((k for k, v in (("setup", setup), ("mount", mount), ("arc_deg", arc_deg),
                                      ("hold_deg", hold_deg)) if v is not None), None)
         if extra is not None:
             raise ParameterError(extra, f"only with a pattern: the {chosen[0]} has its own")
+    if rtest is not None:
+        if options:
+            raise ParameterError(next(iter(options)), "an option of a ball-bar program, not of an R-test run's")
+        if step_deg is not None:
+            raise ParameterError("step_deg", "an option of a ball-bar program: an R-test run has its own positions")
+        return rtest_program(campaign, rtest_run(campaign, rtest),
+                             **{k: v for k, v in (("feed", feed), ("dwell_ms", dwell_ms)) if v is not None})
     if probe is not None:
         if options:
             raise ParameterError(next(iter(options)), "an option of a ball-bar program, not of a probe run's")

@@ -142,6 +142,16 @@ def linear_commands(desc: MachineDescription, q_rot: dict, tool: np.ndarray, tar
     return {a: need[:, FRAME.index(a)] for a in FRAME}
 
 
+def centre_commands(desc: MachineDescription, q_rot: dict, *, tool: np.ndarray, point: np.ndarray) -> dict:
+    """Linear commands {X, Y, Z: (k,)} mm that put the nominal tool point ``tool`` ((3,) or (k, 3), home pose, tool
+    side) on the nominal workpiece point ``point`` ((3,) or (k, 3), home pose) at rotary commands ``q_rot``
+    {letter: (k,)} rad: the nominal inverse chain, exact (the linear axes sit below every rotary axis), as the
+    R-test's run and its program command them."""
+    k = len(next(iter(q_rot.values())))
+    w_rot = nominal_down(np.broadcast_to(point, (k, 3)), desc.work_chain, q_rot)
+    return linear_commands(desc, q_rot, tool, w_rot)
+
+
 def pattern_commands(desc: MachineDescription, pattern: str, *, length: float, ball: np.ndarray, bar: float,
                      arc_deg=None, hold_deg: dict | None = None, reverse: bool = False) -> PatternCommands:
     """Nominal commands of ``pattern`` for a tool of programmed ``length`` (mm), the W ball at ``ball`` (3,) (home

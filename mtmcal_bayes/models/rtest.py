@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..machines.deviations import generated
-from ..machines.patterns import nominal_down, tool_home
+from ..machines.patterns import centre_commands, nominal_down, tool_home
 from ..machines.probe_terms import RTEST_PLACEMENT_TERMS, RTEST_ZERO_TERMS, nest_terms
 from ..machines.space import described_space
 from ..observations import RTestKey, RTestObservations
@@ -72,10 +72,8 @@ class RTestLayout:
         self.sphere = np.repeat(np.array([run.sphere for run in runs], dtype=float), sizes, axis=0)
         self.length = np.repeat([rt.nests[run.nest].length for run in runs], sizes).astype(float)
         self.machine = np.repeat([run.frame == "machine" for run in runs], sizes)
-        w_rot = nominal_down(self.sphere, desc.work_chain, self.angles)
-        t_rot = nominal_down(tool_home(desc, 0.0) + self.length[:, None] * desc.spindle.direction, desc.tool_chain,
-                             self.angles)
-        self.linear = {a: (w_rot - t_rot)[:, i] for i, a in enumerate("XYZ")}
+        self.linear = centre_commands(desc, self.angles, point=self.sphere,
+                                      tool=tool_home(desc, 0.0) + self.length[:, None] * desc.spindle.direction)
         k = len(self.run)
         self.nominal_rotation = np.stack([nominal_down(np.broadcast_to(e, (k, 3)), desc.tool_chain, self.angles,
                                                        directions=True) for e in np.eye(3)], axis=-1)

@@ -1,12 +1,13 @@
-"""Do the ball bar and the touch probe agree?  Each instrument's readings predicted from the other's posterior.
+"""Do the instruments agree?  Each instrument's readings predicted from the other's posterior, pair by pair.
 
-For each direction (probe readings given the ball-bar-only posterior, ball-bar eccentricities given the
-probe-only posterior) the posterior predictive of the other instrument's observations is
+For each pair of the campaign's instruments (the ball bar, the touch probe, the R-test) and each direction (probe
+readings given the ball-bar-only posterior, ball-bar eccentricities given the probe-only posterior, and so on) the
+posterior predictive of the other instrument's observations is
 
     y ~ f(θ) + A_η η + noise,   θ from the source posterior's draws, η the target's own nuisance terms
 
-with ``η`` (stylus, sphere and datum terms for the probe; T-ball and W-ball terms for the ball bar)
-unknown to the source posterior and so drawn from its prior.  The model is linear in ``η`` (exactly
+with ``η`` (stylus, sphere and datum terms for the probe; T-ball and W-ball terms for the ball bar; a run's zero,
+a sphere's placement and a nest's length and centring for the R-test) unknown to the source posterior and so drawn from its prior.  The model is linear in ``η`` (exactly
 for the probe's datum and placement terms, to first order for the rest), so their part of the
 predictive covariance is ``A_η Σ_η A_ηᵀ`` in closed form; the draws give the rest; the noise is the
 likelihood's with the target instrument's own discrepancy scale at its prior mean of σ² (the source
@@ -21,7 +22,7 @@ the noise), not ``m``: in a direction a broad term spans, the predictive varianc
 there says nothing, and counting it as a degree of freedom makes the check insensitive (χ² ≪ dof).  The narrower
 nuisance terms (the T ball's centring, the W ball's clamping, the stylus centring) stay in ``S`` with their priors.
 
-Per reading group (a probe run of one stylus, each ball-bar run) the check gives ``χ² = rᵀ S⁻¹ r`` of that
+Per reading group (a probe run of one stylus, each ball-bar run, each R-test run) the check gives ``χ² = rᵀ S⁻¹ r`` of that
 residual on the group's ``dof``, its p-value, the standardised residuals ``z`` of the readings (each residual over
 its sd after the profiling), and a verdict: *agree* (p ≥ 0.01), *disagree*, or *unchecked* (no free direction).
 """
@@ -39,7 +40,7 @@ from ..analysis import CampaignAnalysis
 from ..inference.approximation import PosteriorApproximation
 from ..inference.log_posterior import LogPosterior
 from ..models import jacobian
-from ..observations import ProbeKey
+from ..observations import ProbeKey, RTestKey
 
 #: a group whose p-value is below this disagrees
 P_DISAGREE = 0.01
@@ -52,25 +53,27 @@ UNCHECKED = "unchecked"
 SIGMA_NODES = 256
 #: posterior draws used per direction
 N_DRAWS = 4000
+#: what a posterior of one instrument's data is called in "… given the <label>-only posterior", by its data
+GIVEN_LABEL = {"ballbar": "ball-bar", "probe": "probe", "rtest": "R-test"}
 
 
 @dataclass
 class Consistency:
-    """The two directions of the check: per reading (``readings``) and per group (``groups``)."""
+    """The two directions of the check: per reading (``readings``) and per group (``groups``); a check of several
+    pairs of instruments (:func:`pairwise`) names each row's pair in a first column ``pair``."""
 
     readings: pd.DataFrame
     groups: pd.DataFrame
 
     def to_text(self) -> str:
-        lines = ["Consistency of the instruments (posterior predictive of one from the other's posterior):"]
-        for _, g in self.groups.iterrows():
-            if g["verdict"] == UNCHECKED:
-                lines.append(f"  {g['verdict']:9s} {g['group']} given the {g['given']}-only posterior: its nuisance "
-                             "terms leave its readings no free direction")
-                continue
-            lines.append(f"  {g['verdict']:9s} {g['group']} given the {g['given']}-only posterior: "
-                         f"χ² = {g['chi2']:.1f} on {g['dof']} dof, p = {g['p_value']:.2g}, "
-                         f"largest |z| = {g['max_abs_z']:.1f} ({g['worst']})")
+        if "pair" not in self.groups:
+            return "\n".join(["Consistency of the instruments (posterior predictive of one from the other's "
+                              "posterior):"] + [_group_line(g, "  ") for _, g in self.groups.iterrows()])
+        lines = ["Consistency of the instruments, pair by pair (posterior predictive of one from the other's "
+                 "posterior):"]
+        for pair, groups in self.groups.groupby("pair", sort=False):
+            lines.append(f"  {pair}:")
+            lines += [_group_line(g, "    ") for _, g in groups.iterrows()]
         return "\n".join(lines)
 
     def to_json(self) -> dict:
@@ -78,12 +81,37 @@ class Consistency:
 
     @property
     def disagreeing(self) -> list[str]:
-        return list(self.groups.loc[self.groups["verdict"] == "disagree", "group"])
+        """The groups that disagree (each once, though several of the other instruments' posteriors see it)."""
+        return list(dict.fromkeys(self.groups.loc[self.groups["verdict"] == "disagree", "group"]))
+
+
+def _group_line(g, indent: str) -> str:
+    """One line of the text: a group's verdict given the other instrument's posterior."""
+    if g["verdict"] == UNCHECKED:
+        return (f"{indent}{g['verdict']:9s} {g['group']} given the {g['given']}-only posterior: its nuisance terms "
+                "leave its readings no free direction")
+    return (f"{indent}{g['verdict']:9s} {g['group']} given the {g['given']}-only posterior: "
+            f"χ² = {g['chi2']:.1f} on {g['dof']} dof, p = {g['p_value']:.2g}, "
+            f"largest |z| = {g['max_abs_z']:.1f} ({g['worst']})")
+
+
+def pairwise(checks: dict[str, Consistency]) -> Consistency:
+    """One :class:`Consistency` of several pairs' checks ``{pair label: its check}``, each row naming its pair (a
+    single pair's check is returned as it is)."""
+    if len(checks) == 1:
+        return next(iter(checks.values()))
+    named = [(c.readings.assign(pair=pair), c.groups.assign(pair=pair)) for pair, c in checks.items()]
+
+    def first(df):
+        return df[["pair"] + [c for c in df.columns if c != "pair"]]
+
+    return Consistency(first(pd.concat([r for r, _ in named], ignore_index=True)),
+                       first(pd.concat([g for _, g in named], ignore_index=True)))
 
 
 def reading_group(key) -> str:
-    """The reading group of an observation key: a probe run (of one stylus) or a ball-bar run."""
-    return key.group if isinstance(key, ProbeKey) else f"ball bar {key.pattern}@{key.setup}/{key.mount}"
+    """The reading group of an observation key: a probe run (of one stylus), an R-test run or a ball-bar run."""
+    return key.group if isinstance(key, (ProbeKey, RTestKey)) else f"ball bar {key.pattern}@{key.setup}/{key.mount}"
 
 
 def reading_groups(keys) -> dict[str, np.ndarray]:
@@ -168,7 +196,7 @@ def predictive_check(source, target: LogPosterior, n_draws: int = N_DRAWS, seed:
     r_all = target.likelihood.y - pred.mean(axis=0)
     keys = model.observations.keys
     rows, verdicts = [], []
-    given = "ball-bar" if post_s.data == "ballbar" else ("probe" if post_s.data == "probe" else "fused")
+    given = GIVEN_LABEL.get(post_s.data, "fused")
     for name, idx in reading_groups(keys).items():
         flat = flat_terms(A[idx], prior_sd, own, noise[idx])
         narrow = [i for i in own if i not in flat]
@@ -231,7 +259,8 @@ def _p_value(chi2: float, Sg: np.ndarray, B: np.ndarray, *, target: LogPosterior
 def instrument_consistency(ballbar, probe, n_draws: int = N_DRAWS, seed: int = 0) -> Consistency:
     """Both directions: probe readings given the ball-bar-only posterior ``ballbar``, ball-bar eccentricities
     given the probe-only posterior ``probe`` (both :class:`~.sample.PosteriorResult` of one campaign and model, or
-    both :class:`LogPosterior` or :class:`CampaignAnalysis` of the linear model, whose exact posteriors are drawn)."""
+    both :class:`LogPosterior` or :class:`CampaignAnalysis` of the linear model, whose exact posteriors are drawn).
+    Any two instruments' posteriors alike (the first's readings given the second's, then the other way)."""
     post_b, post_p = _log_posterior(ballbar), _log_posterior(probe)
     a = predictive_check(ballbar, post_p, n_draws, seed)
     b = predictive_check(probe, post_b, n_draws, seed)

@@ -1,16 +1,19 @@
 """Do the instruments agree, on which deviations do they not, and what could explain it: one check, fast.
 
-:func:`check_instruments` runs the consistency check of the ball bar and the touch probe on the exact
+:func:`check_instruments` runs the consistency check of every pair of the campaign's instruments (the ball bar,
+the touch probe, the R-test: each against the other's posterior) on the exact
 posteriors of the ``linear`` model (the kinematic models' first order; closed form on a grid, no
 sampling: :mod:`.consistency`), the fused posterior's discrepancy scales (one per instrument), the
-deviations each disagreeing reading group depends on (:func:`disputed_deviations`), and — on request —
-the candidate explanations weighed by the marginal likelihood (:mod:`.conflict`).  ``compensate`` refuses
+deviations each disagreeing reading group depends on (:func:`disputed_deviations`), and — on request, where the
+ball bar and the touch probe disagree — the candidate explanations weighed by the marginal likelihood
+(:mod:`.conflict`).  ``compensate`` refuses
 a disputed deviation (SPEC §17) on this check; ``mtmcal-bayes instruments`` prints it.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from itertools import combinations
 
 import numpy as np
 
@@ -19,23 +22,48 @@ from ..analysis import CampaignAnalysis, analysis_of
 from ..errors import ParameterError
 from ..inference.analytic import linearisation
 from ..inference.log_posterior import LogPosterior
-from ..parameters import SCALE_LABEL
+from ..parameters import DATA_INSTRUMENTS, SCALE_LABEL, data_instruments
 from .conflict import ConflictAnalysis, explain_conflict
-from .consistency import (UNCHECKED, Consistency, column_basis, flat_terms, instrument_consistency, reading_groups,
-                          target_noise)
+from .consistency import (GIVEN_LABEL, UNCHECKED, Consistency, column_basis, flat_terms, instrument_consistency,
+                          pairwise, reading_groups, target_noise)
+
+#: each instrument in words, by its data name
+INSTRUMENT_NAME = {"ballbar": "ball bar", "probe": "touch probe", "rtest": "R-test"}
 
 
-def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: LogPosterior) -> dict[str, list[str]]:
-    """``{deviation: [sentence per disagreeing group that depends on it]}``; ``ballbar``, ``probe``: the log
-    posteriors of each instrument's data alone (any model: a kinematic one is linearised).
+def _pair_label(a: str, b: str) -> str:
+    return f"{INSTRUMENT_NAME[a]} / {INSTRUMENT_NAME[b]}"
+
+
+def _roles(g, posteriors) -> tuple[LogPosterior, LogPosterior]:
+    """``(target, source)`` of a group's row ``g``: the posterior whose readings it is, the one it was given."""
+    source = next(p for p in posteriors if GIVEN_LABEL.get(p.data) == g["given"])
+    target = next(p for p in posteriors if p is not source
+                  and g["group"] in reading_groups(p.forward.observations.keys))
+    return target, source
+
+
+def disputed_deviations(consistency: Consistency, *posteriors: LogPosterior) -> dict[str, list[str]]:
+    """``{deviation: [sentence per disagreeing group that depends on it]}``; ``posteriors``: the log posteriors of
+    each instrument's data alone (the ball bar's and the probe's; the R-test's where the check has it; any model: a
+    kinematic one is linearised).
 
     A group depends on a deviation when the deviation moves its readings in a way the group's flat nuisance terms
     (those the check profiles out: :func:`~.consistency.flat_terms`) cannot absorb: the deviation's column of the
     target's linear design, restricted to the group's readings, has a part outside the span of the flat columns.
     Every deviation the target's posterior has counts, whatever the machine calls it."""
+    return _disputed(consistency, posteriors)[0]
+
+
+def _disputed(consistency: Consistency, posteriors) -> tuple[dict[str, list[str]], dict[str, list[tuple]]]:
+    """:func:`disputed_deviations`, and for each deviation the pairs of instruments (data names, in the order
+    ball bar, probe, R-test) behind its sentences."""
     out: dict[str, list[str]] = {}
+    pairs: dict[str, list[tuple]] = {}
+    order = list(INSTRUMENT_NAME)
     for _, g in consistency.groups[consistency.groups["verdict"] == "disagree"].iterrows():
-        target, source = (probe, ballbar) if g["given"] == "ball-bar" else (ballbar, probe)
+        target, source = _roles(g, posteriors)
+        pair = tuple(sorted((target.data, source.data), key=order.index))
         rows = reading_groups(target.forward.observations.keys)[g["group"]]
         A = linearisation(target)[0][rows]  # the design of the linear model; a kinematic model's first order
         sd = target.priors.width[: target.p]
@@ -51,22 +79,25 @@ def disputed_deviations(consistency: Consistency, ballbar: LogPosterior, probe: 
                 col = col - B @ np.linalg.lstsq(B, col, rcond=None)[0]
             if np.abs(col).max() > units.to_internal(0.01, "um"):
                 out.setdefault(p.name, []).append(sentence)
-    return out
+                pairs.setdefault(p.name, []).append(pair)
+    return out, pairs
 
 
 @dataclass
 class InstrumentCheck:
     """The check of :func:`check_instruments`.
 
-    ``consistency``: both directions, per reading group; ``scales``: each discrepancy scale's fused posterior
-    mean and sd, µm; ``disputed``: the deviations the instruments disagree on, with the verdicts behind each;
-    ``conflict``: the candidate explanations (or None)."""
+    ``consistency``: both directions of every pair, per reading group; ``scales``: each discrepancy scale's fused
+    posterior mean and sd, µm; ``disputed``: the deviations the instruments disagree on, with the verdicts behind
+    each; ``conflict``: the candidate explanations (or None); ``disputed_pairs``: per disputed deviation the pairs of
+    instruments (data names) behind its verdicts."""
 
     source: str
     consistency: Consistency
     scales: dict[str, tuple[float, float]]
     disputed: dict[str, list[str]]
     conflict: ConflictAnalysis | None = None
+    disputed_pairs: dict[str, list[tuple]] = field(default_factory=dict)
 
     @property
     def agree(self) -> bool:
@@ -79,7 +110,8 @@ class InstrumentCheck:
         if not hit:
             return None
         why = self.disputed[hit[0]][0]
-        return (f"the ball bar and the touch probe of {self.source} disagree on {', '.join(hit)} ({why}): "
+        a, b = self.disputed_pairs.get(hit[0], [("ballbar", "probe")])[0]
+        return (f"the {INSTRUMENT_NAME[a]} and the {INSTRUMENT_NAME[b]} of {self.source} disagree on {', '.join(hit)} ({why}): "
                 "compensating with a deviation the instruments dispute can double the error it should remove; "
                 "find out which is right (mtmcal-bayes instruments, docs/probe.md), or accept the disagreement")
 
@@ -103,7 +135,8 @@ class InstrumentCheck:
                       "does not refuse, but find the cause (docs/probe.md)."]
         else:
             lines += ["", "The instruments agree on every deviation they both measure."]
-        unchecked = list(self.consistency.groups.loc[self.consistency.groups["verdict"] == UNCHECKED, "group"])
+        unchecked = list(dict.fromkeys(self.consistency.groups.loc[self.consistency.groups["verdict"] == UNCHECKED,
+                                                                   "group"]))
         if unchecked:
             lines.append(f"Not checked: {', '.join(unchecked)} (their broad nuisance terms leave their readings no "
                          "free direction; narrower priors on them would).")
@@ -113,25 +146,33 @@ class InstrumentCheck:
 
 
 def check_instruments(campaign, *, explain: bool = True) -> InstrumentCheck:
-    """The consistency of the two instruments of ``campaign`` on the exact linear posteriors, the fused scales,
-    the disputed deviations and (``explain``) the candidate explanations of a conflict.  ``campaign`` may be a
+    """The consistency of every pair of the instruments of ``campaign`` (each against the other's posterior) on the
+    exact linear posteriors, the fused scales, the disputed deviations and (``explain``) the candidate explanations
+    of a conflict between the ball bar and the touch probe.  ``campaign`` may be a
     :class:`~mtmcal_bayes.analysis.CampaignAnalysis`, whose cache then serves the linear posteriors."""
     analysis = campaign
     campaign = analysis.campaign if isinstance(analysis, CampaignAnalysis) else analysis
-    if not campaign.has_probe_readings() or not campaign.ballbar.runs:
+    have = data_instruments("all", campaign)
+    if len(have) < 2:
         raise ParameterError("campaign", f"{campaign.source} needs ball-bar runs and touch-probe readings to compare "
-                             "the instruments")
-    linear = analysis_of(analysis, model="linear", data="both")
-    ballbar, probe, fused = (linear.variant(data=d) for d in ("ballbar", "probe", "both"))
-    cons = instrument_consistency(ballbar, probe)
+                             "the instruments" if "rtest" not in have else f"{campaign.source} needs ball-bar runs or "
+                             "touch-probe readings beside its R-test runs to compare the instruments")
+    fused_data = next((d for d, used in DATA_INSTRUMENTS.items() if used == have), "all")
+    linear = analysis_of(analysis, model="linear", data=fused_data)
+    alone = {i: linear.variant(data=i) for i in have}
+    checks = {(a, b): instrument_consistency(alone[a], alone[b]) for a, b in combinations(have, 2)}
+    cons = pairwise({_pair_label(a, b): c for (a, b), c in checks.items()})
+    fused = linear.variant(data=fused_data)
     marginal = fused.marginal
     fused = fused.log_posterior
-    ballbar, probe = ballbar.log_posterior, probe.log_posterior
+    posteriors = [alone[i].log_posterior for i in have]
     mean, sd = marginal.sigma_moments(fused.likelihood.y)
     scales = {n: (units.from_internal(mean[k], "um"), units.from_internal(sd[k], "um")) for k, n in
               enumerate(fused.scales)}
-    conflict = explain_conflict(linear) if explain and cons.disagreeing else None
-    return InstrumentCheck(campaign.source, cons, scales, disputed_deviations(cons, ballbar, probe), conflict)
+    two = checks.get(("ballbar", "probe"))  # the conflict the explanations weigh: the ball bar's and the probe's
+    conflict = explain_conflict(linear) if explain and two is not None and two.disagreeing else None
+    disputed, pairs = _disputed(cons, posteriors)
+    return InstrumentCheck(campaign.source, cons, scales, disputed, conflict, pairs)
 
 
 def blame(scales: dict[str, tuple[float, float]], priors: dict) -> str:
