@@ -24,7 +24,7 @@ from mtmcal_bayes.compensation.compensate import program_commands, read
 from mtmcal_bayes.compensation.inverse import with_xyz
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated
-from mtmcal_bayes.models.chain import Chain
+from mtmcal_bayes.machines.chain import Chain
 
 ROOT = Path(__file__).resolve().parents[1]
 TYPES = ("vertical-turn-mill", "trunnion", "head-head")

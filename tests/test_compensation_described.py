@@ -23,7 +23,7 @@ from mtmcal_bayes.compensation.compensate import compensate, program_commands
 from mtmcal_bayes.io.gcode import LINEAR, read_program
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated
-from mtmcal_bayes.models.chain import Chain
+from mtmcal_bayes.machines.chain import Chain
 from mtmcal_bayes.simulation.simulate import truth_from_vector
 
 PROGRAM = Path(__file__).parent / "data" / "machines" / "trunnion-five-axis-12.nc"

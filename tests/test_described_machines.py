@@ -167,7 +167,7 @@ def test_axis_lines_against_the_truth(machine, tmp_path, run_cli):
     deviation is flagged, never shown as measured (the trunnion's A line along Z rests on E_Z0A)."""
     from mtmcal_bayes.io.machine_reader import description_of
     from mtmcal_bayes.machines import generated
-    from mtmcal_bayes.models.chain import Chain
+    from mtmcal_bayes.machines.chain import Chain
     from mtmcal_bayes.posterior.axis_lines import _lines, _quantities
 
     out = tmp_path / "axes.csv"

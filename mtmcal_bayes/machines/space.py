@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from ..parameters import ParameterSpace
-from .deviations import quantities, selected
+from .deviations import quantities
 from .probe_terms import probe_terms
+from .selection import selected
 
 
 def described_space(campaign, deviations=None, data: str = "ballbar") -> ParameterSpace:

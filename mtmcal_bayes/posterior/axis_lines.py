@@ -2,7 +2,7 @@
 
 For each rotary axis and the spindle: the direction (unit vector) and a point of its actual average line at the
 home pose, in the machine frame — the nominal line displaced by the axis' own location errors and by those of
-every axis below it in the chain (:class:`~mtmcal_bayes.models.chain.Chain`, commands all 0); the point is the
+every axis below it in the chain (:class:`~mtmcal_bayes.machines.chain.Chain`, commands all 0); the point is the
 foot of the perpendicular from the description's ``point_mm`` (so a point's offset is the line's position error
 there, as ISO 230-7 states it).  And the distance between the lines of successive rotary axes of one side (and
 between the spindle and the axis carrying it): the pivot distances of a kinematic description.
@@ -30,9 +30,9 @@ from .. import units
 from ..arviz_import import az
 from ..inference.results import HDI_PROB
 from ..iso import iso_symbol
+from ..machines.chain import Chain
 from ..machines.description import SPINDLE, MachineDescription
 from ..machines.deviations import generated, spindle_basis, spindle_own_basis
-from ..models.chain import Chain
 
 #: columns of the table, per row
 COLUMNS = ["element", "quantity", "unit", "nominal", "mean", "sd", "hdi_low", "hdi_high", "determined"]
