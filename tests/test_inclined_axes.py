@@ -73,8 +73,8 @@ def test_an_inclined_axis_and_its_spindle_are_named_by_their_bases():
     spindle (−Z) carried by it has u = the projection of k across −Z = +Y and v = s × u = +X, both frame axes, so
     it keeps §19's frame names; a spindle along [S, 0, −S] has neither in the frame and gets E_U(0C1)B, ..., its
     offset E_W(0C1)B signed along s.  The default selection (SPEC §21's computed rule) keeps the inclined axis' zero
-    and orientations; its positions act only with the C axis' (E_U0B as −E_X0C) and the nuisance terms (E_V0B) and
-    are left out (tests/test_default_selection.py)."""
+    and orientations; its positions act only with the C axis' (E_U0B as −E_X0C, E_V0B as −S·E_Y0C and a sphere's
+    placement) and are left out (tests/test_default_selection.py)."""
     desc = nutating()
     b = desc.axes["B"]
     assert b.inclined and not desc.axes["C"].inclined

@@ -7,15 +7,19 @@ is given), a random tool length per pose (50–350 mm from the spindle's ``point
 workpiece-side point per set-up of poses.  The derivatives are the chain's own (:class:`~.chain.Chain`), by the
 complex step (exact to rounding), all columns in one batch.
 
-In the span from the start stand the nuisance terms every instrument carries:
+In the span from the start stand the nuisance terms every instrument carries (:data:`SPAN`):
 
-* the tool ball's (or stylus ball's, or R-test nest's) offset across the spindle, 2 columns, and its length along
-  it, 1 column: one constant offset in the spindle frame at every pose;
+* the tool ball's (or stylus ball's, or R-test nest's) length along the spindle, 1 column: one constant offset
+  along the spindle at every pose (the ball bar's ``dRB``, the stylus' ``dRS``, each from a tool setter);
 * the workpiece-side point's own placement, 3 columns per point: a constant offset in the workpiece frame.  Every
   instrument has one (the ball bar's W ball, ``xW, yW, zW`` per mount, placed where the dummy sphere is; the
   probe's sphere, ``xP, yP, zP`` per run; the R-test's sphere), so a location error that only moves a point where
   its placement would is never told from it: the outermost workpiece-side axis' zero, a constant translation of the
   whole tool side on a machine whose workpiece side only translates.
+
+The tool ball's offset across the spindle (2 columns, constant in the spindle frame) is computed too but not in the
+span: the ball bar's T ball is centred before the runs, so what acts as that offset the ball bar determines (the
+probe's stylus, free across the spindle, does not: its campaign's identifiability says so).
 
 Order: the workpiece-side axes from the bed outwards, then the tool-side axes from the bed outwards, then the
 spindle; per axis its positions, then its zero, then its orientations.  The rank test is a Gram–Schmidt QR in that
@@ -50,10 +54,15 @@ DEFAULT_TRAVEL = {True: (-np.pi, np.pi), False: (-300.0, 300.0)}
 SQUARENESS_WHY = "linear-axis squareness: measured by other means; held at zero unless selected"
 #: nuisance terms in the span from the start, in the order of their columns
 NUISANCE = ("tool offset across the spindle", "tool length", "workpiece-side point's placement")
+#: the nuisance terms in the span from the start: those every instrument carries.  The tool ball's offset across the
+#: spindle is not among them: the ball bar's T ball is centred before the runs (thesis Sec 4.2.2; the package's
+#: identifiability takes it as known, ``inference.identifiability.CENTRED``), so an error that acts as that offset
+#: is one the ball bar determines even where the probe's stylus (free across the spindle) does not
+SPAN = NUISANCE[1:]
 NUISANCE_WORDS = {
     NUISANCE[0]: "the tool ball's own offset across the spindle",
     NUISANCE[1]: "the tool ball's own length error",
-    NUISANCE[2]: "the workpiece-side point's own placement (the W ball's or the sphere's)",
+    NUISANCE[2]: "the workpiece-side point's own placement, the W ball's or the sphere's",
 }
 
 
@@ -173,6 +182,7 @@ def _compute(desc: MachineDescription) -> Selection:
     errs = rule_order(desc)
     by_name = {d.name: d for d in errs}
     J, N, kinds = columns(desc, errs)
+    N, kinds = N[:, [k in SPAN for k in kinds]], [k for k in kinds if k in SPAN]
     U, S, _ = np.linalg.svd(N, full_matrices=False)
     Q = U[:, S > TOLERANCE * S[0]]  # an orthonormal basis of the nuisance terms' span
     kept_cols: list[int] = []
@@ -230,8 +240,8 @@ def spectrum(desc: MachineDescription) -> np.ndarray:
     """The singular values of the nuisance and error columns together, each column scaled to unit norm, largest
     first: as many are ~1e-15 as the rule leaves errors out (the gap the tolerance sits in)."""
     errs = rule_order(desc)
-    J, N, _ = columns(desc, errs)
-    M = np.column_stack([N, J])
+    J, N, kinds = columns(desc, errs)
+    M = np.column_stack([N[:, [k in SPAN for k in kinds]], J])
     norms = np.linalg.norm(M, axis=0)
     return np.linalg.svd(M[:, norms > 0] / norms[norms > 0], compute_uv=False)
 
