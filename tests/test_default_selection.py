@@ -251,3 +251,12 @@ def test_each_demo_s_truth_re_expressed_predicts_its_readings(name):
         m = make_model(model, c, space, data="both")
         pred = m.predict(np.stack([theta_old, theta_new]))
         assert np.abs(pred[0] - pred[1]).max() < tol, (model, np.abs(pred[0] - pred[1]).max())
+
+
+def test_a_target_the_default_leaves_out_is_refused_with_the_rule_s_reason(run_cli):
+    """``plan --target E_C0A`` on the head-head: one line naming the flag, why it is not estimated (the combination it
+    acts through) and what may be targeted; exit 2."""
+    code, out, err = run_cli("plan", "--machine", "head-head", "--target", "E_C0A")
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "--target: 'E_C0A' is not estimated on this machine (acts only through E_C0C + E_C0A" in err
+    assert "expected one of: E_A0C, E_B0C, E_C0C" in err

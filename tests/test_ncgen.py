@@ -178,7 +178,7 @@ def test_ncgen_on_a_campaign_without_what_the_option_needs_is_one_line_naming_fi
     still gets its programs."""
     text = _demo_text(machine)
     no_probe, no_ballbar = tmp_path / "no-probe.toml", tmp_path / "no-ballbar.toml"
-    no_probe.write_text(sections_dropped(text, "probe"), encoding="utf-8")
+    no_probe.write_text(sections_dropped(text, "probe", "truth.probe"), encoding="utf-8")  # its truth too
     no_ballbar.write_text(probe_only(text), encoding="utf-8")
     pattern = mb.load_campaign(demo_campaign(machine)).ballbar.runs[0].pattern
     for argv, path, key in ((["--probe", "1"], no_probe, "probe.runs"), (["--run", "1"], no_ballbar, "ballbar.runs"),

@@ -13,6 +13,7 @@ leaves out as the stylus' own length or the sphere's placement included, so that
 determines can be stated.
 """
 
+import re
 from pathlib import Path
 
 import mtmcal_bayes as mb
@@ -92,8 +93,10 @@ def calibrated(machine: str) -> str:
     names = ", ".join(f'"{n}"' for n in LISTED[machine])
     head = ("# The built-in type with the deviations a calibrated probe's campaign estimates listed "
             "(make_campaigns.py)\n")
-    return head + builtin_text(f"machines/{machine}.toml").replace(
-        "configuration = ", f"deviations = [{names}]\nconfiguration = ", 1)
+    text = builtin_text(f"machines/{machine}.toml")
+    text = re.sub(r'^name = ".*"$', f'name = "{machine}: the controller cycles\' measurement"', text, count=1,
+                  flags=re.M)  # the campaign's name: a saved campaign writes the description under it
+    return head + text.replace("configuration = ", f"deviations = [{names}]\nconfiguration = ", 1)
 
 
 if __name__ == "__main__":
