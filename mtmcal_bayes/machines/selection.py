@@ -52,7 +52,7 @@ LENGTHS_MM, POINTS_MM = (50.0, 350.0), 200.0
 #: travel assumed for an axis that states none: a full turn, ±300 mm
 DEFAULT_TRAVEL = {True: (-np.pi, np.pi), False: (-300.0, 300.0)}
 SQUARENESS_WHY = "linear-axis squareness: measured by other means; held at zero unless selected"
-#: nuisance terms in the span from the start, in the order of their columns
+#: the nuisance terms computed, in the order of their columns
 NUISANCE = ("tool offset across the spindle", "tool length", "workpiece-side point's placement")
 #: the nuisance terms in the span from the start: those every instrument carries.  The tool ball's offset across the
 #: spindle is not among them: the ball bar's T ball is centred before the runs (thesis Sec 4.2.2; the package's
