@@ -81,8 +81,8 @@ def test_the_sigma_model_caption_and_figure_follow_the_quantities_drawn(samples)
 
 
 def test_a_described_report_counts_its_own_quantities(demo_report):
-    """The head-head demo determines six deviations one by one or in combination: the report's sigma_model.png
-    caption says six, as its identifiability.csv and combinations.csv list them (the demo's shared report,
+    """The head-head demo determines five deviations of its computed default selection, one by one: the report's
+    sigma_model.png caption says five, as its identifiability.csv lists them (the demo's shared report,
     conftest.demo_report)."""
     out, _ = demo_report("head-head")
     ident = pd.read_csv(out / "identifiability.csv")

@@ -35,10 +35,6 @@ def least_squares_of(rep) -> LeastSquares:
     return least_squares(rep.log_posterior, rep.identifiability, units.to_internal(rep.sigma_model_um, "um"))
 
 
-#: combinations.csv's columns, written as its header where the campaign determines nothing only in combination
-COMBINATION_COLUMNS = ["name", "mean", "sd", "hdi_low", "hdi_high", "unit"]
-
-
 def tables(rep, ls: LeastSquares | None, truth) -> dict[str, pd.DataFrame]:
     """identifiability.csv, combinations.csv and, where given, least_squares.csv and truth.csv (none written with
     its index)."""
@@ -48,8 +44,7 @@ def tables(rep, ls: LeastSquares | None, truth) -> dict[str, pd.DataFrame]:
               "weights": "; ".join(f"{k}: {v:.6g}" for k, v in c["weights"].items())} for c in rep.combinations]
     rows += [{"kind": "undetermined", "quantity": n, "weights": f"{n}: 1"} for n in ident.undetermined]
     out = {"identifiability.csv": pd.DataFrame(rows, columns=["kind", "quantity", "weights"]),
-           "combinations.csv": pd.DataFrame(rep.combinations or None, columns=None if rep.combinations else
-                                             COMBINATION_COLUMNS).drop(columns="weights", errors="ignore")}
+           "combinations.csv": pd.DataFrame(rep.combinations).drop(columns="weights", errors="ignore")}
     if ls is not None:
         out["least_squares.csv"] = ls.table
     if truth is not None:
