@@ -20,7 +20,7 @@ import mtmcal_bayes as mb
 from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.io.machine_reader import demo_campaign, description_of
 from mtmcal_bayes.machines import generated
-from mtmcal_bayes.models.chain import Chain
+from mtmcal_bayes.machines.chain import Chain
 from mtmcal_bayes.posterior.axis_lines import _lines, _quantities, axis_lines
 from mtmcal_bayes.simulation.simulate import truth_from_vector
 

@@ -34,7 +34,7 @@ from mtmcal_bayes.inference.log_posterior import LogPosterior
 from mtmcal_bayes.io.gcode import LINEAR, read_program
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated
-from mtmcal_bayes.models.chain import Chain
+from mtmcal_bayes.machines.chain import Chain
 from mtmcal_bayes.simulation.simulate import truth_from_vector
 
 TYPES = ("vertical-turn-mill", "trunnion", "head-head")

@@ -1,5 +1,5 @@
 """A machine's kinematics written out by hand from its description file: the reference the package's chain
-(:mod:`mtmcal_bayes.models.chain`) and the programs of ``ncgen`` are checked against (tests/test_chain_reference.py,
+(:mod:`mtmcal_bayes.machines.chain`) and the programs of ``ncgen`` are checked against (tests/test_chain_reference.py,
 tests/test_workflow_described.py).
 
 Read from the TOML file with :mod:`tomllib`, not through the package's reader.  The configuration

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, builtin_description
+from mtmcal_bayes.machines.chain import Chain
 from mtmcal_bayes.machines.deviations import generated
-from mtmcal_bayes.models.chain import Chain
 
 from .handchain import SQUARENESS, HandMachine, body_of
 

@@ -2,7 +2,10 @@
 table probed at indexed positions of both rotary axes, no ball bar, on the built-in trunnion and head-head types
 (docs/_controller_cycles_section.md).
 
-The campaigns (tests/data/controller_cycles/, written by make_campaigns.py there): each axis at four indexed
+The campaigns (tests/data/controller_cycles/, written by make_campaigns.py there) list their deviations
+(``<type>-calibrated.toml``): §19's set, those the computed default selection leaves out as the stylus' own length
+or the sphere's placement included (SPEC §21: an explicit selection is accepted), so that what a calibrated stylus
+determines can be stated.  Each axis at four indexed
 positions with the other at 0 and at one tilted or turned pose, a 150 mm stylus, one reading per position with a
 1 µm repeatability.  What they determine is computed from the Jacobian, with the stylus as each set-up's nuisance
 term (the package's default) and with the stylus calibrated (its centring and length known, as the cycles use

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, builtin_description
+from mtmcal_bayes.machines.chain import Chain
 from mtmcal_bayes.machines.deviations import generated
-from mtmcal_bayes.models.chain import Chain
 from mtmcal_bayes.posterior import axis_lines as al
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "machines.md"

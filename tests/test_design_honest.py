@@ -53,10 +53,9 @@ def _determined_by(design, quantity: str) -> bool:
 
 
 # ---------------------------------------------------------------- the refusal
-@pytest.mark.parametrize("kind, target, combination", [
-    (None, "dz_BT", None), ("trunnion", "E_C0C", None), ("vertical-turn-mill", "E_C0C", None),
-    # on the head-head machine E_C0C and E_C0A turn about one line: only their sum is determined
-    ("head-head", "E_C0C", "only in the combination E_C0A + E_C0C")])
+# the described types' default selections (SPEC §21) hold no deviation that no run determines: a target on one the
+# rule leaves out is refused with the rule's reason (below)
+@pytest.mark.parametrize("kind, target, combination", [(None, "dz_BT", None)])
 def test_a_target_no_run_determines_is_refused_by_name(run_cli, kind, target, combination):
     """Exit 2, one line naming the quantity and saying what the runs determine of it instead (or that nothing in
     the catalogue would) — where before the prior's sd was reported as the target met in 100 % — and, where the
@@ -69,6 +68,20 @@ def test_a_target_no_run_determines_is_refused_by_name(run_cli, kind, target, co
     assert "combination" in err or "would" in err
     if combination is not None:
         assert combination in err
+
+
+@pytest.mark.parametrize("kind, target, reason", [
+    ("trunnion", "E_C0C", "the same as the workpiece-side point's own placement"),
+    ("vertical-turn-mill", "E_C0C", "the same as the workpiece-side point's own placement"),
+    # on the head-head machine E_C0C and E_C0A turn about one line: only their sum acts, estimated as E_C0C
+    ("head-head", "E_C0A", "acts only through E_C0C + E_C0A")])
+def test_a_target_the_default_selection_leaves_out_is_refused_with_its_reason(run_cli, kind, target, reason):
+    """Exit 2, one line naming the quantity and why the machine's default selection does not estimate it (which
+    quantity carries it, or which set-up term it is)."""
+    code, out, err = run_cli("design", "--target", f"{target}=100", "--machine", kind)
+    assert code == 2, (out, err)
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert f"'{target}' is not estimated on this machine ({reason}" in err
 
 
 # ---------------------------------------------------------------- a target the prior alone meets
@@ -123,12 +136,12 @@ def test_every_deviation_left_out_of_the_reported_quantities_is_named_with_why(k
     assert all(f"  {n}: {w}" in design_text(d) for n, w in left.items())
 
 
-def test_the_trunnion_names_its_five_left_out_deviations_with_the_jacobians_reasons():
+def test_the_trunnion_leaves_none_of_its_default_deviations_untargeted():
+    """§19's list gave the trunnion five deviations no run determined one by one (E_Z0A, E_A0A, E_Y0C, E_A0C, E_C0C);
+    its computed default selection (SPEC §21) leaves out E_Z0A, E_A0C and E_C0C, and with them out E_A0A and E_Y0C
+    are determined: nothing is left untargeted."""
     d = _design("trunnion", contraction=0.5, n_sim=50)
-    left = design_document(d)["not_targeted"]
-    assert set(left) == {"E_Z0A", "E_A0A", "E_Y0C", "E_A0C", "E_C0C"}
-    assert left["E_C0C"].startswith("no candidate run determines it")
-    assert "E_A0C + E_A0A" in left["E_A0A"] and "E_A0C + E_A0A" in left["E_A0C"]
+    assert design_document(d)["not_targeted"] == {}
 
 
 # ---------------------------------------------------------------- every mount

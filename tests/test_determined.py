@@ -87,16 +87,32 @@ def test_the_flags_are_the_jacobians_statement(run_cli, machine, data):
         else:
             assert e["identification"] == "not identified", q
             assert len(w) > 1 or (q in ident["undetermined"] and q not in members), q
-    # every case exercises at least two of the three verdicts
-    assert len(verdicts) >= 2, verdicts
+    # every case exercises at least two of the three verdicts, but the trunnion's demo, which determines every
+    # deviation of its computed default selection (SPEC §21) one by one
+    assert len(verdicts) >= 2 or (machine, verdicts) == ("trunnion", {"data"}), verdicts
+
+
+#: the vertical-turn-mill's deviations as §19's list had them: E_Z0B among them, which the computed default selection
+#: (SPEC §21) leaves out as the sphere's placement along Z; listed, the campaign of defect 4 estimates it
+LISTED = ["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C", "E_X0B", "E_Z0B", "E_A0B", "E_C0B", "E_B0B", "E_Z(0C1)B",
+          "E_C(0C1)B", "E_X(0C1)B"]
 
 
 @pytest.fixture(scope="module")
 def probe_only_text():
-    """The vertical-turn-mill demo with its probe runs only (no ``[ballbar]``): the campaign of defect 4."""
+    """The vertical-turn-mill demo with its probe runs only (no ``[ballbar]``), on its description with
+    :data:`LISTED` selected (``vtm-listed.toml``, to be written beside it): the campaign of defect 4."""
     text = data_path("machines/vertical-turn-mill-demo.toml").read_text()
     head, rest = text.split("[ballbar]", 1)
+    head = head.replace('description = "vertical-turn-mill"', 'description = "vtm-listed.toml"')
     return head + "[probe]" + rest.split("[probe]", 1)[1]
+
+
+def _listed_description(folder) -> None:
+    names = ", ".join(f'"{n}"' for n in LISTED)
+    text = data_path("machines/vertical-turn-mill.toml").read_text()
+    (folder / "vtm-listed.toml").write_text(text.replace("configuration = ", f"deviations = [{names}]\nconfiguration = ",
+                                                         1))
 
 
 @pytest.mark.parametrize("priors", ["", '\n[priors]\nE_Z0B = {dist = "normal", sd_um = 200}\n'])
@@ -106,6 +122,7 @@ def test_probe_only_turn_mill_does_not_determine_E_Z0B(run_cli, tmp_path, probe_
     the prior-growth heuristic alone would call it identified (growth below its threshold): the case of defect 4."""
     path = tmp_path / "vtm-probe-only.toml"
     path.write_text(probe_only_text + priors)
+    _listed_description(tmp_path)
     doc = _sample(run_cli, str(path))
     assert doc["data"] == "probe"
     e = doc["summary"]["E_Z0B"]
@@ -123,18 +140,19 @@ def test_probe_only_turn_mill_does_not_determine_E_Z0B(run_cli, tmp_path, probe_
 def test_the_prior_sensitivity_diagnostic_names_priors_and_decides_nothing(run_cli):
     """A quantity the data determine only with the set-up's nuisance knowledge is named by the separate
     diagnostic (``prior_sensitivity``) and keeps its Jacobian verdict: on the vertical-turn-mill demo E_Y0C is
-    determined and rests on the T-ball centring prior yT; E_X(0C1)B is not determined and its interval rests on
-    tool-length and stylus priors."""
+    determined and rests on the T-ball centring prior yT; on the thesis campaign dz_BT is not determined and its
+    interval rests on the tool-length and T-ball priors (the described demos' computed default selections, SPEC §21,
+    leave out the errors that acted only as such set-up terms, the vertical-turn-mill's E_X(0C1)B among them)."""
     doc = _sample(run_cli, "--machine", "vertical-turn-mill")
     s = doc["summary"]
     assert s["E_Y0C"]["identified"] is True and s["E_Y0C"]["identification"] == "data"
     assert s["E_Y0C"]["prior_sensitivity"] == "rests on the nuisance prior yT"
     assert s["E_Y0C"]["nuisance_growth"] > NOT_IDENTIFIED_GROWTH
-    assert s["E_X(0C1)B"]["identified"] is False and s["E_X(0C1)B"]["identification"] == "not identified"
-    assert "dRB" in s["E_X(0C1)B"]["identified_through"]
-    assert s["E_X(0C1)B"]["prior_sensitivity"].startswith("rests on the nuisance priors ")
     for q, e in s.items():  # named exactly where the nuisance check widens it
         assert bool(e["prior_sensitivity"]) == bool(e["identified_through"]), q
     notes = doc["diagnostics"]["prior_sensitivity"]
     assert any(n.startswith("E_Y0C: rests on the nuisance prior yT") for n in notes)
     assert not any(n.startswith("E_Y0C") for n in doc["diagnostics"]["not_identified"])
+    t = _sample(run_cli)["summary"]["dz_BT"]
+    assert t["identified"] is False and t["identification"] == "not identified"
+    assert "dRB" in t["identified_through"] and t["prior_sensitivity"].startswith("rests on the nuisance priors ")

@@ -1,7 +1,7 @@
 """Measuring programs (``ncgen``, :mod:`mtmcal_bayes.io.chain_programs`): one path for every machine.
 
 Each program of a demo machine is read back and its commanded positions are put through the nominal chain
-(models/chain.py, no deviations), an implementation independent of the pattern code that wrote them: a ball-bar
+(machines/chain.py, no deviations), an implementation independent of the pattern code that wrote them: a ball-bar
 program holds the bar length at every block of its arc, a probe program indexes the run's angles and probes the
 sphere from five directions at the stated distances.  The thesis machine's programs (its format, Fig 4.30(a)) are
 checked against Tables 2.2/2.3 in ``tests/test_thesis_programs.py``; selection, planned runs and refusals are
@@ -20,8 +20,8 @@ from mtmcal_bayes.campaign import ProbeRun, Run
 from mtmcal_bayes.io.chain_programs import ballbar_program, probe_program
 from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, builtin_description, demo_campaign
 from mtmcal_bayes.io.nc_axes import axis_letters, read_axis_blocks
+from mtmcal_bayes.machines.chain import Chain
 from mtmcal_bayes.machines.patterns import placement_commands, tool_home
-from mtmcal_bayes.models.chain import Chain
 from tests.variants import probe_only, sections_dropped
 
 #: the built-in types with a demo campaign in the generic format ([[probe.runs]], W-ball positions): their programs
@@ -178,7 +178,7 @@ def test_ncgen_on_a_campaign_without_what_the_option_needs_is_one_line_naming_fi
     still gets its programs."""
     text = _demo_text(machine)
     no_probe, no_ballbar = tmp_path / "no-probe.toml", tmp_path / "no-ballbar.toml"
-    no_probe.write_text(sections_dropped(text, "probe"), encoding="utf-8")
+    no_probe.write_text(sections_dropped(text, "probe", "truth.probe"), encoding="utf-8")  # its truth too
     no_ballbar.write_text(probe_only(text), encoding="utf-8")
     pattern = mb.load_campaign(demo_campaign(machine)).ballbar.runs[0].pattern
     for argv, path, key in ((["--probe", "1"], no_probe, "probe.runs"), (["--run", "1"], no_ballbar, "ballbar.runs"),

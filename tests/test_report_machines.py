@@ -109,8 +109,9 @@ def test_the_deterministic_values_beside_the_posterior(reports, machine):
         assert s["ballbar"].notna().sum() >= 6
         return
     html = unescape((rep / "index.html").read_text(encoding="utf-8"))
-    combinations = pd.read_csv(rep / "combinations.csv")
-    assert all(name in html for name in combinations["name"])  # what the campaign determines only in combination
+    text = (rep / "combinations.csv").read_text(encoding="utf-8")  # empty (no header) where there is none, as
+    names = pd.read_csv(rep / "combinations.csv")["name"] if text.strip() else []  # on the demos' computed defaults
+    assert all(name in html for name in names)  # what the campaign determines only in combination
     assert "Eqs 4.10" not in html  # no thesis number on a described machine
     determined = [n for n in ls.index if n in s.index]
     assert determined

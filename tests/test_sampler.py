@@ -22,7 +22,7 @@ from mtmcal_bayes.inference import (
 from mtmcal_bayes.inference.marginal import MarginalPosterior
 from mtmcal_bayes.inference.priors import Prior, PriorSet
 from mtmcal_bayes.io import parse_campaign
-from mtmcal_bayes.models.rotations import rotation
+from mtmcal_bayes.machines.rotations import rotation
 from mtmcal_bayes.models.ballbar import CHUNK
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.observations import ProbeKey

@@ -4,6 +4,7 @@ and the 90 % coverage inside its 99 % binomial range).  What is ranked: the devi
 by one and its identifiable combinations (Σ w·θ), then the discrepancy scales; undetermined deviations are not."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -55,9 +56,13 @@ def test_exact_sbc_of_each_demo_passes(kind, scheduler):
 
 def test_a_combination_is_its_weighted_sum():
     """A combination's values are Σ w·θ over its deviations, in display units (µm, ″)."""
-    post = LogPosterior(_demo("trunnion"), "linear", data="both")
+    # the trunnion's controller-cycle campaign, whose listed deviations include E_A0C (the computed default selection
+    # leaves it out, and the demo determines every one it keeps one by one): it determines E_A0C + E_A0A and
+    # E_Y0C + 0.2424 µm/″·E_A0A
+    cycle = Path(__file__).parent / "data" / "controller_cycles" / "trunnion-cycle.toml"
+    post = LogPosterior(load_campaign(cycle), "linear", data="probe")
     checked = checked_quantities(post)
-    assert checked.weights  # the trunnion demo determines E_A0C + E_A0A and E_Y0C + 0.2424 µm/″·E_A0A
+    assert checked.weights
     theta = post.priors.rvs(5, np.random.default_rng(2))
     values, d = checked.values(post, theta), display_draws(post.names, theta)
     for name, w in checked.weights.items():

@@ -171,7 +171,8 @@ def test_a_described_machines_report_tabulates_its_verdicts(demo_report):
     assert "Conformity with the tolerances" in (out / "index.html").read_text(encoding="utf-8")
 
 
-@pytest.mark.parametrize("kind", [t[0] for t in TYPES])
+# the trunnion's demo determines every deviation of its computed default selection (SPEC §21): nothing to test there
+@pytest.mark.parametrize("kind", [t[0] for t in TYPES if t[0] != "trunnion"])
 def test_no_verdict_on_a_quantity_the_data_do_not_determine(run_cli, tmp_path, kind):
     """A tolerance on a quantity the campaign's Jacobian leaves undetermined gets no ISO 14253-1 verdict, however
     wide: its interval is its prior's, so 'conforms' would certify the prior.  The tolerance is 100 posterior sds

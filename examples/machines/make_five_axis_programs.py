@@ -17,7 +17,7 @@ from mtmcal_bayes.compensation.chain_kinematics import work_tool_point
 from mtmcal_bayes.io.gcode import LINEAR
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated
-from mtmcal_bayes.models.chain import Chain
+from mtmcal_bayes.machines.chain import Chain
 
 HERE = Path("examples/machines")
 BLOCKS = 60

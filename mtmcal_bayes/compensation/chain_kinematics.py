@@ -1,9 +1,9 @@
 """The tool point of a machine through its description's chain: the engine's kinematics of a compensation.
 
 A program's words are the axes' positions (X, Y, Z mm; the rotary axes' by their letters, rad here), as the
-description's commands are (:mod:`mtmcal_bayes.models.chain`).  The tool point — the tool centre ``length`` mm
+description's commands are (:mod:`mtmcal_bayes.machines.chain`).  The tool point — the tool centre ``length`` mm
 along the spindle from its ``point_mm`` — is taken down the tool side to the bed and back up the workpiece side
-(:meth:`~mtmcal_bayes.models.chain.Chain.work_frame`): where it sits on the workpiece, as its place at the home
+(:meth:`~mtmcal_bayes.machines.chain.Chain.work_frame`): where it sits on the workpiece, as its place at the home
 pose.  With no deviations that is the programmed point.
 
 Shapes: ``k`` blocks, ``n`` draws (or single-deviation rows); deviation values ``{name: (n,)}`` in mm and rad;
@@ -15,9 +15,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
+from ..machines.chain import Chain
 from ..machines.deviations import generated
 from ..machines.patterns import tool_home
-from ..models.chain import Chain
 
 
 def work_tool_point(chain: Chain, length: float, q: dict[str, np.ndarray], dev: dict[str, np.ndarray], *,

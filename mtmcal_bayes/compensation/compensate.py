@@ -32,8 +32,8 @@ from ..errors import InputError, ParameterError
 from ..inference.analytic import prior_sensitivity
 from ..inference.identifiability import campaign_identifiability
 from ..io.gcode import LINEAR, Program, read_program, rewrite
-from ..machines.deviations import selected
 from ..machines.plugins import provided
+from ..machines.selection import selected
 from .chain_kinematics import chain_kinematics
 from .inverse import invert, tool_axis_tilt, with_xyz
 from .options import OFF_TOOL_MM, POINTS

@@ -19,7 +19,8 @@ from ..inference.identifiability import DETERMINED
 from ..inference.identifiability import IN_COMBINATION as IN_COMBINATION_VERDICT
 from ..inference.log_posterior import LogPosterior
 from ..io.netcdf import read_posterior, read_posterior_attrs
-from ..machines.deviations import generated, redundant
+from ..machines.deviations import generated
+from ..machines.selection import redundant
 from .options import N_DRAWS, SIGMA_MODEL_UM
 
 #: why a deviation is not compensated with a measured value, by its class

@@ -114,7 +114,7 @@ def machine_identity(m: Machine) -> dict:
     machine = m.latest.machine
     out = {"type": machine.type, "configuration": machine.configuration, "description": description_label(machine)}
     if provided(machine, "reported_quantities") is None:
-        from ..machines.deviations import selected
+        from ..machines.selection import selected
 
         out["deviations"] = {d.name: d.meaning for d in selected(machine.description)}
     return out

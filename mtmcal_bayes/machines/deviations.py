@@ -16,7 +16,7 @@ keep the frame names above, else ``E_U(0C1)K``, ``E_V(0C1)K``, ``E_RU(0C1)K``, `
 (its offset along itself, signed along +s).
 
 Each is a small rigid displacement of the body the axis carries, applied at the home pose and carried along
-by the axes below it (:mod:`mtmcal_bayes.models.chain`); an orientation error turns about the axis'
+by the axes below it (:mod:`mtmcal_bayes.machines.chain`); an orientation error turns about the axis'
 ``point_mm`` (the spindle's about the spindle's ``point_mm``).
 """
 
@@ -174,34 +174,6 @@ def generated(desc: MachineDescription) -> list[Deviation]:
         out.append((sym, "angle", tilted, "squareness", about, _unit(about), f"squareness of {tilted} to {ref}"))
     return [Deviation(desc.name_of(sym), sym, kind, body, role, comp, meaning, direction)
             for sym, kind, body, role, comp, direction, meaning in out]
-
-
-def redundant(desc: MachineDescription) -> dict[str, str]:
-    """Generated errors left out of the default set, with why: the spindle's orientation about the axis carrying
-    it (that axis' zero position), its position along that axis (the tool ball's own offset, each setup's
-    nuisance term) and the squareness of the linear axes (held at zero, as in the thesis: measured by other means).
-    An inclined axis' errors are all kept, and so are a spindle's none of whose errors lies along its carrier."""
-    why: dict[str, str] = {}
-    carrier = desc.axes.get(desc.spindle.carrier)
-    for d in generated(desc):
-        if d.role == "squareness":
-            why[d.name] = "linear-axis squareness: measured by other means; held at zero unless selected"
-        elif d.body == SPINDLE and carrier is not None and \
-                abs(abs(float(d.vector @ carrier.direction)) - 1.0) < 1e-12:
-            why[d.name] = (f"the same as the {carrier.letter} axis' zero position" if d.role == "orientation" else
-                           "the same as the tool ball's own offset (each setup's nuisance term)")
-    return why
-
-
-def selected(desc: MachineDescription) -> list[Deviation]:
-    """The deviations a campaign on this machine estimates: ``[machine] deviations`` if given, else the generated
-    ones less :func:`redundant` (on the thesis machine: the thesis' sampled ten, Table 2.1 less the squareness)."""
-    every = generated(desc)
-    if desc.deviations is not None:
-        chosen = set(desc.deviations)
-        return [d for d in every if d.name in chosen or d.symbol in chosen]
-    skip = redundant(desc)
-    return [d for d in every if d.name not in skip]
 
 
 def quantities(desc: MachineDescription) -> dict[str, Quantity]:

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from ..parameters import ParameterSpace, data_instruments
-from .deviations import quantities, selected
+from .deviations import quantities
 from .probe_terms import probe_terms, rtest_terms
+from .selection import selected
 
 
 def described_space(campaign, deviations=None, data: str = "ballbar") -> ParameterSpace:
     """The space of ``campaign`` (a described machine's) for ``data``: the deviations (default the machine's
-    selection, :func:`~.deviations.selected`), per ball-bar setup ``xT, yT, zT, dRB`` and per mount ``xW, yW, zW``
+    selection, :func:`~.selection.selected`), per ball-bar setup ``xT, yT, zT, dRB`` and per mount ``xW, yW, zW``
     with ball-bar data, the probe's terms (:func:`~.probe_terms.probe_terms`) with probe data, the R-test's
     (:func:`~.probe_terms.rtest_terms`) with R-test data."""
     desc = campaign.machine.description

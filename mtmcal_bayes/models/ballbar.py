@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..machines.chain import Chain
 from ..machines.deviations import generated
 from ..machines.patterns import (
     components,
@@ -38,7 +39,6 @@ from ..machines.space import described_space
 from ..observations import Observations
 from ..parameters import MOUNT_NUISANCE, SETUP_NUISANCE, nuisance_name
 from ..patterns import EccentricityFit
-from .chain import Chain
 
 #: rows of a parameter batch evaluated at once: the kernels' temporaries are (rows, k, 3) arrays, and a few
 #: thousand rows at once would take hundreds of MB for no gain in speed

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..machines.chain import Chain
 from ..machines.deviations import generated
 from ..machines.patterns import nominal_down, tool_home
 from ..machines.plugins import provided
@@ -40,7 +41,6 @@ from ..machines.space import described_space
 from ..observations import ProbeKey, ProbeObservations
 from ..parameters import PROBE_NUISANCE, STYLUS_NUISANCE
 from .ballbar import as_numbers, extended, nuisance_columns
-from .chain import Chain
 
 #: fixed-point steps of a probe reading's linear axes
 SOLVE_STEPS = 4

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..machines.chain import Chain
 from ..machines.deviations import generated
 from ..machines.patterns import centre_commands, nominal_down, tool_home
 from ..machines.probe_terms import RTEST_PLACEMENT_TERMS, RTEST_ZERO_TERMS, nest_terms
@@ -34,7 +35,6 @@ from ..machines.space import described_space
 from ..observations import RTestKey, RTestObservations
 from ..parameters import RTEST_NUISANCE
 from .ballbar import as_numbers, extended, nuisance_columns
-from .chain import Chain
 from .probe import NOISE_RULES, _readings
 
 

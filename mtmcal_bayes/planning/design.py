@@ -49,9 +49,11 @@ from ..inference.identifiability import CENTRED, identifiability
 from ..inference.likelihood import GaussianMeanLikelihood
 from ..inference.log_posterior import parameter_space
 from ..inference.priors import make_prior
-from ..machines.deviations import quantities
+from ..io.machine_reader import description_of
+from ..machines.deviations import generated, quantities
 from ..machines.patterns import components
 from ..machines.plugins import provided
+from ..machines.selection import redundant
 from ..models import build_model, check_data, check_model, jacobian_at_zero, models_of
 from ..observations import Observations
 from ..parameters import ParameterSpace, weights
@@ -87,10 +89,14 @@ def target_names(targets, campaign) -> list[str]:
     reported = list(provided(campaign.machine, "reported_quantities", ()))
     allowed = reported + [d for d in devs if d not in reported]
     by = {n: n for n in allowed} | {s: n for s, n in provided(campaign.machine, "aliases", ()) if n in allowed}
+    why = redundant(description_of(campaign.machine))
+    left = {d.name: why[d.name] for d in generated(description_of(campaign.machine)) if d.name in why} | \
+        {d.symbol: why[d.name] for d in generated(description_of(campaign.machine)) if d.name in why}
     for t in targets:
         if t not in by:
-            raise ParameterError("targets", f"unknown quantity {t!r} for this machine (expected one of: "
-                                 f"{', '.join(allowed)})")
+            reason = f"{t!r} is not estimated on this machine ({left[t]})" if t in left else \
+                f"unknown quantity {t!r} for this machine"
+            raise ParameterError("targets", f"{reason} (expected one of: {', '.join(allowed)})")
     return list(dict.fromkeys(by[t] for t in targets))
 
 

@@ -2,7 +2,7 @@
 
 For each rotary axis and the spindle: the direction (unit vector) and a point of its actual average line at the
 home pose, in the machine frame — the nominal line displaced by the axis' own location errors and by those of
-every axis below it in the chain (:class:`~mtmcal_bayes.models.chain.Chain`, commands all 0); the point is the
+every axis below it in the chain (:class:`~mtmcal_bayes.machines.chain.Chain`, commands all 0); the point is the
 foot of the perpendicular from the description's ``point_mm`` (so a point's offset is the line's position error
 there, as ISO 230-7 states it).  And the distance between the lines of successive rotary axes of one side (and
 between the spindle and the axis carrying it): the pivot distances of a kinematic description.
@@ -30,9 +30,10 @@ from .. import units
 from ..arviz_import import az
 from ..inference.results import HDI_PROB
 from ..iso import iso_symbol
+from ..machines.chain import Chain
 from ..machines.description import SPINDLE, MachineDescription
 from ..machines.deviations import generated, spindle_basis, spindle_own_basis
-from ..models.chain import Chain
+from ..machines.selection import redundant
 
 #: columns of the table, per row
 COLUMNS = ["element", "quantity", "unit", "nominal", "mean", "sd", "hdi_low", "hdi_high", "determined"]
@@ -224,7 +225,7 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
     """The posterior means of the position errors the data determine, by ISG name, in mm and rad
     (:mod:`mtmcal_bayes.io.isg_csv`), and the comments saying what is left out and why: a deviation the data do not
     determine (its value would be the prior's), one determined only in combination (which combination), one the
-    format has no name for."""
+    format has no name for, one the machine's model does not estimate (the default selection's reason, SPEC §21)."""
     from ..inference.identifiability import campaign_identifiability
     from ..io.isg_csv import isg_name
 
@@ -250,5 +251,15 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
                             "left out")
         else:
             values[name] = float(units.to_internal(result.summary.loc[p.name, "mean"], p.unit))
+    from ..io.machine_reader import description_of
+
+    desc, estimated = description_of(post.campaign.machine), set(post.space.names)
+    why = redundant(desc)
+    for d in generated(desc):
+        name = isg_name(d.symbol)
+        if name is not None and d.name not in estimated:
+            listed = desc.deviations is not None and d.name in desc.deviations
+            reason = "not among the quantities its model samples" if listed else why.get(d.name, "not selected")
+            comments.append(f"{name}: not estimated by the machine's model ({reason}); held at zero, left out")
     return values, comments
 

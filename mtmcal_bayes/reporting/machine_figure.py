@@ -7,8 +7,8 @@ rotary axis' nominal line through its ``point_mm`` with the sense of a positive 
 axis moves the tool (tool side) or the workpiece (a primed axis: the opposite way), and the chain from workpiece
 to tool beneath.  :func:`deviations_figure` sketches, per rotary axis and for the spindle, the nominal line and the
 line that a positive value of each of its location errors puts in its place, as the chain
-(:class:`~mtmcal_bayes.models.chain.Chain`) displaces it, exaggerated; and the squareness of the linear axes.
-Errors left out of the default set (:func:`~mtmcal_bayes.machines.deviations.redundant`) are drawn in grey.
+(:class:`~mtmcal_bayes.machines.chain.Chain`) displaces it, exaggerated; and the squareness of the linear axes.
+Errors left out of the default set (:func:`~mtmcal_bayes.machines.selection.redundant`) are drawn in grey.
 """
 
 from __future__ import annotations
@@ -22,19 +22,18 @@ from matplotlib.patches import FancyBboxPatch
 
 from ..figure_style import figure, save_png, tight_layout
 from ..io.machine_reader import description_of
+from ..machines.chain import Chain
 from ..machines.description import FRAME, SPINDLE, MachineDescription, along_frame, inclined_basis
 from ..machines.deviations import (
     SQUARENESS_ERRORS,
     Deviation,
     generated,
-    redundant,
-    selected,
     spindle_basis,
     spindle_own_basis,
 )
 from ..machines.plugins import provided
-from ..models.chain import Chain
-from ..models.rotations import rotation
+from ..machines.rotations import rotation
+from ..machines.selection import redundant, selected
 
 WORK = "#0072B2"  # what moves the workpiece
 TOOL = "#D55E00"  # what moves the tool

@@ -11,7 +11,7 @@ C-axis frame, offset by (xW, yW, zW), and turned with C::
 
     W(θ) = M_CZ E_C(θ) (M_CZ⁻¹ P0 + w),      ΔL = |T − W| − L_B
 
-Rotations are exact (``expm([ε]×)``, Rodrigues' formula: :mod:`mtmcal_bayes.models.rotations`, which the chain
+Rotations are exact (``expm([ε]×)``, Rodrigues' formula: :mod:`mtmcal_bayes.machines.rotations`, which the chain
 shares).  This is the thesis' own model (its Eq 2.10 and pivots), the thesis plug-in's; on the thesis machine the
 chain equals ``htm-literal`` to 1e-9 mm (``tests/test_kinematic.py``).
 Where each angular deviation pivots is an explicit :class:`Pivots`
@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...models.rotations import _apply, rotation
+from ...machines.rotations import _apply, rotation
 from .pattern_tables import Commands
 
 

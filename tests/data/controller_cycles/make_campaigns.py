@@ -6,11 +6,18 @@ Each axis is swept over four indexed positions with the other axis at 0 and at o
 stylus is 150 mm long; one reading per position, the probe's repeatability 1 µm.  The readings are simulated from
 the truth of the demo campaigns (examples/machines/<type>.toml) through the chain with the probe's scatter
 (seed 1).  Run from the project root: ``python tests/data/controller_cycles/make_campaigns.py``.
+
+The cycles work with a calibrated probe, so each campaign's machine is its built-in type with ``deviations`` listed
+(``<type>-calibrated.toml`` beside it, written here): §19's set, those the computed default selection (SPEC §21)
+leaves out as the stylus' own length or the sphere's placement included, so that what a calibrated stylus
+determines can be stated.
 """
 
+import re
 from pathlib import Path
 
 import mtmcal_bayes as mb
+from mtmcal_bayes.datasets import builtin_text
 
 HERE = Path("tests/data/controller_cycles")  # relative: the campaigns name their source
 
@@ -20,6 +27,12 @@ CASES = {
                  [("A", [0, -30, -60, -90], "C", [0, 90]), ("C", [0, 90, 180, 270], "A", [0, -60])]),
     "head-head": ([0.0, 0.0, -250.0],        # on the table under the C line; the stylus centre 300 mm below A
                   [("A", [-60, -20, 20, 60], "C", [0, 90]), ("C", [0, 90, 180, 270], "A", [0, 45])]),
+}
+#: type -> the deviations the campaigns estimate (the built-in description's, with these listed)
+LISTED = {
+    "trunnion": ["E_Y0A", "E_Z0A", "E_B0A", "E_C0A", "E_A0A", "E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C"],
+    "head-head": ["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C", "E_Y0A", "E_Z0A", "E_B0A", "E_C0A", "E_A0A",
+                  "E_Y(0C1)A", "E_B(0C1)A", "E_Z(0C1)A"],
 }
 TRUTH = {
     "trunnion": dict(E_Y0A_um=15.0, E_Z0A_um=-10.0, E_B0A_arcsec=8.0, E_C0A_arcsec=-12.0, E_A0A_arcsec=20.0,
@@ -54,7 +67,7 @@ def template(machine: str) -> str:
 
 [machine]
 name = "{machine}: the controller cycles' measurement"
-description = "{machine}"
+description = "{machine}-calibrated.toml"
 
 [probe]
 instrument = "touch-trigger probe"
@@ -75,8 +88,20 @@ centres_mm = {zeros}
 """
 
 
+def calibrated(machine: str) -> str:
+    """The built-in description of ``machine`` with :data:`LISTED`'s deviations selected."""
+    names = ", ".join(f'"{n}"' for n in LISTED[machine])
+    head = ("# The built-in type with the deviations a calibrated probe's campaign estimates listed "
+            "(make_campaigns.py)\n")
+    text = builtin_text(f"machines/{machine}.toml")
+    text = re.sub(r'^name = ".*"$', f'name = "{machine}: the controller cycles\' measurement"', text, count=1,
+                  flags=re.M)  # the campaign's name: a saved campaign writes the description under it
+    return head + text.replace("configuration = ", f"deviations = [{names}]\nconfiguration = ", 1)
+
+
 if __name__ == "__main__":
     for machine in CASES:
+        (HERE / f"{machine}-calibrated.toml").write_text(calibrated(machine))
         src = HERE / f"{machine}-cycle-template.toml"
         src.write_text(template(machine))
         campaign = mb.load_campaign(src)

@@ -30,9 +30,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..machines.description import LINEAR, SPINDLE, MachineDescription
-from ..machines.deviations import SQUARENESS_ERRORS, Deviation
-from ..machines.patterns import turn
+from .description import LINEAR, SPINDLE, MachineDescription
+from .deviations import SQUARENESS_ERRORS, Deviation
+from .patterns import turn
 from .rotations import _apply, rotation
 
 
