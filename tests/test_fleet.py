@@ -34,8 +34,8 @@ VENV_BIN = Path(sys.executable).parent
 BROKEN = 'format = "mtmcal-campaign/1"\n[machine]\nserial = "M-2"\n'
 N_UNITS = 5  # 4 campaigns + 1 history
 #: the reader's one line for a campaign that measures nothing (every machine's)
-NO_MEASUREMENTS = ("no measurements: give [[ballbar.runs]] or [probe] with its runs (or, for a machine to design a "
-                   "campaign for, its [ballbar.setups] and [ballbar.mounts])")
+NO_MEASUREMENTS = ("no measurements: give [[ballbar.runs]], [probe] with its runs or [rtest] with its runs (or, for a "
+                   "machine to design a campaign for, its [ballbar.setups] and [ballbar.mounts])")
 
 
 def _cmp(result_json: dict) -> dict:
