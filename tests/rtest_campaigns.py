@@ -103,10 +103,18 @@ def static_campaign(machine: str, frame: str = "tool", zero: str = "first"):
     return parse_campaign(static_text(machine, frame, zero))
 
 
+def every_setting_text(machine: str, repeats: int = 1) -> str:
+    """The one-sphere static runs in each of the four settings of frame and zero (:data:`SETTINGS`), one campaign:
+    one sphere placement, one nest, 4 × 4 runs (each run's id with its setting)."""
+    runs = [dict(r, id=f"{r['id']} ({frame}, {zero})", repeats=repeats)
+            for frame, zero in SETTINGS for r in static_runs(machine, frame, zero)]
+    return campaign_text(machine, runs, nests={"N1": (NEST_MM, False)})
+
+
 def with_every_instrument_text(machine: str) -> str:
     """The demo campaign of ``machine`` (the thesis campaign on the thesis type: ball bar and touch probe) with the
-    one-sphere static runs (tool frame, zeroed at the first position) added: every instrument."""
+    R-test runs of :func:`every_setting_text` added: every instrument."""
     path = demo_campaign(machine)
     base = builtin_campaign_text()[0] if path is None else Path(path).read_text(encoding="utf-8")
-    rt = static_text(machine)
+    rt = every_setting_text(machine)
     return base + "\n" + rt[rt.index("[rtest]"):]
