@@ -64,7 +64,7 @@ def _indexed(ax, k: int) -> np.ndarray:
     lo, hi = _travel(ax)
     if hi - lo >= 360.0:
         return np.arange(k) * 360.0 / k
-    return np.round(np.linspace(lo, hi, k), 9)
+    return np.round(np.linspace(lo, hi, k), 9) + 0.0  # + 0.0: no -0 in a printed angle
 
 
 def _held(ax) -> float:
