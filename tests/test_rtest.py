@@ -30,6 +30,7 @@ from mtmcal_bayes.models.rtest import RTestModel
 from mtmcal_bayes.simulation.simulate import synthetic_campaign
 
 from .handchain import SQUARENESS, HandMachine, body_of, rodrigues
+from .rtest_campaigns import _toml_list, campaign_text
 
 #: the machines' errors of the reference check: large enough that a wrong sign, order or pivot moves a reading by
 #: microns (mm, rad: about 100″)
@@ -41,29 +42,6 @@ TERM_MM = {"xZR": 0.02, "yZR": 0.02, "zZR": 0.02, "xPR": 0.05, "yPR": 0.05, "zPR
 
 def _rotary(machine: str) -> list[str]:
     return [a.letter for a in builtin_description(machine).rotary_axes]
-
-
-def _toml_list(values) -> str:
-    return "[" + ", ".join(f"{float(v):.12g}" for v in values) + "]"
-
-
-def campaign_text(machine: str, runs: list[dict], *, nests: dict, extra: str = "") -> str:
-    """A campaign of R-test runs on ``machine``: each run ``{id, nest, sphere, angles {letter: list}, frame, zero,
-    repeats, placement?}``, zeros as its readings; ``nests`` {id: (length_mm, calibrated)}."""
-    lines = ['format = "mtmcal-campaign/1"', f'machine = "{machine}"', "", "[rtest]",
-             'instrument = "R-test, 3 sensors"', "repeatability_um = 0.5", ""]
-    for nid, (length, calibrated) in nests.items():
-        lines += [f"[rtest.nests.{nid}]", f"length_mm = {length}"] + (["calibrated = true"] if calibrated else []) + [""]
-    for run in runs:
-        k = len(next(iter(run["angles"].values())))
-        zeros = "[" + ", ".join(["[" + ", ".join(["[0.0, 0.0, 0.0]"] * k) + "]"] * run.get("repeats", 1)) + "]"
-        angles = ", ".join(f"{a} = {_toml_list(v)}" for a, v in run["angles"].items())
-        lines += ["[[rtest.runs]]", f'id = "{run["id"]}"', f'nest = "{run["nest"]}"',
-                  f"sphere_mm = {_toml_list(run['sphere'])}",
-                  *([f'placement = "{run["placement"]}"'] if "placement" in run else []),
-                  f"angles_deg = {{{angles}}}", f'frame = "{run["frame"]}"', f'zero = "{run["zero"]}"',
-                  f"displacement_um = {zeros}", ""]
-    return "\n".join(lines) + extra
 
 
 def _reference_runs(machine: str, frame: str, zero: str, rng) -> list[dict]:
