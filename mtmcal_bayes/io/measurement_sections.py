@@ -23,6 +23,7 @@ from ..machines.plugins import provided
 from .ballbar_section import read_ballbar
 from .probe_readings import probe_readings
 from .rtest_section import read_rtest
+from .run_angles import read_run_angles
 from .toml_reader import TomlReader
 
 #: the engine's keys of ``[probe]``
@@ -105,20 +106,7 @@ def _probe_run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, s
     if stylus not in styli:
         r.fail(f"{path}.stylus", f"no stylus {stylus!r} in [probe.styli] (have: {', '.join(styli) or 'none'})")
     sphere = r.array(t, "sphere_mm", path, (3,))
-    a = t.get("angles_deg")
-    if not isinstance(a, dict) or not a:
-        r.fail(f"{path}.angles_deg", "expected a table of rotary axis -> list of angles, e.g. {A = [0, -30], C = [0, 90]}")
-    angles = {}
-    for letter in a:
-        ax = desc.axes.get(letter)
-        if ax is None or not ax.rotary:
-            r.fail(f"{path}.angles_deg.{letter}", f"not a rotary axis of this machine "
-                   f"({', '.join(x.letter for x in desc.rotary_axes)})")
-        angles[letter] = r.array(a, letter, f"{path}.angles_deg", (None,))
-    sizes = {len(v) for v in angles.values()}
-    if len(sizes) > 1:
-        r.fail(f"{path}.angles_deg", "every axis needs one angle per position: the lists differ in length")
-    n_pos = sizes.pop()
+    angles, n_pos = read_run_angles(r, t, path, desc, example="{A = [0, -30], C = [0, 90]}")
     if n_pos < 2:
         r.fail(f"{path}.angles_deg", "needs at least two indexed positions (only differences between positions inform "
                "the deviations)")

@@ -15,6 +15,7 @@ import numpy as np
 from .. import units
 from ..campaign import RTEST_FRAMES, RTEST_PRIOR_SD_UM, RTEST_ZEROS, RTest, RTestNest, RTestRun
 from ..machines.description import MachineDescription
+from .run_angles import read_run_angles
 from .toml_reader import TomlReader, kind_of
 
 #: the keys of ``[rtest]``, of a nest and of a run
@@ -70,20 +71,7 @@ def _run(r: TomlReader, t: dict, path: str, desc: MachineDescription, *, nests: 
         r.fail(f"{path}.nest", f"no nest {nest!r} in [rtest.nests] (have: {', '.join(nests)})")
     sphere = r.array(t, "sphere_mm", path, (3,))
     placement = r.string(t, "placement", path, default="") or None
-    a = t.get("angles_deg")
-    if not isinstance(a, dict) or not a:
-        r.fail(f"{path}.angles_deg", "expected a table of rotary axis -> list of angles, e.g. {A = [0, 0], C = [0, 90]}")
-    angles = {}
-    for letter in a:
-        ax = desc.axes.get(letter)
-        if ax is None or not ax.rotary:
-            r.fail(f"{path}.angles_deg.{letter}", f"not a rotary axis of this machine "
-                   f"({', '.join(x.letter for x in desc.rotary_axes)})")
-        angles[letter] = r.array(a, letter, f"{path}.angles_deg", (None,))
-    sizes = {len(v) for v in angles.values()}
-    if len(sizes) > 1:
-        r.fail(f"{path}.angles_deg", "every axis needs one angle per position: the lists differ in length")
-    n_pos = sizes.pop()
+    angles, n_pos = read_run_angles(r, t, path, desc, example="{A = [0, 0], C = [0, 90]}")
     frame = _choice(r, t, "frame", path, allowed=RTEST_FRAMES)
     zero = _choice(r, t, "zero", path, allowed=RTEST_ZEROS)
     d = r.array(t, "displacement_um", path, (None, None, 3))
