@@ -112,7 +112,7 @@ class RTestModel:
     def displacements(self, theta: np.ndarray) -> np.ndarray:
         """The readings ``(n, k, 3)`` mm for a batch ``(n, p)``."""
         theta = np.atleast_2d(as_numbers(theta))
-        n, L, s = len(theta), self.layout, self.desc.spindle
+        L, s = self.layout, self.desc.spindle
         ext, dev = extended(theta, self.space)
         terms = {b: ext[:, c] for b, c in self._cols.items()}  # (n, k)
         nest = s.point + (L.length + terms["dLR"])[..., None] * s.direction  # (n, k, 3) at the home pose
