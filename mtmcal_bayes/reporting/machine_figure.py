@@ -13,6 +13,8 @@ Errors left out of the default set (:func:`~mtmcal_bayes.machines.selection.redu
 
 from __future__ import annotations
 
+import textwrap
+
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +49,9 @@ TOOL_MM = 150.0
 SHIFT = 0.25
 TILT_DEG = 12.0
 ZERO_DEG = 25.0
+#: 8 pt characters a line of the figure's notes holds per inch of the figure's width (with a margin)
+NOTE_CHARS_PER_IN = 15
+
 
 
 def _unit(i: int) -> np.ndarray:
@@ -470,6 +475,9 @@ def deviations_figure(desc: MachineDescription) -> Figure:
         for d in greyed:
             by_reason.setdefault(left_out[d.name], []).append(d.symbol)
         notes += [f"    {', '.join(syms)}: {reason}" for reason, syms in by_reason.items()]
+    width = int(fig.get_figwidth() * NOTE_CHARS_PER_IN)
+    notes = [part for line in notes
+             for part in textwrap.wrap(line, width, subsequent_indent=" " * (len(line) - len(line.lstrip()) + 4))]
     fig.text(0.012, 0.006, "\n".join(notes), fontsize=8, color="0.25", va="bottom", linespacing=1.35)
     bottom = (0.155 * len(notes) + 0.2) / fig.get_figheight()  # 8 pt lines, 1.35 apart, in inches
     tight_layout(fig, (0.0, bottom, 1.0, 1.0 - 0.55 / fig.get_figheight()), h_pad=2.0)
@@ -488,7 +496,8 @@ def _basis_row(row, title: str, *, direction: np.ndarray, point: np.ndarray, bas
     lines += ["", "(drawn in words: the drawing of an inclined axis' errors in its basis is not made yet)"]
     for ax in row:
         ax.set_axis_off()
-    row[0].text(0.0, 1.0, "\n".join(lines), transform=row[0].transAxes, fontsize=9, va="top", ha="left")
+    words = row[0].text(0.0, 1.0, "\n".join(lines), transform=row[0].transAxes, fontsize=9, va="top", ha="left")
+    words.set_in_layout(False)  # it runs across the row's empty panels: the layout must not shrink them to fit it
 
 
 def _squareness_row(row, gen: list[Deviation], grey: set[str], *, form: str, length: float) -> None:
