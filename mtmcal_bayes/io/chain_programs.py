@@ -54,7 +54,7 @@ from ..machines.plugins import provided
 from ..units import fixed
 from .machine_reader import description_of
 from .nc_axes import DECIMALS, axis_block, axis_letters, comment
-from .program_parts import (RETRACT_MM, _deg, _linear_notes, _name, _positive, _rotary_travel, _shift,
+from .program_parts import (RETRACT_MM, _deg, _linear_notes, _name, _positive, _rotary_travel, _shift, measured_run,
                             _tool_direction, _words, relative_position)
 from .rtest_program import rtest_program, rtest_run
 
@@ -430,16 +430,8 @@ def campaign_program(campaign, *, pattern: str | None = None, run: int | None = 
 
 
 def _probe_run(campaign, probe: str):
-    runs = campaign.probe.runs if campaign.probe is not None else []
-    if not runs:
-        raise InputError(campaign.source, "probe.runs", f"no [[probe.runs]]: no probe run {probe!r} to write a "
-                         "program of (a ball-bar run's program: give its number or a pattern instead)")
-    ids = [r.id for r in runs]
-    if probe in ids:
-        return runs[ids.index(probe)]
-    if str(probe).isdigit() and 1 <= int(probe) <= len(runs):
-        return runs[int(probe) - 1]
-    raise ParameterError("probe", f"no probe run {probe!r} in the campaign (have: {', '.join(ids) or 'none'})")
+    return measured_run(campaign, campaign.probe.runs if campaign.probe is not None else [], probe, section="probe",
+                        what="probe run", hint=" (a ball-bar run's program: give its number or a pattern instead)")
 
 
 def _pattern_run(campaign, pattern: str, *, setup, mount, arc_deg, hold_deg) -> Run:

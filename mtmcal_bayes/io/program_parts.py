@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import units
-from ..errors import ParameterError
+from ..errors import InputError, ParameterError
 from ..machines.description import FRAME
 from ..machines.patterns import nominal_down
 
@@ -82,3 +82,19 @@ def relative_position(desc, q: dict, *, tool: np.ndarray, ball: np.ndarray) -> n
 def _positive(name: str, value) -> None:
     if not (np.isfinite(value) and value > 0):
         raise ParameterError(name, f"must be a positive number, got {value}")
+
+
+def measured_run(campaign, runs: list, wanted: str, *, section: str, what: str, hint: str = ""):
+    """The run of ``runs`` (a campaign's ``[[<section>.runs]]``) that ``wanted`` names: its id, or its 1-based number.
+    None there: an :class:`InputError` naming ``<section>.runs`` (``hint`` added); an unknown one: a
+    :class:`ParameterError` naming ``section``.  ``what``: the run's kind in the messages ("probe run")."""
+    if not runs:
+        raise InputError(campaign.source, f"{section}.runs", f"no [[{section}.runs]]: no {what} {wanted!r} to write "
+                         f"a program of{hint}")
+    ids = [r.id for r in runs]
+    if wanted in ids:
+        return runs[ids.index(wanted)]
+    if str(wanted).isdigit() and 1 <= int(wanted) <= len(runs):
+        return runs[int(wanted) - 1]
+    raise ParameterError(section, f"no {what} {wanted!r} in the campaign (have: {', '.join(ids)}, or 1 to "
+                         f"{len(runs)})")

@@ -20,13 +20,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError, ParameterError
+from ..errors import ParameterError
 from ..machines.description import FRAME
 from ..machines.patterns import centre_commands, tool_home
 from ..units import fixed
 from .machine_reader import description_of
 from .nc_axes import DECIMALS, axis_block, axis_letters, comment
 from .program_parts import (
+    measured_run,
     RETRACT_MM,
     _deg,
     _linear_notes,
@@ -48,17 +49,8 @@ def rtest_run(campaign, run: str):
     """The ``[[rtest.runs]]`` run ``run`` (its id, or its 1-based number) of ``campaign``; an :class:`InputError`
     naming ``rtest.runs`` where the campaign has none, a :class:`ParameterError` naming ``rtest`` for an unknown
     one."""
-    runs = campaign.rtest.runs if campaign.rtest is not None else []
-    if not runs:
-        raise InputError(campaign.source, "rtest.runs", f"no [[rtest.runs]]: no R-test run {run!r} to write a "
-                         "program of")
-    ids = [r.id for r in runs]
-    if run in ids:
-        return runs[ids.index(run)]
-    if str(run).isdigit() and 1 <= int(run) <= len(runs):
-        return runs[int(run) - 1]
-    raise ParameterError("rtest", f"no R-test run {run!r} in the campaign (have: {', '.join(ids)}, or 1 to "
-                         f"{len(runs)})")
+    return measured_run(campaign, campaign.rtest.runs if campaign.rtest is not None else [], run, section="rtest",
+                        what="R-test run")
 
 
 def rtest_commands(campaign, run) -> dict:

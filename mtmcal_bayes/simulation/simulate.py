@@ -200,16 +200,25 @@ def simulated_rtest(campaign: Campaign, truth: Truth, model: str = "chain", *, n
     readings = rtest_readings(campaign, truth, model)
     sd = campaign.rtest.repeatability if campaign.rtest.repeatability is not None else DEFAULT_PROBE_SD
     out = copy.deepcopy(campaign.rtest)
+    for run, d in _repeats(readings, out.runs, [run.displacements.shape[0] for run in out.runs], noise=noise,
+                           repeats=repeats, sd=sd, rng=rng):
+        run.displacements = d
+    return out
+
+
+def _repeats(readings: np.ndarray, runs, measured: list[int], *, noise: bool, repeats: int | None, sd: float, rng):
+    """Per run (in order, ``runs[i].positions`` of the ``(k, 3)`` ``readings`` each): ``(run, (r, a, 3))`` the
+    readings repeated ``measured[i]`` times (``repeats`` where given) each scattered by ``sd`` with ``noise``, else
+    once as they are."""
     start = 0
-    for run in out.runs:
+    for run, k in zip(runs, measured):
         a = run.positions
-        r = (repeats or run.displacements.shape[0]) if noise else 1
+        r = (repeats or k) if noise else 1
         d = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
         if noise:
             d += rng.normal(0.0, sd, size=d.shape)
-        run.displacements = d
+        yield run, d
         start += a
-    return out
 
 
 def rtest_readings(campaign: Campaign, truth: Truth, model: str = "chain") -> np.ndarray:
@@ -237,15 +246,9 @@ def simulated_probe(campaign: Campaign, truth: Truth, model: str = "htm-thesis",
         return None
     readings = probe_readings(campaign, truth, model)
     out = copy.deepcopy(campaign.probe)
-    start = 0
-    for run in out.runs:
-        a = run.positions
-        r = (repeats or run.centres.shape[0]) if noise else 1
-        centres = np.broadcast_to(readings[start:start + a], (r, a, 3)).copy()
-        if noise:
-            centres += rng.normal(0.0, sd, size=centres.shape)
+    for run, centres in _repeats(readings, out.runs, [run.centres.shape[0] for run in out.runs], noise=noise,
+                                 repeats=repeats, sd=sd, rng=rng):
         run.replace_centres(centres)
-        start += a
     return out
 
 
