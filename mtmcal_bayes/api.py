@@ -373,8 +373,9 @@ def instruments(campaign: CampaignLike = None, *, explain: bool = True) -> Instr
     """Do the instruments of a campaign agree?  The consistency check of every pair of them (the ball bar, the
     touch probe, the R-test: each against the other's posterior) on the exact linear posteriors, each instrument's
     discrepancy scale in the fused posterior, the deviations they disagree on (which ``compensate`` refuses), and
-    with ``explain`` the candidate explanations of a conflict between the ball bar and the probe weighed by the
-    marginal likelihood (readings of the B patterns, the stylus length, a difference between the sessions)."""
+    with ``explain`` the candidate explanations of each disagreeing pair's conflict weighed by the marginal likelihood
+    (readings of the B patterns, the stylus length, the R-test's frame, sign, zero, nests and placements, a
+    difference between the sessions)."""
     from .posterior.instrument_check import check_instruments
 
     c = campaign_of(campaign, measured=True)

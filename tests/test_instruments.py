@@ -134,7 +134,7 @@ def test_instruments_explains_a_conflict_on_every_machine(campaigns, name, run_c
     code, out, err = run_cli("instruments", path, "--json")
     assert code == 0, err
     doc = json.loads(out)
-    assert doc["agree"] is False and doc["explanations"] is not None
+    assert doc["agree"] is False and doc["explanations"] is not None  # two instruments: the one analysis
     cands = doc["explanations"]["candidates"]
     probe = LogPosterior(campaigns[name], "linear", data="probe")
     narrow = any(w < 0.3 for n, w in zip(probe.space.names, probe.priors.width) if n.startswith("dRS["))

@@ -134,3 +134,54 @@ def test_the_cli_checks_three_instruments_and_refuses_one(run_cli, tmp_path):
     code, out, err = run_cli("instruments", alone)
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
     assert "beside its R-test runs" in err and "Traceback" not in err
+
+
+def _explained(check, pair: str) -> list[dict]:
+    """The candidates of ``pair``'s explanations in a three-instrument check's JSON, best first."""
+    doc = check.to_json()["explanations"]
+    assert doc is not None and pair in doc, (pair, None if doc is None else list(doc))
+    return doc[pair]["candidates"]
+
+
+def test_a_reversed_sign_of_the_rtest_readings_is_the_explanation_the_data_prefer():
+    """Every R-test reading negated (a device exporting nest − sphere) on the trunnion: both pairs with the R-test
+    disagree and each pair's best explanation is the reversed sign, decisively (log Bayes factor > 4.6 over the
+    campaign as given); the ball bar / probe pair agrees and has none.  On the trunnion every rotary axis carries the
+    workpiece, so the two frames read alike and the frame is not weighed; the sessions are weighed per rotary axis,
+    the 20″ clamping difference only beside the ball bar."""
+    c = copy.deepcopy(_three("trunnion"))
+    for run in c.rtest.runs:
+        run.displacements = -run.displacements
+    chk = check_instruments(c)
+    assert set(chk.conflicts) == {("ballbar", "rtest"), ("probe", "rtest")}
+    for pair in PAIRS[1:]:
+        cands = _explained(chk, pair)
+        assert cands[0]["name"] == "R-test readings' sign reversed", [(x["name"], x["log_bayes_factor"]) for x in cands]
+        assert cands[0]["log_bayes_factor"] > 4.6
+        names = [x["name"] for x in cands]
+        assert "R-test in the other frame" not in names
+        assert any(n.startswith("sessions differ 20″") for n in names) == pair.startswith("ball bar")
+        assert (pair.startswith("touch probe") and any(n.startswith("stylus length") for n in names)) or \
+            not any(n.startswith("stylus length") for n in names)
+    assert "Where the ball bar's and the R-test's conflict could come from" in chk.to_text()
+
+
+def test_rtest_readings_in_the_other_frame_are_the_explanation_the_data_prefer():
+    """On the head-head (both rotary axes carry the spindle, so the "tool" and "machine" frames differ by the head's
+    turn) R-test runs read in the machine frame but labelled "tool": the pairs with the R-test disagree and each
+    one's best explanation is the other frame (alone, or with a session difference on top, which the data cannot
+    tell apart: within a log Bayes factor of 2.3), decisively over the campaign as given; on the campaign as
+    simulated the check agrees and explains nothing."""
+    c = _three("head-head")
+    assert check_instruments(c).conflicts == {}
+    flipped = copy.deepcopy(c)
+    for run in flipped.rtest.runs:
+        run.frame = "machine" if run.frame == "tool" else "tool"
+    chk = check_instruments(flipped)
+    assert ("ballbar", "rtest") in chk.conflicts
+    for pair, analysis in chk.conflicts.items():
+        best = analysis.candidates[0]
+        assert best.name.endswith("R-test in the other frame"), analysis.table().head(4)
+        frame = next(x for x in analysis.candidates if x.name == "R-test in the other frame")
+        assert frame.log_evidence - analysis.given.log_evidence > 4.6
+        assert best.log_evidence - frame.log_evidence < 2.3

@@ -1,16 +1,17 @@
 """Where a conflict between the instruments comes from: candidate explanations weighed by the data (SPEC §17).
 
-When the ball bar and the touch probe disagree (:mod:`.consistency`), the question is which of the
-plausible causes the data support.  Each candidate is a changed campaign or model; each is weighed by
+When two instruments disagree (:mod:`.consistency`: the ball bar and the touch probe, or either of them and the
+R-test), the question is which of the plausible causes the data support.  Each candidate is a changed campaign or
+model; each is weighed by
 
-* the **marginal likelihood** of the fused linear model, ``log p(y | candidate)``: both instruments'
+* the **marginal likelihood** of the pair's fused linear model, ``log p(y | candidate)``: both instruments'
   data, every parameter and both discrepancy scales integrated out exactly (normal priors, the scales on
   a grid: :meth:`~mtmcal_bayes.inference.marginal.MarginalPosterior.log_evidence`).  Differences are log
   Bayes factors: 2.3 is 10 : 1, 4.6 is 100 : 1 (Jeffreys: above 2.3 strong, above 4.6 decisive);
 * the posterior of the two discrepancy scales (a candidate that explains the conflict needs no large σ);
 * the consistency check of each instrument against the other's posterior (:func:`instrument_consistency`).
 
-Candidates, each where it applies to the campaign's machine:
+Candidates, each where it applies to the pair and the campaign's machine:
 
 * **Readings of the B patterns** (:mod:`mtmcal_bayes.conventions`), where the campaign has B-pattern runs whose
   reading the observations honour: the eight orientations in which a ball-bar program can draw the B = 0° and
@@ -20,10 +21,15 @@ Candidates, each where it applies to the campaign's machine:
 * **Stylus length along its axis** known to 0.3 mm instead of its prior (the touch probe's programmed length is
   the tool eye's with the controller's pivot length, which the ball bar's dial-gauge tool length does not share;
   pre-travel and stylus-ball radius act along the same axis): any machine with a touch probe.
+* **The R-test's set-up** (docs/rtest.md), where the pair has the R-test: its readings in the other frame
+  ("tool" for "machine" and back; only on a machine where the two differ), its readings' sign reversed (nest
+  − sphere exported for sphere − nest), its runs zeroed at their first position where they say "absolute", its
+  nests not calibrated where they say so, the sphere placed anew for every run where runs share a placement.
 * **A difference between the sessions**, per rotary axis of the machine: that axis' orientation deviations (its
   two tilts and its zero; on the thesis machine the B axis' α_XB, β_XB, γ_XB and the C axis' α_CZ, β_CZ) differ in
-  the probe's session from the ball bar's — by a thermal drift (prior sd 5″ each), or by what clamping the axis at
-  indexed positions (the probe) changes against continuous motion (the ball bar) (prior sd 20″ each).
+  the second instrument's session (the probe's, the R-test's) from the first's — by a thermal drift (prior sd 5″
+  each), or, beside the ball bar, by what clamping the axis at indexed positions (the probe, the static R-test)
+  changes against continuous motion (the ball bar) (prior sd 20″ each).
 
 Each candidate shows the fused posterior of the quantities :func:`shown_quantities` picks: the thesis' seven
 (:data:`SHOWN`) where the machine has them, else every deviation it estimates.
@@ -49,7 +55,7 @@ from ..inference.marginal import MarginalPosterior
 from ..io.machine_reader import description_of
 from ..machines.deviations import generated
 from ..observations import Observations
-from ..parameters import DERIVED, quantity_unit
+from ..parameters import DATA_INSTRUMENTS, DERIVED, DISCREPANCY_SCALES, quantity_unit
 from ..patterns import B_PATTERNS
 from .consistency import instrument_consistency
 
@@ -57,12 +63,18 @@ from .consistency import instrument_consistency
 CELLS = 24
 #: the stylus length's prior sd in the "stylus length" candidate, mm
 STYLUS_LENGTH_SD = 0.3
-#: a rotary axis' angles' difference between the sessions: (label, prior sd in ″, what it supposes, with {axis} and
-#: {angles} to fill)
+#: each instrument in words, by its data name
+INSTRUMENT_WORDS = {"ballbar": "ball bar", "probe": "touch probe", "rtest": "R-test"}
+#: the pair of instruments whose conflict is weighed unless another is named
+BALLBAR_PROBE = ("ballbar", "probe")
+#: each instrument's possessive in the sessions' sentences, by its data name
+OWNER = {"ballbar": "ball bar's", "probe": "probe's", "rtest": "R-test's"}
+#: a rotary axis' angles' difference between the sessions: (label, prior sd in ″, what it supposes, with {axis},
+#: {angles} and {second} (the second instrument's possessive) to fill, whether it needs the ball bar as the first)
 SESSIONS = (("session drift 5″", 5.0, "a thermal drift of the {axis}-axis angles {angles} between the two sessions "
-             "(sd 5″ each)"),
-            ("sessions differ 20″", 20.0, "the {axis}-axis angles {angles} differ between the probe's clamped indexed "
-             "positions and the ball bar's continuous motion (sd 20″ each)"))
+             "(sd 5″ each)", False),
+            ("sessions differ 20″", 20.0, "the {axis}-axis angles {angles} differ between the {second} clamped indexed "
+             "positions and the ball bar's continuous motion (sd 20″ each)", True))
 #: the eight orientations of a B-pattern plot: where B = 0° and B = 90° are drawn (first: the thesis' reading)
 ORIENTATIONS = ("B0=+Z,B90=+X", "B0=+Z,B90=-X", "B0=-Z,B90=+X", "B0=-Z,B90=-X",
                 "B0=+X,B90=+Z", "B0=-X,B90=+Z", "B0=+X,B90=-Z", "B0=-X,B90=-Z")
@@ -164,24 +176,34 @@ def _marginal(post: LogPosterior, extra: np.ndarray | None = None, extra_var: np
                              prior_mean=mean0, groups=post.scale_of, y=post.likelihood.y, cells=cells)
 
 
-def _drift_columns(post: LogPosterior, sd_arcsec: float, drifting: list[str]) -> tuple[np.ndarray, np.ndarray]:
-    """Columns of a difference of the angles ``drifting`` in the probe's session: the angles' own columns on the
-    probe's rows, prior sd ``sd_arcsec`` each."""
+def pair_data(pair: tuple[str, str]) -> str:
+    """The ``data`` value whose likelihood uses exactly the instruments of ``pair`` (``("ballbar", "probe")`` ->
+    ``"both"``)."""
+    return next(d for d, used in DATA_INSTRUMENTS.items() if used == tuple(pair))
+
+
+def _drift_columns(post: LogPosterior, sd_arcsec: float, drifting: list[str],
+                   instrument: str = "probe") -> tuple[np.ndarray, np.ndarray]:
+    """Columns of a difference of the angles ``drifting`` in ``instrument``'s session: the angles' own columns on
+    that instrument's rows, prior sd ``sd_arcsec`` each."""
     A = post.forward.design
-    probe_rows = np.array([post.scales[k] == "sigma_model_probe" for k in post.scale_of])
+    scale = DISCREPANCY_SCALES[instrument].name
+    rows = np.array([post.scales[k] == scale for k in post.scale_of])
     cols = [post.space.index(n) for n in drifting]
-    extra = np.where(probe_rows[:, None], A[:, cols], 0.0)
+    extra = np.where(rows[:, None], A[:, cols], 0.0)
     return extra, np.full(len(cols), units.to_internal(sd_arcsec, "arcsec") ** 2)
 
 
 def weigh(campaign, name: str, kind: str, supposes: str, *, drift_arcsec: float | None = None,
-          drifting: list[str] = (), post: LogPosterior | None = None) -> Candidate:
+          drifting: list[str] = (), post: LogPosterior | None = None, pair: tuple[str, str] = BALLBAR_PROBE
+          ) -> Candidate:
     """Evidence, scales and shown quantities (:func:`shown_quantities`) of the fused linear posterior of ``campaign``
-    (a candidate), with the probe's session's angles ``drifting`` differing by a difference of prior sd
-    ``drift_arcsec`` when it is given.  ``post``: that fused linear log posterior when it is at hand."""
-    post = post or LogPosterior(campaign, "linear", data="both")
+    (a candidate) on the data of ``pair``, with the second instrument's session's angles ``drifting`` differing by a
+    difference of prior sd ``drift_arcsec`` when it is given.  ``post``: that fused linear log posterior when it is
+    at hand."""
+    post = post or LogPosterior(campaign, "linear", data=pair_data(pair))
     drift = drift_arcsec is not None
-    extra, extra_var = _drift_columns(post, drift_arcsec, drifting) if drift else (None, None)
+    extra, extra_var = _drift_columns(post, drift_arcsec, drifting, pair[1]) if drift else (None, None)
     mp = _marginal(post, extra, extra_var)
     y = post.likelihood.y
     names = list(post.space.names) + ([f"drift {n}" for n in drifting] if drift else [])
@@ -197,10 +219,12 @@ def weigh(campaign, name: str, kind: str, supposes: str, *, drift_arcsec: float 
 
 @dataclass
 class ConflictAnalysis:
-    """Every candidate explanation, best first (``candidates``); ``given`` is the campaign as it is."""
+    """Every candidate explanation, best first (``candidates``); ``given`` is the campaign as it is; ``pair`` the two
+    instruments (data names) whose conflict they explain."""
 
     given: Candidate
     candidates: list[Candidate]
+    pair: tuple[str, str] = BALLBAR_PROBE
 
     @property
     def shown(self) -> tuple[str, ...]:
@@ -228,10 +252,12 @@ class ConflictAnalysis:
 
     def to_text(self, top: int = 8) -> str:
         t = self.table().head(top)
-        lines = ["Where the instruments' conflict could come from (fused linear model; log Bayes factor against the "
+        who = ("the instruments'" if self.pair == BALLBAR_PROBE else
+               f"the {INSTRUMENT_WORDS[self.pair[0]]}'s and the {INSTRUMENT_WORDS[self.pair[1]]}'s")
+        lines = [f"Where {who} conflict could come from (fused linear model; log Bayes factor against the "
                  "campaign as given; σ posterior means; ″ and µm):"]
         scale_cols = [c for c in t.columns if c.endswith("_um")]
-        head = (f"  {'candidate':50s} {'log BF':>7s} " + " ".join(f"{c[:-3].replace('sigma_model', 'σ'):>8s}"
+        head = (f"  {'candidate':50s} {'log BF':>7s} " + " ".join(f"{_scale_head(c):>8s}"
                                                                    for c in scale_cols)
                 + " " + " ".join(f"{q.replace('alpha_XB+gamma_XB', 'α+γ XB'):>9s}" for q in self.shown))
         lines.append(head)
@@ -242,45 +268,117 @@ class ConflictAnalysis:
         return "\n".join(lines)
 
 
-def _consistency(c: Candidate) -> pd.DataFrame:
-    cons = instrument_consistency(LogPosterior(c.campaign, "linear", data="ballbar"),
-                                  LogPosterior(c.campaign, "linear", data="probe"))
+def _scale_head(column: str) -> str:
+    """A scale's column head in the text: ``sigma_model_probe_um`` -> ``σ_probe``."""
+    return column[:-3].replace("sigma_model", "σ")
+
+
+def _consistency(c: Candidate, pair: tuple[str, str]) -> pd.DataFrame:
+    cons = instrument_consistency(LogPosterior(c.campaign, "linear", data=pair[0]),
+                                  LogPosterior(c.campaign, "linear", data=pair[1]))
     return cons.groups
 
 
-def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
-    """Weigh the candidate explanations of a conflict between the instruments of ``campaign`` (module docstring);
-    the consistency check is run for the campaign as given and the ``consistency_of`` best candidates (none when
-    0).  ``campaign`` may be a :class:`~mtmcal_bayes.analysis.CampaignAnalysis`, whose fused linear log posterior
-    then serves the campaign as given."""
+def _rtest_copy(campaign, change) -> object:
+    """A copy of ``campaign`` whose R-test runs (and nests) ``change(rtest)`` has changed in place."""
+    out = copy.deepcopy(campaign)
+    change(out.rtest)
+    return out
+
+
+def _rtest_candidates(campaign, data: str, given: LogPosterior) -> list[tuple[object, str, str, LogPosterior | None]]:
+    """The R-test's set-up explanations of ``campaign`` (module docstring; ``given``: its fused linear log posterior
+    on ``data``): ``(changed campaign, name, what it supposes, its fused linear log posterior or None)``, each only
+    where it changes the campaign's model."""
+    rt = campaign.rtest
+    out = []
+
+    def flip_frames(r):
+        for run in r.runs:
+            run.frame = "machine" if run.frame == "tool" else "tool"
+
+    def negate(r):
+        for run in r.runs:
+            run.displacements = -run.displacements
+
+    def free_zeros(r):
+        for run in r.runs:
+            run.zero = "first"
+
+    def uncalibrate(r):
+        for nest in r.nests.values():
+            nest.calibrated = False
+
+    def own_placements(r):
+        for k, run in enumerate(r.runs):
+            run.placement = f"run {k + 1}"
+
+    given = given.forward.design
+    frames = _rtest_copy(campaign, flip_frames)
+    post = LogPosterior(frames, "linear", data=data)
+    if post.forward.design.shape != given.shape or not np.allclose(post.forward.design, given, rtol=0, atol=1e-12):
+        out.append((frames, "R-test in the other frame", "the R-test's readings are in the other frame (\"tool\" for "
+                    "\"machine\" and back: whether the device turned them back with the nominal rotation)", post))
+    out.append((_rtest_copy(campaign, negate), "R-test readings' sign reversed", "the R-test's readings are nest − "
+                "sphere, not sphere − nest (the device's sign convention)", None))
+    if any(run.zero == "absolute" for run in rt.runs):
+        out.append((_rtest_copy(campaign, free_zeros), "R-test zeroed at the first position", "the R-test's "
+                    "\"absolute\" runs were zeroed at their first position (the nest not set on a master)", None))
+    if any(nest.calibrated for nest in rt.nests.values()):
+        out.append((_rtest_copy(campaign, uncalibrate), "R-test nest not calibrated", "the nests said to be "
+                    "calibrated are not: their length and centring are free with their priors", None))
+    shared = [run.placement or tuple(run.sphere) for run in rt.runs]
+    if len(set(shared)) < len(shared):
+        out.append((_rtest_copy(campaign, own_placements), "sphere placed anew per run", "the sphere moved between "
+                    "the R-test's runs: each run has its own placement", None))
+    return out
+
+
+def explain_conflict(campaign, *, pair: tuple[str, str] = BALLBAR_PROBE, consistency_of: int = 3) -> ConflictAnalysis:
+    """Weigh the candidate explanations of a conflict between the instruments ``pair`` (data names, in the order
+    ball bar, probe, R-test) of ``campaign`` (module docstring); the consistency check is run for the campaign as
+    given and the ``consistency_of`` best candidates (none when 0).  ``campaign`` may be a
+    :class:`~mtmcal_bayes.analysis.CampaignAnalysis`, whose fused linear log posterior then serves the campaign as
+    given."""
+    pair = tuple(pair)
+    data = pair_data(pair)
     given_post = None
     if isinstance(campaign, CampaignAnalysis):
-        given_post = campaign.variant(model="linear", data="both", fix_dx_BT=False, sigma_model=None).log_posterior
+        given_post = campaign.variant(model="linear", data=data, fix_dx_BT=False, sigma_model=None).log_posterior
         campaign = campaign.campaign
-    if not campaign.has_probe_readings():
-        raise ParameterError("campaign", f"{campaign.source} has no touch-probe readings: there is no second "
-                             "instrument to weigh")
-    posts = {id(campaign): given_post or LogPosterior(campaign, "linear", data="both")}  # built once per campaign
-    given = weigh(campaign, "as given", "campaign", "the campaign as it is", post=posts[id(campaign)])
+    have = {"ballbar": bool(campaign.ballbar.runs), "probe": campaign.has_probe_readings(),
+            "rtest": campaign.has_rtest_readings()}
+    missing = [i for i in pair if not have[i]]
+    if missing:
+        what = {"ballbar": "ball-bar runs", "probe": "touch-probe readings", "rtest": "R-test readings"}[missing[0]]
+        raise ParameterError("campaign", f"{campaign.source} has no {what}: there is no second instrument to weigh")
+    posts = {id(campaign): given_post or LogPosterior(campaign, "linear", data=data)}  # built once per campaign
+    given = weigh(campaign, "as given", "campaign", "the campaign as it is", post=posts[id(campaign)], pair=pair)
     out = [given]
     sd_um = units.from_internal(STYLUS_LENGTH_SD, "um")
-    if "dRS" not in campaign.priors or campaign.priors["dRS"].get("sd", 0.0) < STYLUS_LENGTH_SD:
+    if "probe" in pair and ("dRS" not in campaign.priors or campaign.priors["dRS"].get("sd", 0.0) < STYLUS_LENGTH_SD):
         stylus = copy.deepcopy(campaign)
         stylus.priors["dRS"] = {"dist": "normal", "mean": 0.0, "sd": STYLUS_LENGTH_SD}
-        posts[id(stylus)] = LogPosterior(stylus, "linear", data="both")
+        posts[id(stylus)] = LogPosterior(stylus, "linear", data=data)
         out.append(weigh(stylus, "stylus length ±0.3 mm", "probe",
                          f"the stylus length along its axis known to {sd_um:g} µm (tool eye + controller pivot)",
-                         post=posts[id(stylus)]))
-    best_probe = max(out, key=lambda c: c.log_evidence)
-    base = best_probe.campaign
-    extra = "" if best_probe is given else f"; {best_probe.name}"
-    base_post = posts.get(id(base)) or LogPosterior(base, "linear", data="both")
+                         post=posts[id(stylus)], pair=pair))
+    if "rtest" in pair:
+        for changed, name, supposes, post in _rtest_candidates(campaign, data, posts[id(campaign)]):
+            posts[id(changed)] = post or LogPosterior(changed, "linear", data=data)
+            out.append(weigh(changed, name, "R-test", supposes, post=posts[id(changed)], pair=pair))
+    best_own = max(out, key=lambda c: c.log_evidence)  # the best of the instruments' own explanations
+    base = best_own.campaign
+    extra = "" if best_own is given else f"; {best_own.name}"
+    base_post = posts.get(id(base)) or LogPosterior(base, "linear", data=data)
     for axis, angles in session_axes(base, base_post).items():
-        for label, sd, supposes in SESSIONS:
+        for label, sd, supposes, beside_ballbar in SESSIONS:
+            if beside_ballbar and pair[0] != "ballbar":
+                continue
             out.append(weigh(base, f"{label} ({axis} axis){extra}", "sessions",
-                             supposes.format(axis=axis, angles=", ".join(angles)) + extra, drift_arcsec=sd,
-                             drifting=angles, post=base_post))
-    for orientation in ORIENTATIONS:
+                             supposes.format(axis=axis, angles=", ".join(angles), second=OWNER[pair[1]]) + extra,
+                             drift_arcsec=sd, drifting=angles, post=base_post, pair=pair))
+    for orientation in ORIENTATIONS if "ballbar" in pair else ():
         for reversed_y in (False, True):
             moved = reread(base, orientation, reversed_y)
             if moved is None or _reads_alike(moved, base) or _same_reading(moved, base):
@@ -288,9 +386,10 @@ def explain_conflict(campaign, *, consistency_of: int = 3) -> ConflictAnalysis:
             label = orientation + (", BY bar at −Y" if reversed_y else "")
             out.append(weigh(moved, label + extra, "ball-bar reading",
                              f"the B arcs drawn {orientation.replace(',', ', ')}"
-                             + (", the BY/BA bar on the −Y side of the W ball" if reversed_y else "") + extra))
+                             + (", the BY/BA bar on the −Y side of the W ball" if reversed_y else "") + extra,
+                             pair=pair))
     out.sort(key=lambda c: -c.log_evidence)
     checked = [given] + [c for c in out if c is not given and c.kind != "sessions"][:consistency_of]
     for c in checked if consistency_of else []:
-        c.consistency = _consistency(c)  # (a session difference changes the model, not a campaign: not checked)
-    return ConflictAnalysis(given, out)
+        c.consistency = _consistency(c, pair)  # (a session difference changes the model, not a campaign: not checked)
+    return ConflictAnalysis(given, out, pair)

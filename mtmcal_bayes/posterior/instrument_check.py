@@ -4,9 +4,8 @@
 the touch probe, the R-test: each against the other's posterior) on the exact
 posteriors of the ``linear`` model (the kinematic models' first order; closed form on a grid, no
 sampling: :mod:`.consistency`), the fused posterior's discrepancy scales (one per instrument), the
-deviations each disagreeing reading group depends on (:func:`disputed_deviations`), and — on request, where the
-ball bar and the touch probe disagree — the candidate explanations weighed by the marginal likelihood
-(:mod:`.conflict`).  ``compensate`` refuses
+deviations each disagreeing reading group depends on (:func:`disputed_deviations`), and — on request, for each
+pair that disagrees — the candidate explanations weighed by the marginal likelihood (:mod:`.conflict`).  ``compensate`` refuses
 a disputed deviation (SPEC §17) on this check; ``mtmcal-bayes instruments`` prints it.
 """
 
@@ -89,14 +88,15 @@ class InstrumentCheck:
 
     ``consistency``: both directions of every pair, per reading group; ``scales``: each discrepancy scale's fused
     posterior mean and sd, µm; ``disputed``: the deviations the instruments disagree on, with the verdicts behind
-    each; ``conflict``: the candidate explanations (or None); ``disputed_pairs``: per disputed deviation the pairs of
-    instruments (data names) behind its verdicts."""
+    each; ``conflicts``: per disagreeing pair of instruments (data names), the candidate explanations of its conflict
+    (empty when none is explained); ``disputed_pairs``: per disputed deviation the pairs of instruments (data names)
+    behind its verdicts."""
 
     source: str
     consistency: Consistency
     scales: dict[str, tuple[float, float]]
     disputed: dict[str, list[str]]
-    conflict: ConflictAnalysis | None = None
+    conflicts: dict[tuple[str, str], ConflictAnalysis] = field(default_factory=dict)
     disputed_pairs: dict[str, list[tuple]] = field(default_factory=dict)
 
     @property
@@ -119,7 +119,16 @@ class InstrumentCheck:
         return {"campaign": self.source, "agree": self.agree,
                 "scales_um": {n: {"mean": m, "sd": s} for n, (m, s) in self.scales.items()},
                 "disputed": self.disputed, "consistency": self.consistency.to_json(),
-                "explanations": None if self.conflict is None else self.conflict.to_json()}
+                "explanations": self._explanations_json()}
+
+    def _explanations_json(self) -> dict | None:
+        """The explanations' JSON: None when none was weighed; with two instruments the one analysis, with three
+        ``{pair: analysis}`` (as the consistency names pairs only then)."""
+        if not self.conflicts:
+            return None
+        if "pair" not in self.consistency.groups:
+            return next(iter(self.conflicts.values())).to_json()
+        return {_pair_label(*pair): c.to_json() for pair, c in self.conflicts.items()}
 
     def to_text(self) -> str:
         lines = [f"Campaign: {self.source}", "", self.consistency.to_text(), "",
@@ -140,15 +149,15 @@ class InstrumentCheck:
         if unchecked:
             lines.append(f"Not checked: {', '.join(unchecked)} (their broad nuisance terms leave their readings no "
                          "free direction; narrower priors on them would).")
-        if self.conflict is not None:
-            lines += ["", self.conflict.to_text()]
+        for conflict in self.conflicts.values():
+            lines += ["", conflict.to_text()]
         return "\n".join(lines)
 
 
 def check_instruments(campaign, *, explain: bool = True) -> InstrumentCheck:
     """The consistency of every pair of the instruments of ``campaign`` (each against the other's posterior) on the
     exact linear posteriors, the fused scales, the disputed deviations and (``explain``) the candidate explanations
-    of a conflict between the ball bar and the touch probe.  ``campaign`` may be a
+    of each disagreeing pair's conflict.  ``campaign`` may be a
     :class:`~mtmcal_bayes.analysis.CampaignAnalysis`, whose cache then serves the linear posteriors."""
     analysis = campaign
     campaign = analysis.campaign if isinstance(analysis, CampaignAnalysis) else analysis
@@ -169,10 +178,10 @@ def check_instruments(campaign, *, explain: bool = True) -> InstrumentCheck:
     mean, sd = marginal.sigma_moments(fused.likelihood.y)
     scales = {n: (units.from_internal(mean[k], "um"), units.from_internal(sd[k], "um")) for k, n in
               enumerate(fused.scales)}
-    two = checks.get(("ballbar", "probe"))  # the conflict the explanations weigh: the ball bar's and the probe's
-    conflict = explain_conflict(linear) if explain and two is not None and two.disagreeing else None
+    conflicts = {pair: explain_conflict(linear, pair=pair) for pair, check in checks.items()
+                 if explain and check.disagreeing}
     disputed, pairs = _disputed(cons, posteriors)
-    return InstrumentCheck(campaign.source, cons, scales, disputed, conflict, pairs)
+    return InstrumentCheck(campaign.source, cons, scales, disputed, conflicts, pairs)
 
 
 def blame(scales: dict[str, tuple[float, float]], priors: dict) -> str:
