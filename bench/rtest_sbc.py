@@ -50,7 +50,7 @@ def main() -> None:
                                         workers=args.workers))
                 s = r.summary()
                 seconds = time.perf_counter() - t0
-                lo, hi = r.coverage_band(0.9)
+                lo, hi = r.verdict_band()
                 print(f"\n### {machine}, --data {data}: N = {args.n}, seed {args.seed}, {seconds:.1f} s, "
                       f"{len(r.quantities)} quantities, 90 % coverage band {lo:.3f}–{hi:.3f}\n")
                 print("| quantity | p_uniform | coverage_90 | z_sd | ok |\n|---|---|---|---|---|")

@@ -56,5 +56,13 @@ def sbc_quantities(post) -> tuple[str, ...]:
 
 #: probabilities of the highest-density intervals whose coverage is counted
 INTERVALS: tuple[float, ...] = (0.5, 0.9, 0.95)
-#: a quantity fails when its uniformity p-value is below this
+#: the verdict's false-alarm rate per kind of test, over all the quantities it is over: each of those Q quantities
+#: fails when its uniformity p-value is at most P_MIN / Q or its 90 % coverage lies outside the central 1 − P_MIN / Q
+#: binomial range (Bonferroni), so a calibrated posterior fails the verdict in at most 2 × P_MIN of runs whatever Q
+#: (tested one by one at P_MIN, a run of 35 quantities would fail about half the time)
 P_MIN = 0.01
+
+
+def quantity_level(family: int) -> float:
+    """The level each of ``family`` quantities is tested at: ``P_MIN / family`` (at least one quantity)."""
+    return P_MIN / max(int(family), 1)

@@ -10,7 +10,6 @@ from scipy import stats
 
 from ..arviz_import import az
 from ..figure_style import COLOURS, new_figure, symbol
-from .criteria import P_MIN
 
 NCOLS = 4
 #: an ISO 230-7 symbol in a described machine's quantity (``E_X(0C1)B``, also inside a combination's name)
@@ -36,9 +35,9 @@ def _grid(n: int, title: str):
     return fig, axes.flat
 
 
-def _flag(ax, p: float) -> None:
-    """Title colour: red where the uniformity test fails."""
-    if p <= P_MIN:
+def _flag(ax, p: float, threshold: float) -> None:
+    """Title colour: red where the uniformity test fails (``p`` at or below ``threshold``)."""
+    if p <= threshold:
         ax.title.set_color("#C00000")
 
 
@@ -55,7 +54,7 @@ def rank_histograms(result):
         ax.axhline(N / B, color=COLOURS["prior"], lw=1)
         ax.bar(np.arange(B), c, width=0.9, color=COLOURS["posterior"])
         ax.set_title(_title(q, s.loc[q, "p_uniform"]), fontsize=10)
-        _flag(ax, s.loc[q, "p_uniform"])
+        _flag(ax, s.loc[q, "p_uniform"], result.p_threshold)
         ax.set_xticks([0, B - 1], ["low", "high"])
         ax.set_ylim(0, max(hi, c.max()) * 1.15)
         ax.tick_params(labelsize=8)
@@ -84,7 +83,7 @@ def ecdf_differences(result):
                                                                                    "alpha": 0.3})
         ax.axhline(0, color="k", lw=0.6)
         ax.set_title(_title(q, s.loc[q, "p_uniform"]), fontsize=10)
-        _flag(ax, s.loc[q, "p_uniform"])
+        _flag(ax, s.loc[q, "p_uniform"], result.p_threshold)
         ax.set_xlim(0, L1 - 1)
         ax.tick_params(labelsize=8)
     fig.supxlabel(f"rank of the truth (0…{L1 - 1})", fontsize=9)

@@ -39,7 +39,7 @@ from ..models import check_data, check_model
 from ..progress import Progress, ProgressEvent, emit
 from .criteria import (  # noqa: F401  (re-exported)
     INTERVALS,
-    P_MIN,
+    quantity_level,
     Checked,
     checked_quantities,
     sbc_quantities,
@@ -118,6 +118,20 @@ class SBCResult:
         B, L1 = self.n_bins, self.settings.n_ranked + 1
         return np.stack([np.bincount(self.ranks[:, j] * B // L1, minlength=B) for j in range(len(self.quantities))])
 
+    @property
+    def family(self) -> int:
+        """How many quantities the verdict is over (the identified ones; every ranked one where none is named)."""
+        return len(self.identified) or len(self.quantities)
+
+    @property
+    def p_threshold(self) -> float:
+        """The uniformity p-value at or below which a quantity fails (:func:`~.criteria.quantity_level`)."""
+        return quantity_level(self.family)
+
+    def verdict_band(self) -> tuple[float, float]:
+        """The 90 % coverage range a quantity passes in: the central ``1 − p_threshold`` binomial range."""
+        return self.coverage_band(0.9, level=1.0 - self.p_threshold)
+
     def coverage_band(self, prob: float, level: float = 0.99) -> tuple[float, float]:
         """Central ``level`` range of the coverage a calibrated posterior gives over N replicates (binomial)."""
         n = len(self.ranks)
@@ -138,8 +152,8 @@ class SBCResult:
             row["z_mean"] = float(z[:, j].mean())
             row["z_sd"] = float(z[:, j].std(ddof=1))
             row["contraction"] = float(1.0 - np.mean(self.post_sd[:, j] ** 2) / self.prior_sd[j] ** 2)
-            lo, hi = self.coverage_band(0.9)
-            row["ok"] = bool(p > P_MIN and lo <= row["coverage_90"] <= hi)
+            lo, hi = self.verdict_band()
+            row["ok"] = bool(p > self.p_threshold and lo <= row["coverage_90"] <= hi)
             rows[q] = row
         return pd.DataFrame(rows).T.astype({"ok": bool})
 
@@ -167,7 +181,7 @@ class SBCResult:
     def document(self) -> dict:
         """p_uniform and coverage_50/90/95 per quantity, the settings and the verdict (sbc.json)."""
         s = self.summary()
-        lo, hi = self.coverage_band(0.9)
+        lo, hi = self.verdict_band()
         return {
             "campaign": self.campaign, "model": self.settings.model, "sampler": self.settings.sampler,
             "n": len(self.ranks), "n_ranked": self.settings.n_ranked, "n_bins": self.n_bins,
@@ -175,7 +189,7 @@ class SBCResult:
             "max_steps": self.settings.max_steps if self.settings.sampler == "emcee" else None,
             "wall_time_s": self.wall_time, "replicate_seconds_median": float(np.median(self.seconds)),
             "replicates_not_converged": int((~self.converged).sum()),
-            "p_min": P_MIN, "coverage_90_band_99pct": [lo, hi],
+            "family": self.family, "p_min": self.p_threshold, "coverage_90_band": [lo, hi],
             "quantities": {q: {k: (bool(v) if k == "ok" else float(v)) for k, v in s.loc[q].items()}
                            for q in self.quantities},
             "all_ok": bool(s.loc[list(self.identified), "ok"].all()),
