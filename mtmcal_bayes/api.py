@@ -306,10 +306,11 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
          sigma_model_um: float | None = None, sweep_pattern: str | None = None, output=None,
-         data: str | None = None, sigma_model_prior=None) -> PlanResult:
-    """Rank candidate extra measurements — ball-bar runs and touch-probe runs — by how much they would reduce the
-    uncertainty of ``targets`` (default the eight identified quantities), given the campaign's ``data``
-    (``"ballbar"``, ``"probe"`` or ``"both"``).
+         data: str | None = None, sigma_model_prior=None, times=None) -> PlanResult:
+    """Rank candidate extra measurements — ball-bar runs, touch-probe runs and, with an ``[rtest]``, R-test runs —
+    by how much they would reduce the uncertainty of ``targets`` (default the eight identified quantities), given the
+    campaign's ``data`` (a value of :data:`~mtmcal_bayes.models.DATA`; default every instrument it has).  ``times``:
+    a TOML file (or dict) overriding the machine-time model, as for :func:`design` (an R-test candidate's minutes).
 
     ``candidates``: a TOML file of your own ``[[candidate]]`` tables, or a list of
     :class:`~mtmcal_bayes.planning.Candidate`, ranked with the catalogue.  ``sigma_model_prior``: a σ_model prior
@@ -330,9 +331,12 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
         raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a non-negative number")
     learnt = sigma_model_prior_of(sigma_model_prior, c)  # the closed form's fixed σ_model does not exclude a prior
+    from .machine_time import TimeModel
+
+    clock = TimeModel(**_time_items(c, times))
     extra = _user_candidates(candidates, c)
     result = rank(c, targets, extra=extra, sigma_model_um=sigma_model_um, sweep_pattern=sweep_pattern, model=model,
-                  data=data, sigma_prior=learnt)
+                  data=data, sigma_prior=learnt, times=clock)
     if output is not None:
         result.write(output)
     return result

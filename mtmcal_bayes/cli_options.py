@@ -207,6 +207,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
                    help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
     _sigma_prior_option(s, ": the closed form at its rms, the σ_model information and the Monte-Carlo check under it "
                         "(docs/planning.md)")
+    s.add_argument("--times", metavar="FILE.toml", help="override the machine-time model: an R-test candidate's "
+                   "minutes (docs/design.md)")
     s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")
 
     s = _command(sub, "design", handlers["design"], "design the whole campaign: the runs that reach target "
