@@ -71,16 +71,9 @@ def kinematic_model_of(model: str | None, c: Campaign) -> str:
 def data_of(data: str | None, c: Campaign) -> str:
     """The data of a likelihood: as given, else what the machine's plug-in states (the thesis machine: the ball bar),
     else every instrument the campaign has."""
-    from .machines.plugins import provided
+    from .models import default_data
 
-    if data is not None:
-        return data
-    stated = provided(c.machine, "default_data")
-    if stated is not None:
-        return stated
-    if c.has_rtest_readings():
-        return "all"
-    return "both" if c.ballbar.runs and c.has_probe_readings() else "probe" if not c.ballbar.runs else "ballbar"
+    return default_data(c) if data is None else data
 
 
 def tolerances_of(tolerances, campaign: Campaign | None = None) -> dict | None:
@@ -535,7 +528,7 @@ def history_campaigns(paths) -> list[Campaign]:
 
 
 def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None,
-            trend: str = "auto") -> HistoryResult:
+            trend: str = "auto", data: str | None = None) -> HistoryResult:
     """One machine's history: every quantity at every date jointly (deviations as random walks in time, with a
     drift rate where the data want one, referred to 20 °C when the campaigns' temperatures are given), the
     changes that are real, and the date by which each toleranced quantity should be recalibrated.
@@ -545,16 +538,21 @@ def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None,
     receives history.json, CSV files, trend.png and index.html.  ``model``: ``linear``, or a kinematic model
     linearised per campaign at the history's estimate (the linearisation checked and stated; ``chain`` on a described
     machine, whose history tracks its own deviations that the campaigns determine, docs/history.md); ``trend``:
-    ``"auto"`` (chosen per deviation by Bayes factor) or ``"off"`` (random walks only).
+    ``"auto"`` (chosen per deviation by Bayes factor) or ``"off"`` (random walks only); ``data``: what every
+    campaign's likelihood uses (default: every instrument it has, as :func:`sample`; each instrument its own
+    discrepancy scale, shared by the campaigns).
     """
     from .histories import fit_history
+    from .models import check_data
 
     _writable(output, "history")
     found = history_campaigns(campaigns)
     if found:
         kinematic_model_of(model, found[-1])  # checked: a described machine has linear and chain
     tol = tolerances_of(tolerances, found[-1] if found else None)  # the latest campaign's machine names them
-    result = fit_history(found, model=model, seed=seed, tolerances=tol, trend=trend)
+    for c in found if data is not None else ():
+        check_data(data, c)
+    result = fit_history(found, model=model, seed=seed, tolerances=tol, trend=trend, data=data)
     if output is not None:
         result.write(output)
     return result

@@ -69,7 +69,7 @@ def cmd_simulate(args) -> int:
 
 def cmd_history(args) -> int:
     result = api.history(args.campaigns, model=args.model, seed=args.seed, tolerances=args.tolerances,
-                         output=args.output, trend=args.trend)
+                         output=args.output, trend=args.trend, data=args.data)
     return _show(result, args)
 
 

@@ -165,6 +165,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
                    "Bayes factor wants one (default); off: random walks only")
     s.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
     s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances] for the forecast (default: the latest campaign's)")
+    s.add_argument("--data", choices=DATA, default=None, help="what each campaign's likelihood uses (default: every "
+                   "instrument it has, as sample; the thesis machine: the ball bar)")
     s.add_argument("-o", "--output", metavar="DIR", help="write history.json, CSV files, trend.png and index.html to DIR")
 
     s = _command(sub, "sensitivity", handlers["sensitivity"], "eccentricity of every pattern per unit deviation and mounting offset",

@@ -102,7 +102,8 @@ def test_no_rtest_no_rtest_candidates():
 @pytest.mark.parametrize("machine", list(SPHERES))
 def test_candidates_within_travels(machine):
     """Every R-test candidate's angles lie within its axes' travels (where stated), on every built-in type."""
-    c = parse_campaign(campaign_text(machine, static_runs(machine, "tool", "first")[:1], nests={"N1": (NEST_MM, False)}))
+    runs = static_runs(machine, "tool", "first")[:1]
+    c = parse_campaign(campaign_text(machine, runs, nests={"N1": (NEST_MM, False)}))
     axes = {a.letter: a for a in builtin_description(machine).rotary_axes}
     cands = rtest_catalogue(c)
     assert {x.axis for x in cands} == set(axes)

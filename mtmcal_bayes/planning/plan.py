@@ -252,7 +252,8 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
     learnt = " learnt elsewhere" if planner.learnt is not None and sigma_model_um is None else ""
     bar_runs = (f"; new runs measured {candidates[0].repeats if candidates else 3} times with repeat sd "
                 f"{units.from_internal(planner.pooled_sd, 'um'):.2f} µm (pooled from the campaign) and instrument "
-                f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm") if ballbar or not others else ""
+                f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm") \
+        if ballbar or not others else ""
     notes = [f"closed form for {form} at sigma_model = {units.from_internal(planner.sigma_model, 'um'):.2f} µm "
              f"(the root mean square of its prior{learnt}){bar_runs}",
              kit.feasibility_note,
