@@ -202,9 +202,9 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--candidates", metavar="FILE.toml", help="extra candidates of your own ([[candidate]] tables)")
     s.add_argument("--sigma-model-um", type=float, default=None,
                    help="fixed model-discrepancy sd of the closed form (default: rms of its prior, 2 µm)")
-    s.add_argument("--data", choices=DATA, default=None, help="what the current posterior rests on: ball bar, probe, "
-                   "or both (default: every instrument the campaign has; the thesis machine: the ball bar); probe runs "
-                   "are candidates whenever the campaign has a [probe]")
+    s.add_argument("--data", choices=DATA, default=None, help="what the current posterior rests on (default: every "
+                   "instrument the campaign has; the thesis machine: the ball bar); probe runs are candidates whenever "
+                   "the campaign has a [probe], R-test runs whenever it has an [rtest]")
     s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
                    help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
     _sigma_prior_option(s, ": the closed form at its rms, the σ_model information and the Monte-Carlo check under it "

@@ -224,7 +224,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
          sweep_pattern: str | None = None, model: str = "linear", data: str = "ballbar",
          sigma_prior=None, times: TimeModel | None = None) -> PlanResult:
     """Rank the catalogue — ball-bar runs and, with a ``[probe]``, touch-probe runs — plus ``extra`` user candidates
-    for ``targets``, given the campaign's ``data`` (``"ballbar"``, ``"probe"``, ``"both"``); sweep the tool length;
+    for ``targets``, given the campaign's ``data`` (a value of :data:`~mtmcal_bayes.models.DATA`); sweep the tool length;
     check three by Monte Carlo (ball-bar data).  ``sigma_prior``: a
     :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere (None: the assumed priors): the closed form's
     σ_model (unless ``sigma_model_um``) and the probe's scale are the rms of its priors, and the σ_model information
