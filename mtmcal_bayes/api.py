@@ -71,16 +71,9 @@ def kinematic_model_of(model: str | None, c: Campaign) -> str:
 def data_of(data: str | None, c: Campaign) -> str:
     """The data of a likelihood: as given, else what the machine's plug-in states (the thesis machine: the ball bar),
     else every instrument the campaign has."""
-    from .machines.plugins import provided
+    from .models import default_data
 
-    if data is not None:
-        return data
-    stated = provided(c.machine, "default_data")
-    if stated is not None:
-        return stated
-    if c.has_rtest_readings():
-        return "all"
-    return "both" if c.ballbar.runs and c.has_probe_readings() else "probe" if not c.ballbar.runs else "ballbar"
+    return default_data(c) if data is None else data
 
 
 def tolerances_of(tolerances, campaign: Campaign | None = None) -> dict | None:
@@ -306,10 +299,11 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
 
 def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", candidates=None,
          sigma_model_um: float | None = None, sweep_pattern: str | None = None, output=None,
-         data: str | None = None, sigma_model_prior=None) -> PlanResult:
-    """Rank candidate extra measurements — ball-bar runs and touch-probe runs — by how much they would reduce the
-    uncertainty of ``targets`` (default the eight identified quantities), given the campaign's ``data``
-    (``"ballbar"``, ``"probe"`` or ``"both"``).
+         data: str | None = None, sigma_model_prior=None, times=None) -> PlanResult:
+    """Rank candidate extra measurements — ball-bar runs, touch-probe runs and, with an ``[rtest]``, R-test runs —
+    by how much they would reduce the uncertainty of ``targets`` (default the eight identified quantities), given the
+    campaign's ``data`` (a value of :data:`~mtmcal_bayes.models.DATA`; default every instrument it has).  ``times``:
+    a TOML file (or dict) overriding the machine-time model, as for :func:`design` (an R-test candidate's minutes).
 
     ``candidates``: a TOML file of your own ``[[candidate]]`` tables, or a list of
     :class:`~mtmcal_bayes.planning.Candidate`, ranked with the catalogue.  ``sigma_model_prior``: a σ_model prior
@@ -330,9 +324,12 @@ def plan(campaign: CampaignLike = None, *, targets=None, model: str = "linear", 
     if sigma_model_um is not None and not (math.isfinite(sigma_model_um) and sigma_model_um >= 0):
         raise ParameterError("sigma_model_um", f"{sigma_model_um} is not a non-negative number")
     learnt = sigma_model_prior_of(sigma_model_prior, c)  # the closed form's fixed σ_model does not exclude a prior
+    from .machine_time import TimeModel
+
+    clock = TimeModel(**_time_items(c, times))
     extra = _user_candidates(candidates, c)
     result = rank(c, targets, extra=extra, sigma_model_um=sigma_model_um, sweep_pattern=sweep_pattern, model=model,
-                  data=data, sigma_prior=learnt)
+                  data=data, sigma_prior=learnt, times=clock)
     if output is not None:
         result.write(output)
     return result
@@ -532,7 +529,7 @@ def history_campaigns(paths) -> list[Campaign]:
 
 
 def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None, output=None,
-            trend: str = "auto") -> HistoryResult:
+            trend: str = "auto", data: str | None = None) -> HistoryResult:
     """One machine's history: every quantity at every date jointly (deviations as random walks in time, with a
     drift rate where the data want one, referred to 20 °C when the campaigns' temperatures are given), the
     changes that are real, and the date by which each toleranced quantity should be recalibrated.
@@ -542,16 +539,21 @@ def history(campaigns, *, model: str = "linear", seed: int = 1, tolerances=None,
     receives history.json, CSV files, trend.png and index.html.  ``model``: ``linear``, or a kinematic model
     linearised per campaign at the history's estimate (the linearisation checked and stated; ``chain`` on a described
     machine, whose history tracks its own deviations that the campaigns determine, docs/history.md); ``trend``:
-    ``"auto"`` (chosen per deviation by Bayes factor) or ``"off"`` (random walks only).
+    ``"auto"`` (chosen per deviation by Bayes factor) or ``"off"`` (random walks only); ``data``: what every
+    campaign's likelihood uses (default: every instrument it has, as :func:`sample`; each instrument its own
+    discrepancy scale, shared by the campaigns).
     """
     from .histories import fit_history
+    from .models import check_data
 
     _writable(output, "history")
     found = history_campaigns(campaigns)
     if found:
         kinematic_model_of(model, found[-1])  # checked: a described machine has linear and chain
     tol = tolerances_of(tolerances, found[-1] if found else None)  # the latest campaign's machine names them
-    result = fit_history(found, model=model, seed=seed, tolerances=tol, trend=trend)
+    for c in found if data is not None else ():
+        check_data(data, c)
+    result = fit_history(found, model=model, seed=seed, tolerances=tol, trend=trend, data=data)
     if output is not None:
         result.write(output)
     return result

@@ -342,7 +342,9 @@ class RTestRun:
 @dataclass
 class RTest:
     """A campaign's R-test (``[rtest]``, SPEC §22): instrument, sensors' repeatability (mm, None: not stated), the
-    prior sds of its nuisance terms as stated (mm, None: :data:`RTEST_PRIOR_SD_UM`), nests and runs."""
+    prior sds of its nuisance terms as stated (mm, None: :data:`RTEST_PRIOR_SD_UM`), nests and runs (none yet: an
+    R-test to plan for); ``sphere`` (3,) mm the sphere's nominal centre for runs still to plan (``[rtest] sphere_mm``;
+    None: not stated)."""
 
     instrument: str = ""
     repeatability: float | None = None
@@ -351,6 +353,7 @@ class RTest:
     nest_offset_sd: float | None = None
     nests: dict[str, RTestNest] = field(default_factory=dict)
     runs: list[RTestRun] = field(default_factory=list)
+    sphere: np.ndarray | None = None
 
     def placement_of(self, run: RTestRun) -> str:
         """The placement ``run``'s sphere has: its own ``placement``, else that of the first run with an equal

@@ -69,7 +69,7 @@ def cmd_simulate(args) -> int:
 
 def cmd_history(args) -> int:
     result = api.history(args.campaigns, model=args.model, seed=args.seed, tolerances=args.tolerances,
-                         output=args.output, trend=args.trend)
+                         output=args.output, trend=args.trend, data=args.data)
     return _show(result, args)
 
 
@@ -102,7 +102,7 @@ def cmd_report(args) -> int:
 def cmd_plan(args) -> int:
     return _show(api.plan(args.campaign, targets=args.targets, model=args.model, candidates=args.candidates,
                           sigma_model_um=args.sigma_model_um, sweep_pattern=args.sweep_pattern, output=args.output,
-                          data=args.data, sigma_model_prior=args.sigma_model_prior),
+                          data=args.data, sigma_model_prior=args.sigma_model_prior, times=args.times),
                  args)
 
 

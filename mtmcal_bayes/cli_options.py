@@ -165,6 +165,8 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
                    "Bayes factor wants one (default); off: random walks only")
     s.add_argument("--seed", type=int, default=1, help="random seed (default 1)")
     s.add_argument("--tolerances", metavar="FILE.toml", help="[tolerances] for the forecast (default: the latest campaign's)")
+    s.add_argument("--data", choices=DATA, default=None, help="what each campaign's likelihood uses (default: every "
+                   "instrument it has, as sample; the thesis machine: the ball bar)")
     s.add_argument("-o", "--output", metavar="DIR", help="write history.json, CSV files, trend.png and index.html to DIR")
 
     s = _command(sub, "sensitivity", handlers["sensitivity"], "eccentricity of every pattern per unit deviation and mounting offset",
@@ -200,13 +202,15 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--candidates", metavar="FILE.toml", help="extra candidates of your own ([[candidate]] tables)")
     s.add_argument("--sigma-model-um", type=float, default=None,
                    help="fixed model-discrepancy sd of the closed form (default: rms of its prior, 2 µm)")
-    s.add_argument("--data", choices=DATA, default=None, help="what the current posterior rests on: ball bar, probe, "
-                   "or both (default: every instrument the campaign has; the thesis machine: the ball bar); probe runs "
-                   "are candidates whenever the campaign has a [probe]")
+    s.add_argument("--data", choices=DATA, default=None, help="what the current posterior rests on (default: every "
+                   "instrument the campaign has; the thesis machine: the ball bar); probe runs are candidates whenever "
+                   "the campaign has a [probe], R-test runs whenever it has an [rtest]")
     s.add_argument("--sweep-pattern", choices=("CR", "CA", "BX", "BY"), default=None,
                    help="pattern of the tool-length sweep (default: that of the best tool-length candidate)")
     _sigma_prior_option(s, ": the closed form at its rms, the σ_model information and the Monte-Carlo check under it "
                         "(docs/planning.md)")
+    s.add_argument("--times", metavar="FILE.toml", help="override the machine-time model: an R-test candidate's "
+                   "minutes (docs/design.md)")
     s.add_argument("-o", "--output", metavar="DIR", help="write plan.csv, plan.json and the figures to DIR")
 
     s = _command(sub, "design", handlers["design"], "design the whole campaign: the runs that reach target "

@@ -25,7 +25,23 @@ rotary_deg_per_min     360      the slowest a pattern's rotary axis turns: one C
 directions             2        each run measured clockwise and counter-clockwise (ISO 230-4)
 index_rotary_min       0.5      a described machine's run with other rotary axes held off 0: index
                                 them to the held position and clamp before the arc (estimate)
+mount_rtest_min        15       an R-test session's set-up: the sphere on the table, the nest in the
+                                spindle, the nest centred on the sphere and the sensors zeroed (estimate;
+                                the commercial devices quote a set-up of 10-20 minutes)
+index_rtest_min        0.25     per R-test position: index the rotary axes (the linear axes follow,
+                                keeping the nest on the sphere) and clamp (estimate)
+dwell_rtest_min        0.0333   per R-test position: the dwell while the sensors read (the 2000 ms of
+                                ``ncgen --rtest``'s default ``G04 P2000``)
+mount_probe_min        10       a touch-probe session's set-up: the probe in the spindle, the sphere on
+                                the table, the stylus qualified (estimate)
+probe_position_min     0.5      per probe position and repeat: index the rotary axes, probe the sphere
+                                (five points) and retract (estimate; the controller cycles take 20-40 s)
 =====================  =======  ===================================================================
+
+An R-test run (:func:`rtest_run_minutes`) takes ``repeats × positions × (index_rtest_min + dwell_rtest_min)``
+indexed, or ``repeats × span / rotary_deg_per_min`` swept (the positions logged on the move), plus
+``mount_rtest_min`` for the nest's set-up when the session has none yet; a touch-probe run
+(:func:`probe_run_minutes`) ``repeats × positions × probe_position_min``, plus ``mount_probe_min``.
 
 The measuring motion of a run takes ``repeats × directions × max(path / feed, span / rotary)``, plus
 ``index_rotary_min`` when it holds another rotary axis off 0: ``path`` is the length of the linear-axis commands
@@ -74,6 +90,11 @@ class TimeModel:
     rotary_deg_per_min: float = 360.0
     directions: int = 2
     index_rotary_min: float = 0.5
+    mount_rtest_min: float = 15.0
+    index_rtest_min: float = 0.25
+    dwell_rtest_min: float = 2.0 / 60.0
+    mount_probe_min: float = 10.0
+    probe_position_min: float = 0.5
 
     def __post_init__(self):
         for key, value, why in self.problems():
@@ -228,6 +249,23 @@ class MachineClock:
         return t
 
 
+def rtest_run_minutes(model: TimeModel, positions: int, repeats: int = 1, *, sweep_span_deg: float | None = None,
+                      set_up: bool = True) -> float:
+    """Machine minutes of one R-test run of ``positions`` positions read ``repeats`` times: indexed (each position
+    ``index_rtest_min + dwell_rtest_min``) or, with ``sweep_span_deg``, swept over that span at
+    ``rotary_deg_per_min`` with its positions logged on the move; plus the nest's set-up ``mount_rtest_min`` where
+    ``set_up`` (a session without one yet)."""
+    each = sweep_span_deg / model.rotary_deg_per_min if sweep_span_deg is not None else \
+        positions * (model.index_rtest_min + model.dwell_rtest_min)
+    return (model.mount_rtest_min if set_up else 0.0) + repeats * each
+
+
+def probe_run_minutes(model: TimeModel, positions: int, repeats: int = 1, *, set_up: bool = True) -> float:
+    """Machine minutes of one touch-probe run of ``positions`` positions probed ``repeats`` times each
+    (``probe_position_min``), plus the probe's set-up ``mount_probe_min`` where ``set_up``."""
+    return (model.mount_probe_min if set_up else 0.0) + repeats * positions * model.probe_position_min
+
+
 def _id(x) -> str:
     return x if isinstance(x, str) else x.id
 
@@ -252,4 +290,5 @@ def canonical_order(runs, start_setup: str | None = None, start_mount: str | Non
 
 
 __all__ = ["TimeModel", "TIME_KEYS", "Motion", "MachineClock", "Schedule", "Event", "canonical_order", "path_length",
+           "rtest_run_minutes", "probe_run_minutes",
            "DEFAULT_FEED", "MAX_STEP_MIN", "MAX_FEED"]

@@ -136,6 +136,7 @@ def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
     t0 = time.perf_counter()
     try:
         from ..inference.sampling import SamplerSettings
+        from ..models import default_data
         from ..posterior import sample_posterior
         from ..posterior.output import quantity_json
         from ..reporting.decisions import add_suggestions
@@ -143,6 +144,7 @@ def campaign_unit(campaign, settings: FleetSettings, seed: int) -> dict:
         s = SamplerSettings(seed=seed, max_steps=settings.max_steps, target_ess=settings.target_ess,
                             sampler=settings.sampler)
         post = sample_posterior(campaign, model=model_for(campaign, settings.model), settings=s,
+                                data=default_data(campaign),
                                 tolerances=settings.tolerances_for(campaign.machine)[0])
         add_suggestions(post, campaign)
         d = post.diagnostics
@@ -183,7 +185,8 @@ def history_unit(campaigns: list, seed: int, with_page: bool, model: str = "line
                 result.write(tmp)
                 files = {p.relative_to(tmp).as_posix(): base64.b64encode(p.read_bytes()).decode("ascii")
                          for p in sorted(Path(tmp).rglob("*")) if p.is_file()}
-        typed = bool(campaigns[-1].machine.type)  # only a machine with a type has its σ_model pooled
+        # only a machine with a type has its σ_model pooled, and only from a history whose data have the ball bar's
+        typed = bool(campaigns[-1].machine.type) and result.fit.model.scales[0] == "sigma_model"
         loglik = history_log_likelihood(result.fit.model) if typed else None
         return {"result": _plain({"seed": seed, **doc, "sigma_model_loglik": loglik}), "files": files,
                 "elapsed_s": time.perf_counter() - t0}

@@ -17,14 +17,15 @@ from ..parameters import quantity_unit
 from .fit import PRACTICAL_MINIMUM, changes, check_history, check_temperatures, fit, recalibrate_by
 from .kinematic import linearised_history
 from .model import HistoryModel
-from .quantities import history_quantities
+from .quantities import history_quantities, instruments_in_words
 from .result import HistoryResult, summary_frame
 
 __all__ = ["HistoryModel", "HistoryResult", "fit_history"]
 
 
 def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: dict | None = None,
-                thresholds: dict[str, float] | None = None, trend: str = "auto") -> HistoryResult:
+                thresholds: dict[str, float] | None = None, trend: str = "auto",
+                data: str | None = None) -> HistoryResult:
     """The history of one machine from its campaigns (any order; each dated, one serial).
 
     ``tolerances``: ``{name: Tolerance}`` (default the latest campaign's ``[tolerances]``); ``thresholds``: the
@@ -32,15 +33,17 @@ def fit_history(campaigns, *, model: str = "linear", seed: int = 1, tolerances: 
     where there is one, else :data:`~.fit.PRACTICAL_MINIMUM`).  ``trend``: ``"auto"`` (a drift rate per deviation
     where the data want it) or ``"off"`` (random walks only).  ``model``: ``linear``, or a kinematic model
     (``htm-thesis``, ``htm-literal``): each campaign is linearised at the history's estimate at its date and the
-    linearisation checked against the nonlinear model (:func:`~.kinematic.linearised_history`).
+    linearisation checked against the nonlinear model (:func:`~.kinematic.linearised_history`).  ``data``: what each
+    campaign's likelihood uses (default: every instrument it has, as ``sample``; the thesis machine: the ball bar),
+    each instrument with its own discrepancy scale shared by the campaigns.
     """
     campaigns = sorted(campaigns, key=lambda c: c.date) if all(c.date for c in campaigns) else list(campaigns)
     check_history(campaigns)
     check_temperatures(campaigns)
     if model == "linear":
-        hm, hf, check = HistoryModel(campaigns, model), None, None
+        hm, hf, check = HistoryModel(campaigns, model, data=data), None, None
     else:
-        hm, hf, check = linearised_history(campaigns, model, seed=seed, trend=trend)
+        hm, hf, check = linearised_history(campaigns, model, seed=seed, trend=trend, data=data)
     names, left = tracked(campaigns, hm)
     if hf is None:
         hf = fit(hm, seed=seed, quantities=names, trend=trend)
@@ -74,8 +77,8 @@ def tracked(campaigns, hm: HistoryModel) -> tuple[list[str], list[dict]]:
     """:func:`~.quantities.history_quantities` of ``hm``; none determined is an error naming the latest campaign."""
     names, left = history_quantities(campaigns, hm.posts, hm.deviations)
     if not names:
-        raise MtmcalError(f"{campaigns[-1].source}: the ball bar of these campaigns determines none of the machine's "
-                          "deviations one by one; a history needs at least one")
+        raise MtmcalError(f"{campaigns[-1].source}: {instruments_in_words(campaigns, hm.posts)} of these campaigns "
+                          "determines none of the machine's deviations one by one; a history needs at least one")
     return names, left
 
 

@@ -2,8 +2,9 @@
 between dates, and the forecast against the tolerances.
 
 * **Scales.** emcee (``vectorize=True``) samples ``log q_j`` (one drift rate per deviation, half-Cauchy prior of
-  scale :data:`DRIFT_SCALE` per √year: small drift is expected, a crash must stay possible) and ``log σ``
-  (σ_model's prior from the campaign) on the exact marginal likelihood of :class:`.model.HistoryModel`.
+  scale :data:`DRIFT_SCALE` per √year: small drift is expected, a crash must stay possible) and ``log σ_i``
+  (the discrepancy scale of each instrument the data use, its prior from the campaign) on the exact marginal
+  likelihood of :class:`.model.HistoryModel`.
 * **States.** For :data:`N_STATE` scale draws the states' Gaussian posterior is exact; quantities are linear
   combinations, so their means and variances are exact per draw and the posterior is the mixture.
 * **Changes.** Between consecutive campaigns, ``P(|Δ| > threshold)`` from the mixture.  A change is flagged
@@ -80,7 +81,7 @@ class HistoryFit:
     model: HistoryModel
     quantities: list[str]
     q2: np.ndarray  # (n, d) drift rates², internal units per year
-    s2: np.ndarray  # (n,) σ_model², mm²
+    s2: np.ndarray  # (n, S) the discrepancy scales², mm² (``model.scales``)
     mean: np.ndarray  # (n, T, k) display units, at 20 °C
     sd: np.ndarray  # (n, T, k)
     last_var: np.ndarray  # (n, k) variance at the last date, display units²
@@ -107,18 +108,19 @@ def drift_scale(deviations) -> np.ndarray:
 
 def _log_prob_factory(hm: HistoryModel):
     scale = drift_scale(hm.deviations)
-    sig = PriorSet([hm.sigma_prior])  # plain numpy: scipy's frozen logpdf was a seventh of the fit
+    sig = PriorSet(hm.sigma_priors)  # plain numpy: scipy's frozen logpdf was a seventh of the fit
+    d = hm.d
 
     def log_prob(z: np.ndarray) -> np.ndarray:
         z = np.atleast_2d(z)
-        q = np.exp(z[:, :-1])
-        s = np.exp(z[:, -1])
-        lp = np.sum(np.log(2.0 / (math.pi * scale)) - np.log1p((q / scale) ** 2) + z[:, :-1], axis=1)
-        lp = lp + sig.logpdf(s[:, None]) + z[:, -1]
+        q = np.exp(z[:, :d])
+        s = np.exp(z[:, d:])  # (n, S)
+        lp = np.sum(np.log(2.0 / (math.pi * scale)) - np.log1p((q / scale) ** 2) + z[:, :d], axis=1)
+        lp = lp + sig.logpdf(s) + z[:, d:].sum(axis=1)
         out = np.full(len(z), -np.inf)
         # a drift of 10⁵ times the prior scale or a σ_model of a millimetre is no machine: outside the support
-        ok = np.isfinite(lp) & (z[:, :-1] < np.log(scale) + LOG_RANGE).all(axis=1) & (z[:, :-1] > np.log(scale) - 2 * LOG_RANGE).all(axis=1)
-        ok &= (s < units.to_internal(1.0, "mm")) & (s > units.to_internal(1e-4, "um"))
+        ok = np.isfinite(lp) & (z[:, :d] < np.log(scale) + LOG_RANGE).all(axis=1) & (z[:, :d] > np.log(scale) - 2 * LOG_RANGE).all(axis=1)
+        ok &= (s < units.to_internal(1.0, "mm")).all(axis=1) & (s > units.to_internal(1e-4, "um")).all(axis=1)
         if ok.any():
             out[ok] = lp[ok] + hm.log_marginal(q[ok] ** 2, s[ok] ** 2)
         return out
@@ -132,15 +134,15 @@ def _internal_scale(table: dict, names) -> np.ndarray:
 
 def _sample_scales(hm: HistoryModel, rng: np.random.Generator, *, start: np.ndarray | None = None,
                    steps: int = N_STEPS, burn: int = BURN) -> tuple[np.ndarray, float, float, np.ndarray]:
-    """N_STATE draws (n, d + 1) of (log q, log σ), the acceptance fraction, the largest autocorrelation time and
+    """N_STATE draws (n, d + S) of (log q, log σ), the acceptance fraction, the largest autocorrelation time and
     the walkers' last positions (``start``: where the walkers begin, default spread around the prior scales)."""
     log_prob, scale = _log_prob_factory(hm)
-    dim = hm.d + 1
+    dim = hm.d + len(hm.scales)
     walkers = WALKERS_PER_DIM * dim + (WALKERS_PER_DIM * dim) % 2
-    s0 = hm.sigma_prior.sd
+    s0 = np.array([p.sd for p in hm.sigma_priors])
     if start is None:
         start = np.column_stack([np.log(scale * 0.3) + rng.normal(0, 0.5, (walkers, hm.d)),
-                                 math.log(s0) + rng.normal(0, 0.3, walkers)])
+                                 np.log(s0) + rng.normal(0, 0.3, (walkers, len(s0)))])
     sampler = emcee.EnsembleSampler(walkers, dim, log_prob, vectorize=True,
                                     moves=[(emcee.moves.DEMove(), 0.8), (emcee.moves.DESnookerMove(), 0.2)])
     sampler.random_state = np.random.RandomState(rng.integers(2**32 - 1)).get_state()
@@ -160,7 +162,7 @@ def _sample_scales(hm: HistoryModel, rng: np.random.Generator, *, start: np.ndar
 
 def trend_bayes_factors(hm: HistoryModel, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
     """log10 Bayes factor (d,) of "random walk + trend" against the model as it is, per deviation, from draws
-    ``q2`` (n, d), ``s2`` (n,) of the scales' posterior under the model as it is (module docstring)."""
+    ``q2`` (n, d), ``s2`` (n, S) of the scales' posterior under the model as it is (module docstring)."""
     base = hm.log_marginal(q2, s2)
     var = _internal_scale(TREND_SCALE, hm.deviations) ** 2
     out = np.empty(hm.d)
@@ -179,14 +181,14 @@ def fit(hm: HistoryModel, *, quantities, seed: int = 1, trend: str = "auto") -> 
     pick, acceptance, tau, last = _sample_scales(hm, rng)
     bf = {}
     if trend == "auto":
-        log10_bf = trend_bayes_factors(hm, np.exp(2 * pick[:, :-1]), np.exp(2 * pick[:, -1]))
+        log10_bf = trend_bayes_factors(hm, np.exp(2 * pick[:, :hm.d]), np.exp(2 * pick[:, hm.d:]))
         bf = dict(zip(hm.deviations, log10_bf.tolist()))
         keep = log10_bf > math.log10(TREND_BAYES_FACTOR)
         if keep.any():
             hm.set_trend(np.where(keep, _internal_scale(TREND_SCALE, hm.deviations) ** 2, 0.0))
             # the scales move little when a rate is added: the walkers go on from where they are, burn-in shorter
             pick, acceptance, tau, _ = _sample_scales(hm, rng, start=last, steps=RESAMPLE_STEPS, burn=RESAMPLE_BURN)
-    q2, s2 = np.exp(2 * pick[:, :-1]), np.exp(2 * pick[:, -1])
+    q2, s2 = np.exp(2 * pick[:, :hm.d]), np.exp(2 * pick[:, hm.d:])
     names = [n for n in quantities if weights(n, hm.deviations)]
     W = np.array([[weights(n, hm.deviations).get(k, 0.0) for k in hm.deviations] for n in names])  # (k, d)
     disp = np.array([units.from_internal(1.0, quantity_unit(n)) for n in names])  # display per internal

@@ -65,15 +65,16 @@ def expansion_gap(hm: HistoryModel, points, sds, seed: int = 0) -> float:
     return gap
 
 
-def linearised_history(campaigns, model: str, *, seed: int, trend: str) -> tuple[HistoryModel, HistoryFit, dict]:
+def linearised_history(campaigns, model: str, *, seed: int, trend: str,
+                       data: str | None = None) -> tuple[HistoryModel, HistoryFit, dict]:
     """The history on ``model`` linearised at its own estimate (module docstring); returns the model, the fit and
     the check ``{"model", "points", "max_gap_um", "accuracy_um", "ok"}``."""
     from .quantities import history_quantities
 
-    first = HistoryModel(campaigns, model)
+    first = HistoryModel(campaigns, model, data=data)
     names, _ = history_quantities(campaigns, first.posts, first.deviations)
     points, _ = estimate_points(first, fit(first, seed=seed, trend=trend, quantities=names))
-    hm = HistoryModel(campaigns, model, points=points)
+    hm = HistoryModel(campaigns, model, points=points, data=data)
     hf = fit(hm, seed=seed, trend=trend, quantities=names)
     points, sds = estimate_points(hm, hf)
     gap = expansion_gap(hm, points, sds, seed=seed)

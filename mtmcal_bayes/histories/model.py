@@ -4,11 +4,13 @@ States: the deviations ``x_t`` (d,) at each campaign date t (years ``τ_t`` sinc
 drawn from the deviation priors, N(μ0, diag(v0)); between campaigns each deviation j takes a Gaussian
 random-walk step, ``x_{t+1} − x_t ~ N(0, q_j²·(τ_{t+1} − τ_t))``: ``q_j`` is its drift rate (per √year).
 
-Observations: campaign t's means ``y_t = c_t + A_t x_t + B_t n_t + e_t`` (the linear model of that campaign),
-with its own set-up offsets ``n_t`` (the W ball is clamped anew, the T ball re-centred: independent per
-campaign, from their priors) and noise ``e_t ~ N(0, diag(base_var_t) + σ²·I)``, ``σ`` the model discrepancy
-shared by all campaigns.  The offsets are Gaussian and independent of everything else, so they are
-integrated out exactly: ``R_t = B_t P_n B_tᵀ + diag(base_var_t)``.
+Observations: campaign t's means ``y_t = c_t + A_t x_t + B_t n_t + e_t`` (the linear model of that campaign, on
+its data: every instrument it has by default, as ``sample``), with its own set-up offsets ``n_t`` (the W ball is
+clamped anew, the T ball re-centred, the probe's stylus and sphere and the R-test's sphere, nest and zeros set anew:
+independent per campaign, from their priors) and noise ``e_t ~ N(0, diag(base_var_t) + σ_i²)``, ``σ_i`` the model
+discrepancy of the reading's instrument (the ball bar's ``sigma_model``, ``sigma_model_probe``,
+``sigma_model_rtest``), each shared by all campaigns.  The offsets are Gaussian and independent of everything
+else, so they are integrated out exactly: ``R_t = B_t P_n B_tᵀ + diag(base_var_t)``.
 
 Given the scales (q, σ) the whole history is one linear-Gaussian system.  Stacking the campaigns,
 ``y ~ N(H μ_X, H Σ_X(q) Hᵀ + R + σ² I)`` with ``Cov(x_{s,j}, x_{t,j}) = v0_j + q_j²·min(τ_s, τ_t)``: the
@@ -37,9 +39,12 @@ from .. import units
 from ..campaign import REFERENCE_TEMPERATURE_C
 from ..inference.analytic import linearisation
 from ..inference.log_posterior import LogPosterior
+from ..models import default_data
 from ..parameters import quantity_unit
 
 SECONDS_PER_YEAR = 365.25 * 86400.0
+#: nodes per further discrepancy scale integrated in :meth:`HistoryModel.log_marginal_grid` (equal probability)
+OTHER_SCALE_NODES = 8
 #: prior sd of a thermal sensitivity, display units per °C
 THERMAL_SCALE = {"arcsec": 2.0, "um": 3.0}
 
@@ -49,23 +54,30 @@ class HistoryModel:
 
     Attributes: ``deviations`` (d names), ``tau`` (T,) years since the first campaign, ``mu0``/``var0`` (d,)
     the deviation priors, ``H`` (M, T·d), ``resid`` (M,) the observations minus their prior mean, ``C0`` (M, M)
-    the covariance without the random-walk and σ terms, ``G`` (d, M, M) with ``C = C0 + Σ_j q_j² G_j + σ² I``.
+    the covariance without the random-walk and σ terms, ``G`` (d, M, M) with ``C = C0 + Σ_j q_j² G_j + diag(σ²)``;
+    ``scales`` the S discrepancy scales of the instruments the campaigns' data use (the ball bar's first),
+    ``scale_of_row`` (M,) each observation's, ``sigma_priors`` their priors (``sigma_prior`` the first's).
     """
 
     def __init__(self, campaigns, model: str = "linear", *, thermal: bool = True,
-                 points: list[np.ndarray] | None = None):
+                 points: list[np.ndarray] | None = None, data: str | None = None):
         """``thermal``: model the thermal sensitivities (prior sd :data:`THERMAL_SCALE` per °C) when every campaign
         has its ``temperature_C``.  ``points``: per campaign the parameter vector (internal units) at which a
         kinematic ``model`` is linearised (default: zero, the prior centre); the ``linear`` model is linear
-        already."""
-        posts = [LogPosterior(c, model) for c in campaigns]
+        already.  ``data``: what every campaign's likelihood uses (default: each campaign's every instrument, as
+        ``sample``)."""
+        posts = [LogPosterior(c, model, data=default_data(c) if data is None else data) for c in campaigns]
         first = posts[0]
         dev = [i for i, p in enumerate(first.space.parameters) if p.group == "deviation"]
         self.deviations = [first.space.parameters[i].name for i in dev]
         pri = first.priors.priors
         self.mu0 = np.array([pri[i].centre for i in dev])
         self.var0 = np.array([pri[i].sd for i in dev]) ** 2
-        self.sigma_prior = first.priors.priors[-1]  # sigma_model's (the last of a sampled-σ posterior)
+        self.scales = tuple(dict.fromkeys(s for post in posts for s in post.scales))
+        # each scale's prior: the first campaign's that has it (the scales follow the deviations in a posterior)
+        self.sigma_priors = [next(post.priors.priors[post.p + post.scales.index(s)] for post in posts
+                                  if s in post.scales) for s in self.scales]
+        self.sigma_prior = self.sigma_priors[0]
         t0 = campaigns[0].date
         self.tau = np.array([(c.date - t0).total_seconds() / SECONDS_PER_YEAR for c in campaigns])
         d, T = len(dev), len(campaigns)
@@ -97,6 +109,8 @@ class HistoryModel:
         y = np.concatenate(ys)
         self.resid = y - self.H @ np.tile(self.mu0, T)
         self.campaign_of_row = np.repeat(np.arange(T), sizes)
+        self.scale_of_row = np.concatenate([np.array([self.scales.index(post.scales[i]) for i in post.scale_of],
+                                                     dtype=int) for post in posts])
         tmin = np.minimum.outer(self.tau, self.tau)  # (T, T)
         # per deviation j: h_j (M,) its column in every block; prior part v0_j h hᵀ and walk part min(τ)·h hᵀ
         Hj = self.H.reshape(M, T, d).sum(axis=1)  # (M, d): block-diagonal, so the sum picks each row's block
@@ -132,10 +146,10 @@ class HistoryModel:
         return self.log_marginal(q2, s2, static=self._static_cov(tv))
 
     def covariance(self, q2: np.ndarray, s2: np.ndarray, static: np.ndarray | None = None) -> np.ndarray:
-        """``C`` (n, M, M) of the observations for drift rates² ``q2`` (n, d) and σ² ``s2`` (n,); ``static``: the part
-        without the random walks and σ (default that of the rate variances set)."""
+        """``C`` (n, M, M) of the observations for drift rates² ``q2`` (n, d) and σ² ``s2`` (n, S) (or (n,) with
+        one scale); ``static``: the part without the random walks and σ (default that of the rate variances set)."""
         C = (self.C0 if static is None else static) + (q2 @ self.G.reshape(self.d, -1)).reshape(len(q2), self.M, self.M)
-        C[:, np.arange(self.M), np.arange(self.M)] += s2[:, None]
+        C[:, np.arange(self.M), np.arange(self.M)] += _per_scale(s2)[:, self.scale_of_row]
         return C
 
     def log_marginal(self, q2: np.ndarray, s2: np.ndarray, static: np.ndarray | None = None) -> np.ndarray:
@@ -150,7 +164,7 @@ class HistoryModel:
         A[:, :M, :M] = self.covariance(q2, s2, static)
         A[:, :M, M] = self.resid
         A[:, M, :M] = self.resid
-        c = 2.0 * float(self.resid @ self.resid) / (self.noise_floor + s2) + 1.0
+        c = 2.0 * float(self.resid @ self.resid) / (self.noise_floor + _per_scale(s2).min(axis=1)) + 1.0
         A[:, M, M] = c
         try:
             L = np.linalg.cholesky(A)
@@ -167,12 +181,44 @@ class HistoryModel:
 
         One eigendecomposition per rate vector of the covariance without σ, ``C(q) = V diag(λ) Vᵀ``: adding σ²·I
         shifts every eigenvalue, so ``log N(r; 0, C(q) + σ² I) = −½ (Σ_k z_k² / (λ_k + σ²) + Σ_k log(λ_k + σ²)
-        + M log 2π)`` with ``z = Vᵀ r``, for the whole σ grid at once (``λ_k ≥`` the least noise variance > 0)."""
+        + M log 2π)`` with ``z = Vᵀ r``, for the whole σ grid at once (``λ_k ≥`` the least noise variance > 0).
+        With more than one scale (several instruments) the grid is the first scale's and the others are integrated
+        over their priors (:meth:`_log_marginal_grid_others`)."""
+        if len(self.scales) > 1:
+            return self._log_marginal_grid_others(np.atleast_2d(q2), np.asarray(s2, float))
         lam, V = np.linalg.eigh(self.covariance(np.atleast_2d(q2), np.zeros(len(np.atleast_2d(q2)))))
         z2 = np.einsum("nmk,m->nk", V, self.resid) ** 2  # (n, M)
         total = lam[:, :, None] + np.asarray(s2, float)[None, None, :]  # (n, M, G)
         return -0.5 * (np.sum(z2[:, :, None] / total, axis=1) + np.sum(np.log(total), axis=1)
                        + self.M * math.log(2 * math.pi))
+
+    def _log_marginal_grid_others(self, q2: np.ndarray, s2: np.ndarray) -> np.ndarray:
+        """:meth:`log_marginal_grid` with several scales: the first scale ``s2`` (G,) on the grid, the others
+        integrated over their priors by :data:`OTHER_SCALE_NODES` equal-probability nodes each (their midpoints'
+        quantiles).  Per rate vector and node, ``D`` the covariance without the first scale (Cholesky ``L``) and
+        ``F = L⁻¹E`` (E the first scale's rows): ``C = L (I + σ² F Fᵀ) Lᵀ``, so with ``F = U diag(√μ) Wᵀ`` and
+        ``w = L⁻¹ r``, ``log det C = log det D + Σ log(1 + σ²μ_k)``, ``rᵀC⁻¹r = |w|² − Σ (Uᵀw)_k² σ²μ_k/(1 + σ²μ_k)``."""
+        others = [p.frozen().ppf((np.arange(OTHER_SCALE_NODES) + 0.5) / OTHER_SCALE_NODES) ** 2
+                  for p in self.sigma_priors[1:]]
+        nodes = np.stack(np.meshgrid(*others, indexing="ij"), axis=-1).reshape(-1, len(others))  # (J, S − 1)
+        rows = np.flatnonzero(self.scale_of_row == 0)
+        n, J = len(q2), len(nodes)
+        s_all = np.concatenate([np.zeros((J, 1)), nodes], axis=1)  # (J, S): the first scale 0 in D
+        D = self.covariance(np.repeat(q2, J, axis=0), np.tile(s_all, (n, 1)))  # (n·J, M, M)
+        L = np.linalg.cholesky(D)
+        rhs = np.concatenate([np.eye(self.M)[:, rows], self.resid[:, None]], axis=1)
+        X = np.linalg.solve(L, np.broadcast_to(rhs, (len(D),) + rhs.shape))  # (n·J, M, m0 + 1): L⁻¹[E r]
+        F, w = X[..., :-1], X[..., -1]
+        U, sv, _ = np.linalg.svd(F, full_matrices=False)
+        mu = sv**2  # (n·J, m0)
+        z2 = np.einsum("nmk,nm->nk", U, w) ** 2
+        sig = s2[None, None, :]
+        shrink = sig * mu[:, :, None] / (1.0 + sig * mu[:, :, None])  # (n·J, m0, G)
+        quad = np.sum(w**2, axis=1)[:, None] - np.sum(z2[:, :, None] * shrink, axis=1)
+        logdet = 2.0 * np.log(np.diagonal(L, axis1=1, axis2=2)).sum(axis=1)[:, None] + \
+            np.sum(np.log1p(sig * mu[:, :, None]), axis=1)
+        ll = (-0.5 * (quad + logdet + self.M * math.log(2 * math.pi))).reshape(n, J, len(s2))
+        return np.logaddexp.reduce(ll, axis=1) - math.log(J)
 
     def prior_state_cov(self, q2: np.ndarray) -> np.ndarray:
         """Σ_X (n, T·d, T·d): ``v0_j + q_j²·min(τ_s, τ_t)`` between the states of one deviation, 0 across."""
@@ -218,6 +264,12 @@ class HistoryModel:
         cov = S - SH @ K
         cov = 0.5 * (cov + np.transpose(cov, (0, 2, 1)))
         return mean, cov
+
+
+def _per_scale(s2) -> np.ndarray:
+    """σ² as ``(n, S)``: a ``(n,)`` vector is one scale's."""
+    s2 = np.asarray(s2, float)
+    return s2[:, None] if s2.ndim == 1 else s2
 
 
 def _is_pd(C: np.ndarray) -> bool:

@@ -13,11 +13,22 @@ from __future__ import annotations
 
 from ..inference.identifiability import campaign_identifiability
 from ..machines.plugins import provided
+from ..parameters import data_instruments
+
+#: each instrument in words
+INSTRUMENT_WORDS = {"ballbar": "the ball bar", "probe": "the touch probe", "rtest": "the R-test"}
+
+
+def instruments_in_words(campaigns, posts) -> str:
+    """The instruments whose data the history's campaigns use (``posts``: their log posteriors), in words."""
+    used = dict.fromkeys(i for c, p in zip(campaigns, posts) for i in data_instruments(p.data, c))
+    return " and ".join(INSTRUMENT_WORDS[i] for i in used)
 
 
 def history_quantities(campaigns, posts, deviations) -> tuple[list[str], list[dict]]:
     """The tracked quantities (names, in the order of ``deviations``) and the deviations left out
-    (``[{"quantity", "why"}]``), from the campaigns and their ball-bar log posteriors ``posts`` (one each)."""
+    (``[{"quantity", "why"}]``), from the campaigns and their log posteriors ``posts`` (one each, on the data the
+    history uses)."""
     own = provided(campaigns[-1].machine, "reported_quantities")  # a plug-in's (the thesis': Table 4.5's eight)
     idents = [campaign_identifiability(p) for p in posts]
     determined = [d for d in deviations if all(d in i.determined for i in idents)]
@@ -31,7 +42,7 @@ def history_quantities(campaigns, posts, deviations) -> tuple[list[str], list[di
         if d in determined:
             why = "determined, but not among the quantities the machine reports"
         elif d in last.undetermined:
-            why = "undetermined by the ball bar: its posterior is its prior"
+            why = f"undetermined by {instruments_in_words(campaigns, posts)}: its posterior is its prior"
         elif d in combos:
             why = f"determined only in combination: {combos[d]}"
         else:

@@ -74,11 +74,20 @@ class HistoryResult:
 
     def sigma_model(self) -> dict:
         """What the history taught of σ_model (shared by its campaigns): median, mean and sd of ln(σ/µm), and the
-        prior it was learnt under."""
-        u = np.log(units.from_internal(np.sqrt(self.fit.s2), "um"))
-        prior = self.fit.model.sigma_prior
-        return {"median_um": float(np.exp(np.median(u))), "mean_log_um": float(u.mean()), "sd_log": float(u.std()),
-                "prior": f"{prior.dist}, sd {units.from_internal(prior.sd, 'um'):.3g} µm"}
+        prior it was learnt under, of its first discrepancy scale (the ball bar's where its data have it); where the
+        data use other instruments, ``scale`` names it and ``scales`` gives each instrument's the same way."""
+        hm = self.fit.model
+        s2 = self.fit.s2.reshape(len(self.fit.s2), -1)
+        each = {}
+        for i, (name, prior) in enumerate(zip(hm.scales, hm.sigma_priors)):
+            u = np.log(units.from_internal(np.sqrt(s2[:, i]), "um"))
+            each[name] = {"median_um": float(np.exp(np.median(u))), "mean_log_um": float(u.mean()),
+                          "sd_log": float(u.std()),
+                          "prior": f"{prior.dist}, sd {units.from_internal(prior.sd, 'um'):.3g} µm"}
+        first = each[hm.scales[0]]
+        if hm.scales == ("sigma_model",):
+            return first
+        return {**first, "scale": hm.scales[0], "scales": each}
 
     def thermal(self) -> dict:
         """Per quantity: the thermal sensitivity's posterior mean and sd per °C, its unit, and ``identified``

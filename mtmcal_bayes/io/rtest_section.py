@@ -19,7 +19,7 @@ from .run_angles import read_run_angles
 from .toml_reader import TomlReader, kind_of
 
 #: the keys of ``[rtest]``, of a nest and of a run
-RTEST_KEYS = ("instrument", "repeatability_um", *RTEST_PRIOR_SD_UM, "nests", "runs")
+RTEST_KEYS = ("instrument", "repeatability_um", *RTEST_PRIOR_SD_UM, "sphere_mm", "nests", "runs")
 #: decimals of the angles (°) and displacements (µm) written: far below any reading, and what keeps a save of a
 #: loaded campaign byte for byte the one it was loaded from (the unit conversions round in the last bit)
 DECIMALS = 9
@@ -45,6 +45,10 @@ def read_rtest(r: TomlReader, t: dict, desc: MachineDescription | None) -> RTest
         if not isinstance(calibrated, bool):
             r.fail(f"{path}.calibrated", f"expected true or false, got {kind_of(calibrated)}")
         rt.nests[nid] = RTestNest(r.number(n, "length_mm", path, positive=True), calibrated)
+    if "sphere_mm" in t:
+        rt.sphere = r.array(t, "sphere_mm", P, (3,))
+    if "runs" not in t:  # an R-test still to plan for: its nests (and sphere) only
+        return rt
     raw = t.get("runs")
     if not isinstance(raw, list) or not raw or not all(isinstance(x, dict) for x in raw):
         r.fail(f"{P}.runs", "expected one or more [[rtest.runs]] tables")
@@ -89,6 +93,8 @@ def rtest_document(rt: RTest) -> dict:
                    ("nest_length_um", rt.nest_length_sd), ("nest_offset_um", rt.nest_offset_sd)):
         if v is not None:
             d[key] = units.from_internal(v, "um")
+    if rt.sphere is not None:
+        d["sphere_mm"] = [float(x) for x in rt.sphere]
     d["nests"] = {nid: {"length_mm": float(n.length), **({"calibrated": True} if n.calibrated else {})}
                   for nid, n in rt.nests.items()}
     d["runs"] = [{"id": run.id, "nest": run.nest, "sphere_mm": [float(x) for x in run.sphere],
@@ -98,6 +104,8 @@ def rtest_document(rt: RTest) -> dict:
                   "frame": run.frame, "zero": run.zero,
                   "displacement_um": np.round(units.from_internal(run.displacements, "um"), DECIMALS)}
                  for run in rt.runs]
+    if not d["runs"]:
+        del d["runs"]
     return d
 
 

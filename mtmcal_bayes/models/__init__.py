@@ -60,6 +60,18 @@ def default_kinematic_model(machine) -> str:
 DATA = tuple(DATA_INSTRUMENTS)
 
 
+def default_data(campaign) -> str:
+    """The data a likelihood of ``campaign`` takes when none is asked for: what its machine's plug-in states (the
+    thesis machine: the ball bar), else every instrument it has readings of (``"all"`` where it has R-test runs)."""
+    stated = provided(campaign.machine, "default_data")
+    if stated is not None:
+        return stated
+    if campaign.has_rtest_readings():
+        return "all"
+    return "both" if campaign.ballbar.runs and campaign.has_probe_readings() else \
+        "probe" if not campaign.ballbar.runs else "ballbar"
+
+
 def check_data(data: str, campaign=None, parameter: str = "data") -> str:
     """``data`` if it is one of :data:`DATA` (and ``campaign`` has the readings it asks for)."""
     if data not in DATA:
@@ -158,6 +170,7 @@ def _engine_gap(campaign, theta: np.ndarray, space=None, *, observations=None) -
 
 
 __all__ = ["MODELS", "KINEMATIC_MODELS", "CHAIN", "ENGINE_MODELS", "DESCRIBED_MODELS", "BallbarModel", "ChainBallbarModel",
-           "ProbeModel", "ChainProbeModel", "RTestModel", "FirstOrderModel", "DATA", "check_model", "check_data", "make_model", "build_model",
+           "ProbeModel", "ChainProbeModel", "RTestModel", "FirstOrderModel", "DATA", "check_model", "check_data",
+           "default_data", "make_model", "build_model",
            "models_of", "default_kinematic_model", "JointModel", "first_order_gap", "jacobian",
            "jacobian_at_zero"]

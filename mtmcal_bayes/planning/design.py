@@ -56,10 +56,11 @@ from ..machines.plugins import provided
 from ..machines.selection import redundant
 from ..models import build_model, check_data, check_model, jacobian_at_zero, models_of
 from ..observations import Observations
-from ..parameters import ParameterSpace, weights
+from ..parameters import ParameterSpace, data_instruments, weights
 from .candidates import Candidate
 from .chain_candidates import arc_of
 from .probe_catalogue import ProbeCandidate
+from .rtest_catalogue import RTestCandidate
 from .scale_priors import contraction_reference, default_sigma_model, scale_prior
 
 #: a candidate that changes no target's sd by this fraction identifies nothing new
@@ -194,7 +195,9 @@ class Planner:
     sigma_model : fixed model-discrepancy sd of the ball bar, mm (default :func:`default_sigma_model`); the probe's
         is the rms of the ``sigma_model_probe`` prior
     model : one of the machine's models (:func:`~mtmcal_bayes.models.models_of`)
-    data : what the campaign's current posterior rests on: ``"ballbar"`` (default), ``"probe"`` or ``"both"``
+    data : what the campaign's current posterior rests on (a value of :data:`~mtmcal_bayes.models.DATA`):
+        ``"ballbar"`` (default), ``"probe"``, ``"both"``, the R-test's (``"rtest"``, ``"ballbar+rtest"``, ...) or
+        ``"all"``; each instrument's rows with its own discrepancy scale at the rms of its prior
     sigma_prior : a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere, or None (the assumed
         priors): the prior of each scale it names, so the default ``sigma_model`` and the probe's scale are the rms
         of the learnt priors, and σ_model's prior is the learnt one wherever it is used (:meth:`sigma_prior`);
@@ -220,31 +223,39 @@ class Planner:
         self.table = quantity_table(campaign)
         own = parameter_space(campaign, False, data)
         self.deviations = [p.name for p in own.parameters if p.group == "deviation"]
-        self.space = self._make_space([(p.owner, p.base) for p in own.parameters if p.group == "probe"])
-        priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in self.space.parameters]
+        self.space = self._make_space([(p.owner, p.base) for p in own.parameters if p.group == "probe"],
+                                      [(p.owner, p.base) for p in own.parameters if p.group == "rtest"])
+        stated = campaign.rtest.prior_sds() if campaign.rtest is not None else None
+        priors = [make_prior(p.name, p.base, p.kind, campaign.priors, stated=stated) for p in self.space.parameters]
         self.prior_var = np.array([p.sd for p in priors]) ** 2
         self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
         obs = Observations.from_campaign(campaign)
         self.observations = obs
         self.pooled_sd = obs.pooled_sd()
         A, V = [np.zeros((0, len(self.space)))], [np.zeros(0)]
-        if data != "probe" and len(obs):  # the ball bar's rows first: repeats of its runs index them
+        used = data_instruments(self.data, campaign)
+        if "ballbar" in used and len(obs):  # the ball bar's rows first: repeats of its runs index them
             A.append(self.rows_for(campaign, self.space))
             V.append(GaussianMeanLikelihood(obs, bb.accuracy).base_var + self.sigma_model**2)
-        if data != "ballbar":
-            probe = build_model(self.model, campaign, self.space, "probe")
-            A.append(_first_order(probe))
-            V.append(probe.observations.noise_variance() + self.sigma_probe**2)
+        for instrument, scale in (("probe", self.sigma_probe), ("rtest", self.sigma_rtest)):
+            if instrument in used:
+                part = build_model(self.model, campaign, self.space, instrument)
+                A.append(_first_order(part))
+                V.append(part.observations.noise_variance() + scale**2)
         self.A, self.V = np.vstack(A), np.concatenate(V)
         self.targets = target_names(targets, campaign) if targets else self._default_targets()
         self.T = self.target_matrix(self.space)
         self.target_units = [self.table[t].unit for t in self.targets]
 
-    def _make_space(self, probe: list) -> ParameterSpace:
+    def _make_space(self, probe: list, rtest: list = ()) -> ParameterSpace:
         """The parameters: the machine's deviations, every set-up's and mount's terms (the candidates' too), the
-        probe's own terms ``probe`` (with probe data) and each probe candidate's."""
+        probe's own terms ``probe`` (with probe data) and each probe candidate's, the R-test's ``rtest`` (with R-test
+        data) and each R-test candidate's (a placement and a nest they share, once)."""
         probe = probe + [t for c in self.candidates if isinstance(c, ProbeCandidate) for t in c.terms(self.campaign)]
-        return ParameterSpace(list(self._setups), list(self._mounts), self.deviations, probe, table=self.table)
+        rtest = list(dict.fromkeys(list(rtest) + [t for c in self.candidates if isinstance(c, RTestCandidate)
+                                                   for t in c.terms(self.campaign)]))
+        return ParameterSpace(list(self._setups), list(self._mounts), self.deviations, probe, table=self.table,
+                              rtest=rtest)
 
     def _default_targets(self) -> list[str]:
         """The quantities the machine's plug-in reports, else those the campaign and every candidate determine."""
@@ -270,6 +281,7 @@ class Planner:
         self.sigma_model = default_sigma_model(campaign, learnt=sigma_prior) if sigma_model is None \
             else float(sigma_model)
         self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe", sigma_prior)
+        self.sigma_rtest = default_sigma_model(campaign, "sigma_model_rtest", sigma_prior)
 
     def retarget(self, targets: list[str]) -> None:
         """Value ``targets`` instead (names checked as at construction; the rows are kept)."""
@@ -333,6 +345,9 @@ class Planner:
         if isinstance(c, ProbeCandidate):
             A, base = c.rows(self.campaign, self.space, self.deviations, self.table)
             return A, 1.0 / (base + self.sigma_probe**2)
+        if isinstance(c, RTestCandidate):
+            A, base = c.rows(self.campaign, self.space, self.deviations, self.table)
+            return A, 1.0 / (base + self.sigma_rtest**2)
         return self._new_run_rows(c) if c.repeat_of is None else self._repeat_rows(c)
 
     def _repeat_rows(self, c: Candidate):
@@ -427,7 +442,7 @@ class Planner:
         runs = np.arange(1, max_runs + 1)
         fisher = np.zeros((len(candidates), max_runs))
         for k, (c, (B, w)) in enumerate(zip(candidates, rows)):
-            if isinstance(c, ProbeCandidate):  # the probe's readings carry its own scale: nothing about sigma_model
+            if isinstance(c, (ProbeCandidate, RTestCandidate)):  # their own scales: nothing about sigma_model
                 fisher[k] = now
                 continue
             if c.repeat_of is None:

@@ -15,6 +15,8 @@ from .figures import ranking_figure, sweep_figure
 SHOWN = 15
 #: patterns shown in "What would teach sigma_model" (the best candidate of each)
 SIGMA_SHOWN = 6
+#: R-test candidates listed with their minutes
+RTEST_SHOWN = 5
 
 
 def format_plan(result) -> str:
@@ -38,10 +40,12 @@ def format_plan(result) -> str:
     bad = t[~t["feasible"]]
     for _, r in bad.iterrows():
         lines.append(f"  rejected: {r['name']}: {r['verdict']}")
+    lines += rtest_lines(result)
     lines += sigma_lines(result)
     s = result.sweep
-    lines += ["", f"Sweep: {result.sweep_pattern} at the primary tool length plus Δ"]
-    for tg, s_ in zip(result.targets, sym):
+    if len(s):
+        lines += ["", f"Sweep: {result.sweep_pattern} at the primary tool length plus Δ"]
+    for tg, s_ in zip(result.targets, sym if len(s) else []):
         first, last = s.iloc[0], s.iloc[-1]
         not_id = s.loc[~s[f"{tg} identified"], "extension_mm"]
         msg = (f"  {tg}: sd {first[f'{tg} sd_before']:.3g}{s_} today; {first[f'{tg} sd_after']:.3g}{s_} at Δ = 0, "
@@ -60,6 +64,21 @@ def format_plan(result) -> str:
                          f"  Monte Carlo {r['sd_after_monte_carlo']:8.3g}  ({100 * r['relative_difference']:+.1f} %)")
     lines += ["", "Notes:"] + [f"  - {n}" for n in result.notes]
     return "\n".join(lines)
+
+
+def rtest_lines(result) -> list[str]:
+    """The best R-test candidates with their machine minutes (the time model's), when the plan has any."""
+    t = result.table
+    r_t = t[t["kind"] == "rtest"]
+    if not len(r_t):
+        return []
+    lines = ["", f"R-test candidates, best {min(RTEST_SHOWN, len(r_t))} of {len(r_t)} (machine minutes from the "
+             "time model; plan.json gives each as its [[rtest.runs]] table, for ncgen --rtest once added):",
+             f"  {'#':>3s}  {'candidate':40s} {'minutes':>7s}  {'EIG bits':>8s}  verdict"]
+    for _, r in r_t.head(RTEST_SHOWN).iterrows():
+        lines.append(f"  {int(r['rank']):3d}  {r['name'][:40]:40s} {r['minutes']:7.1f}  {r['eig_bits']:8.3f}  "
+                     f"{r['verdict']}")
+    return lines
 
 
 def _runs(value, max_runs: int) -> str:
@@ -113,6 +132,7 @@ def write_plan(result, out_dir) -> list[str]:
         result.check.to_csv(tmp / "plan_check.csv", index=False, float_format="%.6g")
         (tmp / "plan.json").write_text(json.dumps(result.document(), indent=2, ensure_ascii=False), encoding="utf-8")
         save_png(ranking_figure(result), tmp / "plan_ranking.png")
-        save_png(sweep_figure(result), tmp / "plan_sweep.png")
+        if len(result.sweep):  # none without a ball-bar set-up
+            save_png(sweep_figure(result), tmp / "plan_sweep.png")
         files = sorted(p.name for p in tmp.iterdir())
     return files

@@ -8,12 +8,15 @@ import numpy as np
 import pandas as pd
 
 from .. import units
+from ..parameters import data_instruments
 from .candidates import Candidate
 from .catalogue import sweep_candidates
 from .machine_kit import catalogue_of, feasibility_of, kit_of, planner_for
 from .design import MAX_RUNS, SIGMA_CONTRACTION, Planner, SigmaInformation
 from .preposterior import current_posterior, realised_sd
+from ..machine_time import TimeModel
 from .probe_catalogue import PROBE_NOTE, ProbeCandidate, probe_catalogue, probe_feasibility
+from .rtest_catalogue import RTestCandidate, rtest_catalogue, rtest_feasibility, rtest_note
 from .scale_priors import learnt_notes, learnt_summary, scale_prior
 
 #: tool-length differences of the sweep, mm
@@ -40,6 +43,9 @@ class PlanResult:
     #: what the campaign and the candidates teach about sigma_model (:func:`sigma_summary`); the per-candidate
     #: values are the table's sigma_model_* columns
     sigma_model: dict = field(default_factory=dict)
+    #: each R-test candidate's ``[[rtest.runs]]`` table by name (angles_deg, sphere_mm, nest, frame, zero): add it
+    #: to the campaign and ``ncgen --rtest`` writes its program
+    rtest_runs: dict = field(default_factory=dict)
 
     def write(self, out_dir) -> list[str]:
         """Write plan.csv, plan_sweep.csv, plan_check.csv, plan.json and the figures into ``out_dir``."""
@@ -80,6 +86,8 @@ class PlanResult:
                 "sigma_model_runs_needed": None if pd.isna(r["sigma_model_runs_needed"])
                 else int(r["sigma_model_runs_needed"]),
             })
+            if r["kind"] == "rtest":
+                cands[-1].update(minutes=float(r["minutes"]), rtest_run=self.rtest_runs[r["name"]])
         ranked = self.table.sort_values("sigma_model_rank")
         sigma = {**self.sigma_model, "ranking": [str(n) for n in ranked.loc[ranked["feasible"], "name"]]}
         return {"model": self.model, "targets": self.targets, "sigma_model_um": self.sigma_model_um, "candidates": cands,
@@ -98,22 +106,35 @@ def _table(planner: Planner, candidates: list[Candidate], campaign) -> pd.DataFr
     return _tables(planner, candidates, campaign)[0]
 
 
-def _tables(planner: Planner, candidates: list[Candidate], campaign) -> tuple[pd.DataFrame, SigmaInformation]:
-    """The ranked table and what the candidates would teach about sigma_model (one set of candidate rows)."""
+def _rtest_where(c: RTestCandidate) -> dict:
+    """The geometry columns of an R-test candidate: its nest (length in ``R_B_mm``) and its sphere."""
+    s = c.setup
+    return {"setup": f"nest {s.nest} {s.length:g} mm", "R_B_mm": s.length, "Z_T_mm": np.nan,
+            "mount": f"sphere {s.placement} at [" + ", ".join(f"{x:g}" for x in s.sphere) + "] mm", "R_C_mm": np.nan}
+
+
+def _tables(planner: Planner, candidates: list[Candidate], campaign,
+            times: TimeModel | None = None) -> tuple[pd.DataFrame, SigmaInformation]:
+    """The ranked table and what the candidates would teach about sigma_model (one set of candidate rows); with
+    R-test candidates, a ``minutes`` column: theirs from ``times`` (default the time model's defaults)."""
     made = planner.candidate_rows(candidates)
     ev = planner.evaluate(candidates, rows=made)
     si = planner.sigma_information(candidates, rows=made)
     rows = []
     kit = kit_of(campaign)
     fits = feasibility_of(campaign)
+    timed = any(isinstance(c, RTestCandidate) for c in candidates)
+    times = times or TimeModel()
     for k, c in enumerate(candidates):
-        probe = isinstance(c, ProbeCandidate)
-        ok, why = probe_feasibility(c, campaign) if probe else fits(c)
+        probe, rtest = isinstance(c, ProbeCandidate), isinstance(c, RTestCandidate)
+        ok, why = probe_feasibility(c, campaign) if probe else rtest_feasibility(c, campaign) if rtest else fits(c)
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
         where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
-                  "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else kit.where(c))
+                  "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else
+                 _rtest_where(c) if rtest else kit.where(c))
         row = {"name": c.name, "kind": c.kind, "pattern": c.pattern, **where, "L_B_mm": c.length,
-               "repeats": c.repeats, "extension_mm": c.extension, "feasible": ok, "feasibility": why,
+               "repeats": c.repeats, **({"minutes": c.minutes(times) if rtest else np.nan} if timed else {}),
+               "extension_mm": c.extension, "feasible": ok, "feasibility": why,
                "eig_bits": float(ev.eig_bits[k]), "informative": bool(ev.informative[k]),
                "newly_identified": ", ".join(newly), "verdict": _verdict(ok, why, bool(ev.informative[k])),
                "sigma_model_contraction": float(si.contraction[k]),
@@ -168,7 +189,7 @@ def monte_carlo_check(planner: Planner, table: pd.DataFrame, *, n: int = N_CHECK
     index = {c.name: i for i, c in enumerate(planner.candidates)}
     if planner.data != "ballbar":  # the check's exact posterior has one scale for all rows: the ball bar's alone
         return pd.DataFrame()
-    picked = [r for _, r in table.iterrows() if r["feasible"] and r["kind"] not in ("repeats", "probe")][:n]
+    picked = [r for _, r in table.iterrows() if r["feasible"] and r["kind"] not in ("repeats", "probe", "rtest")][:n]
     rows = []
     now = current_posterior(planner) if picked else None
     for r in picked:
@@ -201,35 +222,49 @@ def best_measurement(campaign, target: str, *, sigma_model_um: float | None = No
 
 def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_model_um: float | None = None,
          sweep_pattern: str | None = None, model: str = "linear", data: str = "ballbar",
-         sigma_prior=None) -> PlanResult:
+         sigma_prior=None, times: TimeModel | None = None) -> PlanResult:
     """Rank the catalogue — ball-bar runs and, with a ``[probe]``, touch-probe runs — plus ``extra`` user candidates
-    for ``targets``, given the campaign's ``data`` (``"ballbar"``, ``"probe"``, ``"both"``); sweep the tool length;
+    for ``targets``, given the campaign's ``data`` (a value of :data:`~mtmcal_bayes.models.DATA`); sweep the tool length;
     check three by Monte Carlo (ball-bar data).  ``sigma_prior``: a
     :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere (None: the assumed priors): the closed form's
     σ_model (unless ``sigma_model_um``) and the probe's scale are the rms of its priors, and the σ_model information
-    and the Monte-Carlo check use it (:class:`.design.Planner`)."""
+    and the Monte-Carlo check use it (:class:`.design.Planner`).  With an ``[rtest]``, R-test runs are candidates
+    too (:mod:`.rtest_catalogue`), each with its machine minutes under ``times`` (default the time model's defaults);
+    a campaign without a ball-bar set-up but with probe or R-test candidates has no ball-bar candidates and no
+    sweep."""
     kit = kit_of(campaign)
-    ballbar = [c for c in catalogue_of(campaign) if data != "probe" or c.repeat_of is None]
-    candidates = ballbar + probe_catalogue(campaign) + list(extra or [])
+    others = probe_catalogue(campaign) + rtest_catalogue(campaign)
+    ballbar = [c for c in catalogue_of(campaign) if data != "probe" or c.repeat_of is None] \
+        if campaign.ballbar.setups or not others else []
+    candidates = ballbar + others + list(extra or [])
     sigma = None if sigma_model_um is None else units.to_internal(sigma_model_um, "um")
     planner = planner_for(campaign, candidates, targets, sigma_model=sigma, model=model, data=data,
                           sigma_prior=sigma_prior)
-    table, si = _tables(planner, candidates, campaign)
-    if sweep_pattern is None:
-        sweep_pattern = kit.sweep_pattern(table, campaign)
-    sweep = tool_length_sweep(planner, campaign, sweep_pattern)
+    table, si = _tables(planner, candidates, campaign, times)
+    if not ballbar:  # nothing to sweep: no ball-bar set-up
+        sweep_pattern, sweep = "", pd.DataFrame()
+    else:
+        if sweep_pattern is None:
+            sweep_pattern = kit.sweep_pattern(table, campaign)
+        sweep = tool_length_sweep(planner, campaign, sweep_pattern)
     check = monte_carlo_check(planner, table)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"
     learnt = " learnt elsewhere" if planner.learnt is not None and sigma_model_um is None else ""
+    bar_runs = (f"; new runs measured {candidates[0].repeats if candidates else 3} times with repeat sd "
+                f"{units.from_internal(planner.pooled_sd, 'um'):.2f} µm (pooled from the campaign) and instrument "
+                f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm") \
+        if ballbar or not others else ""
     notes = [f"closed form for {form} at sigma_model = {units.from_internal(planner.sigma_model, 'um'):.2f} µm "
-             f"(the root mean square of its prior{learnt}); new runs measured "
-             f"{candidates[0].repeats if candidates else 3} times with repeat sd "
-             f"{units.from_internal(planner.pooled_sd, 'um'):.2f} µm (pooled from the campaign) and instrument "
-             f"accuracy {units.from_internal(campaign.ballbar.accuracy, 'um'):g} µm",
+             f"(the root mean square of its prior{learnt}){bar_runs}",
              kit.feasibility_note,
              (PROBE_NOTE.format(sigma_probe=units.from_internal(planner.sigma_probe, 'um'))
               if any(isinstance(c, ProbeCandidate) for c in candidates) else
               "no touch-probe candidates: the campaign has no [probe] with a repeatability and a stylus")]
+    rtests = [c for c in candidates if isinstance(c, RTestCandidate)]
+    if rtests:
+        notes.append(rtest_note(campaign, rtests, planner.sigma_rtest))
+    if not ballbar:
+        notes.append("no ball-bar candidates and no tool-length sweep: the campaign has no ball-bar set-up")
     cols = [c for c in sweep.columns if c.endswith(" sd_after")]
     if len(sweep) > 1 and np.allclose(sweep[cols].to_numpy(), sweep[cols].to_numpy()[0], rtol=1e-6):
         notes.append(f"the tool-length sweep of {sweep_pattern} is flat: a longer tool teaches nothing more here "
@@ -238,7 +273,7 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
         notes.append(f"not targeted: {', '.join(planner.not_targeted)} — no run of the catalogue determines them one "
                      "by one (identifiability of the campaign and every candidate together, the T ball centred)")
     if data != "ballbar":
-        notes.append(f"the current posterior rests on {'both instruments' if data == 'both' else 'the probe'}: the "
+        notes.append(f"the current posterior rests on {_resting_on(data, campaign)}: the "
                      "sigma_model information and the Monte-Carlo check (one scale for all data) are for ball-bar "
                      "data only and are not given here")
     if planner.sigma_model == 0.0:
@@ -248,7 +283,23 @@ def plan(campaign, targets=None, *, extra: list[Candidate] | None = None, sigma_
                           "and the Monte-Carlo check")
     return PlanResult(table, sweep, check, planner.targets, planner.target_units,
                       units.from_internal(planner.sigma_model, "um"), sweep_pattern, model, notes, campaign.source,
-                      sigma_model=sigma_summary(planner, si) if data == "ballbar" else {})
+                      sigma_model=sigma_summary(planner, si) if data == "ballbar" else {},
+                      rtest_runs={c.name: rtest_run_table(c) for c in rtests})
+
+
+def rtest_run_table(c: RTestCandidate) -> dict:
+    """An R-test candidate as its ``[[rtest.runs]]`` table, without readings (docs/rtest.md)."""
+    s = c.setup
+    return {"id": c.name, "nest": s.nest, "sphere_mm": list(s.sphere), "angles_deg": c.angles_deg(),
+            "frame": s.frame, "zero": s.zero, "repeats": c.repeats, **({"swept": True} if c.sweep_span else {})}
+
+
+def _resting_on(data: str, campaign) -> str:
+    """The instruments the current posterior rests on, in words (the ball bar's and the probe's as before)."""
+    if data in ("both", "probe"):
+        return "both instruments" if data == "both" else "the probe"
+    words = {"ballbar": "the ball bar", "probe": "the touch probe", "rtest": "the R-test"}
+    return " and ".join(words[i] for i in data_instruments(data, campaign))
 
 
 def sigma_summary(planner: Planner, si: SigmaInformation) -> dict:

@@ -132,7 +132,7 @@ def synthetic_history(campaign: Campaign, truth: Truth, dates, *, drifts=(), ser
         dev = truth_at(truth, drifts, when)
         for name, k in thermal:
             dev[name] = dev.get(name, 0.0) + k * (temperatures[i] - REFERENCE_TEMPERATURE_C)
-        t = Truth(dev, setups, mounts, copy.deepcopy(truth.probe))
+        t = Truth(dev, setups, mounts, copy.deepcopy(truth.probe), copy.deepcopy(truth.rtest))
         c = synthetic_campaign(campaign, t, model, noise=True, seed=int(rng.integers(2**31)), sigma_model=sigma_model)
         c.reported = {}
         c.date = when
