@@ -32,6 +32,12 @@ def demo():
     return mb.load_campaign(demo_campaign("nutating-head"))
 
 
+@pytest.fixture(scope="module")
+def exact(demo):
+    """``sample --machine nutating-head --sampler exact`` (every instrument, seed 1: what ``axes`` samples)."""
+    return mb.sample(demo, sampler="exact", seed=1)
+
+
 def _errors(seed: int) -> dict[str, float]:
     """Every location error of the type at random, 30–100 % of ±50 µm / ±100″ (mm, rad)."""
     rng = np.random.default_rng(seed)
@@ -154,11 +160,11 @@ def _within(result, truth: dict, names, combinations) -> list[str]:
     return far
 
 
-def test_the_posterior_with_every_instrument_finds_the_stated_truth(demo):
+def test_the_posterior_with_every_instrument_finds_the_stated_truth(demo, exact):
     """``sample --machine nutating-head --sampler exact`` (every instrument, seed 1): each of the nine deviations'
     posterior mean lies within 3 posterior sd of the truth the readings were simulated from (the chain, with noise),
     and the posterior is narrower than 2 µm / 2″ on each: the truth is found, not merely not excluded."""
-    r = mb.sample(demo, sampler="exact", seed=1)
+    r = exact
     names = [p.name for p in r.log_posterior.space.parameters if p.group == "deviation"]
     assert len(names) == 9 and set(names) == set(demo.truth.deviations)
     assert not _within(r, _truth(demo, names), names, [])
@@ -174,3 +180,87 @@ def test_the_chain_model_on_ball_bar_and_probe_finds_the_stated_truth(demo):
     names = [p.name for p in r.log_posterior.space.parameters if p.group == "deviation"]
     far = _within(r, _truth(demo, names), ident.determined, r.combinations)
     assert not far, far
+
+
+# ------------------------------------------------------------------------------- controllers: axes and the ISG CSV
+
+def _rotate(v: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``v`` (3,) turned by each rotation vector of ``w`` (n, 3) rad (Rodrigues' formula): (n, 3)."""
+    angle = np.linalg.norm(w, axis=1, keepdims=True)
+    k = w / np.where(angle > 0, angle, 1.0)
+    return (v * np.cos(angle) + np.cross(k, v) * np.sin(angle) + k * (k @ v)[:, None] * (1.0 - np.cos(angle)))
+
+
+def test_the_isg_csv_gives_the_inclined_line_from_the_posterior(exact):
+    """The ISG CSV of the exact posterior (``axes --machine nutating-head --format isg-csv``): B's identified line as
+    ``PXB PYB PZB`` (mm) and ``VXB VYB VZB``: the direction is the posterior mean of B's direction turned by each
+    draw's rotation of its body (its tilts about u and v and its zero about k, by Rodrigues' formula, computed here),
+    to 1e-9; the point is B's point (0, 0, 440), its position errors not estimated (a comment says so); B's errors in
+    its basis are named in comments, not written under frame names; the record's other names are position errors
+    of the format."""
+    from mtmcal_bayes.io.isg_csv import ISG_NAMES, isg_csv
+    from mtmcal_bayes.posterior.axis_lines import isg_position_errors
+
+    lines = isg_csv(*isg_position_errors(exact)).splitlines()
+    header, record = [ln for ln in lines if not ln.startswith("//")]
+    values = dict(zip(header.split(), map(float, record.split())))
+    line = ["PXB", "PYB", "PZB", "VXB", "VYB", "VZB"]
+    assert header.split()[-6:] == line and set(values) - set(line) <= set(ISG_NAMES)
+
+    post = exact.idata.posterior
+    ru, rv, zero = (units.to_internal(np.ravel(post[n].values), "arcsec") for n in ("E_RU0B", "E_RV0B", "E_B0B"))
+    k = np.array([0.0, 1.0, 1.0]) / np.sqrt(2.0)
+    u, v = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, -1.0]) / np.sqrt(2.0)
+    d = _rotate(k, ru[:, None] * u + rv[:, None] * v + zero[:, None] * k).mean(axis=0)
+    got = np.array([values[n] for n in line[3:]])
+    assert np.max(np.abs(got - d)) < 1e-9, got - d  # the record's 9 significant digits: 5e-10 on 0.7
+    assert np.linalg.norm(got - k) > 3e-5  # the tilts (about 10″) moved it
+    np.testing.assert_array_equal([values[n] for n in line[:3]], B_POINT)
+    comments = "\n".join(ln for ln in lines if ln.startswith("//"))
+    assert "PXB PYB PZB: the description's point" in comments
+    for name in ("E_RU0B", "E_RV0B"):
+        assert f"{name}: an error of the inclined B axis in its own basis" in comments
+    for name in ("E_U0B", "E_V0B"):
+        assert f"{name}: not estimated by the machine's model (acts only through" in comments
+    assert "B0B: the zero of the inclined B axis" in comments
+
+
+def test_axes_writes_the_isg_csv_of_the_type(tmp_path, run_cli):
+    """The command writes the same record: ``axes --machine nutating-head --format isg-csv -o FILE`` ends its
+    header with B's line."""
+    out = tmp_path / "b.csv"
+    code, _, err = run_cli("axes", "--machine", "nutating-head", "--format", "isg-csv", "-o", str(out))
+    assert code == 0, err
+    header = [ln for ln in out.read_text(encoding="utf-8").splitlines() if not ln.startswith("//")][0]
+    assert header.split()[-6:] == ["PXB", "PYB", "PZB", "VXB", "VYB", "VZB"]
+
+
+@pytest.mark.parametrize("machine", ["trunnion", "head-head"])
+def test_a_frame_aligned_type_s_isg_csv_has_no_line(machine, run_cli):
+    """On a type whose axes lie along frame axes the CSV is position errors only, as before: no axis line, no
+    inclined-axis comment."""
+    from mtmcal_bayes.io.isg_csv import ISG_NAMES
+
+    code, text, err = run_cli("axes", "--machine", machine, "--format", "isg-csv")
+    assert code == 0, err
+    header = [ln for ln in text.splitlines() if not ln.startswith("//")][0].split()
+    assert header and set(header) <= set(ISG_NAMES)
+    assert "inclined" not in text and "identified line" not in text
+
+
+def test_the_head_angle_is_45_degrees_plus_the_spindle_s_tilt_in_b_s_plane(demo, exact):
+    """docs/machines.md (ISG KIN_TYP_33's head angle HD3): the angle between B's identified line and the tool, per
+    draw of the exact posterior, is 45° + E_A(0C1)B to first order (to 0.01″: the second order of angles of ~10″),
+    and B's own tilts do not enter it."""
+    from mtmcal_bayes.machines.chain import Chain
+    from mtmcal_bayes.posterior import axis_lines as al
+
+    r = exact
+    desc = demo.machine.description
+    draws = {p.name: units.to_internal(np.ravel(r.idata.posterior[p.name].values)[:500], p.unit)
+             for p in r.log_posterior.space.parameters if p.group == "deviation"}
+    lines = al._lines(Chain(desc, generated(desc)), desc, draws, 500)
+    angle = np.arccos(np.einsum("ni,ni->n", lines["B"][1], -lines["C1"][1]))
+    want = np.deg2rad(45.0) + draws["E_A(0C1)B"]
+    assert np.max(np.abs(units.from_internal(angle - want, "arcsec"))) < 0.01
+    assert np.ptp(units.from_internal(draws["E_A(0C1)B"], "arcsec")) > 0.1  # the draws spread: the check can fail
