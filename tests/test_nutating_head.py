@@ -239,10 +239,11 @@ def test_a_frame_aligned_type_s_isg_csv_has_no_line(machine, run_cli):
     assert "inclined" not in text and "identified line" not in text
 
 
-def test_the_head_angle_is_45_degrees_plus_the_spindle_s_tilt_in_b_s_plane(demo, exact):
-    """docs/machines.md (ISG KIN_TYP_33's head angle HD3): the angle between B's identified line and the tool, per
-    draw of the exact posterior, is 45° + E_A(0C1)B to first order (to 0.01″: the second order of angles of ~10″),
-    and B's own tilts do not enter it."""
+def test_the_head_angle_and_the_gauge_line_are_what_the_controller_table_says(demo, exact):
+    """docs/machines.md's controller table of the type, per draw of the exact posterior: the angle between B's
+    identified line and the tool (ISG KIN_TYP_33's head angle HD3) is 45° + E_A(0C1)B to first order (to 0.01″: the
+    second order of angles of ~10″; B's own tilts do not enter it); the gauge line's absolute point is
+    E_X(0C1)B − 0.4799 µm/″·(E_RV0B + E_B0B) along X and 140 mm × E_RU0B along Y."""
     from mtmcal_bayes.machines.chain import Chain
     from mtmcal_bayes.posterior import axis_lines as al
 
@@ -255,6 +256,12 @@ def test_the_head_angle_is_45_degrees_plus_the_spindle_s_tilt_in_b_s_plane(demo,
     want = np.deg2rad(45.0) + draws["E_A(0C1)B"]
     assert np.max(np.abs(units.from_internal(angle - want, "arcsec"))) < 0.01
     assert np.ptp(units.from_internal(draws["E_A(0C1)B"], "arcsec")) > 0.1  # the draws spread: the check can fail
+    # the docs' table: the gauge line's absolute X and Y (140 mm below B's pivot), to first order (1e-6 mm)
+    point = lines["C1"][0]
+    want_x = draws["E_X(0C1)B"] - 140.0 * np.sqrt(0.5) * (draws["E_RV0B"] + draws["E_B0B"])
+    want_y = 140.0 * draws["E_RU0B"]
+    assert np.max(np.abs(point[:, 0] - want_x)) < 1e-6 and np.max(np.abs(point[:, 1] - want_y)) < 1e-6
+    assert np.ptp(point[:, 0]) > 1e-4
 
 
 def test_the_report_s_numbers_are_the_stated_truth(tmp_path, run_cli):
