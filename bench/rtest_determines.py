@@ -22,7 +22,7 @@ from mtmcal_bayes.inference.identifiability import campaign_identifiability  # n
 from mtmcal_bayes.inference.log_posterior import LogPosterior  # noqa: E402
 from tests.rtest_campaigns import SETTINGS, SPHERES, static_campaign, static_runs  # noqa: E402
 
-TYPES = ("integrex-i200", "vertical-turn-mill", "trunnion", "head-head")
+TYPES = ("integrex-i200", "vertical-turn-mill", "trunnion", "head-head", "nutating-head")
 
 
 def verdicts(machine: str) -> dict:

@@ -6,7 +6,9 @@ Read from the TOML file with :mod:`tomllib`, not through the package's reader.  
 ``w-<work axes>b<tool axes>(C1)-t``: the letters between ``w-`` and ``b`` carry the workpiece, the first the one
 nearest the workpiece; those between ``b`` and ``(`` carry the tool, the first the one on the bed.  A rotary
 axis of direction ``±e`` turns by its command θ right-handed about its direction through its ``point_mm``
-(the frame axis' rotation matrix at ±θ, written out below); a linear axis moves the tool side by ``+q`` along
+(the frame axis' rotation matrix at ±θ, written out below); one given as a vector k (an inclined axis, SPEC §21) by
+Rodrigues' formula about k, its location errors along and about its basis u (the frame axis least along k, made
+perpendicular to it), v = k × u and about k itself; a linear axis moves the tool side by ``+q`` along
 its frame axis (tilted by its squareness errors, ISO 230-1's form: the direction of motion alone) and the
 workpiece side by ``−q``.  A location error of a body (an axis' carried body, or the
 spindle's, ``"C1"``) is ``v ↦ R(ε)(v − p) + p + δ`` with ``R(ε)`` by Rodrigues' formula and ``p`` the body's
@@ -54,8 +56,11 @@ def rodrigues(eps: np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * K @ K
 
 
-def unit(direction: str) -> np.ndarray:
-    """``"-Z"`` -> (0, 0, -1)."""
+def unit(direction) -> np.ndarray:
+    """``"-Z"`` -> (0, 0, -1); a vector (an inclined direction) -> it normalised."""
+    if not isinstance(direction, str):
+        v = np.asarray(direction, float)
+        return v / np.linalg.norm(v)
     e = np.zeros(3)
     e[FRAME.index(direction[1])] = 1.0 if direction[0] == "+" else -1.0
     return e
@@ -96,7 +101,7 @@ class HandMachine:
         """Axis ``letter`` at command ``q`` applied to ``v`` (3,) (``turn_only``: a direction, no translation)."""
         if self.rotary(letter):
             d = self.axes[letter]["direction"]
-            R = ROTATION[d[1]](q if d[0] == "+" else -q)
+            R = ROTATION[d[1]](q if d[0] == "+" else -q) if isinstance(d, str) else rodrigues(q * unit(d))
             if turn_only:
                 return R @ v
             p = self.point(letter)
@@ -105,6 +110,29 @@ class HandMachine:
             return v
         e = rodrigues(self.tilts.get(letter, np.zeros(3))) @ unit("+" + letter)
         return v + (-q if work else q) * e
+
+    def inclined(self, letter: str) -> bool:
+        """Whether rotary axis ``letter`` is given by a vector off the frame axes."""
+        return self.rotary(letter) and not isinstance(self.axes[letter]["direction"], str)
+
+    def basis(self, letter: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(u, v, k)`` of inclined axis ``letter``: u the frame axis with the smallest |eᵢ·k| (the first on a tie)
+        with its part along k taken off, normalised; v = k × u."""
+        k = self.direction(letter)
+        e = np.eye(3)[int(np.argmin(np.abs(k)))]
+        u = e - (e @ k) * k
+        u /= np.linalg.norm(u)
+        return u, np.cross(k, u), k
+
+    def error_axis(self, symbol: str) -> np.ndarray:
+        """The unit vector a location error moves along or turns about: its frame axis, or on an inclined axis its
+        basis vector (``E_U0B``, ``E_RU0B``: u; ``E_V0B``, ``E_RV0B``: v; ``E_B0B``, its zero: k)."""
+        body, role, comp = body_of(symbol, self)
+        if comp is not None:
+            return np.eye(3)[comp]
+        u, v, k = self.basis(body)
+        name = symbol[2:symbol.index("0")]
+        return {"U": u, "V": v, "RU": u, "RV": v}.get(name, k)
 
     def displace(self, body: str, v: np.ndarray) -> np.ndarray:
         if body not in self.errors:
@@ -144,11 +172,15 @@ class HandMachine:
 SQUARENESS = {"E_C0X": ("X", 2), "E_B0X": ("X", 1), "E_A0Y": ("Y", 0)}
 
 
-def body_of(symbol: str) -> tuple[str, str, int]:
+def body_of(symbol: str, hand: HandMachine | None = None) -> tuple[str, str, int | None]:
     """``(body, "position" or "orientation", frame component)`` of an ISO 230-7 location error symbol:
-    ``E_X0C`` (C's line along X), ``E_A0C`` (C's orientation about X), ``E_X(0C1)B`` (the spindle's, along X)."""
+    ``E_X0C`` (C's line along X), ``E_A0C`` (C's orientation about X), ``E_X(0C1)B`` (the spindle's, along X).  On
+    an inclined axis of ``hand`` (SPEC §21: ``E_U0B``, ``E_V0B`` positions, ``E_RU0B``, ``E_RV0B``, ``E_B0B``
+    orientations) the component is None: :meth:`HandMachine.error_axis` gives its vector."""
     letter = symbol[2]
     body = "C1" if "(0C1)" in symbol else symbol.split("0")[-1]
+    if hand is not None and body != "C1" and hand.inclined(body):
+        return body, "position" if symbol[2:symbol.index("0")] in ("U", "V") else "orientation", None
     if letter in FRAME:
         return body, "position", FRAME.index(letter)
     return body, "orientation", "ABC".index(letter)

@@ -21,6 +21,8 @@ SPHERES = {
     "trunnion": ([0.0, 100.0, 0.0], "50 mm above the table surface, 100 mm off the A and the C line: the "
                                     "controller cycles' sphere"),
     "head-head": ([0.0, 0.0, -250.0], "on the table under the head: the demo's probe sphere"),
+    "nutating-head": ([100.0, 0.0, 50.0], "100 mm off the C line, 50 mm above the table surface: the demo's R-test "
+                                          "sphere"),
 }
 #: the nest's length from the spindle's point, mm (not calibrated: its length and centring are nuisance terms)
 NEST_MM = 150.0
@@ -113,8 +115,11 @@ def every_setting_text(machine: str, repeats: int = 1) -> str:
 
 def with_every_instrument_text(machine: str) -> str:
     """The demo campaign of ``machine`` (the thesis campaign on the thesis type: ball bar and touch probe) with the
-    R-test runs of :func:`every_setting_text` added: every instrument."""
+    R-test runs of :func:`every_setting_text` added: every instrument.  A demo with R-test runs of its own (the
+    nutating head's) is every instrument as it is."""
     path = demo_campaign(machine)
     base = builtin_campaign_text()[0] if path is None else Path(path).read_text(encoding="utf-8")
+    if "\n[rtest]" in base:
+        return base
     rt = every_setting_text(machine)
     return base + "\n" + rt[rt.index("[rtest]"):]

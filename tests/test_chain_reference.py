@@ -49,12 +49,13 @@ def test_chain_is_the_hand_written_kinematics(machine, with_errors):
             values[d.name] = np.array([rng.choice([-1.0, 1.0]) * ORIENTATION_RAD])
             hand.tilts.setdefault(letter, np.zeros(3))[about] += values[d.name][0]
             continue
-        body, role, comp = body_of(d.symbol)
+        body, role, comp = body_of(d.symbol, hand)
         assert (body, role, comp) == (d.body, d.role, d.component), d.symbol  # the symbol says what it moves
         v = rng.choice([-1.0, 1.0]) * (POSITION_MM if role == "position" else ORIENTATION_RAD) * rng.uniform(0.5, 1)
         values[d.name] = np.array([v])
         eps, delta = hand.errors.setdefault(body, (np.zeros(3), np.zeros(3)))
-        (delta if role == "position" else eps)[comp] += v
+        target = delta if role == "position" else eps
+        target += v * hand.error_axis(d.symbol)
     assert not with_errors or len(hand.errors) >= 2  # errors on at least one rotary axis and the spindle
     chain = Chain(desc, deviations)
     q = _commands(hand, rng, 5)

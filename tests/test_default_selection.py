@@ -58,6 +58,17 @@ EXPECTED = {
         "E_A(0C1)A": ({"E_A0A": 1.0, "E_Y(0C1)A": -lever(150.0)}, set()),
         "E_Z(0C1)A": ({}, {LENGTH}),
     },
+    # B along k = [0, S, S] through (0, 0, 440), the gauge line at (0, 0, 300): u = +X, v = S·(ŷ − ẑ)
+    "nutating-head": {
+        "E_C0C": ({}, {PLACEMENT}),
+        "E_U0B": ({"E_X0C": -1.0}, set()),                          # B's line along X against C's line along X
+        "E_V0B": ({"E_Y0C": -S}, {PLACEMENT}),                      # its Y part against C's, its Z part a placement
+        "E_Y(0C1)B": ({"E_Y0C": -1.0}, {LENGTH, PLACEMENT}),        # along Y, in B's plane: as the nutating test
+        # about Y = k/S − ẑ through the gauge line: √2 × B's zero about its line 140 mm above, a turn about the tool's
+        # own axis that moves no tool point, and the shift along X of that lever
+        "E_B(0C1)B": ({"E_B0B": np.sqrt(2.0), "E_X(0C1)B": lever(140.0)}, set()),
+        "E_Z(0C1)B": ({}, {LENGTH}),
+    },
 }
 
 

@@ -246,16 +246,19 @@ class HandNutating:
     then turns what it carries by its command about its *actual* line, the nominal line displaced the same way
     (a Rodrigues rotation about that line); the spindle's displacement is carried by B, B's line by the linear axes."""
 
-    def __init__(self, e: dict):
+    def __init__(self, e: dict, b_point=(0.0, 0.0, 150.0), spindle_point=(0.0, 0.0, 0.0)):
+        """``e`` every location error by symbol (mm, rad; absent: 0); ``b_point`` B's point, ``spindle_point`` the
+        spindle's (mm; the built-in ``nutating-head`` type: (0, 0, 440) and (0, 0, 300))."""
+        e = {n: e.get(n, 0.0) for n in NUTATING_ERRORS}
         self.e = e
         k = np.array([0.0, S, S]) / np.linalg.norm([0.0, S, S])
         u = np.array([1.0, 0.0, 0.0])
-        self.b = (k, np.array([0.0, 0.0, 150.0]), e["E_RU0B"] * u + e["E_RV0B"] * np.cross(k, u) + e["E_B0B"] * k,
+        self.b = (k, np.array(b_point, float), e["E_RU0B"] * u + e["E_RV0B"] * np.cross(k, u) + e["E_B0B"] * k,
                   e["E_U0B"] * u + e["E_V0B"] * np.cross(k, u))
         z = np.array([0.0, 0.0, 1.0])
         self.c = (z, np.zeros(3), np.array([e["E_A0C"], e["E_B0C"], e["E_C0C"]]),
                   np.array([e["E_X0C"], e["E_Y0C"], 0.0]))
-        self.spindle = (np.zeros(3), np.array([e["E_A(0C1)B"], e["E_B(0C1)B"], 0.0]),
+        self.spindle = (np.array(spindle_point, float), np.array([e["E_A(0C1)B"], e["E_B(0C1)B"], 0.0]),
                         np.array([e["E_X(0C1)B"], e["E_Y(0C1)B"], e["E_Z(0C1)B"]]))
 
     @staticmethod

@@ -207,6 +207,11 @@ GENERATED = {
     "head-head": (["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C", "E_Y0A", "E_Z0A", "E_B0A", "E_C0A", "E_A0A",
                    "E_X(0C1)A", "E_Y(0C1)A", "E_A(0C1)A", "E_B(0C1)A", "E_Z(0C1)A", "E_C0X", "E_B0X", "E_A0Y"],
                   ["E_X0C", "E_Y0C", "E_Z0A", "E_C0A", "E_A(0C1)A", "E_Z(0C1)A"] + SQUARENESS),
+    # the 45° B head: its positions act only with the C line's (E_U0B as −E_X0C, E_V0B as −0.7071·E_Y0C and the
+    # sphere's placement), the spindle's position along Y with E_Y0C, its tilt about Y with B's zero
+    "nutating-head": (["E_X0C", "E_Y0C", "E_A0C", "E_B0C", "E_C0C", "E_U0B", "E_V0B", "E_RU0B", "E_RV0B", "E_B0B",
+                       "E_X(0C1)B", "E_Y(0C1)B", "E_A(0C1)B", "E_B(0C1)B", "E_Z(0C1)B", "E_C0X", "E_B0X", "E_A0Y"],
+                      ["E_C0C", "E_U0B", "E_V0B", "E_Y(0C1)B", "E_B(0C1)B", "E_Z(0C1)B"] + SQUARENESS),
 }
 
 
@@ -282,8 +287,9 @@ def test_every_rule_through_the_command_line(tmp_path, run_cli, case):
     assert not out.exists()
 
 
-def _directions(name: str) -> list[tuple[str, str]]:
-    """``(section, direction)`` of every rotary axis and the spindle of built-in type ``name``: ``("axes.B", "+Y")``."""
+def _directions(name: str) -> list[tuple[str, str | list]]:
+    """``(section, direction)`` of every rotary axis and the spindle of built-in type ``name``: ``("axes.B", "+Y")``
+    (an inclined one as its vector)."""
     t = tomllib.loads(builtin_toml(name))
     out = [(f"axes.{k}", v["direction"]) for k, v in t["axes"].items() if "direction" in v]
     return out + [("spindle", t["spindle"]["direction"])]
@@ -319,10 +325,11 @@ def test_a_direction_vector_within_1e6_of_unit_is_normalised_and_an_inclined_one
         return parse_description(tomllib.loads(path.read_text(encoding="utf-8")), str(path), "", builtin=name)
 
     for section, direction in _directions(name):
-        v = _frame_vector(direction)
+        given = not isinstance(direction, str)  # the type's own inclined axis (the nutating head's B)
+        v = np.asarray(direction, float) / np.linalg.norm(direction) if given else _frame_vector(direction)
         k = int(np.argmax(np.abs(v)))
         other = np.eye(3)[(k + 1) % 3]
-        near = v * (1.0 + 5e-7) + 1e-10 * other  # within the tolerances
+        near = v * (1.0 + 5e-7) + (0.0 if given else 1e-10) * other  # within the tolerances
         cases = {
             "near": ("[" + ", ".join(repr(float(x)) for x in near) + "]", None),
             "45": ("[" + ", ".join(repr(float(x)) for x in (v + other) * 0.70710678) + "]", "inclined"),
@@ -330,12 +337,17 @@ def test_a_direction_vector_within_1e6_of_unit_is_normalised_and_an_inclined_one
             "long": ("[" + ", ".join(repr(float(x)) for x in v * 1.001) + "]", "is not a unit vector (its length is "
                      "1.001)"),
         }
+        if given:  # already inclined: 45° from its nearest frame axis is another inclined direction, not the case
+            del cases["45"]
         for case, (vector, fragment) in cases.items():
             path.write_text(_with_direction(name, section, vector), encoding="utf-8")
             if fragment is None:
                 desc = load()
                 axis = desc.spindle if section == "spindle" else desc.axes[section[-1]]
-                assert np.array_equal(axis.direction, v), (section, case)
+                if given:
+                    assert np.max(np.abs(axis.direction - v)) < 1e-15, (section, case)
+                else:
+                    assert np.array_equal(axis.direction, v), (section, case)
                 assert [d.symbol for d in generated(desc)] == [d.symbol for d in generated(base)]
                 continue
             if fragment == "inclined":

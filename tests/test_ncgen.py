@@ -102,7 +102,10 @@ def test_each_probe_program_indexes_the_runs_angles_and_probes_the_sphere(machin
         for i in probes:
             assert abs(np.linalg.norm(gap[i]) - (touch - overtravel)) < 1e-9
             assert abs(np.linalg.norm(gap[i - 1]) - (touch + clearance)) < 1e-9
-            assert np.linalg.norm(np.cross(gap[i], gap[i - 1])) < 1e-9  # the skip move heads for the centre
+            # the skip move heads for the centre: the angle between the two gaps below 1e-10 rad (the program's 10
+            # decimals on commands of a few hundred mm and degrees round them at ~1e-12 relative)
+            sine = np.linalg.norm(np.cross(gap[i], gap[i - 1])) / (np.linalg.norm(gap[i]) * np.linalg.norm(gap[i - 1]))
+            assert sine < 1e-10
         for p in range(run.positions):  # five directions that fix a sphere's centre: they span space
             dirs = gap[probes[5 * p:5 * p + 5]]
             assert np.linalg.matrix_rank(dirs, tol=1e-6) == 3

@@ -178,7 +178,7 @@ def test_one_rule_of_measurements_and_of_reported_values_on_every_machine(machin
     (the thesis') and refused by name where it has none."""
     path = demo_campaign(machine)
     doc = tomllib.loads(open(path, encoding="utf-8").read()) if path is not None else _thesis_doc()
-    bare = {k: v for k, v in doc.items() if k not in ("ballbar", "probe", "truth", "reported", "design")}
+    bare = {k: v for k, v in doc.items() if k not in ("ballbar", "probe", "rtest", "truth", "reported", "design")}
     err = _error(bare, tmp_path)
     assert err.key == "ballbar" and "no measurements" in str(err)
     empty = {**bare, "probe": {}}

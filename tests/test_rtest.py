@@ -68,11 +68,12 @@ def _hand_errors(machine: str, desc, rng) -> tuple[HandMachine, HandMachine, dic
             values[d.name] = rng.choice([-1.0, 1.0]) * ORIENTATION_RAD
             hand.tilts.setdefault(letter, np.zeros(3))[about] += values[d.name]
             continue
-        body, role, comp = body_of(d.symbol)
+        body, role, comp = body_of(d.symbol, hand)
         v = rng.choice([-1.0, 1.0]) * (POSITION_MM if role == "position" else ORIENTATION_RAD) * rng.uniform(0.5, 1)
         values[d.name] = v
         eps, delta = hand.errors.setdefault(body, (np.zeros(3), np.zeros(3)))
-        (delta if role == "position" else eps)[comp] += v
+        target = delta if role == "position" else eps
+        target += v * hand.error_axis(d.symbol)
     return nominal, hand, values
 
 

@@ -1,6 +1,6 @@
 """Validation of the R-test (issue 43, docs/rtest.md): the tables of what a one-sphere static R-test campaign
 determines on each built-in type are the ones the Jacobian gives (bench/rtest_determines.py); simulation-based
-calibration with R-test data alone passes on two types and rejects a wrong posterior (bench/rtest_sbc.py: every type,
+calibration with R-test data alone passes on three types and rejects a wrong posterior (bench/rtest_sbc.py: every type,
 the R-test alone and every instrument, N = 200)."""
 
 from __future__ import annotations
@@ -87,7 +87,7 @@ def campaigns():
     return get
 
 
-@pytest.mark.parametrize("machine", ["trunnion", "head-head"])
+@pytest.mark.parametrize("machine", ["trunnion", "head-head", "nutating-head"])
 def test_exact_sbc_with_rtest_data_passes(machine, campaigns, scheduler):
     """``validate sbc --data rtest --sampler exact``, seed 1 (the CLI's default), N = 200, on the one-sphere static
     runs in all four settings of frame and zero: the ranked quantities are what the R-test data determine (one by

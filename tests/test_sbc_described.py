@@ -18,7 +18,7 @@ from mtmcal_bayes.inference.identifiability import campaign_identifiability
 from mtmcal_bayes.validation import SBCSettings, run_sbc
 from mtmcal_bayes.validation.criteria import checked_quantities
 
-TYPES = ("vertical-turn-mill", "trunnion", "head-head")
+TYPES = ("vertical-turn-mill", "trunnion", "head-head", "nutating-head")
 
 
 def _demo(kind: str):
@@ -27,7 +27,7 @@ def _demo(kind: str):
 
 @pytest.fixture(scope="module")
 def scheduler():
-    """One local Dask cluster for the three runs (starting one takes seconds)."""
+    """One local Dask cluster for the runs (starting one takes seconds)."""
     with dask_client(workers=1) as client:
         yield client.scheduler.address
 

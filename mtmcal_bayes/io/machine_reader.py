@@ -41,6 +41,7 @@ BUILTIN_TYPES: dict[str, str] = {
     "vertical-turn-mill": "turn-mill with the swivel head vertical at B = 0 (tool along −X), C table",
     "trunnion": "five-axis trunnion table: C on A on the bed, the spindle on the linear axes",
     "head-head": "five-axis head-head: a C head carrying an A fork, the table on the linear axes",
+    "nutating-head": "five-axis nutating head: a B head inclined 45° (vertical to horizontal spindle), C table",
 }
 #: the built-in type whose deviations keep the thesis names
 THESIS_TYPE = "integrex-i200"

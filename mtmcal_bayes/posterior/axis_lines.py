@@ -225,9 +225,12 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
     """The posterior means of the position errors the data determine, by ISG name, in mm and rad
     (:mod:`mtmcal_bayes.io.isg_csv`), and the comments saying what is left out and why: a deviation the data do not
     determine (its value would be the prior's), one determined only in combination (which combination), one the
-    format has no name for, one the machine's model does not estimate (the default selection's reason, SPEC §21)."""
+    format has no name for, one the machine's model does not estimate (the default selection's reason, SPEC §21).
+    An inclined rotary axis, whose errors are named in its own basis, is given as its identified line
+    (:func:`inclined_lines`)."""
     from ..inference.identifiability import campaign_identifiability
     from ..io.isg_csv import isg_name
+    from ..io.machine_reader import description_of
 
     post = result.log_posterior
     ident = result.identifiability or campaign_identifiability(post)
@@ -235,6 +238,8 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
     for c in result.combinations:
         for n in c["weights"]:
             in_combination.setdefault(n, []).append(c["name"])
+    desc = description_of(post.campaign.machine)
+    inclined = {d.name: d.body for d in generated(desc) if d.body in desc.axes and desc.axes[d.body].inclined}
     values, comments = {}, [f"position errors identified by mtmcal-bayes from {post.campaign.source} "
                             f"({post.model_name} model, posterior means; mm and rad)"]
     for p in post.space.parameters:
@@ -242,7 +247,11 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
             continue
         symbol = p.name if p.name.startswith("E_") else iso_symbol(p.name)
         name = isg_name(symbol) if symbol else None
-        if name is None:
+        carrier = inclined.get(p.name)
+        if name is None and carrier is not None:
+            comments.append(f"{p.name}: an error of the inclined {carrier} axis in its own basis, which no position "
+                            f"error of this format names; {carrier}'s identified line is given instead")
+        elif name is None:
             comments.append(f"{p.name}: no position error of this format names it; left out")
         elif p.name in ident.undetermined:
             comments.append(f"{name}: not determined by this campaign (its value would be the prior's); left out")
@@ -251,15 +260,54 @@ def isg_position_errors(result) -> tuple[dict[str, float], list[str]]:
                             "left out")
         else:
             values[name] = float(units.to_internal(result.summary.loc[p.name, "mean"], p.unit))
-    from ..io.machine_reader import description_of
-
-    desc, estimated = description_of(post.campaign.machine), set(post.space.names)
+            if carrier is not None:  # an inclined axis' zero keeps its ISO name: a turn about the axis' own line
+                comments.append(f"{name}: the zero of the inclined {carrier} axis, a turn about its own line")
+    estimated = set(post.space.names)
     why = redundant(desc)
     for d in generated(desc):
         name = isg_name(d.symbol)
+        if name is None and d.name in inclined and d.name not in estimated:
+            comments.append(f"{d.symbol}: not estimated by the machine's model ({why.get(d.name, 'not selected')}); "
+                            f"held at zero in {d.body}'s identified line")
         if name is not None and d.name not in estimated:
             listed = desc.deviations is not None and d.name in desc.deviations
             reason = "not among the quantities its model samples" if listed else why.get(d.name, "not selected")
             comments.append(f"{name}: not estimated by the machine's model ({reason}); held at zero, left out")
+    if inclined:
+        line_values, line_comments = inclined_lines(result, desc)
+        values |= line_values
+        comments += line_comments
+    return values, comments
+
+
+def inclined_lines(result, desc: MachineDescription) -> tuple[dict[str, float], list[str]]:
+    """Each inclined rotary axis' identified line for the ISG CSV (``PXB PYB PZB``, mm: the line's point nearest
+    the described ``point_mm``; ``VXB VYB VZB``: its unit direction; posterior means in the machine frame at the home
+    pose, :func:`axis_lines`), with a comment per axis: what the numbers are, a number left out because the data do
+    not determine it, and a point fixed by the description (its position errors not estimated: sd 0)."""
+    from ..io.isg_csv import line_names
+
+    table = axis_lines(result).table
+    values, comments = {}, []
+    for ax in desc.rotary_axes:
+        if not ax.inclined:
+            continue
+        rows = table[table["element"] == ax.letter].set_index("quantity")
+        names = line_names(ax.letter)
+        comments.append(f"{' '.join(n for n, _, _ in names)}: the inclined {ax.letter} axis' identified line "
+                        "(a point in mm, the point nearest the described point_mm, and its unit direction; machine "
+                        "frame, every axis at 0)")
+        fixed = []
+        for name, what, c in names:
+            row = rows.loc[f"{what}_{c}"]
+            if not row["determined"]:
+                comments.append(f"{name}: not determined by this campaign (its value would be the prior's); left out")
+                continue
+            values[name] = float(row["mean"])
+            if what == "point" and row["sd"] == 0.0:
+                fixed.append(name)
+        if fixed:
+            comments.append(f"{' '.join(fixed)}: the description's point (the axis' position errors are not "
+                            "estimated)")
     return values, comments
 
