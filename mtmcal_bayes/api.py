@@ -430,7 +430,8 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     the machine's, below); ``integer_unit``: how X/Y/Z/B/C words without a decimal point (``X100``) are read, ``"um"``
     (increments of 1 µm / 0.001°) or ``"mm"`` (mm / °); by default they are refused (zeros are accepted).
 
-    A campaign with both instruments is checked first (:func:`instruments`): where they disagree on a deviation the
+    A campaign with two or three instruments (the ball bar, the touch probe, the R-test) is checked first
+    (:func:`instruments`, every pair): where they disagree on a deviation the
     compensation uses, it is refused (a ``ParameterError`` naming ``accept_disagreement``) unless
     ``accept_disagreement``, which compensates and warns; so is a campaign on which the check cannot run (a gap of
     its probe readings, :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
@@ -447,6 +448,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     from .errors import ParameterError
     from .machines import selected
     from .machines.plugins import provided
+    from .parameters import data_instruments
 
     c = campaign_of(campaign, measured=True)
     check_options(c, method=method, values=values, point=point)
@@ -454,10 +456,11 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     parsed = read(c, program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
-    if c.has_probe_readings() and c.ballbar.runs and (gap := c.probe_gap()) is not None:
+    two = len(data_instruments("all", c)) >= 2  # any two instruments: every pair is checked (docs/rtest.md)
+    if two and c.has_probe_readings() and (gap := c.probe_gap()) is not None:
         refusal = (f"whether the instruments of {c.source} agree on the deviations it uses cannot be checked: "
                    f"{gap.reason()}")
-    elif c.has_probe_readings() and c.ballbar.runs:
+    elif two:
         refusal = instruments(c, explain=False).refusal([d.name for d in selected(c.machine.description)])
     if refusal and not accept_disagreement:
         raise ParameterError("accept_disagreement", f"not given, and {refusal}")

@@ -134,3 +134,21 @@ def test_the_cli_checks_three_instruments_and_refuses_one(run_cli, tmp_path):
     code, out, err = run_cli("instruments", alone)
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
     assert "beside its R-test runs" in err and "Traceback" not in err
+
+
+def test_compensate_checks_the_rtest_beside_one_other_instrument():
+    """A trunnion campaign of the R-test beside the ball bar (its probe runs dropped), its run r1
+    shifted SHIFT_UM: compensate checks the pair before it corrects and refuses, naming the R-test and
+    ``accept_disagreement``; accepted, it compensates and warns.  (It checked only a campaign with the ball bar and
+    the probe: this pair went unchecked.)"""
+    import mtmcal_bayes as mb
+    from mtmcal_bayes.errors import ParameterError
+
+    c = _shifted(_three("trunnion"))
+    c.probe = None
+    program = Path(__file__).parent / "data" / "machines" / "trunnion-five-axis-12.nc"
+    with pytest.raises(ParameterError) as refused:
+        mb.compensate(program, campaign=c)
+    assert "accept_disagreement" in str(refused.value) and "R-test" in str(refused.value)
+    done = mb.compensate(program, campaign=c, accept_disagreement=True)
+    assert any("(accepted)" in w and "R-test" in w for w in done.warnings)
