@@ -69,14 +69,15 @@ def kinematic_model_of(model: str | None, c: Campaign) -> str:
 
 
 def data_of(data: str | None, c: Campaign) -> str:
-    """The data of a likelihood: as given, else what the machine's plug-in states (the thesis machine: the ball bar),
-    else every instrument the campaign has."""
+    """The data of a likelihood: as given, else what the machine's plug-in states (the thesis machine: the ball bar)
+    where the campaign has those instruments, else every instrument the campaign has."""
     from .machines.plugins import provided
+    from .parameters import data_instruments
 
     if data is not None:
         return data
     stated = provided(c.machine, "default_data")
-    if stated is not None:
+    if stated is not None and set(data_instruments(stated, c)) <= set(data_instruments("all", c)):
         return stated
     if c.has_rtest_readings():
         return "all"
