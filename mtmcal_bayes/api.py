@@ -286,9 +286,6 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     c = campaign_of(campaign, measured=True)
     check_model(model)
     data = check_data(data_of(data, c), c)
-    if "rtest" in data_instruments(data, c):  # docs/rtest.md, "Not done yet"
-        raise ParameterError("data", f"{data!r}: the report has no R-test sections yet (docs/rtest.md); give the data "
-                             "ballbar, probe or both, or use sample for the R-test")
     learnt = sigma_model_prior_of(sigma_model_prior, c, sigma_model_um)
     if posterior is not None and learnt is not None and learnt != posterior.log_posterior.sigma_prior:
         raise ParameterError("sigma_model_prior", "is not the prior the given posterior was sampled with")
