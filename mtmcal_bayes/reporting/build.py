@@ -636,7 +636,8 @@ def _pairs_section(page: Page, check: InstrumentCheck) -> None:
         + ". consistency_pairs.csv.")
     if check.disputed:
         page.paragraph("The instruments disagree on " + ", ".join(check.disputed) + ": "
-                       + " ".join(v[0] for v in check.disputed.values()) + " compensate refuses them unless the "
+                       + "; ".join(dict.fromkeys(w for v in check.disputed.values() for w in v)) + ". Compensate "
+                       "refuses them unless the "
                        "disagreement is accepted (section 'Compensation').")
     cols = [col for col in ("pair", "group", "given", "chi2", "dof", "p_value", "max_abs_z", "worst", "verdict")
             if col in g.columns]
