@@ -824,7 +824,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
                    digits={"elpd_loo": 2, "elpd_drop": 2, "pareto_k": 2})
 
     if c.rtest is not None:
-        rtest_sections.rtest_section(page, rep, *c.rtest, tmp)
+        rtest_sections.rtest_section(page, rep, *c.rtest, tmp=tmp)
 
     if ppc_df is not None:
         page.section("polar", "Ball-bar trajectories")

@@ -65,7 +65,7 @@ def terms_table(rep) -> pd.DataFrame:
     """rtest_terms.csv: the R-test's nuisance terms (each run's zero, each placement, each nest's length and
     offset), µm: owner, meaning, prior sd, posterior mean, sd and 95 % HDI, and the truth where the campaign states
     one."""
-    import arviz as az
+    from ..arviz_import import az
 
     post = rep.log_posterior
     priors = {p.name: p for p in post.priors.priors}
@@ -125,7 +125,7 @@ def readings_figure(table: pd.DataFrame):
     return fig
 
 
-def rtest_section(page: Page, rep, readings: pd.DataFrame, terms: pd.DataFrame, tmp: Path) -> None:
+def rtest_section(page: Page, rep, readings: pd.DataFrame, terms: pd.DataFrame, *, tmp: Path) -> None:
     """The R-test's readings against the posterior predictive, its discrepancy scale and its nuisance terms."""
     s = rep.summary
     page.section("rtest", "R-test readings")
