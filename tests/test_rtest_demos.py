@@ -41,3 +41,12 @@ def test_the_rtest_demo_is_its_script_s_and_sample_finds_its_truth(machine):
     t = truth_table(r, None, c.truth).set_index("quantity")
     assert set(determined) <= set(t.index)
     assert (t["z"].abs() < Z_MAX).all(), t[["truth", "mean", "sd", "z"]]
+
+
+def test_the_ball_bar_asked_of_an_rtest_campaign_is_one_line(run_cli):
+    """The thesis type's R-test demo: its default data is the R-test (the plug-in's default, the ball bar, holds only
+    where the campaign has ball-bar runs; it took the ball bar and failed in the linear algebra); the ball bar asked
+    for is refused in one line, exit 2."""
+    code, out, err = run_cli("sample", rtest_demo_campaign("integrex-i200"), "--data", "ballbar")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert "needs ball-bar runs" in err and "Traceback" not in err
