@@ -274,7 +274,8 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     ``compare_models`` adds the same campaign under every forward model its machine offers (the thesis machine's
     four, a described machine's ``linear`` and ``chain``).  ``data`` as for :func:`sample`; a campaign with ball-bar
     runs and touch-probe readings also gets its ball-bar-only, probe-only and fused posteriors side by side and the
-    instruments' consistency check.  ``tolerances``,
+    instruments' consistency check; a posterior of R-test readings its R-test sections, and a campaign with the
+    R-test beside another instrument every pair's check (docs/rtest.md, "The report").  ``tolerances``,
     ``sigma_model_um`` and ``sigma_model_prior`` as for :func:`sample` (the learnt prior for every posterior of
     the report; with ``posterior``, it must be the one that posterior was sampled with).
     """

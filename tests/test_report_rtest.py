@@ -57,21 +57,21 @@ def test_the_report_of_an_rtest_demo(machine, tmp_path):
     assert "σ_model (R-test)" in html or "sigma_model_rtest" in html
 
 
-def test_the_report_checks_the_rtest_beside_the_probe(tmp_path):
-    """The trunnion demo's touch probe with the R-test demo's runs (its ball bar and set-ups dropped), every reading
-    simulated from the demo's truth, the last two positions of the first R-test run moved 30 µm along X: the report's
-    pair-by-pair section flags that run given the probe's posterior, consistency_pairs.csv names it, and the
-    compensation section refuses the disputed deviations."""
+def test_the_report_checks_the_rtest_beside_the_ball_bar(tmp_path):
+    """The trunnion demo's ball bar with the R-test demo's runs (its probe dropped), every reading simulated from the
+    demo's truth, the last two positions of the first R-test run moved 30 µm along X, reported with ``data="rtest"``
+    (a posterior that did not see the ball bar: no eccentricity plots of it): the pair-by-pair section flags that run
+    given the ball bar's posterior, consistency_pairs.csv names it, and the compensation section refuses the disputed
+    deviations."""
     c = copy.deepcopy(mb.load_campaign(demo_campaign("trunnion")))
     rt = mb.load_campaign(rtest_demo_campaign("trunnion"))
-    c.ballbar = copy.deepcopy(c.ballbar)
-    c.ballbar.runs, c.ballbar.setups, c.ballbar.mounts, c.rtest = [], {}, {}, rt.rtest
+    c.probe, c.rtest = None, rt.rtest
     c.truth.rtest = rt.truth.rtest
     c = synthetic_campaign(c, c.truth, "chain", noise=True, seed=5)
     c.rtest.runs[0].displacements[:, -2:, 0] += 30 * 1e-3
-    mb.report(c, output=tmp_path / "r", seed=1, sampler="exact")
+    mb.report(c, output=tmp_path / "r", seed=1, sampler="exact", data="rtest")
     anchors, html = _anchors(tmp_path / "r")
-    assert SECTIONS | {"pairs"} <= anchors
+    assert SECTIONS | {"pairs"} <= anchors and "polar" not in anchors
     g = pd.read_csv(tmp_path / "r" / "consistency_pairs.csv")
     first = g[g["group"] == f"R-test {c.rtest.runs[0].id}"]
     assert list(first["verdict"]) == ["disagree"] and (g.loc[g.index != first.index[0], "verdict"] == "agree").all()

@@ -224,7 +224,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             first = _main_figures(rep, model, loo, shown)
             first.insert(1, ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc")))
             # the eccentricity plots show the main posterior where it saw the ball bar, else the ball-bar one
-            ppc_here = data != "probe" and bool(campaign.ballbar.runs)
+            ppc_here = _saw_ballbar(data, campaign)
             ppc_df = None
             if ppc_here:
                 ppc_df = ppc.ppc_table(rep.idata, campaign, analysis.ballbar_observations)
@@ -312,6 +312,11 @@ def _expected_unidentified(analysis) -> list[str]:
                       [p.name for p in analysis.space.parameters if p.group == "deviation"])
     determined = campaign_identifiability(analysis.log_posterior)
     return [n for n in listed if determined.of(n)[0] not in (None, DETERMINED)]
+
+
+def _saw_ballbar(data: str, campaign) -> bool:
+    """Whether a posterior of ``data`` saw the campaign's ball-bar runs."""
+    return "ballbar" in data_instruments(data, campaign) and bool(campaign.ballbar.runs)
 
 
 def _plans(campaign) -> bool:
@@ -457,7 +462,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     if compare_models:
         figures[:0] = [("compare_forest.png", lambda: forest.forest_figure(
                             {m: r.summary for m, r in reports.items()}, shown.reference, names=shown.listed))]
-        if campaign.ballbar.runs and data != "probe":
+        if _saw_ballbar(data, campaign):
             figures.append(("compare_ppc.png", lambda: ppc.ppc_figure(
                 {m: ppc.ppc_table(r.idata, campaign, analysis.ballbar_observations) for m, r in reports.items()},
                 campaign)))
@@ -499,7 +504,7 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident,
         csv(name, df, index=False)
     if len(c.reports) > 1:
         csv("compare_models.csv", compare.model_comparison_table(c.reports, shown.listed), index=False)
-        if ppc_df is not None and rep.data != "probe":  # the fit of each model's ball-bar predictions
+        if ppc_df is not None and _saw_ballbar(rep.data, rep.log_posterior.campaign):  # each model's ball-bar fit
             csv("compare_fit.csv", compare.model_fit_table(c.reports, rep.log_posterior.campaign))
     if c.instruments is not None:
         csv("instruments.csv", c.instruments.intervals, index=False)
@@ -855,7 +860,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     if ident is not None and thesis_section is not None:
         thesis_section(page, ident, effect, sigma_um)
     if reports is not None:
-        _models_section(page, reports, campaign, tmp, names=shown.listed, with_fit=ppc_df is not None and rep.data != "probe")
+        _models_section(page, reports, campaign, tmp, names=shown.listed,
+                        with_fit=ppc_df is not None and _saw_ballbar(rep.data, campaign))
     return page
 
 
