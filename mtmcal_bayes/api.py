@@ -69,8 +69,8 @@ def kinematic_model_of(model: str | None, c: Campaign) -> str:
 
 
 def data_of(data: str | None, c: Campaign) -> str:
-    """The data of a likelihood: as given, else what the machine's plug-in states (the thesis machine: the ball bar),
-    else every instrument the campaign has."""
+    """The data of a likelihood: as given, else what the machine's plug-in states (the thesis machine: the ball bar)
+    where the campaign has those instruments, else every instrument the campaign has."""
     from .models import default_data
 
     return default_data(c) if data is None else data
@@ -266,7 +266,8 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     ``compare_models`` adds the same campaign under every forward model its machine offers (the thesis machine's
     four, a described machine's ``linear`` and ``chain``).  ``data`` as for :func:`sample`; a campaign with ball-bar
     runs and touch-probe readings also gets its ball-bar-only, probe-only and fused posteriors side by side and the
-    instruments' consistency check.  ``tolerances``,
+    instruments' consistency check; a posterior of R-test readings its R-test sections, and a campaign with the
+    R-test beside another instrument every pair's check (docs/rtest.md, "The report").  ``tolerances``,
     ``sigma_model_um`` and ``sigma_model_prior`` as for :func:`sample` (the learnt prior for every posterior of
     the report; with ``posterior``, it must be the one that posterior was sampled with).
     """
@@ -278,9 +279,6 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     c = campaign_of(campaign, measured=True)
     check_model(model)
     data = check_data(data_of(data, c), c)
-    if "rtest" in data_instruments(data, c):  # docs/rtest.md, "Not done yet"
-        raise ParameterError("data", f"{data!r}: the report has no R-test sections yet (docs/rtest.md); give the data "
-                             "ballbar, probe or both, or use sample for the R-test")
     learnt = sigma_model_prior_of(sigma_model_prior, c, sigma_model_um)
     if posterior is not None and learnt is not None and learnt != posterior.log_posterior.sigma_prior:
         raise ParameterError("sigma_model_prior", "is not the prior the given posterior was sampled with")
@@ -428,7 +426,8 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     the machine's, below); ``integer_unit``: how X/Y/Z/B/C words without a decimal point (``X100``) are read, ``"um"``
     (increments of 1 µm / 0.001°) or ``"mm"`` (mm / °); by default they are refused (zeros are accepted).
 
-    A campaign with both instruments is checked first (:func:`instruments`): where they disagree on a deviation the
+    A campaign with two or three instruments (the ball bar, the touch probe, the R-test) is checked first
+    (:func:`instruments`, every pair): where they disagree on a deviation the
     compensation uses, it is refused (a ``ParameterError`` naming ``accept_disagreement``) unless
     ``accept_disagreement``, which compensates and warns; so is a campaign on which the check cannot run (a gap of
     its probe readings, :meth:`~mtmcal_bayes.campaign.Campaign.probe_gap`).
@@ -445,6 +444,7 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     from .errors import ParameterError
     from .machines import selected
     from .machines.plugins import provided
+    from .parameters import data_instruments
 
     c = campaign_of(campaign, measured=True)
     check_options(c, method=method, values=values, point=point)
@@ -452,10 +452,11 @@ def compensate(program, *, campaign: CampaignLike = None, output=None, method: s
     parsed = read(c, program, integer_unit=integer_unit)
     _writable(output, "compensated program")
     refusal = None
-    if c.has_probe_readings() and c.ballbar.runs and (gap := c.probe_gap()) is not None:
+    two = len(data_instruments("all", c)) >= 2  # any two instruments: every pair is checked (docs/rtest.md)
+    if two and c.has_probe_readings() and (gap := c.probe_gap()) is not None:
         refusal = (f"whether the instruments of {c.source} agree on the deviations it uses cannot be checked: "
                    f"{gap.reason()}")
-    elif c.has_probe_readings() and c.ballbar.runs:
+    elif two:
         refusal = instruments(c, explain=False).refusal([d.name for d in selected(c.machine.description)])
     if refusal and not accept_disagreement:
         raise ParameterError("accept_disagreement", f"not given, and {refusal}")

@@ -297,8 +297,9 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("--mount", default=None, help="campaign mount (Z_C of the C-axis pivot)")
     s.add_argument("--integer-unit", choices=("um", "mm"), default=None, help="how to read X/Y/Z/B/C words "
                    "without a decimal point (X100): increments of 1 µm / 0.001°, or mm / ° (default: refuse them)")
-    s.add_argument("--accept-disagreement", action="store_true", help="compensate even with deviations the ball "
-                   "bar and the touch probe disagree on (default: refuse them; see mtmcal-bayes instruments)")
+    s.add_argument("--accept-disagreement", action="store_true", help="compensate even with deviations two of the "
+                   "instruments (ball bar, touch probe, R-test) disagree on (default: refuse them; see mtmcal-bayes "
+                   "instruments)")
 
     s = _command(sub, "fleet", handlers["fleet"], "every machine's campaigns in a folder tree, in parallel on Dask: "
                  "posteriors, histories, one overview (docs/fleet.md)", campaign=None,

@@ -391,13 +391,12 @@ def test_thesis_type_rtest_keeps_the_thesis_names():
 
 
 def test_identify_and_report_of_an_rtest_campaign(run_cli, tmp_path):
-    """``identify`` of a campaign of R-test runs alone is the least squares of its R-test readings; ``report``, which
-    has no R-test sections yet, refuses R-test data in one line (exit 2) and writes nothing."""
+    """``identify`` of a campaign of R-test runs alone is the least squares of its R-test readings; ``report`` writes
+    its R-test sections (tests/test_report_rtest.py checks them)."""
     path = tmp_path / "c.toml"
     last = "[[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]]"  # the second repeat: some scatter
     path.write_text(_good_text().replace(last, "[[0.4, -0.3, 0.2], [0.1, 0.0, 0.3], [0.0, 0.2, -0.1]]]"))
     code, out, err = run_cli("identify", path)
     assert code == 0 and "all data" in out, err
     code, out, err = run_cli("report", path, "-o", tmp_path / "report")
-    assert code == 2 and out == "" and len(err.splitlines()) == 1 and "no R-test sections yet" in err, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.toml"]
+    assert code == 0 and "rtest.png" in out and "rtest_terms.csv" in out, err

@@ -185,3 +185,19 @@ def test_rtest_readings_in_the_other_frame_are_the_explanation_the_data_prefer()
         frame = next(x for x in analysis.candidates if x.name == "R-test in the other frame")
         assert frame.log_evidence - analysis.given.log_evidence > 4.6
         assert best.log_evidence - frame.log_evidence < 2.3
+
+
+def test_compensate_checks_the_rtest_beside_one_other_instrument():
+    """A trunnion campaign of the R-test beside the ball bar (its probe runs dropped), its run r1
+    shifted SHIFT_UM: compensate checks the pair before it corrects and refuses, naming the R-test and
+    ``accept_disagreement``.  (It checked only a campaign with the ball bar and the probe: this pair went
+    unchecked.)"""
+    import mtmcal_bayes as mb
+    from mtmcal_bayes.errors import ParameterError
+
+    c = _shifted(_three("trunnion"))
+    c.probe = None
+    program = Path(__file__).parent / "data" / "machines" / "trunnion-five-axis-12.nc"
+    with pytest.raises(ParameterError) as refused:
+        mb.compensate(program, campaign=c)
+    assert "accept_disagreement" in str(refused.value) and "R-test" in str(refused.value)

@@ -112,3 +112,20 @@ def test_sbc_with_rtest_data_rejects_a_wrong_posterior(width, shift, what, campa
                 sampler=_Distorted(width=width, shift=shift))
     s = r.summary().loc[list(r.identified)]
     assert not s["ok"].any(), (what, s[["p_uniform", "coverage_90"]])
+
+
+@pytest.mark.parametrize("machine", ["integrex-i200", "vertical-turn-mill"])
+def test_exact_sbc_of_the_rtest_demo_passes(machine, scheduler):
+    """``validate sbc --sampler exact`` on the R-test demo of the two types the test above leaves out (docs/rtest.md,
+    "The R-test demos"; N = 100, seed 1, every instrument the demo has: bench/rtest_demo_sbc.py runs N = 200 on all
+    four): the ranked quantities are what the demo determines and the R-test's scale, every one passing."""
+    from mtmcal_bayes.io import load_campaign
+    from mtmcal_bayes.io.machine_reader import rtest_demo_campaign
+
+    c = load_campaign(rtest_demo_campaign(machine))
+    r = run_sbc(c, SBCSettings(n=100, sampler="exact", data="all", scheduler=scheduler, seed=1))
+    ident = campaign_identifiability(LogPosterior(c, "linear", data="rtest"))
+    assert set(r.quantities[:-1]) == set(ident.determined + tuple(x.name for x in ident.combinations))
+    assert r.quantities[-1] == "sigma_model_rtest"
+    s = r.summary()
+    assert s["ok"].all(), s[["p_uniform", "coverage_90", "ok"]]

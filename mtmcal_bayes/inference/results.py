@@ -13,7 +13,7 @@ import pandas as pd
 from .. import units
 from ..arviz_import import az
 from ..iso import iso_symbol
-from ..observations import JointObservations, ProbeObservations
+from ..observations import JointObservations, ProbeObservations, RTestObservations
 from ..parameters import DERIVED, NUISANCE_MEANING, combine, iso_kind, quantity_unit, weights
 from .analytic import NOT_IDENTIFIED_GROWTH, WIDEN, prior_sensitivity, reported
 from .budget import linearisation_point, variance_budget
@@ -38,10 +38,12 @@ def display_draws(names: list[str], draws: np.ndarray) -> dict[str, np.ndarray]:
 
 def observation_parts(observations) -> list[tuple[str, object, slice]]:
     """``(variable name, observations, slice)`` of each kind of measurement in ``observations``:
-    ``"eccentricity"`` for the ball bar's, ``"probe_reading"`` for the probe's."""
+    ``"eccentricity"`` for the ball bar's, ``"probe_reading"`` for the probe's, ``"rtest_reading"`` for the R-test's
+    (each its own variable: with the probe's beside them, one name would hide the other's)."""
     parts = observations.slices() if isinstance(observations, JointObservations) else [
         (observations, slice(0, len(observations)))]
-    return [("probe_reading" if isinstance(o, ProbeObservations) else "eccentricity", o, sl) for o, sl in parts]
+    return [("rtest_reading" if isinstance(o, RTestObservations) else "probe_reading"
+             if isinstance(o, ProbeObservations) else "eccentricity", o, sl) for o, sl in parts]
 
 
 def to_inference_data(result, n_prior: int = 4000, n_predictive: int = 1000,

@@ -177,6 +177,12 @@ def description_of(machine) -> MachineDescription:
     return machine.description if machine.description is not None else builtin_description(THESIS_TYPE)
 
 
+def rtest_demo_campaign(name: str) -> str:
+    """The R-test demo campaign of a built-in machine type (R-test runs alone, simulated from a stated truth;
+    docs/rtest.md, "The R-test demos"), as a path for :func:`~mtmcal_bayes.io.load_campaign`."""
+    return str(data_path(f"machines/{name}-rtest-demo.toml"))
+
+
 def demo_campaign(name: str):
     """The demo campaign of a built-in machine type, as a path for :func:`~mtmcal_bayes.io.load_campaign` (None: the
     thesis machine's is the built-in thesis campaign)."""

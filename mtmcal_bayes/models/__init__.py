@@ -62,9 +62,10 @@ DATA = tuple(DATA_INSTRUMENTS)
 
 def default_data(campaign) -> str:
     """The data a likelihood of ``campaign`` takes when none is asked for: what its machine's plug-in states (the
-    thesis machine: the ball bar), else every instrument it has readings of (``"all"`` where it has R-test runs)."""
+    thesis machine: the ball bar) where the campaign has those instruments, else every instrument it has readings of
+    (``"all"`` where it has R-test runs)."""
     stated = provided(campaign.machine, "default_data")
-    if stated is not None:
+    if stated is not None and set(data_instruments(stated, campaign)) <= set(data_instruments("all", campaign)):
         return stated
     if campaign.has_rtest_readings():
         return "all"
@@ -96,9 +97,12 @@ def _check_ballbar_probe(part: str, data: str, campaign, parameter: str) -> str:
         where = provided(campaign.machine, "probe_sections", "[[probe.runs]]")
         raise ParameterError(parameter, f"{data!r} needs touch-probe readings, and the campaign {campaign.source} "
                              f"has no {where}")
-    if part != "probe" and campaign is not None and not campaign.ballbar.runs and campaign.has_probe_readings():
+    if part != "probe" and campaign is not None and not campaign.ballbar.runs and (
+            campaign.has_probe_readings() or campaign.has_rtest_readings()):
+        use = ("a probe-only campaign: use the probe data" if not campaign.has_rtest_readings() else
+               "use the data of the instruments it has, e.g. all")
         raise ParameterError(parameter, f"{data!r} needs ball-bar runs, and the campaign {campaign.source} has no "
-                             "[[ballbar.runs]] (a probe-only campaign: use the probe data)")
+                             f"[[ballbar.runs]] ({use})")
     return data
 
 

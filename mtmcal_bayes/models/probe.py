@@ -47,8 +47,8 @@ SOLVE_STEPS = 4
 #: the datum of a run's readings: where its sphere is in the reading frame
 DATUM_TERMS = ("xD", "yD", "zD")
 #: the probe's reading noise, by rule (a machine's plug-in may state its own, ``probe_noise``):
-#: ``"pooled"``: the repeat scatter pooled over every repeated run (else the stated repeatability, else 1 µm) over
-#: the repeats; ``"run scatter plus repeatability"``: per run its pooled repeat scatter over the repeats (the
+#: ``"pooled"``: the repeat scatter pooled over every repeated run (else, or where every repeat is equal, the stated
+#: repeatability, else 1 µm) over the repeats; ``"run scatter plus repeatability"``: per run its pooled repeat scatter over the repeats (the
 #: repeatability where not repeated) plus the stated repeatability, which is then required.  A fitted centre: its
 #: fit covariance plus the repeatability².
 NOISE_RULES = ("pooled", "run scatter plus repeatability")
@@ -202,6 +202,9 @@ def _readings(runs: list[LayoutRun], repeatability: float | None, noise: str):
     u2 = (repeatability if repeatability is not None else DEFAULT_REPEATABILITY) ** 2
     if noise == NOISE_RULES[0] and scatter:
         pooled = sum(d * v.sum() for d, v in scatter) / sum(d * len(v) for d, v in scatter)
+        # every repeat equal (an export rounded coarser than the scatter): the scatter is below the rounding, not
+        # zero; the stated repeatability (else 1 µm) is its floor, where a zero would leave the readings no noise
+        pooled = pooled if pooled > 0 else u2
     for run in runs:
         c = run.centres
         r, a = c.shape[:2]

@@ -269,6 +269,9 @@ def instrument_consistency(ballbar, probe, n_draws: int = N_DRAWS, seed: int = 0
 
 #: labels of the three posteriors, by the data they use
 DATA_LABELS = {"ballbar": "ball bar only", "probe": "probe only", "both": "fused"}
+#: every data value in words (the R-test's too: :data:`~mtmcal_bayes.parameters.DATA_INSTRUMENTS`)
+DATA_WORDS = {**DATA_LABELS, "rtest": "R-test only", "ballbar+rtest": "ball bar and R-test",
+              "probe+rtest": "probe and R-test", "all": "every instrument"}
 
 
 @dataclass

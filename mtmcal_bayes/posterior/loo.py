@@ -117,7 +117,7 @@ def _n_parameters(idata) -> int:
 
 
 def loo_check(idata) -> LooResult:
-    """PSIS-LOO of every observation variable of ``idata`` (``eccentricity``, ``probe_reading``).
+    """PSIS-LOO of every observation variable of ``idata`` (``eccentricity``, ``probe_reading``, ``rtest_reading``).
 
     ``idata`` needs a ``log_likelihood`` group (every posterior written by this version has one).  ArviZ's
     warning about high Pareto k is silenced: the table and :meth:`LooResult.power_sentence` say it.

@@ -16,11 +16,14 @@ SOURCE_COLOURS = {"repeatability": "#56B4E9", "instrument": "#0072B2", "probe re
                   "sigma_model": "#E69F00", "sigma_model_probe": "#B8860B", "sigma_model_uncertainty": "#F0E442",
                   "prior:deviations": "#999999", "prior:T-ball centring": "#D55E00", "prior:dRB": "#CC79A7",
                   "prior:W-ball clamping": "#882255", "prior:stylus centring": "#117733", "prior:dRS": "#44AA99",
-                  "prior:rS": "#AA4499", "prior:sphere placement": "#332288", "prior:reading datum": "#DDDDDD"}
+                  "prior:rS": "#AA4499", "prior:sphere placement": "#332288", "prior:reading datum": "#DDDDDD",
+                  "R-test readings": "#88CCEE", "sigma_model_rtest": "#DDCC77", "prior:R-test zero": "#661100",
+                  "prior:R-test sphere placement": "#6699CC", "prior:R-test nest centring": "#999933",
+                  "prior:R-test nest length": "#AA4466"}
 
 BUDGET_CAPTION = (
     "Uncertainty budget: the share of each quantity's posterior variance that comes from each source — the "
-    "repeatability and accuracy of the measurements, the model-discrepancy scale σ_model (with touch-probe data: "
+    "repeatability and accuracy of the measurements, the model-discrepancy scale σ_model (with touch-probe or R-test data: "
     "each instrument's own), not knowing σ_model (law of total variance), and the priors (of the deviations, the T-ball centring, the tool length dRB, the "
     "W-ball clamping). Exact for the linear model at each σ_model (Σ = Σ_g ΣP_gΣ + Σ_k K R_k Kᵀ), averaged over "
     "σ_model's posterior; kinematic models linearised at the posterior mean. Table: summary.csv, budget:* columns."

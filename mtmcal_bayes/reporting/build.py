@@ -31,6 +31,7 @@ from ..io.machine_reader import description_of
 from ..io.netcdf import write_netcdf_atomic
 from ..machines.plugins import provided
 from ..models import models_of
+from ..parameters import SCALE_LABEL, data_instruments
 from ..planning import figures as plan_figures
 from ..planning.plan import PlanResult, plan
 from ..posterior.comparison import comparison, references
@@ -42,10 +43,11 @@ from ..posterior.conformity import (
 )
 from ..posterior.consistency import (
     DATA_LABELS,
+    DATA_WORDS,
     InstrumentComparison,
     compare_instruments,
 )
-from ..posterior.instrument_check import blame, disputed_deviations
+from ..posterior.instrument_check import InstrumentCheck, blame, check_instruments, disputed_deviations
 from ..posterior.least_squares import LeastSquares
 from ..posterior.loo import LooResult, loo_check
 from ..posterior.output import format_posterior, posterior_json
@@ -63,7 +65,7 @@ from . import (
     ppc,
     widths,
 )
-from . import machine_sections
+from . import machine_sections, rtest_sections
 from .decisions import SUGGESTION_COLUMNS, add_suggestions, suggestion_text
 from .drawing import Drawing
 from .missing import missing_data
@@ -123,6 +125,8 @@ class ReportContent:
     conflict: ConflictAnalysis | None = None  # candidate explanations, when they disagree or a run is read otherwise
     shown: Shown | None = None  # the quantities listed and drawn, with their deterministic values
     machine_tables: dict = field(default_factory=dict)  # identifiability, least squares, truth (machine_sections)
+    rtest: tuple | None = None  # the R-test's readings and nuisance terms (rtest_sections), where the posterior saw it
+    pairs: InstrumentCheck | None = None  # every pair of the instruments, where the R-test is one of two or three
 
 
 def summary_table(rep: PosteriorResult) -> pd.DataFrame:
@@ -156,7 +160,7 @@ def _side_posterior(analysis, settings: SamplerSettings, say, progress):
         other = analysis.variant(data=data)
         exact = other.model == "linear" and other.approximation.exact
         how = "exact draws" if exact else "sampling"
-        say(f"{how} of the posterior ({other.model}, {DATA_LABELS[data]}) to compare the instruments")
+        say(f"{how} of the posterior ({other.model}, {DATA_WORDS[data]}) to compare the instruments")
         s = dataclasses.replace(settings, sampler="exact") if exact else settings
         return sample_posterior(other, settings=s, progress=progress, statement=False, lean=data != "ballbar")
     return side
@@ -209,7 +213,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                 if tol:
                     rep.conformity = conformity_table(rep.idata, rep.summary, tol)
             else:
-                say(f"sampling the posterior ({model}, {DATA_LABELS[data]})")
+                say(f"sampling the posterior ({model}, {DATA_WORDS[data]})")
                 rep = sample_posterior(analysis, settings=settings, progress=progress, tolerances=tol)
             if rep.conformity is not None and not rep.conformity.empty:
                 say("asking the planner how to decide the undecided tolerances")
@@ -220,11 +224,15 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             first = _main_figures(rep, model, loo, shown)
             first.insert(1, ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc")))
             # the eccentricity plots show the main posterior where it saw the ball bar, else the ball-bar one
-            ppc_here = data != "probe" and bool(campaign.ballbar.runs)
+            ppc_here = _saw_ballbar(data, campaign)
             ppc_df = None
             if ppc_here:
                 ppc_df = ppc.ppc_table(rep.idata, campaign, analysis.ballbar_observations)
                 first[2:2] = _eccentricity_figures(rep, ppc_df, campaign)
+            rtest = None
+            if rtest_sections.has_readings(rep):
+                rtest = (rtest_sections.readings_table(rep), rtest_sections.terms_table(rep))
+                first.insert(2, ("rtest.png", lambda: rtest_sections.readings_figure(rtest[0])))
 
             def draw(jobs):  # a batch of figures, drawn while the report goes on; a figure already failed stops it
                 drawing.check()
@@ -240,7 +248,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                 ppc_df = content.ppc
             extras = drawing.finish()
             off_scale, content.conflict = extras["corner.png"], extras.get(CONFLICT_JOB)
-            files = _write_tables(tmp, rep, content, ident=ident, ppc_df=ppc_df, loo=loo, shown=shown)
+            files = _write_tables(tmp, rep, content, ident=ident, ppc_df=ppc_df, loo=loo, shown=shown, rtest=rtest)
         finally:
             drawing.stop()
         files = [n for n in FIGURE_ORDER if (tmp / n).exists()] + files + ["posterior.nc"]
@@ -249,7 +257,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                                      content.diagnostics, content.effect, off_scale, rep.sigma_model_um,
                                      analysis.fix_dx_BT, content.planned, content.instruments, loo=loo,
                                      disputed=content.disputed, conflict=content.conflict, shown=shown,
-                                     machine_tables=content.machine_tables)
+                                     machine_tables=content.machine_tables, rtest=rtest, pairs=content.pairs)
         page = _page(page_content, tmp)
         elapsed = time.perf_counter() - t0
         files.insert(0, "index.html")
@@ -306,6 +314,11 @@ def _expected_unidentified(analysis) -> list[str]:
     return [n for n in listed if determined.of(n)[0] not in (None, DETERMINED)]
 
 
+def _saw_ballbar(data: str, campaign) -> bool:
+    """Whether a posterior of ``data`` saw the campaign's ball-bar runs."""
+    return "ballbar" in data_instruments(data, campaign) and bool(campaign.ballbar.runs)
+
+
 def _plans(campaign) -> bool:
     """Whether the planner can rank measurements for this campaign: its catalogue starts from a ball-bar set-up."""
     return bool(campaign.ballbar.setups)
@@ -359,7 +372,7 @@ def _conflict_job(analysis) -> tuple:
 #: the figures in the order the report's file list names them
 FIGURE_ORDER = ("machine.png", "deviations.png", "corner.png", "forest.png", "ppc.png", "polar.png", "widths.png",
                 "rank.png", "trace.png", "loo.png", "compare_forest.png", "compare_ppc.png", "instruments_forest.png",
-                "budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png")
+                "budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png", "rtest.png")
 
 
 def _main_figures(rep: PosteriorResult, model: str, loo: LooResult, shown: Shown) -> list:
@@ -396,6 +409,7 @@ class _Rest:
     planned: PlanResult | None  # None: the planner has no catalogue for this campaign (no ball-bar set-up)
     ppc: pd.DataFrame | None  # the ball-bar posterior's predictive check, when it is a side posterior
     machine_tables: dict  # identifiability, combinations, least squares, truth: where the posterior has them
+    pairs: InstrumentCheck | None = None  # every pair of the instruments, where the R-test is one of two or three
 
 
 def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare_models, draw, ahead, drawing,
@@ -407,11 +421,16 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     the comparison does not want it, else its result comes back with the figures (``_Rest.conflict`` is filled in
     then)."""
     model, data = analysis.model, analysis.data
-    instruments = disputed = ppc_df = None
+    instruments = disputed = ppc_df = pairs = None
+    if campaign.has_rtest_readings() and len(data_instruments("all", campaign)) >= 2:
+        say("checking every pair of the instruments (the R-test's included)")
+        pairs = check_instruments(analysis, explain=False)
+        disputed = pairs.disputed
     if _compares_instruments(campaign):
         instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
-        disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
-                                       instruments.posteriors["probe"].log_posterior)
+        if pairs is None:  # else every pair's verdicts, the ball bar / probe pair's among them
+            disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
+                                           instruments.posteriors["probe"].log_posterior)
         if instruments.consistency.disagreeing and CONFLICT_JOB not in ahead:  # a conflict to explain after all
             say("weighing the explanations of the conflict between the instruments")
             ahead[CONFLICT_JOB] = drawing.start([_conflict_job(analysis)])
@@ -443,7 +462,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     if compare_models:
         figures[:0] = [("compare_forest.png", lambda: forest.forest_figure(
                             {m: r.summary for m, r in reports.items()}, shown.reference, names=shown.listed))]
-        if campaign.ballbar.runs and data != "probe":
+        if _saw_ballbar(data, campaign):
             figures.append(("compare_ppc.png", lambda: ppc.ppc_figure(
                 {m: ppc.ppc_table(r.idata, campaign, analysis.ballbar_observations) for m, r in reports.items()},
                 campaign)))
@@ -455,11 +474,12 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
     # the Jacobian's statement and the least squares on every machine; the stated truth of a simulated campaign
     machine_tables = machine_sections.tables(rep, shown.least_squares, campaign.truth)
     return _Rest(instruments, disputed, None, reports, missing, summary_table(rep),
-                 mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df, machine_tables)
+                 mcmc_plots.diagnostics_table(rep.summary, rep.sampling), effect, planned, ppc_df, machine_tables,
+                 pairs)
 
 
 def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident,
-                  ppc_df: pd.DataFrame | None, loo: LooResult, shown: Shown) -> list[str]:
+                  ppc_df: pd.DataFrame | None, loo: LooResult, shown: Shown, rtest: tuple | None) -> list[str]:
     """Every CSV of the report into ``tmp``; returns their names in order."""
     files: list[str] = []
 
@@ -470,6 +490,9 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident,
     csv("summary.csv", c.summary)
     if ppc_df is not None:
         csv("ppc.csv", ppc_df)
+    if rtest is not None:
+        csv("rtest.csv", rtest[0], index=False)
+        csv("rtest_terms.csv", rtest[1], index=False)
     csv("loo.csv", loo.table)
     csv("diagnostics.csv", c.diagnostics)
     csv("priors.csv", priors_table(rep.log_posterior))
@@ -481,7 +504,7 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident,
         csv(name, df, index=False)
     if len(c.reports) > 1:
         csv("compare_models.csv", compare.model_comparison_table(c.reports, shown.listed), index=False)
-        if ppc_df is not None and rep.data != "probe":  # the fit of each model's ball-bar predictions
+        if ppc_df is not None and _saw_ballbar(rep.data, rep.log_posterior.campaign):  # each model's ball-bar fit
             csv("compare_fit.csv", compare.model_fit_table(c.reports, rep.log_posterior.campaign))
     if c.instruments is not None:
         csv("instruments.csv", c.instruments.intervals, index=False)
@@ -489,6 +512,8 @@ def _write_tables(tmp: Path, rep: PosteriorResult, c: _Rest, *, ident,
         csv("consistency_readings.csv", c.instruments.consistency.readings, index=False)
         if c.conflict is not None:
             csv("explanations.csv", c.conflict.table(), index=False)
+    if c.pairs is not None:
+        csv("consistency_pairs.csv", c.pairs.consistency.groups, index=False)
     csv("budget.csv", budget_table(rep.summary))
     if c.planned is not None:
         csv("plan.csv", c.planned.table, index=False)
@@ -602,16 +627,45 @@ def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
                    digits=2, index=False)
 
 
+def _pairs_section(page: Page, check: InstrumentCheck) -> None:
+    """Every pair of the instruments, each against the other's posterior (``mtmcal-bayes instruments``), where the
+    R-test is one of them."""
+    g = check.consistency.groups
+    page.section("pairs", "The instruments, pair by pair")
+    page.paragraph(
+        "Each instrument's readings predicted from the posterior of another's data alone (the exact linear "
+        "posterior; its own nuisance terms from their priors, the broad ones profiled out), per reading group: each "
+        "R-test run, each ball-bar run, each probe run; a χ² on the rank of the predictive covariance gives the "
+        "verdict (disagree: p < 0.01; docs/rtest.md, 'Three instruments'). The fused posterior's discrepancy scales: "
+        + ", ".join(f"{SCALE_LABEL[n]} {m:.2f} ± {sd:.2f} µm" for n, (m, sd) in check.scales.items())
+        + ". consistency_pairs.csv.")
+    if check.disputed:
+        page.paragraph("The instruments disagree on " + ", ".join(check.disputed) + ": "
+                       + "; ".join(dict.fromkeys(w for v in check.disputed.values() for w in v)) + ". Compensate "
+                       "refuses them unless the "
+                       "disagreement is accepted (section 'Compensation').")
+    cols = [col for col in ("pair", "group", "given", "chi2", "dof", "p_value", "max_abs_z", "worst", "verdict")
+            if col in g.columns]
+    page.table(g[cols], digits={"chi2": 1, "p_value": 3, "max_abs_z": 2}, index=False)
+
+
 def _compensation_section(page: Page, c: ReportContent) -> None:
     page.section("compensation", "Compensation")
     base = ("mtmcal-bayes compensate rewrites X/Y/Z of an NC program so the tool point reaches the programmed points "
             "(exact inversion of the kinematic model with the posterior mean; the residual error per block from the "
             "posterior; docs/compensation.md). ")
     if c.disputed:
-        page.paragraph(base + "On this campaign it refuses: the ball bar and the touch probe disagree on "
-                       + ", ".join(c.disputed) + " (section 'Ball bar and touch probe'), and a deviation with the "
+        where = ("two of the instruments disagree on " if c.pairs is not None else
+                 "the ball bar and the touch probe disagree on ")
+        page.paragraph(base + "On this campaign it refuses: " + where + ", ".join(c.disputed)
+                       + (" (section 'The instruments, pair by pair')" if c.pairs is not None else
+                          " (section 'Ball bar and touch probe')") + ", and a deviation with the "
                        "wrong sign doubles the error it was meant to remove. Find the cause, or pass "
                        "--accept-disagreement to compensate anyway (with a warning).")
+    elif c.pairs is not None:
+        page.paragraph(base + "Every pair of the instruments agrees on every deviation both measure, so it "
+                       "compensates without asking; deviations the data do not determine one by one, and those whose "
+                       "values rest on nuisance priors, are named in its warnings.")
     elif c.instruments is not None:
         page.paragraph(base + "The two instruments agree on every deviation they both measure, so it compensates "
                        "without asking; deviations the data do not determine one by one, and those whose values rest "
@@ -727,7 +781,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
             "micrometres. Full table: summary.csv. The least-squares values beside them: section 'Least-squares "
             "identification'.")
     else:
-        page.paragraph(f"Posterior of the deviations under the {model} model ({DATA_LABELS[rep.data]}): mean, sd "
+        page.paragraph(f"Posterior of the deviations under the {model} model ({DATA_WORDS[rep.data]}): mean, sd "
                        "and 95 % highest-density interval; angles in arc seconds, lengths in micrometres. The "
                        "least-squares values beside them: section 'Least-squares identification'. summary.csv.")
     page.table(_results_table(summary, shown.listed), digits={"R-hat": 3})
@@ -748,6 +802,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
 
     if c.instruments is not None:
         _instruments_section(page, c, tmp)
+    if c.pairs is not None:
+        _pairs_section(page, c.pairs)
     _compensation_section(page, c)
 
     page.section("ppc", "Posterior predictive check")
@@ -764,13 +820,16 @@ def _page(c: ReportContent, tmp: Path) -> Page:
         page.table(ppc_df[["observed_mean_um", "repeat_sd_um", "n_repeats", "predictive_mean_um",
                            "predictive_sd_um", "z", "inside_95"]], digits={"z": 2})
     if c.loo is not None:  # leave-one-out consistency, the second check
-        page.paragraph(f"Leave-one-out consistency of the posterior ({DATA_LABELS[rep.data]}): does each observed "
+        page.paragraph(f"Leave-one-out consistency of the posterior ({DATA_WORDS[rep.data]}): does each observed "
                        "mean agree with what all the other measurements predict for it? " + c.loo.power_sentence()
                        + " Table: loo.csv.")
         page.box("warn", "Leave-one-out: measurements the others do not predict", c.loo.outlier_sentences())
         page.figure(tmp / "loo.png", loo_plot.CAPTION, "leave-one-out elpd and Pareto k per observation")
         page.table(c.loo.table[["variable", "elpd_loo", "elpd_drop", "pareto_k", "note"]],
                    digits={"elpd_loo": 2, "elpd_drop": 2, "pareto_k": 2})
+
+    if c.rtest is not None:
+        rtest_sections.rtest_section(page, rep, *c.rtest, tmp=tmp)
 
     if ppc_df is not None:
         page.section("polar", "Ball-bar trajectories")
@@ -801,7 +860,8 @@ def _page(c: ReportContent, tmp: Path) -> Page:
     if ident is not None and thesis_section is not None:
         thesis_section(page, ident, effect, sigma_um)
     if reports is not None:
-        _models_section(page, reports, campaign, tmp, names=shown.listed, with_fit=ppc_df is not None and rep.data != "probe")
+        _models_section(page, reports, campaign, tmp, names=shown.listed,
+                        with_fit=ppc_df is not None and _saw_ballbar(rep.data, campaign))
     return page
 
 
