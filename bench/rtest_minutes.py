@@ -46,7 +46,7 @@ from mtmcal_bayes.simulation.simulate import synthetic_campaign  # noqa: E402
 from tests.rtest_campaigns import static_text  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-TYPES = ("integrex-i200", "vertical-turn-mill", "trunnion", "head-head")
+TYPES = ("integrex-i200", "vertical-turn-mill", "trunnion", "head-head", "nutating-head")
 SEED = 1
 INSTRUMENTS = ("ballbar", "probe", "rtest")
 LABEL = {"ballbar": "ball bar", "probe": "touch probe", "rtest": "R-test"}
