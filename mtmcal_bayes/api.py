@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 from .analysis import CampaignAnalysis
 from .campaign import Campaign
 from .io.campaign_reader import load_campaign
-from .io.machine_reader import demo_campaign  # noqa: F401  (the CLI's --machine TYPE)
+from .io.machine_reader import demo_campaign, rtest_demo_campaign  # noqa: F401  (the CLI's --machine TYPE [--demo])
 from .io.textfiles import check_writable
 from .progress import Progress
 

@@ -238,11 +238,13 @@ def _exit_now(code: int) -> NoReturn:
 def _run(args, *, process: bool) -> int:
     """Run the parsed command; its exit status (errors as one line on stderr, status 2).  ``process``: the command
     line's own process, which an interruption ends at once."""
-    if getattr(args, "machine", None):
-        if args.campaign:
-            args.parser.error("give a CAMPAIGN or --machine, not both")
-        args.campaign = api.demo_campaign(args.machine)
+    if getattr(args, "demo", None) and not getattr(args, "machine", None):
+        args.parser.error("--demo needs --machine TYPE")
+    if getattr(args, "machine", None) and args.campaign:
+        args.parser.error("give a CAMPAIGN or --machine, not both")
     try:
+        if getattr(args, "machine", None):
+            args.campaign = (api.rtest_demo_campaign if args.demo == "rtest" else api.demo_campaign)(args.machine)
         return args.func(args)
     except ParameterError as exc:
         print(f"{PROG} {args.command}: error: {flag_of(args.parser, exc.parameter)}: {exc.message}", file=sys.stderr)

@@ -37,10 +37,16 @@ def _command(sub, name: str, func, help: str, *, campaign: str | None = "campaig
         s.add_argument("--machine", choices=list(BUILTIN_TYPES), default=None, metavar="TYPE",
                        help="instead of CAMPAIGN, the demo campaign of a built-in machine type: "
                             + ", ".join(BUILTIN_TYPES) + " (docs/machines.md)")
+        _demo_option(s)
     if json_help:
         s.add_argument("--json", action="store_true", help=json_help)
     s.set_defaults(func=func, parser=s)
     return s
+
+
+def _demo_option(s) -> None:
+    s.add_argument("--demo", choices=["rtest"], default=None, help="with --machine: the type's R-test demo (R-test runs "
+                   "alone, docs/rtest.md) instead of its demo campaign")
 
 
 def _floats(text: str) -> list[float]:
@@ -234,6 +240,7 @@ def build_parser(handlers: dict) -> argparse.ArgumentParser:
     s.add_argument("campaign", nargs="?", metavar="CAMPAIGN", help="campaign whose setup geometry to use (default: thesis)")
     s.add_argument("--machine", choices=list(BUILTIN_TYPES), default=None, metavar="TYPE",
                    help="instead of CAMPAIGN, the demo campaign of a built-in machine type: " + ", ".join(BUILTIN_TYPES))
+    _demo_option(s)
     s.add_argument("--R-B-mm", dest="R_B_mm", type=float, default=None, help="a format that takes it (the thesis "
                    "machine's): tool length R_B, mm (default: the setup's)")
     s.add_argument("--x0", type=float, default=None, help="a format that takes it (the thesis machine's): NC X of the "

@@ -50,3 +50,15 @@ def test_the_ball_bar_asked_of_an_rtest_campaign_is_one_line(run_cli):
     code, out, err = run_cli("sample", rtest_demo_campaign("integrex-i200"), "--data", "ballbar")
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
     assert "needs ball-bar runs" in err and "Traceback" not in err
+
+
+def test_the_rtest_demo_by_its_type_on_the_command_line(run_cli):
+    """``--machine TYPE --demo rtest`` runs a command on the type's R-test demo (the same output as its path);
+    ``--demo`` without ``--machine``, or on a type whose demo has R-test runs of its own: one line, exit 2."""
+    by_type = run_cli("identify", "--machine", "head-head", "--demo", "rtest", "--json")
+    by_path = run_cli("identify", rtest_demo_campaign("head-head"), "--json")
+    assert by_type[0] == 0 and by_type == by_path, by_type[2]
+    code, out, err = run_cli("identify", "--demo", "rtest")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "--demo needs --machine" in err
+    code, out, err = run_cli("identify", "--machine", "nutating-head", "--demo", "rtest")  # its demo has R-test runs
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1 and "'rtest'" in err, err

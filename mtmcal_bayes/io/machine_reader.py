@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import units
 from ..datasets import data_path
-from ..errors import InputError
+from ..errors import InputError, ParameterError
 from ..machines.description import (
     LINEAR,
     ROTARY,
@@ -179,8 +179,13 @@ def description_of(machine) -> MachineDescription:
 
 def rtest_demo_campaign(name: str) -> str:
     """The R-test demo campaign of a built-in machine type (R-test runs alone, simulated from a stated truth;
-    docs/rtest.md, "The R-test demos"), as a path for :func:`~mtmcal_bayes.io.load_campaign`."""
-    return str(data_path(f"machines/{name}-rtest-demo.toml"))
+    docs/rtest.md, "The R-test demos"), as a path for :func:`~mtmcal_bayes.io.load_campaign`; a type whose demo
+    campaign has R-test runs of its own has none (a :class:`~mtmcal_bayes.errors.ParameterError` on ``demo``)."""
+    path = data_path(f"machines/{name}-rtest-demo.toml")
+    if not path.is_file():
+        raise ParameterError("demo", f"{name} has no separate R-test demo: its demo campaign has R-test runs beside the "
+                             "ball bar and the probe (its data 'rtest' is the R-test alone)")
+    return str(path)
 
 
 def demo_campaign(name: str):
