@@ -84,6 +84,7 @@ def sigma_figure(rep, names):
     fig = figure(figsize=(12, 2.7 * rows + 2.2))
     gs = fig.add_gridspec(rows + 1, 4, height_ratios=[1] * rows + [0.8])
     here = rep.sigma_model_um
+    fixed = f"{SCALE_LABEL[post.scales[0]]} fixed at [µm]" if len(post.scales) == 1 else "every σ_model fixed at [µm]"
     for i, n in enumerate(names):
         ax = fig.add_subplot(gs[i // 4, i % 4])
         ax.plot(curves.index, curves[n], color=COLOURS["posterior"], lw=2)
@@ -94,7 +95,7 @@ def sigma_figure(rep, names):
         ax.tick_params(labelsize=8)
         ax.grid(alpha=0.25)
         if i + 4 >= len(names):  # the lowest curve of its column
-            ax.set_xlabel("σ_model fixed at [µm]", fontsize=8)
+            ax.set_xlabel(fixed, fontsize=8)
     ax = fig.add_subplot(gs[rows, :])
     scale = post.scales[0]  # with both instruments every scale is fixed at the abscissa; the ball bar's is shown
     top = 4.0
