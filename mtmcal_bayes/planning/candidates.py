@@ -139,3 +139,16 @@ def candidate_run(r: TomlReader, t: dict, path: str, campaign: Campaign, *, patt
                "instrument accuracy and the model discrepancy, which do not average out, set the uncertainty")
     name = r.string(t, "name", path, default=f"{pattern} @ {setup.id}/{mount.id} (user)")
     return length, int(repeats), name
+
+
+class WithoutBar:
+    """What a candidate that is not a ball-bar run (a probe run, an R-test run) answers where the ranking asks a
+    ball-bar run's questions: no bar length (nan), and a pattern named by its kind and its axis (``"probe C"``)."""
+
+    @property
+    def length(self) -> float:
+        return float("nan")
+
+    @property
+    def pattern(self) -> str:
+        return f"{self.kind} {self.axis}"

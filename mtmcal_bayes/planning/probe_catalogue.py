@@ -28,6 +28,7 @@ from ..campaign import Probe, ProbeRun
 from ..machines.probe_terms import probe_terms
 from ..models.chain_models import ChainProbeModel, FirstOrderModel
 from ..parameters import ParameterSpace
+from .candidates import WithoutBar
 from .catalogue import HOLD_DEG, hold_for, rules_of, travel_problems
 
 #: repeats of each reading of a probe candidate
@@ -44,7 +45,7 @@ PROBE_NOTE = ("touch-probe runs (kind 'probe'): each rotary axis indexed to 0° 
 
 
 @dataclass(frozen=True)
-class ProbeCandidate:
+class ProbeCandidate(WithoutBar):
     """One candidate probe run: ``name``; ``id`` the owner of its sphere terms; ``positions``
     ``((letter, (angles°...)), ...)`` (each axis one angle per position), ``angles_deg`` the indexed axis' angles;
     ``sphere`` (3,) mm at the home pose (``Z_C`` its height, ``R_C`` 0: the plan's table columns); ``stylus`` the
@@ -65,15 +66,6 @@ class ProbeCandidate:
     kind: str = "probe"
     repeat_of: int | None = None
     extension: float | None = None
-
-    @property
-    def length(self) -> float:
-        """No bar: the candidate's "length" is nan (a ball-bar candidate's bar length)."""
-        return float("nan")
-
-    @property
-    def pattern(self) -> str:
-        return f"probe {self.axis}"
 
     def probe_run(self) -> ProbeRun:
         """The candidate as a probe run (zero readings: the rows do not depend on them)."""

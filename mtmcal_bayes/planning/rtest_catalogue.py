@@ -39,6 +39,7 @@ from ..models.chain_models import FirstOrderModel
 from ..models.probe import DEFAULT_REPEATABILITY
 from ..models.rtest import RTestLayout, RTestModel
 from ..parameters import ParameterSpace
+from .candidates import WithoutBar
 from .catalogue import HOLD_DEG, travel_problems
 
 #: positions of an indexed candidate over its axis' travel
@@ -104,7 +105,7 @@ def set_up(campaign) -> RTestSetUp | None:
 
 
 @dataclass(frozen=True)
-class RTestCandidate:
+class RTestCandidate(WithoutBar):
     """One candidate R-test run: ``name``; ``id`` the owner of its zero; ``positions`` ``((letter, (angles°...)),
     ...)`` (each rotary axis one angle per position); ``axis`` the indexed or swept axis; ``sweep_span`` its swept
     span, degrees (None: indexed); ``setup`` its :class:`RTestSetUp`; ``repeats`` per position."""
@@ -119,15 +120,6 @@ class RTestCandidate:
     kind: str = "rtest"
     repeat_of: int | None = None
     extension: float | None = None
-
-    @property
-    def length(self) -> float:
-        """No bar: nan (a ball-bar candidate's bar length)."""
-        return float("nan")
-
-    @property
-    def pattern(self) -> str:
-        return f"rtest {self.axis}"
 
     @property
     def n_positions(self) -> int:
