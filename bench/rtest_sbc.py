@@ -34,6 +34,21 @@ TYPES = ("integrex-i200", "vertical-turn-mill", "trunnion", "head-head", "nutati
 CAMPAIGNS = {"rtest": every_setting_text, "all": with_every_instrument_text}
 
 
+def print_table(title: str, r, seconds: float, seed: int) -> int:
+    """Print one SBC run's table (per quantity p_uniform, 90 % coverage, z sd, verdict) under ``title``; the number of
+    quantities failing the verdict."""
+    s = r.summary()
+    lo, hi = r.verdict_band()
+    print(f"\n### {title}: N = {len(r.ranks)}, seed {seed}, {seconds:.1f} s, {len(r.quantities)} quantities, "
+          f"90 % coverage band {lo:.3f}–{hi:.3f}, p > {r.p_threshold:.2g}\n")
+    print("| quantity | p_uniform | coverage_90 | z_sd | ok |\n|---|---|---|---|---|")
+    for q in r.quantities:
+        row = s.loc[q]
+        print(f"| {q} | {row['p_uniform']:.3f} | {row['coverage_90']:.3f} | {row['z_sd']:.3f} | "
+              f"{'yes' if row['ok'] else 'NO'} |")
+    return int((~s["ok"]).sum())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=200)
@@ -50,17 +65,7 @@ def main() -> None:
                 r = run_sbc(parse_campaign(text(machine)),
                             SBCSettings(n=args.n, sampler="exact", data=data, scheduler=address, seed=args.seed,
                                         workers=args.workers))
-                s = r.summary()
-                seconds = time.perf_counter() - t0
-                lo, hi = r.verdict_band()
-                print(f"\n### {machine}, --data {data}: N = {args.n}, seed {args.seed}, {seconds:.1f} s, "
-                      f"{len(r.quantities)} quantities, 90 % coverage band {lo:.3f}–{hi:.3f}\n")
-                print("| quantity | p_uniform | coverage_90 | z_sd | ok |\n|---|---|---|---|---|")
-                for q in r.quantities:
-                    row = s.loc[q]
-                    print(f"| {q} | {row['p_uniform']:.3f} | {row['coverage_90']:.3f} | {row['z_sd']:.3f} | "
-                          f"{'yes' if row['ok'] else 'NO'} |")
-                failed += int((~s["ok"]).sum())
+                failed += print_table(f"{machine}, --data {data}", r, time.perf_counter() - t0, args.seed)
     print(f"\nquantities failing: {failed}")
 
 
