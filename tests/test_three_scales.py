@@ -28,7 +28,7 @@ def every_instrument(request):
     priors = post.priors.priors[: post.p]
     args = (post.forward.design, post.likelihood.base_var, np.array([q.sd for q in priors]) ** 2,
             [q.frozen() for q in post.priors.priors[post.p:]])
-    kwargs = dict(prior_mean=np.array([q.mean for q in priors]), groups=post.scale_of, y=post.likelihood.y)
+    kwargs = {"prior_mean": np.array([q.mean for q in priors]), "groups": post.scale_of, "y": post.likelihood.y}
     return post, args, kwargs
 
 
