@@ -49,7 +49,8 @@ def test_three_scales_log_joint_moments_and_precisions_equal_each_cell_written_o
     """On a grid of 5³ cells: each cell's ``log p(y | σ) + log p(σ)`` is scipy's multivariate normal of the data
     under ``S0 + diag(base + σ_g²)`` plus the log prior; each cell's posterior precision is
     ``Σ0⁻¹ + Aᵀ V⁻¹ A`` written out; the deviations' posterior means and sds are the mixture of the cells'
-    Gaussian posteriors (each from numpy's inverse of its precision) weighted by those joints."""
+    Gaussian posteriors (each from numpy's inverse of its precision) weighted by those joints, and so is the
+    posterior mean of θ."""
     post, args, kwargs = every_instrument
     m = MarginalPosterior(*args, **kwargs, cells=5)
     A, base, prior_var = args[:3]
@@ -78,6 +79,9 @@ def test_three_scales_log_joint_moments_and_precisions_equal_each_cell_written_o
     mean, sd = m.target_moments(post.likelihood.y[None], T)
     assert np.max(np.abs(mean[0] - want_mean) / want_sd) < 1e-9
     np.testing.assert_allclose(sd[0], want_sd, rtol=1e-9)
+    # the posterior mean of every parameter (a kinematic model's next linearisation point), in its posterior sd
+    theta_sd = np.sqrt(w @ (mean_g**2 + np.diagonal(cov, axis1=1, axis2=2)) - (w @ mean_g) ** 2)
+    assert np.max(np.abs(m.posterior_mean(post.likelihood.y) - w @ mean_g) / theta_sd) < 1e-9
 
 
 def test_default_three_scale_grid_gives_the_moments_of_a_finer_grid(every_instrument):

@@ -477,6 +477,16 @@ class MarginalPosterior:
         """Posterior mean of θ in each cell, ``(G, N, P)``."""
         return self.prior_mean + np.einsum("gpm,nm->gnp", self.gain, self._residual(y))
 
+    def posterior_mean(self, y: np.ndarray) -> np.ndarray:
+        """Posterior mean of θ ``(P,)`` given one data vector ``y`` (m,): the cells' means weighted by the cells'
+        posterior weights.  From three scales on by :meth:`target_moments` of θ itself, which never forms the
+        cells' gains (``(G, P, m)``: gigabytes on 110 592 cells)."""
+        y = np.asarray(y)
+        if self._by_scale:
+            return self.target_moments(y[None], np.eye(self.A.shape[1]))[0][0]
+        w = self.weights(y[None])[:, 0]
+        return np.einsum("g,gp->p", w, self.means(y[None])[:, 0])
+
     def target_moments(self, y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and sd of the targets ``T @ θ``, each ``(N, t)``, for data ``(N, m)``.
 
