@@ -27,15 +27,13 @@ def _rows(text: str) -> dict[tuple[str, str], tuple[float, float]]:
 
 @pytest.mark.parametrize("machine", list(BUILTIN_TYPES))
 def test_axes_text_has_the_descriptions_nominal_beside_the_identified_value(run_cli, machine):
-    # the ball bar and the probe (every demo has them): the text's layout does not depend on the data, and a demo
-    # with R-test runs besides (the nutating head's) samples three discrepancy scales, ten times slower
-    code, text, err = run_cli("axes", "--machine", machine, "--data", "both")
+    code, text, err = run_cli("axes", "--machine", machine)
     assert code == 0, err
     assert _table(text)[1].split() == ["nominal", "identified"]
     inclined = sum(a.inclined for a in builtin_description(machine).rotary_axes)
     assert len(_table(text)) == len(text.splitlines()) - inclined
     rows = _rows(text)
-    code, out, err = run_cli("axes", "--machine", machine, "--json", "--data", "both")
+    code, out, err = run_cli("axes", "--machine", machine, "--json")
     assert code == 0, err
     lines = json.loads(out)["lines"]
     assert len(rows) == len(lines)

@@ -226,6 +226,16 @@ def test_the_isg_csv_gives_the_inclined_line_from_the_posterior(exact):
     assert "B0B: the zero of the inclined B axis" in comments
 
 
+def test_axes_writes_the_isg_csv_of_the_type(tmp_path, run_cli):
+    """The command writes the same record: ``axes --machine nutating-head --format isg-csv -o FILE`` ends its
+    header with B's line."""
+    out = tmp_path / "b.csv"
+    code, _, err = run_cli("axes", "--machine", "nutating-head", "--format", "isg-csv", "-o", str(out))
+    assert code == 0, err
+    header = [ln for ln in out.read_text(encoding="utf-8").splitlines() if not ln.startswith("//")][0]
+    assert header.split()[-6:] == ["PXB", "PYB", "PZB", "VXB", "VYB", "VZB"]
+
+
 @pytest.mark.parametrize("machine", ["trunnion", "head-head"])
 def test_a_frame_aligned_type_s_isg_csv_has_no_line(machine, run_cli):
     """On a type whose axes lie along frame axes the CSV is position errors only, as before: no axis line, no

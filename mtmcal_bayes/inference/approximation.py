@@ -67,8 +67,7 @@ class PosteriorApproximation:
             for _ in range(LINEARISATIONS):
                 A = jacobian(model, theta0)
                 self.marginal = marginal_at(A, model.predict(theta0) - A @ theta0)
-                w = self.marginal.weights(y[None])[:, 0]
-                theta0 = np.einsum("g,gp->p", w, self.marginal.means(y[None])[:, 0])
+                theta0 = self.marginal.posterior_mean(y)
             self.exact = False
         self.proposal = GridProposal(self.marginal, y)
         self.kind = ("exact σ-marginal posterior" if self.exact else
