@@ -30,8 +30,8 @@ COLOURS = {
 }
 #: one colour per forward model in model comparisons, in the order of :data:`~mtmcal_bayes.models.MODELS`
 MODEL_COLOURS = dict(zip(MODELS, ("#0072B2", "#E69F00", "#009E73")))
-#: the ball-bar-only, probe-only and fused posteriors
-DATA_COLOURS = {"ball bar only": "#0072B2", "probe only": "#CC79A7", "fused": "#000000"}
+#: the ball-bar-only, probe-only, R-test-only and fused posteriors
+DATA_COLOURS = {"ball bar only": "#0072B2", "probe only": "#CC79A7", "R-test only": "#009E73", "fused": "#000000"}
 
 #: the label of each kind of deterministic value (:data:`~mtmcal_bayes.posterior.comparison.REFERENCES`): the thesis
 #: plug-in's three, and the least squares of every machine

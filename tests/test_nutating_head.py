@@ -275,16 +275,22 @@ def test_the_head_angle_and_the_gauge_line_are_what_the_controller_table_says(de
 
 
 def test_the_report_s_numbers_are_the_stated_truth(tmp_path, run_cli):
-    """``report --machine nutating-head --data both -o DIR`` (the ball bar and the probe: until the report has its
-    R-test sections it refuses R-test data, and with it the plain ``report --machine nutating-head``): its truth table has a row for each of the
-    five deviations and three combinations the two determine, each within 3 posterior sd of the stated truth; the
-    machine figures are drawn."""
+    """``report --machine nutating-head -o DIR`` (every instrument: ball bar, probe, R-test): its truth table has a
+    row for each of the nine deviations, all determined with every instrument, each within 3 posterior sd of the
+    stated truth; the instruments are compared each alone and fused (the fused rows are the report's own posterior);
+    the R-test's readings and the machine figures are drawn."""
     import csv
 
-    code, _, err = run_cli("report", "--machine", "nutating-head", "--data", "both", "-o", str(tmp_path))
+    code, _, err = run_cli("report", "--machine", "nutating-head", "-o", str(tmp_path))
     assert code == 0, err
     rows = list(csv.DictReader((tmp_path / "truth.csv").open(encoding="utf-8")))
-    assert len(rows) == 8
+    assert len(rows) == 9
     far = [r["quantity"] for r in rows if abs(float(r["z"])) > 3.0]
     assert not far, far
-    assert (tmp_path / "machine.png").stat().st_size > 0 and (tmp_path / "deviations.png").stat().st_size > 0
+    compared = list(csv.DictReader((tmp_path / "instruments.csv").open(encoding="utf-8")))
+    assert list(dict.fromkeys(r["data"] for r in compared)) == ["ball bar only", "probe only", "R-test only", "fused"]
+    summary = {r["quantity"]: r for r in csv.DictReader((tmp_path / "summary.csv").open(encoding="utf-8"))}
+    fused = [r for r in compared if r["data"] == "fused"]
+    assert fused and all(float(r["mean"]) == float(summary[r["quantity"]]["mean"]) for r in fused)
+    for name in ("machine.png", "deviations.png", "rtest.png", "instruments_forest.png"):
+        assert (tmp_path / name).stat().st_size > 0

@@ -29,7 +29,7 @@ its sd after the profiling), and a verdict: *agree* (p ≥ 0.01), *disagree*, or
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -267,8 +267,18 @@ def instrument_consistency(ballbar, probe, n_draws: int = N_DRAWS, seed: int = 0
     return Consistency(pd.concat([a[0], b[0]], ignore_index=True), pd.concat([a[1], b[1]], ignore_index=True))
 
 
-#: labels of the three posteriors, by the data they use
+#: labels of the three posteriors of the ball bar and the probe, by the data they use
 DATA_LABELS = {"ballbar": "ball bar only", "probe": "probe only", "both": "fused"}
+#: each instrument's own posterior in words, by its data name
+ALONE_LABELS = {"ballbar": "ball bar only", "probe": "probe only", "rtest": "R-test only"}
+
+
+def comparison_labels(instruments=("ballbar", "probe")) -> dict[str, str]:
+    """``{data: label}`` of an instruments' comparison: each instrument alone, then all of them fused (``"both"``
+    for the ball bar and the probe, :data:`DATA_LABELS`; ``"all"`` with the R-test besides)."""
+    instruments = tuple(instruments)
+    fused = "both" if instruments == ("ballbar", "probe") else "all"
+    return {**{i: ALONE_LABELS[i] for i in instruments}, fused: "fused"}
 #: every data value in words (the R-test's too: :data:`~mtmcal_bayes.parameters.DATA_INSTRUMENTS`)
 DATA_WORDS = {**DATA_LABELS, "rtest": "R-test only", "ballbar+rtest": "ball bar and R-test",
               "probe+rtest": "probe and R-test", "all": "every instrument"}
@@ -286,37 +296,54 @@ class InstrumentComparison:
     consistency: Consistency
     intervals: pd.DataFrame
     disagreements: list[str]
+    labels: dict = field(default_factory=lambda: dict(DATA_LABELS))  # {data: label}, each alone, then fused
+
+    @property
+    def fused(self):
+        """The posterior of every compared instrument's data."""
+        return self.posteriors[list(self.labels)[-1]]
 
     def to_text(self) -> str:
-        lines = [self.consistency.to_text(), "", "Posterior sd by data (ball bar only / probe only / fused):"]
+        lines = [self.consistency.to_text(), "", f"Posterior sd by data ({' / '.join(self.labels.values())}):"]
         sd = self.intervals.pivot(index="quantity", columns="data", values="sd")
         for q in sd.index:
-            lines.append(f"  {q:18s} " + " / ".join(f"{sd.loc[q, DATA_LABELS[d]]:.3g}" for d in DATA_LABELS))
+            lines.append(f"  {q:18s} " + " / ".join(f"{sd.loc[q, label]:.3g}" for label in self.labels.values()))
         return "\n".join(lines + [""] + (self.disagreements or ["No quantity's ball-bar-only and probe-only 95 % "
                                                                  "HDIs are disjoint."]))
 
 
-def compare_instruments(posteriors: dict, sample) -> InstrumentComparison:
-    """The three posteriors (``posteriors`` holds those already sampled, by data; ``sample(data)`` samples
-    the others) and the consistency of the two instruments."""
+def compare_instruments(posteriors: dict, sample, instruments=("ballbar", "probe")) -> InstrumentComparison:
+    """The posteriors of each of ``instruments`` alone and of all of them fused (:func:`comparison_labels`;
+    ``posteriors`` holds those already sampled, by data; ``sample(data)`` samples the others) and the consistency of
+    the ball bar and the probe (every pair with the R-test: :func:`~.instrument_check.check_instruments`)."""
+    labels = comparison_labels(instruments)
     posteriors = dict(posteriors)
-    for data in DATA_LABELS:
+    for data in labels:
         if data not in posteriors:
             posteriors[data] = sample(data)
-    posteriors = {d: posteriors[d] for d in DATA_LABELS}
+    posteriors = {d: posteriors[d] for d in labels}
     cons = instrument_consistency(posteriors["ballbar"], posteriors["probe"])
     rows = []
     for data, res in posteriors.items():
         for q, r in res.summary.iterrows():
-            rows.append({"quantity": q, "data": DATA_LABELS[data], "mean": r["mean"], "sd": r["sd"],
+            rows.append({"quantity": q, "data": labels[data], "mean": r["mean"], "sd": r["sd"],
                          "hdi_low": r["hdi_low"], "hdi_high": r["hdi_high"], "unit": r["unit"]})
     intervals = pd.DataFrame(rows)
-    b, p = posteriors["ballbar"].summary, posteriors["probe"].summary
     out = []
-    for q in b.index:
-        if q in p.index and (b.loc[q, "hdi_high"] < p.loc[q, "hdi_low"] or p.loc[q, "hdi_high"] < b.loc[q, "hdi_low"]):
-            u = units.SYMBOL[b.loc[q, "unit"]]
-            out.append(f"{q}: the instruments disagree — ball bar {b.loc[q, 'mean']:.1f} {u} "
-                       f"[{b.loc[q, 'hdi_low']:.1f}, {b.loc[q, 'hdi_high']:.1f}], probe {p.loc[q, 'mean']:.1f} {u} "
-                       f"[{p.loc[q, 'hdi_low']:.1f}, {p.loc[q, 'hdi_high']:.1f}]: disjoint 95 % HDIs")
-    return InstrumentComparison(posteriors, cons, intervals, out)
+    alone = [d for d in labels if d in ALONE_LABELS]
+    for i, first in enumerate(alone):
+        for second in alone[i + 1:]:
+            b, p = posteriors[first].summary, posteriors[second].summary
+            for q in b.index:
+                if q in p.index and (b.loc[q, "hdi_high"] < p.loc[q, "hdi_low"]
+                                     or p.loc[q, "hdi_high"] < b.loc[q, "hdi_low"]):
+                    u = units.SYMBOL[b.loc[q, "unit"]]
+                    out.append(f"{q}: the instruments disagree — {_ALONE_WORD[first]} {b.loc[q, 'mean']:.1f} {u} "
+                               f"[{b.loc[q, 'hdi_low']:.1f}, {b.loc[q, 'hdi_high']:.1f}], {_ALONE_WORD[second]} "
+                               f"{p.loc[q, 'mean']:.1f} {u} [{p.loc[q, 'hdi_low']:.1f}, {p.loc[q, 'hdi_high']:.1f}]: "
+                               "disjoint 95 % HDIs")
+    return InstrumentComparison(posteriors, cons, intervals, out, labels)
+
+
+#: each instrument in the disagreements' sentences
+_ALONE_WORD = {"ballbar": "ball bar", "probe": "probe", "rtest": "R-test"}

@@ -42,7 +42,6 @@ from ..posterior.conformity import (
     row_tolerance_text,
 )
 from ..posterior.consistency import (
-    DATA_LABELS,
     DATA_WORDS,
     InstrumentComparison,
     compare_instruments,
@@ -427,7 +426,8 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
         pairs = check_instruments(analysis, explain=False)
         disputed = pairs.disputed
     if _compares_instruments(campaign):
-        instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress))
+        instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress),
+                                          data_instruments("all", campaign))
         if pairs is None:  # else every pair's verdicts, the ball bar / probe pair's among them
             disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
                                            instruments.posteriors["probe"].log_posterior)
@@ -435,7 +435,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
             say("weighing the explanations of the conflict between the instruments")
             ahead[CONFLICT_JOB] = drawing.start([_conflict_job(analysis)])
         figures = [("instruments_forest.png", lambda: forest.forest_figure(
-            {DATA_LABELS[d]: r.summary for d, r in instruments.posteriors.items()}, shown.reference,
+            {instruments.labels[d]: r.summary for d, r in instruments.posteriors.items()}, shown.reference,
             names=shown.listed))]
         if not ppc_here:  # the eccentricity plots show the ball-bar posterior, a side one here
             ppc_df = ppc.ppc_table(instruments.posteriors["ballbar"].idata, campaign, analysis.ballbar_observations)
@@ -584,7 +584,8 @@ def reference_table(check) -> pd.DataFrame:
 
 def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
     ins = c.instruments
-    page.section("instruments", "Ball bar and touch probe: each alone and fused")
+    page.section("instruments", ("Ball bar, touch probe and R-test" if "rtest" in ins.labels else "Ball bar and touch probe")
+                 + ": each alone and fused")
     cons = ins.consistency
     page.paragraph(
         "The touch-probe readings (sphere centres at indexed positions of the rotary axes) enter the likelihood through the same "
@@ -594,7 +595,7 @@ def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
         + " ".join(f"{g['group']} given the {g['given']}-only posterior: {g['verdict']} (χ² = {g['chi2']:.1f} on "
                    f"{g['dof']} dof, p = {g['p_value']:.2g}, largest |z| = {g['max_abs_z']:.1f} at {g['worst']})."
                    for _, g in cons.groups.iterrows()))
-    fused = ins.posteriors["both"]
+    fused = ins.fused
     post = fused.log_posterior
     if post.fixed_sigma is None:
         scales = {n: (float(fused.summary.loc[n, "mean"]), float(fused.summary.loc[n, "sd"])) for n in post.scales}
@@ -609,7 +610,7 @@ def _instruments_section(page: Page, c: ReportContent, tmp: Path) -> None:
                        "disagreeing group beyond what its datum terms absorb); compensate refuses them unless the "
                        "disagreement is accepted (section 'Compensation').")
     page.figure(tmp / "instruments_forest.png", forest.CAPTION_DATA, "intervals by data")
-    sd = ins.intervals.pivot(index="quantity", columns="data", values="sd")[list(DATA_LABELS.values())]
+    sd = ins.intervals.pivot(index="quantity", columns="data", values="sd")[list(ins.labels.values())]
     page.table(sd.rename(columns=lambda col: f"sd, {col}"), digits=2)
     if c.conflict is not None:
         page.paragraph(
