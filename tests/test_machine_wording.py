@@ -17,10 +17,19 @@ from mtmcal_bayes.units import in_words
 THESIS_COLUMNS = "ball bar  probe(thesis)"
 
 
+class _Samples(dict):
+    """``samples[type]``: the emcee posterior (seeded) of a built-in type's demo campaign (the thesis campaign for its
+    type), sampled when first asked for: under ``pytest -n`` a worker given some of this file's tests samples only
+    the types they read."""
+
+    def __missing__(self, machine: str):
+        self[machine] = mb.sample(mb.load_campaign(demo_campaign(machine)), seed=1)
+        return self[machine]
+
+
 @pytest.fixture(scope="module")
 def samples():
-    """The emcee posterior (seeded) of each built-in type's demo campaign (the thesis campaign for its type)."""
-    return {t: mb.sample(mb.load_campaign(demo_campaign(t)), seed=1) for t in BUILTIN_TYPES}
+    return _Samples()
 
 
 def _machine_deviations(result) -> list[str]:
