@@ -222,7 +222,8 @@ def test_promised_share_holds_on_simulated_machines(new_machine):
         assert abs(s - promised[d.targets.index(q)]) < 3 * np.sqrt(0.1 * 0.9 / 60)
 
 
-@pytest.mark.xfail(strict=True, reason="known gap (issue 42): with the honest rule the fixed design is 5 runs, 88 min "
+# not run while the gap is not being worked on (issue 44): it costs ~25 s of every test run to confirm it is still open
+@pytest.mark.xfail(strict=True, run=False, reason="known gap (issue 42): with the honest rule the fixed design is 5 runs, 88 min "
                    "(δy_CZ is determined by no 4-run design); on machine 2000 next measures the same five and then "
                    "BY@RB1+25 for σ_model's contraction, which the fixed design promises only in expectation and the "
                    "twin check here does not ask of it: [102.3, 88.2, 90.9] min against 88.2")

@@ -138,7 +138,7 @@ def test_a_ramp_is_extrapolated_and_warns_closer_to_the_crossing(base, first_sta
     assert len(first_stage_once) == chosen
 
 
-# a flat history keeps random walks (no drift at all: no deviation gets a drift rate): checked on the 20 seeded
+# a flat history keeps random walks (no drift at all: no deviation gets a drift rate): checked on the 12 seeded
 # histories without a change of tests/test_history.py::test_false_alarm_rate_without_change, the same five dates
 
 
