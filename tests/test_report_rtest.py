@@ -77,3 +77,24 @@ def test_the_report_checks_the_rtest_beside_the_ball_bar(tmp_path):
     assert list(first["verdict"]) == ["disagree"] and (g.loc[g.index != first.index[0], "verdict"] == "agree").all()
     section = html[html.index('id="compensation"'):html.index('id="ppc"')]
     assert "it refuses" in section and "--accept-disagreement" in section
+
+
+def test_the_report_plans_on_its_own_data(tmp_path):
+    """The report's plan rests on the data of the report's posterior: on a trunnion campaign whose ball bar has its
+    set-ups but no runs yet, beside R-test runs, the report completes (its plan took the ball bar's data alone and
+    failed in the linear algebra) and ranks R-test candidates by the R-test's data (the same table as ``plan`` with
+    the report's data: the R-test), and its page says nothing of σ_model's information, which the planner computes
+    for the ball bar's data alone."""
+    from mtmcal_bayes.planning.plan import plan
+
+    c = mb.load_campaign(demo_campaign("trunnion"))
+    rt = mb.load_campaign(rtest_demo_campaign("trunnion"))
+    c.ballbar.runs, c.probe, c.rtest, c.truth = [], None, rt.rtest, rt.truth
+    mb.report(c, output=tmp_path / "rep", sampler="exact")  # the exact draws: what is tested is the plan
+    table = pd.read_csv(tmp_path / "rep" / "plan.csv")
+    assert (table["kind"] == "rtest").any()
+    alone = plan(c, list(table.filter(like=" sd_after").columns.str.replace(" sd_after", "")), data="rtest").table
+    pd.testing.assert_series_equal(table.set_index("name")["eig_bits"].sort_index(),
+                                   alone.set_index("name")["eig_bits"].sort_index(), rtol=1e-5)  # CSV: 6 digits
+    _, page = _anchors(tmp_path / "rep")
+    assert "What would teach σ_model" not in page

@@ -323,10 +323,11 @@ def _plans(campaign) -> bool:
     return bool(campaign.ballbar.setups)
 
 
-def _plan_and_figures(campaign, directory: Path, targets=None, sigma_prior=None):
-    """A drawing job: the plan (:func:`~mtmcal_bayes.planning.plan.plan`, under the posterior's learnt σ_model
-    prior ``sigma_prior`` if any) and its figures written into ``directory``; returns ``(None, plan)``."""
-    planned = plan(campaign, targets, sigma_prior=sigma_prior)
+def _plan_and_figures(campaign, directory: Path, *, targets=None, sigma_prior=None, data: str = "ballbar"):
+    """A drawing job: the plan (:func:`~mtmcal_bayes.planning.plan.plan`, given the report's ``data``, under the
+    posterior's learnt σ_model prior ``sigma_prior`` if any) and its figures written into ``directory``; returns
+    ``(None, plan)``."""
+    planned = plan(campaign, targets, sigma_prior=sigma_prior, data=data)
     for name, make in PLAN_FIGURES:
         save_png(make(planned), directory / name)
     return None, planned
@@ -354,7 +355,8 @@ def _ahead(analysis, drawing: Drawing, say) -> tuple[dict[str, int], list[str]]:
     if _plans(campaign):
         say("planning the next measurement (beside the sampling)")
         ahead[PLAN_JOB] = drawing.start([(PLAN_JOB, lambda: _plan_and_figures(
-            campaign, drawing.directory, targets=targets or None, sigma_prior=analysis.sigma_prior))])
+            campaign, drawing.directory, targets=targets or None, sigma_prior=analysis.sigma_prior,
+            data=analysis.data))])
     if _compares_instruments(campaign) and not reads_as_thesis(campaign.ballbar):  # wanted whatever the comparison
         say("weighing the explanations of a conflict between the instruments and the readings of the B runs "
             "(beside the sampling)")
@@ -753,7 +755,7 @@ def _planning(campaign, rep, drawing: Drawing, *, batch: int, say, listed: list[
         return drawing.wait(batch)[PLAN_JOB], True
     drawing.cancel(batch)
     say("planning the next measurement for the quantities the data do not identify")
-    return plan(campaign, targets, sigma_prior=rep.log_posterior.sigma_prior), False
+    return plan(campaign, targets, sigma_prior=rep.log_posterior.sigma_prior, data=rep.log_posterior.data), False
 
 
 #: the page's title where the campaign names no machine description (the thesis' own campaign format)
@@ -881,6 +883,14 @@ def _plan_section(page: Page, planned: PlanResult, rep: PosteriorResult, *, show
         + ". Closed form for the linear model; the full ranking is in plan.csv, and mtmcal-bayes plan "
           "ranks for any targets (docs/planning.md).")
     info = planned.document()["sigma_model_information"]
+    if "prior" in info:  # the ball bar's data alone (the planner's σ_model information is theirs: docs/planning.md)
+        _sigma_paragraph(page, planned, rep, info)
+    page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
+    _plan_tables(page, planned, tmp)
+
+
+def _sigma_paragraph(page: Page, planned: PlanResult, rep: PosteriorResult, info: dict) -> None:
+    """What would teach the ball bar's σ_model: the plan's closed-form contraction now and the best candidate's."""
     t = planned.table.sort_values("sigma_model_rank").iloc[0]
     page.paragraph(
         f"What would teach σ_model: today's design narrows its {info['prior']} prior by a contraction of "
@@ -891,7 +901,10 @@ def _plan_section(page: Page, planned: PlanResult, rep: PosteriorResult, *, show
         f"{info['target_contraction']:g} (docs/planning.md)."
         + (" The planner weighs the assumed prior of σ_model, not the one learnt elsewhere that the posterior above "
            "uses." if rep.log_posterior.sigma_prior is not None else ""))
-    page.figure(tmp / "plan_ranking.png", plan_figures.RANKING_CAPTION, "ranked candidate measurements")
+
+
+def _plan_tables(page: Page, planned: PlanResult, tmp: Path) -> None:
+    """The plan's ten best candidates, its sweep figure and its Monte-Carlo check."""
     ranked = planned.table.head(10)
     cols = ["name", "eig_bits", "verdict", "newly_identified"] + [f"{t} sd_after" for t in planned.targets[:4]]
     page.table(ranked[cols].rename(columns={"newly_identified": "identifies"}), digits=3, index=False)
