@@ -185,23 +185,25 @@ def test_the_commands_take_the_prior_and_name_its_source(run_cli, tmp_path):
 
 def test_the_reports_plan_is_made_under_the_posteriors_learnt_prior(thesis, tmp_path, monkeypatch):
     """The report plans beside its sampling (build._ahead) and again for unidentified quantities (build._planning):
-    both under the learnt prior of the posterior it reports."""
+    both under the learnt prior of the posterior it reports, and on its data (the thesis machine's: the ball bar)."""
     from mtmcal_bayes.analysis import analysis_of
     from mtmcal_bayes.reporting import build
     from mtmcal_bayes.reporting.drawing import Drawing
 
     seen = []
     monkeypatch.setattr(build, "_plan_and_figures",
-                        lambda campaign, directory, targets=None, sigma_prior=None: (seen.append(sigma_prior), None))
+                        lambda campaign, directory, targets=None, sigma_prior=None, data=None:
+                        (seen.append((sigma_prior, data)), None))
     drawing = Drawing(tmp_path, workers=1)  # drawn here: the job's arguments are seen by this process
     build._ahead(analysis_of(thesis, sigma_prior=SMALL), drawing, say=lambda text: None)
-    assert seen == [SMALL]
-    monkeypatch.setattr(build, "plan", lambda campaign, targets, sigma_prior=None: seen.append(sigma_prior))
+    assert seen == [(SMALL, "ballbar")]
+    monkeypatch.setattr(build, "plan", lambda campaign, targets, sigma_prior=None, data=None:
+                        seen.append((sigma_prior, data)))
     post = mb.sample(parse_campaign(variants.without_second_tool_length()), seed=1, sampler="exact",
                      sigma_model_prior=SMALL)
     build._planning(post.log_posterior.campaign, post, drawing, batch=0, say=lambda text: None,
                     listed=list(mb.IDENTIFIABLE), planned_for=[])  # not the plan begun ahead: planned again
-    assert seen == [SMALL, SMALL]
+    assert seen == [(SMALL, "ballbar"), (SMALL, "ballbar")]
 
 
 def test_a_design_without_runs_is_written_whole_and_replaces_an_earlier_one(run_cli, tmp_path, monkeypatch):
