@@ -17,11 +17,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from targets import IMPORT_FLOOR, run  # noqa: E402  (a fresh process, its wall time and peak memory)
+from targets import timed_against_floor  # noqa: E402  (fresh processes, each after the import floor)
 
 from mtmcal_bayes.io.machine_reader import rtest_demo_campaign  # noqa: E402
 
@@ -33,19 +32,15 @@ def ratios(repeats: int) -> dict:
     out: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         cwd = Path(tmp)
-        floors, times = [], {}
-        for k in range(repeats):
-            for t in TYPES:
-                path = rtest_demo_campaign(t)
-                commands = {"sample": ["mtmcal-bayes", "sample", path, "--quiet"],
-                            "report": ["mtmcal-bayes", "report", path, "-o", f"r-{t}-{k}", "--quiet"]}
-                for name, argv in commands.items():
-                    floors.append(run(IMPORT_FLOOR, cwd)[0])
-                    times.setdefault(f"{name} {t}", []).append(run(argv, cwd)[0])
-        t_ref = float(np.median(floors))
+        commands = {}
+        for t in TYPES:
+            path = rtest_demo_campaign(t)
+            commands[f"sample {t}"] = ["mtmcal-bayes", "sample", path, "--quiet"]
+            commands[f"report {t}"] = ["mtmcal-bayes", "report", path, "-o", f"r-{t}", "--quiet"]
+        t_ref, times = timed_against_floor(commands, cwd, repeats)
         out["t_ref_s"] = t_ref
-        for key, ts in times.items():
-            med, goal = float(np.median(ts)), GOALS[key.split()[0]]
+        for key, med in times.items():
+            goal = GOALS[key.split()[0]]
             out[key] = {"wall_s": med, "ratio_to_t_ref": med / t_ref, "goal": goal, "met": med / t_ref <= goal}
     return out
 

@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from targets import run  # noqa: E402  (a fresh process, its wall time and peak memory)
+from targets import timed_against_floor  # noqa: E402  (fresh processes, each after the import floor)
 
 from mtmcal_bayes.inference.log_posterior import LogPosterior  # noqa: E402
 from mtmcal_bayes.io.campaign_reader import parse_campaign  # noqa: E402
@@ -33,7 +33,6 @@ from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vect
 from tests.rtest_campaigns import every_setting_text  # noqa: E402
 
 TYPES = ("integrex-i200", "vertical-turn-mill", "trunnion", "head-head")
-FLOOR = ["python", "-c", "import arviz, emcee, scipy.stats, numpy"]
 GOAL = 1.3
 
 
@@ -53,16 +52,10 @@ def ratios(repeats: int) -> dict:
         cwd = Path(tmp)
         for t in TYPES:
             write_campaign(t, cwd / f"{t}-rtest.toml")
-        floors, times = [], {}
-        for _ in range(repeats):
-            for t in TYPES:
-                floors.append(run(FLOOR, cwd)[0])
-                times.setdefault(t, []).append(run(["mtmcal-bayes", "sample", f"{t}-rtest.toml", "--data", "rtest",
-                                                    "--quiet"], cwd)[0])
-        t_ref = float(np.median(floors))
+        commands = {t: ["mtmcal-bayes", "sample", f"{t}-rtest.toml", "--data", "rtest", "--quiet"] for t in TYPES}
+        t_ref, times = timed_against_floor(commands, cwd, repeats)
         out["t_ref_s"] = t_ref
-        for t, ts in times.items():
-            med = float(np.median(ts))
+        for t, med in times.items():
             out[f"sample --data rtest {t}"] = {"wall_s": med, "ratio_to_t_ref": med / t_ref, "goal": GOAL,
                                                "met": med / t_ref <= GOAL}
     return out

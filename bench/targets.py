@@ -62,6 +62,17 @@ def median_run(argv, cwd, repeats):
 IMPORT_FLOOR = ["python", "-c", "import arviz, emcee, scipy.stats, numpy"]
 
 
+def timed_against_floor(commands: dict, cwd: Path, repeats: int) -> tuple[float, dict[str, float]]:
+    """Each command of ``commands`` (``{name: argv}``) run right after a run of the import floor, ``repeats`` rounds
+    in the dict's order: t_ref (the floor's median wall time, s) and each command's median wall time (s)."""
+    floors, times = [], {name: [] for name in commands}
+    for _ in range(repeats):
+        for name, argv in commands.items():
+            floors.append(run(IMPORT_FLOOR, cwd)[0])
+            times[name].append(run(argv, cwd)[0])
+    return float(np.median(floors)), {name: float(np.median(ts)) for name, ts in times.items()}
+
+
 def floor_rows(tmp: Path, repeats: int, row) -> None:
     """Issue 25: report, a ball-bar-only report and sample as ratios to the import floor, each command timed
     right after a floor run (pairs; medians of each)."""
@@ -73,15 +84,10 @@ def floor_rows(tmp: Path, repeats: int, row) -> None:
                 "report, ball bar only": ["mtmcal-bayes", "report", str(tmp / "ballbar_only.toml"), "-o", "r2",
                                           "--quiet"],
                 "sample": ["mtmcal-bayes", "sample", "--seed", "1", "--quiet"]}
-    floors, times = [], {k: [] for k in commands}
-    for _ in range(max(repeats, 3)):
-        for name, argv in commands.items():
-            floors.append(run(IMPORT_FLOOR, tmp)[0])
-            times[name].append(run(argv, tmp)[0])
-    t_ref = float(np.median(floors))
+    t_ref, times = timed_against_floor(commands, tmp, max(repeats, 3))
     row("import floor t_ref (arviz, emcee, scipy.stats, numpy)", t_ref, None, "s")
     for name, target in (("report", 3.0), ("report, ball bar only", 2.5), ("sample", 1.3)):
-        row(f"{name}: whole process / t_ref", float(np.median(times[name])) / t_ref, target, "")
+        row(f"{name}: whole process / t_ref", times[name] / t_ref, target, "")
 
 
 def main() -> None:
