@@ -4,7 +4,6 @@ has: the R-test) finds each deviation the campaign determines within 3.5 posteri
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import pytest
@@ -14,7 +13,9 @@ from mtmcal_bayes.inference.identifiability import campaign_identifiability
 from mtmcal_bayes.io.machine_reader import BUILTIN_TYPES, rtest_demo_campaign
 from mtmcal_bayes.reporting.machine_sections import truth_table
 
-SCRIPT = Path(__file__).resolve().parents[1] / "examples" / "machines" / "make_rtest_demos.py"
+from .scripts import ROOT, load_script
+
+SCRIPT = ROOT / "examples" / "machines" / "make_rtest_demos.py"
 #: |posterior mean − truth| / posterior sd allowed for each determined deviation: about 20 over the four types, so
 #: under a correct model P(any beyond 3.5) ≈ 1 % (and the seeds are fixed); a wrong sign or lever arm of a term moves
 #: them by tens of sd
@@ -22,10 +23,7 @@ Z_MAX = 3.5
 
 
 def _script():
-    spec = importlib.util.spec_from_file_location("make_rtest_demos", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script(SCRIPT)
 
 
 @pytest.mark.parametrize("machine", [t for t in BUILTIN_TYPES if t in _script().SPHERES])

@@ -4,25 +4,13 @@ built-in type, the exact posterior sds of the deviations from one instrument's c
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
 
 from mtmcal_bayes.machine_time import TimeModel, probe_run_minutes, rtest_run_minutes
 
-ROOT = Path(__file__).resolve().parents[1]
+from .scripts import ROOT, bench_script
 
-
-def _bench(name: str):
-    """A bench script as a module (bench/ is not a package)."""
-    spec = importlib.util.spec_from_file_location(name, ROOT / "bench" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-MINUTES = _bench("rtest_minutes")
+MINUTES = bench_script("rtest_minutes")
 
 
 @pytest.mark.parametrize("machine", MINUTES.TYPES)

@@ -5,8 +5,6 @@ the R-test alone and every instrument, N = 200)."""
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
 
 import pytest
 
@@ -17,21 +15,13 @@ from mtmcal_bayes.io.campaign_reader import parse_campaign
 from mtmcal_bayes.validation import SBCSettings, run_sbc
 
 from .rtest_campaigns import every_setting_text
+from .scripts import ROOT, bench_script
 from .test_validation import _Distorted
 
-ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "rtest.md"
 
 
-def _bench(name: str):
-    """A bench script as a module (bench/ is not a package)."""
-    spec = importlib.util.spec_from_file_location(name, ROOT / "bench" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-DETERMINES = _bench("rtest_determines")
+DETERMINES = bench_script("rtest_determines")
 
 
 def _doc_section(machine: str) -> str:
