@@ -110,18 +110,18 @@ def patterns_for(campaign) -> list[str]:
     return list(provided(machine, "patterns") or patterns_of(description_of(machine)))
 
 
+def holds_within(ax) -> tuple[float, ...]:
+    """The angles of :data:`HOLD_DEG` a rotary axis' travel allows (all where it states none), in their order."""
+    lo, hi = (-np.inf, np.inf) if ax.travel is None else np.rad2deg(ax.travel)
+    return tuple(h for h in HOLD_DEG if lo - 1e-9 <= h <= hi + 1e-9)
+
+
 def hold_for(desc, letter: str) -> tuple[tuple[str, float], ...] | None:
     """The other rotary axes of a pattern of axis ``letter`` held at the first of :data:`HOLD_DEG` each allows;
     None when no other rotary axis has such a position."""
-    held = []
-    for ax in desc.rotary_axes:
-        if ax.letter == letter:
-            continue
-        lo, hi = (-np.inf, np.inf) if ax.travel is None else np.rad2deg(ax.travel)
-        pick = next((h for h in HOLD_DEG if lo - 1e-9 <= h <= hi + 1e-9), None)
-        if pick is not None:
-            held.append((ax.letter, pick))
-    return tuple(held) or None
+    held = tuple((ax.letter, holds_within(ax)[0]) for ax in desc.rotary_axes
+                 if ax.letter != letter and holds_within(ax))
+    return held or None
 
 
 def label(pattern: str, setup: Setup, mount: Mount | None, *, hold=(), length: float | None = None) -> str:

@@ -29,7 +29,7 @@ from ..machines.probe_terms import probe_terms
 from ..models.chain_models import ChainProbeModel, FirstOrderModel
 from ..parameters import ParameterSpace
 from .candidates import WithoutBar
-from .catalogue import HOLD_DEG, hold_for, rules_of, travel_problems
+from .catalogue import hold_for, holds_within, rules_of, travel_problems
 
 #: repeats of each reading of a probe candidate
 PROBE_REPEATS = 2
@@ -108,8 +108,7 @@ def _positions(ax) -> tuple[float, ...]:
     """0° and up to three more positions of ``ax`` within its travel."""
     if ax.travel is None or np.rad2deg(ax.travel[1] - ax.travel[0]) >= 360.0:
         return (0.0, 90.0, 180.0, 270.0)
-    lo, hi = np.rad2deg(ax.travel)
-    return (0.0,) + tuple(h for h in HOLD_DEG if lo - 1e-9 <= h <= hi + 1e-9)[:3]
+    return (0.0,) + holds_within(ax)[:3]
 
 
 def probe_catalogue(campaign) -> list[ProbeCandidate]:

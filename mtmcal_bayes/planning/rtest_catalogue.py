@@ -40,7 +40,7 @@ from ..models.probe import DEFAULT_REPEATABILITY
 from ..models.rtest import RTestLayout, RTestModel
 from ..parameters import ParameterSpace
 from .candidates import WithoutBar
-from .catalogue import HOLD_DEG, travel_problems
+from .catalogue import holds_within, travel_problems
 
 #: positions of an indexed candidate over its axis' travel
 INDEXED_POSITIONS = 6
@@ -190,8 +190,7 @@ def spread(ax, k: int) -> np.ndarray:
 
 def held_angles(ax) -> tuple[float, ...]:
     """The first :data:`HELD_ANGLES` angles of :data:`~.catalogue.HOLD_DEG` within an axis' travel."""
-    lo, hi = (-np.inf, np.inf) if ax.travel is None else np.rad2deg(ax.travel)
-    return tuple(h for h in HOLD_DEG if lo - 1e-9 <= h <= hi + 1e-9)[:HELD_ANGLES]
+    return holds_within(ax)[:HELD_ANGLES]
 
 
 def rtest_catalogue(campaign) -> list[RTestCandidate]:
