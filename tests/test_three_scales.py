@@ -111,9 +111,12 @@ def test_three_scale_proposal_factors_cells_when_used_as_all_at_once(every_instr
     theta, sigma = prop.draw(200, np.random.RandomState(3))
     have = np.flatnonzero(prop._have)
     assert 0 < len(have) < len(prop.kept)
-    chol, _ = m.cov_factors(prop.kept[have])
+    np.testing.assert_array_equal(have, np.arange(len(have)))  # the factored cells fill the first slots
+    cells = prop.cells[have]
+    assert set(cells) <= set(prop.kept) and (prop.slot[cells] == have).all()
+    chol, _ = m.cov_factors(cells)
     np.testing.assert_allclose(prop.chol[have], chol, rtol=0, atol=1e-12 * np.abs(chol).max())
-    np.testing.assert_allclose(prop.mean[have], m.means_from_factors(post.likelihood.y, chol, prop.kept[have]),
+    np.testing.assert_allclose(prop.mean[have], m.means_from_factors(post.likelihood.y, chol, cells),
                                rtol=1e-12, atol=1e-12 * np.abs(prop.mean[have]).max())
     r = np.random.RandomState(3)
     j = r.choice(prop.cell_prob.size, size=200, p=prop.cell_prob)
