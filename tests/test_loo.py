@@ -164,3 +164,41 @@ def test_report_shows_loo_and_writes_loo_csv(thesis, run_cli, tmp_path):
     html = (out / "index.html").read_text(encoding="utf-8")
     assert "Leave-one-out consistency of the posterior" in html and "<strong>loo.png.</strong>" in html
     assert f"{TARGET}: elpd_loo" in html and "check this measurement" in html
+
+
+def _loo_table(m: int, outliers=(), influential=()):
+    """A LooResult of ``m`` observations of two kinds, the given rows flagged (elpd 6 below the median, k 0.9)."""
+    from mtmcal_bayes.posterior.loo import LooResult
+
+    rng = np.random.default_rng(0)
+    elpd = -0.5 + 0.1 * rng.standard_normal(m)
+    elpd[list(outliers)] -= 6.0
+    k = np.full(m, 0.2)
+    k[list(influential)] = 0.9
+    names = [f"obs{i}" for i in range(m)]
+    kinds = ["eccentricity"] * (m // 3) + ["rtest_reading"] * (m - m // 3)
+    t = pd.DataFrame({"variable": kinds, "elpd_loo": elpd, "pareto_k": k}, index=pd.Index(names, name="observation"))
+    t["influential"] = t["pareto_k"] > K_INFLUENTIAL
+    t["elpd_drop"] = t.groupby("variable")["elpd_loo"].transform("median") - t["elpd_loo"]
+    t["outlier"] = t["elpd_drop"] >= ELPD_DROP
+    t["note"] = ""
+    return LooResult(t, float(elpd.sum()), 1.0, 3.0, m, 5, 1000)
+
+
+def test_many_observations_are_drawn_compact_with_the_flagged_ones_named():
+    """Beyond ROWS_LABELLED observations the figure is the compact form (two panels of a fixed height, each
+    observation a point) naming exactly the flagged observations, each in the panel of its flag; up to it, one
+    labelled row per observation."""
+    from mtmcal_bayes.reporting import loo_plot
+
+    many = _loo_table(loo_plot.ROWS_LABELLED + 20, outliers=(3, 50), influential=(10, 11, 51))
+    fig = loo_plot.loo_figure(many)
+    top, bottom = fig.axes
+    assert fig.get_figheight() == pytest.approx(6.4) and len(top.get_yticklabels()) < 20
+    named = {a: {t.get_text() for t in a.texts if t.get_text().startswith("obs")} for a in (top, bottom)}
+    assert named == {top: {"obs3", "obs50"}, bottom: {"obs10", "obs11", "obs51"}}
+    assert loo_plot.caption(many) == loo_plot.COMPACT_CAPTION
+    few = _loo_table(loo_plot.ROWS_LABELLED, outliers=(3,))
+    fig = loo_plot.loo_figure(few)
+    assert [t.get_text() for t in fig.axes[0].get_yticklabels()] == list(few.table.index)
+    assert loo_plot.caption(few) == loo_plot.CAPTION

@@ -827,7 +827,7 @@ def _page(c: ReportContent, tmp: Path) -> Page:
                        "mean agree with what all the other measurements predict for it? " + c.loo.power_sentence()
                        + " Table: loo.csv.")
         page.box("warn", "Leave-one-out: measurements the others do not predict", c.loo.outlier_sentences())
-        page.figure(tmp / "loo.png", loo_plot.CAPTION, "leave-one-out elpd and Pareto k per observation")
+        page.figure(tmp / "loo.png", loo_plot.caption(c.loo), "leave-one-out elpd and Pareto k per observation")
         page.table(c.loo.table[["variable", "elpd_loo", "elpd_drop", "pareto_k", "note"]],
                    digits={"elpd_loo": 2, "elpd_drop": 2, "pareto_k": 2})
 
