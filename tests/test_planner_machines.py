@@ -98,3 +98,20 @@ def test_targets_by_name_or_iso_symbol_and_one_refusal(campaign):
             assert target_names([symbol], campaign) == [name]
     with pytest.raises(ParameterError, match=r"unknown quantity 'beta_QQ' for this machine .*" + planner.deviations[0]):
         target_names(["beta_QQ"], campaign)
+
+
+def test_the_catalogues_rows_made_together_equal_each_made_alone(campaign):
+    """The planner makes the rows of the new runs at one measured mount, bar length and set-up from one model of them
+    all: every catalogue candidate's rows and weights equal those of a planner given that candidate alone
+    (to 1e-12 of the rows' largest entry; the same columns)."""
+    cands = [c for c in catalogue_of(campaign) if c.repeat_of is None][:120]
+    together = Planner(campaign, cands, None)
+    got = together.candidate_rows()
+    grouped = sum(c.mount.id in {r.mount for r in campaign.ballbar.runs} for c in cands)
+    assert grouped >= 10  # the test sees runs made together
+    for c, (A, w) in zip(cands, got):
+        alone = Planner(campaign, [c], None)
+        (A1, w1), = alone.candidate_rows()
+        A1 = _columns(A1, alone.space.names, together.space.names)
+        assert A.shape == A1.shape and np.abs(A - A1).max() <= 1e-12 * max(np.abs(A1).max(), 1e-300), c.name
+        assert np.array_equal(w, w1)

@@ -337,9 +337,29 @@ class Planner:
         candidates' rows made once."""
         if candidates is None or candidates is self.candidates:
             if self._rows_cache is None:
-                self._rows_cache = [self._rows_of(c) for c in self.candidates]
+                self._rows_cache = self._rows_of_each(self.candidates)
             return self._rows_cache
-        return [self._rows_of(c) for c in candidates]
+        return self._rows_of_each(candidates)
+
+    def _rows_of_each(self, candidates: list) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`_rows_of` of each candidate, the new runs' at one mount the campaign measured, one bar length and
+        one set-up from one model of them all (:meth:`_new_runs_rows`: a catalogue's hundreds of runs in a few models, not one
+        model each)."""
+        out: list = [None] * len(candidates)
+        groups: dict[tuple, list[int]] = {}
+        measured = {r.mount for r in self.campaign.ballbar.runs}
+        for i, c in enumerate(candidates):
+            # at a mount the campaign has not measured, the first run there would place the W ball for the others:
+            # each such candidate in a model of its own
+            if isinstance(c, Candidate) and c.repeat_of is None and c.mount.id in measured:
+                # one set-up too: each set-up's terms are columns the model differentiates every run's rows in
+                groups.setdefault((c.mount.id, c.length, c.setup.id), []).append(i)
+            else:
+                out[i] = self._rows_of(c)
+        for idx in groups.values():
+            for i, rows in zip(idx, self._new_runs_rows([candidates[i] for i in idx])):
+                out[i] = rows
+        return out
 
     def _rows_of(self, c) -> tuple[np.ndarray, np.ndarray]:
         if isinstance(c, ProbeCandidate):
@@ -348,7 +368,7 @@ class Planner:
         if isinstance(c, RTestCandidate):
             A, base = c.rows(self.campaign, self.space, self.deviations, self.table)
             return A, 1.0 / (base + self.sigma_rtest**2)
-        return self._new_run_rows(c) if c.repeat_of is None else self._repeat_rows(c)
+        return self._new_runs_rows([c])[0] if c.repeat_of is None else self._repeat_rows(c)
 
     def _repeat_rows(self, c: Candidate):
         keys = [j for j, k in enumerate(self.observations.keys) if k.run == c.repeat_of]
@@ -357,21 +377,27 @@ class Planner:
         v_new = self.V[keys] - s2 / n + s2 / (n + c.repeats)
         return self.A[keys], 1.0 / v_new - 1.0 / self.V[keys]
 
-    def _new_run_rows(self, c: Candidate):
-        """Rows of a new run (its bar length), from a campaign of that run alone after the campaign's first run at its
-        mount: a model that places a mount's W ball by the first run there (the chain: that run's set-up enters the
-        rows of every run at the mount) sees the candidate where the campaign placed it; one that does not, the same
-        rows as in the campaign itself."""
-        first = next((r for r in self.campaign.ballbar.runs if r.mount == c.mount.id), None)
+    def _new_runs_rows(self, cands: list[Candidate]) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Rows and weights of each new run of ``cands`` (one mount, one bar length, one set-up), from a campaign of those runs
+        after the campaign's first run at their mount: a model that places a mount's W ball by the first run there
+        (the chain: that run's set-up enters the rows of every run at the mount) sees each candidate where the
+        campaign placed it; one that does not, the same rows as in the campaign itself.  After that first run a
+        run's rows depend on its own set-up and mount alone, so several runs share one model; at a mount the
+        campaign has not measured, one candidate at a time (the first would place the others)."""
+        c0 = cands[0]
+        first = next((r for r in self.campaign.ballbar.runs if r.mount == c0.mount.id), None)
         aug = copy.copy(self.campaign)
         bb = copy.copy(self.campaign.ballbar)
-        bb.length = c.length
+        bb.length = c0.length
         bb.setups, bb.mounts = self._setups, self._mounts
-        bb.runs = ([] if first is None else [first]) + [self.as_run(c)]
+        before = [] if first is None else [first]
+        bb.runs = before + [self.as_run(c) for c in cands]
         aug.ballbar = bb
         design = self.rows_for(aug, self.space)
-        rows = [i for i, k in enumerate(Observations.from_campaign(aug).keys) if k.run == len(bb.runs) - 1]
-        return design[rows], np.full(len(rows), 1.0 / self.noise_var(c.repeats))
+        run_of = np.array([k.run for k in Observations.from_campaign(aug).keys])
+        return [(design[run_of == len(before) + j], np.full(int((run_of == len(before) + j).sum()),
+                                                            1.0 / self.noise_var(c.repeats)))
+                for j, c in enumerate(cands)]
 
     # ------------------------------------------------------------------ posterior
     def _precision(self, widen: float = 1.0) -> np.ndarray:
