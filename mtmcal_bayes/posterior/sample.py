@@ -110,6 +110,16 @@ class PosteriorResult:
     identifiability: object | None = None  # what its campaign determines (Identifiability)
     combinations: list[dict] = field(default_factory=list)  # its named combinations with their posteriors
     prior_notes: list[str] = field(default_factory=list)  # the prior-sensitivity diagnostic's sentences
+    reference_at: int | None = None  # where the reference check's warnings go in ``warnings``, while it is to come
+
+    def check_reference(self) -> None:
+        """Make the check against the approximation the sampler started from, left to come by
+        :func:`sample_posterior` (``reference=False``): :attr:`reference` and its warnings, in their place."""
+        if self.reference_at is None:
+            return
+        self.reference = reference_check(self.sampling, self.summary)
+        at, self.reference_at = self.reference_at, None
+        self.warnings[at:at] = reference_warnings(self.reference, self.summary)
 
     @property
     def log_posterior(self) -> LogPosterior:
@@ -190,7 +200,8 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
                      settings: SamplerSettings | None = None, checkpoint=None,
                      progress: Progress | None = None, data: str | None = None,
                      tolerances: dict | None = None, sigma_model: float | None | str = "same",
-                     statement: bool = True, sigma_prior="same", lean: bool = False) -> PosteriorResult:
+                     statement: bool = True, sigma_prior="same", lean: bool = False,
+                     sampled=None, reference: bool = True) -> PosteriorResult:
     """Sample the posterior of ``campaign`` given its ``data`` (``"ballbar"``, ``"probe"`` or ``"both"``) and
     summarise it against the deterministic results; decide conformity with ``tolerances`` (``{name:
     Tolerance}``; default the campaign's own).  ``sigma_model`` (mm) fixes the model-discrepancy scale instead of
@@ -203,12 +214,17 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     GUM statement and the uncertainty budget (a posterior shown beside another).  ``lean=True`` with exact draws
     (``settings.sampler == "exact"``), for a posterior whose intervals alone are shown: an InferenceData of the
     posterior alone (no prior, predictions or log-likelihood), no chain diagnostics and no check against the
-    exact posterior (the draws are independent draws of it); with sampled chains it changes nothing."""
+    exact posterior (the draws are independent draws of it); with sampled chains it changes nothing.
+    ``sampled(result)`` is called with the :class:`~mtmcal_bayes.inference.sampling.SamplingResult` as soon as the
+    chains exist (a report begins the figures that need them alone); ``reference=False`` leaves the check against
+    the approximation the sampler started from to the caller (:meth:`PosteriorResult.check_reference`)."""
     analysis = analysis_of(campaign, model=model, fix_dx_BT=fix_dx_BT, data=data, sigma_model=sigma_model,
                            sigma_prior=sigma_prior)
     campaign, post = analysis.campaign, analysis.log_posterior
     result = run_ensembles(post, settings, checkpoint=checkpoint, progress=progress,
                            approximation=analysis.approximation)
+    if sampled is not None:
+        sampled(result)
     seed = settings.seed if settings else None
     beside = lean and result.settings.sampler == "exact"  # exact draws whose intervals alone are shown
     idata = to_inference_data(result, seed=seed, posterior_only=beside)
@@ -220,8 +236,9 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     # the machine's published deterministic values (its plug-in's; the least squares, which wants the posterior's
     # σ_model, joins them in the report)
     comp = comparison(summary, references(analysis.identification))
-    ref = None if beside else reference_check(result, summary)
+    ref = None if beside or not reference else reference_check(result, summary)
     warn = result.messages + linear_model_check(result) + ([] if beside else diagnostics_warnings(summary))
+    reference_at = len(warn)  # where the check's warnings go (made later: check_reference)
     warn += reference_warnings(ref, summary)
     warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data
     tol = campaign.tolerances if tolerances is None else tolerances
@@ -231,4 +248,5 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
                  for n, t in tol.items() if n not in summary.index]
     return PosteriorResult(idata, summary, comp, result, warn, not_identified(summary), ref, conformity=conf,
                            identifiability=ident, combinations=combination_summaries(ident, idata),
-                           prior_notes=prior_sensitivity_notes(summary))
+                           prior_notes=prior_sensitivity_notes(summary),
+                           reference_at=None if beside or reference else reference_at)

@@ -213,12 +213,18 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                     rep.conformity = conformity_table(rep.idata, rep.summary, tol)
             else:
                 say(f"sampling the posterior ({model}, {DATA_WORDS[data]})")
-                rep = sample_posterior(analysis, settings=settings, progress=progress, tolerances=tol)
+                # the figures that need the chains alone are drawn while they are summarised (the second core is
+                # free then), the check against the exact posterior is made once the other figures are begun
+                rep = sample_posterior(analysis, settings=settings, progress=progress, tolerances=tol,
+                                       sampled=lambda result: _draw_chains(drawing, result, campaign, data, say),
+                                       reference=False)
             if rep.conformity is not None and not rep.conformity.empty:
                 say("asking the planner how to decide the undecided tolerances")
                 add_suggestions(rep, campaign)
             shown = Shown.of(rep, ident)
-            loo = loo_check(rep.idata)
+            # the leave-one-out check in its figure's process (a posterior read from a file without the pointwise
+            # log-likelihood is refused here, as before anything is drawn)
+            loo = loo_check(rep.idata) if "log_likelihood" not in rep.idata.groups() else None
             # the main posterior's figures and its NetCDF while the instruments are weighed and the plan is made
             first = _main_figures(rep, model, loo, shown)
             first.insert(1, ("posterior.nc", lambda: write_netcdf_atomic(rep.idata, tmp / "posterior.nc")))
@@ -227,7 +233,8 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
             ppc_df = None
             if ppc_here:
                 ppc_df = ppc.ppc_table(rep.idata, campaign, analysis.ballbar_observations)
-                first[2:2] = _eccentricity_figures(rep, ppc_df, campaign)
+                first[2:2] = [job for job in _eccentricity_figures(rep, ppc_df, campaign)
+                              if job[0] not in drawing.names]  # polar.png: begun with the chains
             rtest = None
             if rtest_sections.has_readings(rep):
                 rtest = (rtest_sections.readings_table(rep), rtest_sections.terms_table(rep))
@@ -240,6 +247,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                     drawing.start(jobs)
 
             draw(first)
+            rep.check_reference()
             content = _rest_of_report(rep, analysis, campaign, settings=settings, say=say, progress=progress,
                                       compare_models=compare_models, draw=draw, ahead=ahead, drawing=drawing,
                                       ident=ident, shown=shown, ppc_here=ppc_here, planned_for=planned_for)
@@ -247,6 +255,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                 ppc_df = content.ppc
             extras = drawing.finish()
             off_scale, content.conflict = extras["corner.png"], extras.get(CONFLICT_JOB)
+            loo = extras["loo.png"] if loo is None else loo
             files = _write_tables(tmp, rep, content, ident=ident, ppc_df=ppc_df, loo=loo, shown=shown, rtest=rtest)
         finally:
             drawing.stop()
@@ -376,9 +385,24 @@ FIGURE_ORDER = ("machine.png", "deviations.png", "corner.png", "forest.png", "pp
                 "budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png", "rtest.png")
 
 
-def _main_figures(rep: PosteriorResult, model: str, loo: LooResult, shown: Shown) -> list:
+def _draw_chains(drawing: Drawing, result, campaign, data: str, say) -> None:
+    """Begin the main posterior's figures that need its chains alone (the polar trajectories, where it saw the ball
+    bar) in one process, while the report summarises them."""
+    if _saw_ballbar(data, campaign):
+        say("drawing polar.png")
+        drawing.start([("polar.png", lambda: polar.polar_figure(result, campaign))], workers=1)
+
+
+def _loo_job(rep: PosteriorResult, loo: LooResult | None):
+    """The leave-one-out figure and, when ``loo`` is None, the check itself (PSIS-LOO of every observation), made in
+    the figure's process: ``(figure, check)``."""
+    loo = loo_check(rep.idata) if loo is None else loo
+    return loo_plot.loo_figure(loo), loo
+
+
+def _main_figures(rep: PosteriorResult, model: str, loo: LooResult | None, shown: Shown) -> list:
     """The figures that show the main posterior alone: drawn as soon as it exists (the longest first, so that the
-    two drawing processes end together)."""
+    two drawing processes end together); the leave-one-out check with its figure where ``loo`` is None."""
     return [("corner.png", lambda: corner_plot.corner_figure(rep.idata, shown.reference, names=shown.joint)),
             ("sigma_model.png", lambda: budget_plot.sigma_figure(rep, names=shown.joint)),
             ("trace.png", lambda: mcmc_plots.trace_figure(rep.sampling, names=shown.joint)),
@@ -386,7 +410,7 @@ def _main_figures(rep: PosteriorResult, model: str, loo: LooResult, shown: Shown
             ("rank.png", lambda: mcmc_plots.rank_figure(rep.idata, names=shown.joint)),
             ("budget.png", lambda: budget_plot.budget_figure(rep.summary)),
             ("widths.png", lambda: widths.widths_figure(rep.summary, names=shown.listed)),
-            ("loo.png", lambda: loo_plot.loo_figure(loo))]
+            ("loo.png", lambda: _loo_job(rep, loo))]
 
 
 def _eccentricity_figures(bb_rep: PosteriorResult, ppc_df: pd.DataFrame, campaign) -> list:
