@@ -115,3 +115,24 @@ def test_the_catalogues_rows_made_together_equal_each_made_alone(campaign):
         A1 = _columns(A1, alone.space.names, together.space.names)
         assert A.shape == A1.shape and np.abs(A - A1).max() <= 1e-12 * max(np.abs(A1).max(), 1e-300), c.name
         assert np.array_equal(w, w1)
+
+
+@pytest.mark.parametrize("machine", ["thesis", "nutating-head"])
+def test_an_extended_planner_values_new_candidates_as_a_new_planner_does(machine):
+    """The tool-length sweep's candidates (new set-ups) valued by the report's planner extended to them and by a
+    planner made anew for them with the same targets, data and scales: the same sds, information and identifiability
+    (to 1e-12 relative), on the thesis machine and on the nutating head with every instrument."""
+    from mtmcal_bayes.planning.catalogue import sweep_candidates
+
+    campaign = api.campaign_of(None if machine == "thesis" else api.demo_campaign(machine))
+    data = "ballbar" if machine == "thesis" else "all"
+    planner = Planner(campaign, catalogue_of(campaign)[:20], None, data=data)
+    pattern = next(c.pattern for c in catalogue_of(campaign) if c.kind == "tool length")
+    cands = sweep_candidates(campaign, pattern, (0.0, 25.0, 50.0))
+    got = planner.extended(cands).evaluate()
+    want = Planner(campaign, cands, planner.targets, sigma_model=planner.sigma_model, data=data).evaluate()
+    assert got.targets == want.targets and len(got.targets) >= 3
+    for name in ("sd_before", "sd_after", "eig_bits"):
+        np.testing.assert_allclose(getattr(got, name), getattr(want, name), rtol=1e-12, atol=0)
+    assert np.array_equal(got.identified_after, want.identified_after)
+    assert np.array_equal(got.identified_before, want.identified_before)

@@ -223,12 +223,9 @@ class Planner:
         self.table = quantity_table(campaign)
         own = parameter_space(campaign, False, data)
         self.deviations = [p.name for p in own.parameters if p.group == "deviation"]
-        self.space = self._make_space([(p.owner, p.base) for p in own.parameters if p.group == "probe"],
-                                      [(p.owner, p.base) for p in own.parameters if p.group == "rtest"])
-        stated = campaign.rtest.prior_sds() if campaign.rtest is not None else None
-        priors = [make_prior(p.name, p.base, p.kind, campaign.priors, stated=stated) for p in self.space.parameters]
-        self.prior_var = np.array([p.sd for p in priors]) ** 2
-        self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
+        self._own_terms = ([(p.owner, p.base) for p in own.parameters if p.group == "probe"],
+                           [(p.owner, p.base) for p in own.parameters if p.group == "rtest"])
+        self._lay_out()
         obs = Observations.from_campaign(campaign)
         self.observations = obs
         self.pooled_sd = obs.pooled_sd()
@@ -246,6 +243,37 @@ class Planner:
         self.targets = target_names(targets, campaign) if targets else self._default_targets()
         self.T = self.target_matrix(self.space)
         self.target_units = [self.table[t].unit for t in self.targets]
+
+    def _lay_out(self) -> None:
+        """The parameters of the campaign's own terms and the candidates' (:meth:`_make_space`), their prior
+        variances and which are deviations."""
+        self.space = self._make_space(*self._own_terms)
+        rtest = self.campaign.rtest
+        stated = rtest.prior_sds() if rtest is not None else None
+        priors = [make_prior(p.name, p.base, p.kind, self.campaign.priors, stated=stated)
+                  for p in self.space.parameters]
+        self.prior_var = np.array([p.sd for p in priors]) ** 2
+        self.is_deviation = np.array([p.group == "deviation" for p in self.space.parameters])
+
+    def extended(self, candidates: list) -> Planner:
+        """This planner (its campaign, data, scales and targets) valuing ``candidates`` instead: the campaign's own
+        rows kept, laid over the parameters the new candidates add (their set-ups' and mounts' terms, zero in the
+        campaign's rows) and without those only this planner's candidates had, not made again."""
+        new = copy.copy(self)
+        new.candidates, new._rows_cache = list(candidates), None
+        new._setups, new._mounts = dict(self._setups), dict(self._mounts)
+        for c in new.candidates:
+            if isinstance(c, Candidate):
+                new._setups.setdefault(c.setup.id, c.setup)
+                new._mounts.setdefault(c.mount.id, c.mount)
+        new._lay_out()
+        # the columns of this planner's own candidates' terms (no row of the campaign's touches them) are left out
+        kept = set(new.space.names)
+        old = [j for j, n in enumerate(self.space.names) if n in kept]
+        new.A = np.zeros((len(self.A), len(new.space)))
+        new.A[:, [new.space.index(self.space.names[j]) for j in old]] = self.A[:, old]
+        new.T = new.target_matrix(new.space)
+        return new
 
     def _make_space(self, probe: list, rtest: list = ()) -> ParameterSpace:
         """The parameters: the machine's deviations, every set-up's and mount's terms (the candidates' too), the
@@ -335,7 +363,7 @@ class Planner:
     def candidate_rows(self, candidates: list | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
         """For each candidate, its rows ``(k, P)`` and precision weights ``(k,)`` (1/mm²); the planner's own
         candidates' rows made once."""
-        if candidates is None or candidates is self.candidates:
+        if candidates is None or _same(candidates, self.candidates):
             if self._rows_cache is None:
                 self._rows_cache = self._rows_of_each(self.candidates)
             return self._rows_cache
@@ -511,6 +539,12 @@ class Planner:
         W = 1.0 / V
         M = [np.einsum("mp,rm,mq->rpq", X0, W**j, X0) for j in (1, 2, 3)]
         return trace_inv_sq(*M, np.sum(W**2, axis=1))
+
+
+def _same(candidates: list, others: list) -> bool:
+    """Whether two lists hold the same candidate objects in the same order (the planner keeps a copy of the list it
+    was given, which its callers then pass back)."""
+    return candidates is others or (len(candidates) == len(others) and all(a is b for a, b in zip(candidates, others)))
 
 
 def _first_order(model) -> np.ndarray:

@@ -164,9 +164,7 @@ def tool_length_sweep(planner: Planner, campaign, pattern: str, extensions=SWEEP
     """Expected target sds for ``pattern`` at the primary setup plus each extension (mm)."""
     kit = kit_of(campaign)
     cands = sweep_candidates(campaign, pattern, extensions)
-    sub = planner_for(campaign, cands, planner.targets, sigma_model=planner.sigma_model, model=planner.model,
-                      data=planner.data, sigma_prior=planner.learnt)
-    ev = sub.evaluate()
+    ev = planner.extended(cands).evaluate()
     rows = []
     fits = feasibility_of(campaign)
     for k, (c, e) in enumerate(zip(cands, extensions)):

@@ -213,8 +213,9 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     bar, dx_BT and σ_model sampled, σ_model under its assumed prior).  ``statement=False``: a summary without the
     GUM statement and the uncertainty budget (a posterior shown beside another).  ``lean=True`` with exact draws
     (``settings.sampler == "exact"``), for a posterior whose intervals alone are shown: an InferenceData of the
-    posterior alone (no prior, predictions or log-likelihood), no chain diagnostics and no check against the
-    exact posterior (the draws are independent draws of it); with sampled chains it changes nothing.
+    posterior alone (no prior, predictions or log-likelihood), no chain diagnostics, no check against the
+    exact posterior (the draws are independent draws of it) and no check of the linear model's first order (its
+    warnings are the main posterior's to give); with sampled chains it changes nothing.
     ``sampled(result)`` is called with the :class:`~mtmcal_bayes.inference.sampling.SamplingResult` as soon as the
     chains exist (a report begins the figures that need them alone); ``reference=False`` leaves the check against
     the approximation the sampler started from to the caller (:meth:`PosteriorResult.check_reference`)."""
@@ -237,7 +238,7 @@ def sample_posterior(campaign, *, model: str | None = None, fix_dx_BT: bool | No
     # σ_model, joins them in the report)
     comp = comparison(summary, references(analysis.identification))
     ref = None if beside or not reference else reference_check(result, summary)
-    warn = result.messages + linear_model_check(result) + ([] if beside else diagnostics_warnings(summary))
+    warn = result.messages + ([] if beside else linear_model_check(result) + diagnostics_warnings(summary))
     reference_at = len(warn)  # where the check's warnings go (made later: check_reference)
     warn += reference_warnings(ref, summary)
     warn += [campaign.lacking_data_note()] if campaign.ballbar.planned else []  # planned runs: not in the data

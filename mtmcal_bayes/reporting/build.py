@@ -150,18 +150,20 @@ def priors_table(post) -> pd.DataFrame:
                          for p in post.priors.priors]).set_index("parameter")
 
 
-def _side_posterior(analysis, settings: SamplerSettings, say, progress):
+def _side_posterior(analysis, settings: SamplerSettings, say, progress, *, ppc_here: bool):
     """How the report gets the posterior of other data than its main one, for the instruments' comparison: for the
     linear model (normal priors) exact draws of its closed-form σ-marginal posterior, which is what sampling would
     converge to; for a kinematic model the sampler.  The report shows their intervals; the ball-bar one, when the
-    main posterior is not, also supplies the eccentricity plots (its predictions)."""
+    main posterior did not see the ball bar (not ``ppc_here``), also supplies the eccentricity plots (its
+    predictions)."""
     def side(data: str) -> PosteriorResult:
         other = analysis.variant(data=data)
         exact = other.model == "linear" and other.approximation.exact
         how = "exact draws" if exact else "sampling"
         say(f"{how} of the posterior ({other.model}, {DATA_WORDS[data]}) to compare the instruments")
         s = dataclasses.replace(settings, sampler="exact") if exact else settings
-        return sample_posterior(other, settings=s, progress=progress, statement=False, lean=data != "ballbar")
+        return sample_posterior(other, settings=s, progress=progress, statement=False,
+                                lean=data != "ballbar" or ppc_here)
     return side
 
 
@@ -452,7 +454,7 @@ def _rest_of_report(rep, analysis, campaign, *, settings, say, progress, compare
         pairs = check_instruments(analysis, explain=False)
         disputed = pairs.disputed
     if _compares_instruments(campaign):
-        instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress),
+        instruments = compare_instruments({data: rep}, _side_posterior(analysis, settings, say, progress, ppc_here=ppc_here),
                                           data_instruments("all", campaign))
         if pairs is None:  # else every pair's verdicts, the ball bar / probe pair's among them
             disputed = disputed_deviations(instruments.consistency, instruments.posteriors["ballbar"].log_posterior,
