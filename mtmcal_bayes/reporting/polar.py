@@ -9,7 +9,7 @@ from matplotlib.lines import Line2D
 
 from .. import units
 from ..conventions import machine_repeats
-from ..figure_style import COLOURS, figure, tight_layout
+from ..figure_style import COLOURS, figure
 from ..io.machine_reader import description_of
 from ..observations import Observations
 from ..machines import patterns as described_patterns
@@ -26,6 +26,10 @@ CAPTION = (
 )
 N_BAND_DRAWS = 400
 C_GRID_DEG = np.linspace(0.0, 360.0, 181)
+#: the panels' layout, inches: margins at the sides, above (a panel's two-line title), below (the legend) and the
+#: gaps between panels (a title and the angle labels beneath the panel above); fixed, not measured, since every
+#: panel has the same decorations (measuring them was half the figure's time)
+SIDE_IN, TOP_IN, BOTTOM_IN, ROW_GAP_IN, COLUMN_GAP_IN = 0.45, 0.85, 0.85, 1.15, 0.7
 
 
 def _runs(campaign):
@@ -108,12 +112,22 @@ def polar_figure(result, campaign, seed: int = 0):
             ax.set_thetamax(np.rad2deg(psi.max()))
         ax.tick_params(axis="x", labelsize=8)
         e = ", ".join(f"{c} {v:+.1f}" for c, v in zip(names, reps.mean(axis=0)))
-        ax.set_title(f"{run.pattern} @ {run.setup}/{run.mount}  ({g.mount})\n"
+        held = "".join(f", {a} {v:g}° held" for a, v in (run.hold_deg or {}).items())
+        ax.set_title(f"{run.pattern}{held} @ {run.setup}/{run.mount}  ({g.mount})\n"
                      f"measured: {e} µm", fontsize=9.5, pad=12)
     handles = [Line2D([], [], color=COLOURS["observed"], lw=1.6, label="measured (mean of repeats)"),
                Line2D([], [], color="0.55", lw=0.7, label="each repeat"),
                Line2D([], [], color=COLOURS["posterior"], lw=8, alpha=0.35, label="posterior 95 % band"),
                Line2D([], [], color="0.3", lw=1.0, ls=":", label="ΔL = 0")]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=9, frameon=False)
-    tight_layout(fig, (0, 0.5 / fig.get_figheight(), 1, 1), h_pad=2.5)
+    _lay_out(fig, nrows, ncols)
     return fig
+
+
+def _lay_out(fig, nrows: int, ncols: int) -> None:
+    """Place the panels by the fixed margins and gaps (inches) of :data:`SIDE_IN` and the others."""
+    W, H = fig.get_figwidth(), fig.get_figheight()
+    panel_w = (W - 2 * SIDE_IN - (ncols - 1) * COLUMN_GAP_IN) / ncols
+    panel_h = (H - TOP_IN - BOTTOM_IN - (nrows - 1) * ROW_GAP_IN) / nrows
+    fig.subplots_adjust(left=SIDE_IN / W, right=1 - SIDE_IN / W, top=1 - TOP_IN / H, bottom=BOTTOM_IN / H,
+                        wspace=COLUMN_GAP_IN / panel_w, hspace=ROW_GAP_IN / panel_h)
