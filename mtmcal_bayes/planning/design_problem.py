@@ -191,14 +191,17 @@ class DesignProblem:
     def moments(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(M (3, B, S, P, P), t (B, S))`` of designs ``counts`` (B, K)."""
         counts = np.atleast_2d(counts)
+        # the candidates some design runs (a design runs a few of a hundred: the others' terms are not read)
+        used = np.flatnonzero(counts.any(axis=0))
+        counts = counts[:, used]
         first = (counts >= 1).astype(float)
         again = np.maximum(counts - 1, 0).astype(float)
         K = len(self.candidates)
-        flat = lambda a: a.reshape(3, K, -1)  # noqa: E731  (candidates × everything else, for one matmul)
+        flat = lambda a: a.reshape(3, K, -1)[:, used]  # noqa: E731  (candidates × everything else, one matmul)
         shape = (3, len(counts)) + self.first.shape[2:]
         M = (np.stack(self.base)[:, None] + (first @ flat(self.first)).reshape(shape)
              + (again @ flat(self.again)).reshape(shape))
-        t = self.base_t[None] + first @ self.first_t + again @ self.again_t
+        t = self.base_t[None] + first @ self.first_t[used] + again @ self.again_t[used]
         return M, t
 
     @property

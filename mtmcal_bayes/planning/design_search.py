@@ -163,7 +163,9 @@ class Search:
                 ok[k] = False
                 scores = self._score(vp)
                 for j in np.flatnonzero(ok):
-                    if self.goal.has_targets and scores[j] > MET and score0 <= MET:
+                    # with targets a swap must meet them (the design met them) or come nearer (it did not): the
+                    # minutes of the others are not needed
+                    if self.goal.has_targets and (scores[j] > MET if score0 <= MET else scores[j] >= score0 - MET):
                         continue
                     trial = less.copy()
                     trial[j] += 1
