@@ -6,7 +6,8 @@ as ratios to the import floor (issue 43: report ≤ 3, sample ≤ 1.3 t_ref).
 ``t_ref`` is the import floor, ``python -c "import arviz, emcee, scipy.stats, numpy"``; each command runs as a fresh
 process right after a floor run (pairs, as bench/targets.py does), in a temporary directory, and its median wall time
 is divided by the floor's median.  ``sample`` takes the demo's default data (every instrument it has: the R-test) and
-the default sampler; ``report`` its defaults (seed 1).  Prints one JSON document.
+the default sampler; ``report`` its defaults (seed 1); the nutating head's demo (ball bar, probe and R-test) with
+every instrument and with its R-test alone.  Prints one JSON document.
 """
 
 from __future__ import annotations
@@ -37,6 +38,12 @@ def ratios(repeats: int) -> dict:
             path = rtest_demo_campaign(t)
             commands[f"sample {t}"] = ["mtmcal-bayes", "sample", path, "--quiet"]
             commands[f"report {t}"] = ["mtmcal-bayes", "report", path, "-o", f"r-{t}", "--quiet"]
+        # the nutating head's own demo has R-test runs beside the ball bar and the probe (no separate R-test demo)
+        for data in ("all", "rtest"):
+            args = ["--machine", "nutating-head", "--data", data]
+            commands[f"sample nutating-head --data {data}"] = ["mtmcal-bayes", "sample", *args, "--quiet"]
+            commands[f"report nutating-head --data {data}"] = ["mtmcal-bayes", "report", *args, "-o",
+                                                              f"r-nutating-{data}", "--quiet"]
         t_ref, times = timed_against_floor(commands, cwd, repeats)
         out["t_ref_s"] = t_ref
         for key, med in times.items():
