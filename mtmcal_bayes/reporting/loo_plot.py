@@ -77,13 +77,7 @@ def loo_figure(result: LooResult):
     axk.set_xlim(min(-0.1, float(t["pareto_k"].min()) - 0.05), max(1.5, float(t["pareto_k"].max()) + 0.1))
     axk.set_xlabel("Pareto k")
     axk.grid(axis="x", alpha=0.3)
-    handles = [Line2D([], [], color=COLOURS["posterior"], marker="o", ls="none", label="no flag"),
-               Line2D([], [], color=FLAG, marker="o", ls="none",
-                      label=f"elpd_loo ≥ {ELPD_DROP:g} below the median / Pareto k > {K_INFLUENTIAL}"),
-               Line2D([], [], color="0.55", lw=1.0, label="median elpd_loo of the kind")]
-    fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=9, frameon=False)
-    tight_layout(fig, (0, 0.45 / fig.get_figheight(), 1, 1))
-    return fig
+    return _finished(fig)
 
 
 def compact_figure(result: LooResult):
@@ -136,6 +130,11 @@ def compact_figure(result: LooResult):
             axis.annotate(name, (x[i], values.iloc[i]), xytext=(left, at), textcoords="data", fontsize=8,
                           color=FLAG, ha="left", va="center",
                           arrowprops={"arrowstyle": "-", "color": FLAG, "lw": 0.6, "shrinkA": 0, "shrinkB": 3})
+    return _finished(fig)
+
+
+def _finished(fig):
+    """``fig`` with the legend of the flags beneath, laid out."""
     handles = [Line2D([], [], color=COLOURS["posterior"], marker="o", ls="none", label="no flag"),
                Line2D([], [], color=FLAG, marker="o", ls="none",
                       label=f"elpd_loo ≥ {ELPD_DROP:g} below the median / Pareto k > {K_INFLUENTIAL}"),
