@@ -41,25 +41,29 @@ class Timing:
         search asks this tens of thousands of times; walking stand-in runs through :func:`canonical_order` and
         ``MachineClock._steps`` took half as long again over a whole design, so the walk is written out here
         (``tests/test_machine_time.py`` holds it equal to :meth:`total`)."""
-        seq = []  # (setup id, placement key, candidate index) in designed order
+        # the runs grouped by set-up, then placement, each in the order of first appearance (designed order)
+        groups: dict = {}
         for k in np.flatnonzero(counts):
             c = candidates[k]
-            seq += [(c.setup.id, c.mount.id if i == 0 else ("again", int(k), i), int(k)) for i in range(int(counts[k]))]
-        setups = list(dict.fromkeys(s for s, _, _ in seq))
-        if start[1] in setups:
+            k = int(k)
+            by_mount = groups.setdefault(c.setup.id, {})
+            by_mount.setdefault(c.mount.id, []).append(k)
+            for i in range(1, int(counts[k])):
+                by_mount[("again", k, i)] = [k]
+        setups = list(groups)
+        if start[1] in groups:
             setups.remove(start[1])
             setups.insert(0, start[1])
         m = self.model
         mounted, setup, mount = start
         t = 0.0
         for s in setups:
-            here = [x for x in seq if x[0] == s]
-            mounts = list(dict.fromkeys(x[1] for x in here))
-            if s == start[1] and start[2] in mounts:
+            mounts = list(groups[s])
+            if s == start[1] and start[2] in groups[s]:
                 mounts.remove(start[2])
                 mounts.insert(0, start[2])
             for mt in mounts:
-                for _, _, k in (x for x in here if x[1] == mt):
+                for k in groups[s][mt]:
                     if not mounted:
                         t += m.mount_ballbar_min
                     if s != setup:
