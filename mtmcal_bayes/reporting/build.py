@@ -218,7 +218,7 @@ def build_report(campaign, out_dir, *, model: str = "linear", settings: SamplerS
                 # the figures that need the chains alone are drawn while they are summarised (the second core is
                 # free then), the check against the exact posterior is made once the other figures are begun
                 rep = sample_posterior(analysis, settings=settings, progress=progress, tolerances=tol,
-                                       sampled=lambda result: _draw_chains(drawing, result, campaign, data, say),
+                                       sampled=lambda result: _draw_chains(drawing, result, campaign, data=data, say=say),
                                        reference=False)
             if rep.conformity is not None and not rep.conformity.empty:
                 say("asking the planner how to decide the undecided tolerances")
@@ -387,7 +387,7 @@ FIGURE_ORDER = ("machine.png", "deviations.png", "corner.png", "forest.png", "pp
                 "budget.png", "sigma_model.png", "plan_ranking.png", "plan_sweep.png", "rtest.png")
 
 
-def _draw_chains(drawing: Drawing, result, campaign, data: str, say) -> None:
+def _draw_chains(drawing: Drawing, result, campaign, *, data: str, say) -> None:
     """Begin the main posterior's figures that need its chains alone (the polar trajectories, where it saw the ball
     bar) in one process, while the report summarises them."""
     if _saw_ballbar(data, campaign):
