@@ -363,7 +363,7 @@ def _candidates_note(instruments: list[str], scale: str) -> str:
     names = {"ballbar": "σ_model", "probe": "σ_model_probe", "rtest": "σ_model_rtest"}
     others = [names[i] for i in instruments if i != scale]
     return ("candidates: " + "; ".join(words[i] for i in instruments)
-            + f"; the discrepancy scale learnt and integrated out is {names[scale]}"
+            + f"; the discrepancy scale the data teach and the search integrates out is {names[scale]}"
             + (f" ({', '.join(others)} at the rms of {'its' if len(others) == 1 else 'their'} prior in the search, "
                "integrated out in the exact check)" if others else "")
             + " (docs/design.md, \"Every instrument\")")

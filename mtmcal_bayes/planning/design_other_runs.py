@@ -25,7 +25,7 @@ def run_id(order: int, run) -> str:
     return f"design {order:02d} {run.candidate.kind} {run.candidate.axis}"
 
 
-def other_record(order: int, run, minutes: float, why: str, programs: bool) -> dict:
+def other_record(order: int, run, *, minutes: float, why: str, programs: bool) -> dict:
     """The record of a designed probe or R-test run (``design --json``'s ``runs``)."""
     c = run.candidate
     if c.instrument == "probe":

@@ -38,7 +38,7 @@ def run_records(design: Design, programs: bool = False) -> list[dict]:
     view = copy.copy(design)  # the ball bar's runs come first in measuring order: their records keep their order
     view.runs, view.minutes, view.why = ([x[i] for i in bar] for x in (design.runs, design.minutes, design.why))
     out = kit_of(design.campaign).run_records(view, programs)
-    return out + [other_record(i, r, m, why, programs)
+    return out + [other_record(i, r, minutes=m, why=why, programs=programs)
                   for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)
                   if r.instrument != "ballbar"]
 
