@@ -217,3 +217,15 @@ def test_written_design_has_programs_and_tables_to_fill_in(paths, tmp_path):
     (tmp_path / "measured.toml").write_text(text, encoding="utf-8")
     measured = load_campaign(tmp_path / "measured.toml")
     assert [r.id for r in measured.rtest.runs] == [t["id"] for t in runs]
+
+
+def test_next_names_a_probe_run(paths):
+    """``next`` on a campaign whose only instrument chosen is the probe: the next run is a probe run, named in the
+    text with its stylus and sphere."""
+    from mtmcal_bayes.planning.design_output import next_text
+    from mtmcal_bayes.planning.next_run import next_step
+
+    c = load_campaign(paths / "no_rtest.toml")
+    step = next_step(c, targets={"E_B0C": 5.0}, contraction=None, seed=0, n_sim=100, instruments=["probe"])
+    assert step.status == "measure" and step.design.runs[0].instrument == "probe"
+    assert next_text(step).startswith(f"measure next: {step.design.runs[0].candidate.name} (stylus 150 mm, sphere at")

@@ -238,10 +238,14 @@ def next_text(step: NextStep) -> str:
             lines.append(f"planned runs not needed: {', '.join(step.planned_left)}")
     else:
         r = run_records(step.design)[0]
-        where = (f"{r['setup']} (R_B {r['R_B_mm']:.1f} mm), mount {r['mount']} (R_C {r['R_C_mm']:.0f} mm)"
-                 if "R_C_mm" in r else f"{r['setup']}, mount {r['mount']} ({_where(r)})")
-        lines.append(f"measure next: {r['pattern']} at setup {where}, {r['repeats']} repeats, "
-                     f"~{r['minutes']:.0f} min — {r['why']}")
+        if "instrument" in r:  # a probe or R-test run: its table in to_fill_in.toml once written (-o)
+            lines.append(f"measure next: {r['candidate']} ({r['setup']}, {r['mount']}), {r['repeats']} repeat(s), "
+                         f"~{r['minutes']:.0f} min — {r['why']}")
+        else:
+            where = (f"{r['setup']} (R_B {r['R_B_mm']:.1f} mm), mount {r['mount']} (R_C {r['R_C_mm']:.0f} mm)"
+                     if "R_C_mm" in r else f"{r['setup']}, mount {r['mount']} ({_where(r)})")
+            lines.append(f"measure next: {r['pattern']} at setup {where}, {r['repeats']} repeats, "
+                         f"~{r['minutes']:.0f} min — {r['why']}")
         lines.append(f"time left: {step.minutes_left:.0f} min for {len(step.design.runs)} run(s); every target met "
                      f"at the end in {step.probability_targets_met:.0%} of simulated machines")
         if step.dropped:
