@@ -720,6 +720,18 @@ def _program(campaign, planned) -> str:
     return ballbar_program(campaign, planned, feed=campaign.ballbar.feed_mm_per_min)
 
 
+def _other_program(campaign, candidate) -> str:
+    """The program of a designed touch-probe or R-test run of ``campaign`` (``candidate``: its catalogue candidate),
+    as ``ncgen --probe`` / ``ncgen --rtest`` writes it."""
+    from .io.chain_programs import probe_program
+    from .io.rtest_program import rtest_program
+
+    one = candidate.alone(campaign)
+    if candidate.instrument == "probe":
+        return probe_program(one, one.probe.runs[0])
+    return rtest_program(one, one.rtest.runs[0])
+
+
 def _check_planning_model(model: str, c: Campaign) -> None:
     """The model checked for ``c``'s machine."""
     from .models import check_model, models_of
@@ -737,7 +749,8 @@ def _user_candidates(candidates, c: Campaign) -> list:
 
 def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolerances=None,
            budget_min: float | None = None, contraction: float | None = 0.5, candidates=None, times=None,
-           seed: int = 0, model: str = "linear", output=None, sigma_model_prior=None) -> DesignResult:
+           seed: int = 0, model: str = "linear", output=None, sigma_model_prior=None,
+           instruments=None) -> DesignResult:
     """Design the whole campaign: the ball-bar runs, in measuring order, that reach ``targets`` in the fewest
     machine minutes, or that improve most within ``budget_min`` (docs/design.md).
 
@@ -750,7 +763,8 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     ``sigma_model_prior``: a σ_model prior learnt elsewhere (file path or
     :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior`): σ_model is integrated out over it, and the contraction is
     measured against the wider of the assumed and the learnt prior, so a narrow learnt prior may meet it before any run
-    (docs/design.md).
+    (docs/design.md).  ``instruments``: the ones to choose among (``"ballbar,probe,rtest"`` or a list; default every
+    one the campaign has a set-up for).
     """
     from .machine_time import TimeModel
     from .planning.design_make import make_design
@@ -766,16 +780,16 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
     d = make_design(c, targets=targets, tolerances=tolerances_of(tolerances, c), contraction=contraction,
                     budget_min=budget_min, candidates=extra, time_model=TimeModel(**items), model=model, seed=seed,
                     candidates_source=str(candidates) if isinstance(candidates, (str, os.PathLike)) else "candidates",
-                    sigma_prior=learnt)
+                    sigma_prior=learnt, instruments=instruments)
     if output is None:
         return DesignResult(d)
-    files, path = write_design(d, output, program=_program, times=items)
+    files, path = write_design(d, output, program=_program, times=items, other_program=_other_program)
     return DesignResult(d, str(output), files, path)
 
 
 def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, contraction: float | None = None,
              budget_min: float | None = None, candidates=None, times=None, seed: int = 0, model: str = "linear",
-             output=None, sigma_model_prior=None) -> NextResult:
+             output=None, sigma_model_prior=None, instruments=None) -> NextResult:
     """On a partly measured designed campaign: the next run to measure (the rest re-planned from what is measured)
     or "stop: every target reached" (docs/design.md).  Targets, contraction, budget and times default to the
     campaign's ``[design]``; ``output`` receives the re-planned campaign and programs; ``sigma_model_prior`` as for
@@ -791,10 +805,10 @@ def next_run(campaign: CampaignLike = None, *, targets: dict | None = None, cont
     items = _time_items(c, times)
     step = next_step(c, targets=targets, contraction=contraction, budget_min=budget_min,
                      time_model=TimeModel(**items), candidates=_user_candidates(candidates, c), model=model, seed=seed,
-                     sigma_prior=learnt)
+                     sigma_prior=learnt, instruments=instruments)
     if output is None:
         return NextResult(step)
-    files, program = write_next(step, output, program=_program, times=items)
+    files, program = write_next(step, output, program=_program, times=items, other_program=_other_program)
     return NextResult(step, str(output), files, program)
 
 

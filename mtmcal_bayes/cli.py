@@ -126,13 +126,15 @@ def cmd_design(args) -> int:
     return _show(api.design(args.campaign, targets=_targets(args.targets), tolerances=args.tolerances,
                             budget_min=args.budget_min, contraction=None if args.contraction == 0 else args.contraction,
                             candidates=args.candidates, times=args.times, seed=args.seed, model=args.model,
-                            output=args.output, sigma_model_prior=args.sigma_model_prior), args)
+                            output=args.output, sigma_model_prior=args.sigma_model_prior,
+                            instruments=args.instruments), args)
 
 
 def cmd_next(args) -> int:
     return _show(api.next_run(args.campaign, targets=_targets(args.targets), contraction=args.contraction,
                               budget_min=args.budget_min, candidates=args.candidates, times=args.times, seed=args.seed,
-                              model=args.model, output=args.output, sigma_model_prior=args.sigma_model_prior), args)
+                              model=args.model, output=args.output, sigma_model_prior=args.sigma_model_prior,
+                              instruments=args.instruments), args)
 
 
 def cmd_ncgen(args) -> int:

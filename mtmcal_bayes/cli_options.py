@@ -118,6 +118,8 @@ def _design_goal(s, *, contraction_default) -> None:
     s.add_argument("--candidates", metavar="FILE.toml", help="candidate runs of your own ([[candidate]] tables), "
                    "added to the catalogue")
     s.add_argument("--times", metavar="FILE.toml", help="override the machine-time model (docs/design.md)")
+    s.add_argument("--instruments", metavar="LIST", default=None, help="the instruments to choose among, "
+                   "comma-separated: ballbar, probe, rtest (default: every one the campaign has a set-up for)")
     s.add_argument("--seed", type=int, default=0, help="random seed of the search and the check (default 0)")
     _model(s, "linear", help="forward model (default linear; htm models are linearised at zero)")
     _sigma_prior_option(s, ": σ_model is integrated out over it, and its contraction measured against the wider "

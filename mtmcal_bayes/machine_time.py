@@ -36,6 +36,13 @@ mount_probe_min        10       a touch-probe session's set-up: the probe in the
                                 the table, the stylus qualified (estimate)
 probe_position_min     0.5      per probe position and repeat: index the rotary axes, probe the sphere
                                 (five points) and retract (estimate; the controller cycles take 20-40 s)
+instrument_change_min  5        a design's change from one instrument to the next (ball bar, probe,
+                                R-test): take the one off the machine and clear the table before the
+                                next one's set-up (estimate)
+stylus_change_min      5        a probe run with another stylus, or a stylus set anew: change it and
+                                qualify it on the sphere (estimate)
+move_sphere_min        5        a probe run with the sphere elsewhere, or placed anew: unclamp, move,
+                                clamp it (estimate)
 =====================  =======  ===================================================================
 
 An R-test run (:func:`rtest_run_minutes`) takes ``repeats × positions × (index_rtest_min + dwell_rtest_min)``
@@ -95,6 +102,9 @@ class TimeModel:
     dwell_rtest_min: float = 2.0 / 60.0
     mount_probe_min: float = 10.0
     probe_position_min: float = 0.5
+    instrument_change_min: float = 5.0
+    stylus_change_min: float = 5.0
+    move_sphere_min: float = 5.0
 
     def __post_init__(self):
         for key, value, why in self.problems():

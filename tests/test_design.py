@@ -328,7 +328,7 @@ def test_next_text_names_the_run_and_the_time_left(run_cli, thesis):
 @pytest.mark.parametrize("args, flag, words", [
     (["--target", "alpha_XB=0.001"], "--target", ["alpha_XB", "cannot be reached"]),
     (["--target", "alpha_XB=0.5", "--budget-min", "45"], "--target", ["alpha_XB", "within 45 min", "reaches"]),
-    (["--budget-min", "20"], "--budget-min", ["shorter than the shortest run"]),
+    (["--budget-min", "20", "--instruments", "ballbar"], "--budget-min", ["shorter than the shortest run"]),
     (["--budget-min", "1"], "--budget-min", ["shorter than the shortest run"]),
     (["--target", "foo_XB=1"], "--target", ["unknown quantity"]),
     (["--target", "alpha_XB"], "--target", ["NAME=SD"]),

@@ -207,16 +207,17 @@ def test_the_reports_plan_is_made_under_the_posteriors_learnt_prior(thesis, tmp_
 
 
 def test_a_design_without_runs_is_written_whole_and_replaces_an_earlier_one(run_cli, tmp_path, monkeypatch):
-    """design -o: the thesis campaign's design (one BA run for σ_model) and then, into the same folder, its design
-    under a tight learnt prior (no run): every file written, the earlier run's program gone, the timeline saying
-    why it is empty; a design that fails while writing leaves the folder as it was."""
+    """design -o: the thesis campaign's ball-bar design (one BA run for σ_model; ``--instruments ballbar``: with the
+    probe the design is a probe run) and then, into the same folder, its design under a tight learnt prior (no run):
+    every file written, the earlier run's program gone, the timeline saying why it is empty; a design that fails
+    while writing leaves the folder as it was."""
     from mtmcal_bayes.planning import design_figures
     from mtmcal_bayes.io.campaign_reader import load_campaign
     from mtmcal_bayes.planning.machine_kit import kit_of
 
     out, prior = tmp_path / "design", tmp_path / "prior.toml"
     write_sigma_model_prior(prior, SMALL)
-    code, text, err = run_cli("design", "-o", out)
+    code, text, err = run_cli("design", "-o", out, "--instruments", "ballbar")
     assert code == 0, err
     first = json.loads((out / "design.json").read_text())
     assert [p.name for p in (out / "programs").iterdir()] == [r["program"].split("/")[-1] for r in first["runs"]]

@@ -51,6 +51,17 @@ class Candidate:
     arc_deg: tuple[float, float, float] | None = None
     hold_deg: tuple[tuple[str, float], ...] = ()
 
+    #: the instrument that measures it (a design's runs are grouped by instrument, each with its own scale)
+    instrument = "ballbar"
+
+    def renewed(self) -> set[tuple[str, str]]:
+        """The ``(group, owner)`` of the nuisance terms a further run of it sets anew: its W-ball placement's."""
+        return {("mount", self.mount.id)}
+
+    def again(self, instance: int):
+        """Itself: a further run's own placement is the designed run's mount (:mod:`.design_runs`)."""
+        return self
+
 
 _USER_KEYS = {"name", "pattern", "setup", "mount", "R_B_mm", "Z_T_mm", "X_T_mm", "Z_C_mm", "R_C_mm", "length_mm",
               "repeats"}
@@ -152,3 +163,14 @@ class WithoutBar:
     @property
     def pattern(self) -> str:
         return f"{self.kind} {self.axis}"
+
+    @property
+    def instrument(self) -> str:
+        return self.kind
+
+    def again(self, instance: int):
+        """The candidate as its ``instance``-th run (2, 3, ...): its own terms (:meth:`renewed`) under owners of their
+        own, ``<id>#<instance>``."""
+        import dataclasses
+
+        return self if instance == 1 else dataclasses.replace(self, id=f"{self.id}#{instance}")

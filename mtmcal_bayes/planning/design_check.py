@@ -25,11 +25,18 @@ from .. import units
 from ..inference.marginal import MarginalPosterior
 from ..inference.priors import make_prior
 from ..observations import Observations
+from ..parameters import ParameterSpace
 from .design import Planner
+from .design_problem import taught_prior
 from .design_runs import DesignedRun, with_runs
+from .design_timing import SESSION
 
 #: simulated machines of the check
 N_SIM = 400
+#: cells per discrepancy scale of the check's grid, by the number of scales: one, the marginal posterior's own
+#: default; two, its 48²; three, 24³ rather than its 48³ (8× fewer cells: each machine's realised sds within 0.6 % of
+#: a 32³ grid's, their means within 0.02 %; 16³ was 4.7 % off; docs/design.md, "Every instrument")
+CHECK_CELLS = {1: None, 2: 48, 3: 24}
 
 
 @dataclass
@@ -66,22 +73,47 @@ class Preposterior:
         return float(np.mean(np.all(self.sd <= tg, axis=1)))
 
 
-def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SIM, seed: int | None = 0) -> Preposterior:
-    """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring)."""
+def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SIM, seed: int | None = 0,
+                 taught: str = "ballbar") -> Preposterior:
+    """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring).
+
+    Touch-probe and R-test runs among ``runs`` carry their own discrepancy scales: each simulated machine draws
+    every scale from its prior (the ball bar's from today's posterior where the campaign has measured it), and the
+    exact posterior integrates all of them out on a grid of :data:`CHECK_CELLS` cells per scale; ``taught`` the
+    instrument whose scale's contraction is reported (:mod:`.design_instruments`)."""
     rng = np.random.default_rng(seed)
     campaign = planner.campaign
     aug = with_runs(campaign, runs, planner.as_run)
+    others = [r.measured for r in runs if r.instrument != "ballbar"]
     space = planner.space_for(aug)
-    priors = [make_prior(p.name, p.base, p.kind, campaign.priors) for p in space.parameters]
+    if others:
+        space = ParameterSpace(list(aug.ballbar.setups), list(aug.ballbar.mounts), planner.deviations,
+                               [t for c in others if c.instrument == "probe" for t in c.terms(campaign)],
+                               table=planner.table,
+                               rtest=list(dict.fromkeys(t for c in others if c.instrument == "rtest"
+                                                        for t in c.terms(campaign))))
+    stated = campaign.rtest.prior_sds() if campaign.rtest is not None else None
+    priors = [make_prior(p.name, p.base, p.kind, campaign.priors, stated=stated) for p in space.parameters]
     prior_var = np.array([p.sd for p in priors]) ** 2
     prior_mean = np.array([p.mean for p in priors])
     A = planner.rows_for(aug, space)
     keys = Observations.from_campaign(aug).keys
     m0 = len(campaign.ballbar.runs)
-    new = np.array([k.run >= m0 for k in keys])
+    bar_runs = [r for r in runs if r.instrument == "ballbar"]
     sigma0 = planner.sigma_model
     base_now = planner.V - sigma0**2
-    base_new = np.array([planner.noise_var(runs[k.run - m0].repeats) - sigma0**2 for k in keys if k.run >= m0])
+    base_new = [np.array([planner.noise_var(bar_runs[k.run - m0].repeats) - sigma0**2 for k in keys
+                          if k.run >= m0])]
+    instrument = ["ballbar"] * len(A)
+    for c in others:
+        rows, base = c.rows(campaign, space, planner.deviations, planner.table)
+        A = np.vstack([A, rows])
+        base_new.append(base)
+        instrument += [c.instrument] * len(rows)
+    base_new = np.concatenate(base_new)
+    new = np.concatenate([np.array([k.run >= m0 for k in keys], dtype=bool), np.ones(len(A) - len(keys), dtype=bool)])
+    scales = [i for i in SESSION if i in instrument]  # the scales with rows, the ball bar's first
+    groups = np.array([scales.index(i) for i in instrument], dtype=int)
     T = planner.target_matrix(space)
     sigma_prior = planner.sigma_prior()
     # the grid of the simulated campaigns' posteriors: the prior's range, widened to where the measured data put σ
@@ -100,16 +132,35 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
         sigma = sigma_prior.rvs(size=n_sim, random_state=rng)
         sd_now = np.sqrt(np.sum(T**2 * prior_var, axis=1))[None]
         var_now = float(sigma_prior.var())
-    y_new = theta @ A[new].T + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None] + sigma[:, None] ** 2)
-    y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
-    after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, sigma_prior, prior_mean=prior_mean,
-                              sigma_min=lo, sigma_max=hi)
+    if scales == ["ballbar"] or not scales:  # one scale: the ball bar's, as before any other instrument
+        y_new = theta @ A[new].T + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None]
+                                                                                         + sigma[:, None] ** 2)
+        y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
+        after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, sigma_prior,
+                                  prior_mean=prior_mean, sigma_min=lo, sigma_max=hi)
+        s = after.sigma[:, 0]
+        prior_var_s = planner.contraction_reference() or float(sigma_prior.var())  # a learnt prior: the wider one's
+    else:
+        own = {i: taught_prior(planner, i) for i in scales}
+        draws = {i: (sigma if i == "ballbar" else own[i].rvs(size=n_sim, random_state=rng)) for i in scales}
+        per_row = np.column_stack([draws[i] for i in scales])[:, groups[new]]  # (n_sim, new rows)
+        y_new = theta @ A[new].T + rng.standard_normal(per_row.shape) * np.sqrt(base_new[None] + per_row**2)
+        y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
+        lows = [lo if i == "ballbar" else float(own[i].ppf(1e-5)) for i in scales]
+        highs = [hi if i == "ballbar" else float(own[i].ppf(0.99999)) for i in scales]
+        after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, [own[i] for i in scales],
+                                  prior_mean=prior_mean, sigma_min=lows, sigma_max=highs, groups=groups,
+                                  cells=CHECK_CELLS[min(len(scales), 3)])
+        g = scales.index(taught) if taught in scales else 0
+        s = after.sigma[:, g]
+        if taught != "ballbar":  # today's posterior rests on the ball bar: this scale is at its prior
+            var_now = float(own[taught].var()) if taught in own else var_now
+        prior_var_s = (planner.contraction_reference() or float(sigma_prior.var())) if taught == "ballbar" else \
+            float(taught_prior(planner, taught).var())
     _, sd = after.target_moments(y_all, T)
     w = after.weights(y_all)  # (G, n)
-    s = after.sigma[:, 0]
     mean_s = s @ w
     var_s = (s**2) @ w - mean_s**2
-    prior_var_s = planner.contraction_reference() or float(sigma_prior.var())  # a learnt prior: the wider one's
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     return Preposterior(list(planner.targets), sd * scale, sd_now[0] * scale, 1.0 - var_s / prior_var_s,
                         float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"))

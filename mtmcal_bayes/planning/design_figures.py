@@ -117,10 +117,12 @@ def write_design_html(design, out_dir, *, doc: dict, runs: pd.DataFrame, expecte
     if "R_C_mm" in runs:
         where = ["R_C_mm"]
     else:  # a described machine's: the W ball, the arc and the held axes as a reader writes them
+        # a probe or R-test run has none of them (its stylus or nest and sphere are its set-up and mount)
         runs = runs.assign(
-            position_mm=[", ".join(f"{x:g}" for x in v) for v in runs["position_mm"]],
-            arc_deg=[f"{a:g}…{b:g}° by {d:g}°" for a, b, d in runs["arc_deg"]],
-            hold_deg=[", ".join(f"{k} {v:g}°" for k, v in h.items()) or "—" for h in runs["hold_deg"]])
+            position_mm=[", ".join(f"{x:g}" for x in v) if isinstance(v, list) else "—" for v in runs["position_mm"]],
+            arc_deg=[f"{v[0]:g}…{v[1]:g}° by {v[2]:g}°" if isinstance(v, list) else "—" for v in runs["arc_deg"]],
+            hold_deg=[", ".join(f"{k} {v:g}°" for k, v in h.items()) or "—" if isinstance(h, dict) else "—"
+                      for h in runs["hold_deg"]])
         where = ["position_mm", "arc_deg", "hold_deg"]
     page.table(runs[["pattern", "setup", "mount", "R_B_mm", *where, "repeats", "minutes", "program", "why"]],
                digits={"R_B_mm": 1, "R_C_mm": 0, "minutes": 1})

@@ -25,6 +25,7 @@ from .candidates import Candidate
 from .machine_kit import catalogue_of, feasibility_of
 from .design import Planner, target_names
 from .design_check import Preposterior, preposterior
+from .design_instruments import chosen_instruments, other_candidates, taught
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
 from .design_runs import DesignedRun, designed_runs
 from .design_search import Goal, Search
@@ -72,6 +73,8 @@ class Design:
     determined: np.ndarray | None = None
     #: {deviation: why} the deviations that are no reported quantity of their own (:func:`.determined.not_targeted`)
     not_targeted: dict = field(default_factory=dict)
+    #: the instruments the design chose among (:mod:`.design_instruments`)
+    instruments: list = field(default_factory=lambda: ["ballbar"])
 
     @property
     def total_minutes(self) -> float:
@@ -133,10 +136,12 @@ def targets_from_tolerances(planner: Planner, tolerances: dict, source: str = "t
     return out
 
 
-def design_candidates(campaign, extra: list[Candidate] | None = None, source: str = "candidates") -> list[Candidate]:
+def design_candidates(campaign, extra: list[Candidate] | None = None, source: str = "candidates",
+                      instruments=("ballbar",)) -> list[Candidate]:
     """``extra`` (the user's, or a designed campaign's planned runs; each checked: within the travels, at the
-    campaign's bar length) and the catalogue's new ball-bar runs within the travels, one candidate per pattern,
-    set-up, mount and repeats (the first given)."""
+    campaign's bar length), the catalogue's new ball-bar runs within the travels (with the ball bar among
+    ``instruments``), one candidate per pattern, set-up, mount and repeats (the first given), then the touch-probe
+    and R-test runs of the catalogues within the travels (:func:`.design_instruments.other_candidates`)."""
     out = []
     fits = feasibility_of(campaign)
     for i, c in enumerate(extra or []):
@@ -148,7 +153,7 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
             raise InputError(source, f"{where}.length_mm", f"{c.length:g} mm: a campaign has one bar length "
                              f"({campaign.ballbar.length:g} mm); design another bar length as a campaign of its own")
         out.append(c)
-    for c in catalogue_of(campaign):
+    for c in catalogue_of(campaign) if "ballbar" in instruments else []:
         if c.repeat_of is None and c.kind != "bar length" and fits(c)[0]:
             out.append(c)
     seen, unique = set(), []
@@ -157,7 +162,7 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
         if key not in seen:
             seen.add(key)
             unique.append(c)
-    return unique
+    return unique + other_candidates(campaign, list(instruments))
 
 
 def reporting_planner(campaign, cands: list[Candidate], want: dict, *, tolerances=None, model: str = "linear",
@@ -232,7 +237,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                 contraction: float | None = CONTRACTION, budget_min: float | None = None,
                 candidates: list[Candidate] | None = None, time_model: TimeModel | None = None,
                 model: str = "linear", seed: int | None = 0, start=None, n_sim: int | None = None,
-                candidates_source: str = "candidates", sigma_prior=None) -> Design:
+                candidates_source: str = "candidates", sigma_prior=None, instruments=None) -> Design:
     """The designed campaign for ``campaign`` (see the module docstring).
 
     ``targets`` {quantity: sd in ″/µm}; ``tolerances`` {quantity: Tolerance} (targets from them where no sd is
@@ -241,15 +246,17 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     nothing mounted); ``sigma_prior`` a :class:`~mtmcal_bayes.sigma_prior.SigmaModelPrior` learnt elsewhere (None:
     the assumed prior): σ_model's quantiles, the contraction's Laplace prior and the exact check's draws and
     posteriors are then the learnt prior's, and the contraction is measured against the wider prior's variance
-    (:meth:`.design.Planner.contraction_reference`).
+    (:meth:`.design.Planner.contraction_reference`); ``instruments`` the ones to choose among (names or
+    ``"ballbar,probe"``; default every one the campaign has a set-up for, :mod:`.design_instruments`).
     """
     if contraction is not None and not (0.0 < contraction < 1.0):
         raise ParameterError("contraction", f"must lie between 0 and 1, got {contraction!r}")
     if budget_min is not None and not (math.isfinite(budget_min) and budget_min > 0):
         raise ParameterError("budget_min", f"must be a positive number of minutes, got {budget_min!r}")
     want = parse_targets(targets, campaign)
-    cands = design_candidates(campaign, candidates, candidates_source)
-    taken = set(campaign.ballbar.mounts) | {c.mount.id for c in cands}
+    instruments = chosen_instruments(campaign, instruments)
+    cands = design_candidates(campaign, candidates, candidates_source, instruments)
+    taken = set(campaign.ballbar.mounts) | {c.mount.id for c in cands if c.instrument == "ballbar"}
     if not cands:
         raise ParameterError("candidates", "no candidate run fits the machine's travels")
     planner = reporting_planner(campaign, cands, want, tolerances=tolerances, model=model, sigma_prior=sigma_prior)
@@ -259,7 +266,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     if not want and contraction is None and budget_min is None:
         raise ParameterError("targets", "nothing to design for: give target sds, tolerances, a σ_model contraction "
                              "or a budget")
-    problem = DesignProblem(planner)
+    problem = DesignProblem(planner, taught=taught(instruments))
     goal = Goal(_goal_vector(planner, want), contraction, budget_min)
     det = problem.determination
     refuse_undetermined(problem, goal)
@@ -282,7 +289,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                 break  # a tightened goal out of reach: keep what was found
             _refuse_within_budget(problem, goal, minutes, seed=seed, units_of=planner.target_units)
         runs = designed_runs(cands, result.counts, taken)
-        check = preposterior(planner, runs, seed=seed, **kw)
+        check = preposterior(planner, runs, seed=seed, taught=problem.taught, **kw)
         last = (result, runs, check, rounds)
         if not goal.has_targets or not runs:
             best = last
@@ -320,9 +327,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         "(parameters and σ_model from today's posterior, or the priors on a new machine)",
         f"a target is promised when it is met in at least {PROMISE:.0%} of those machines; the search uses the "
         f"closed form at σ_model's quantiles {nodes} µm",
-        "candidates: new ball-bar runs of the catalogue within the travels (bar lengths other than the campaign's "
-        "and more repeats of measured runs are not designed: a campaign has one bar length, and a later session "
-        "cannot add repeats to a measured run); touch-probe runs are not designed yet (docs/design.md)",
+        _candidates_note(instruments, problem.taught),
         "a designed run at an existing set-up assumes the T ball re-set to that set-up's offsets; re-centred, give "
         "the set-up a new id",
     ]
@@ -345,7 +350,23 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                           "contraction": float(result.value.contraction[0]),
                           "contraction_now": c_now},
                   cands, model, notes, start, rounds, learnt_summary(campaign, sigma_prior), determined,
-                  not_targeted(planner, det.identifiability()))
+                  not_targeted(planner, det.identifiability()), list(instruments))
+
+
+def _candidates_note(instruments: list[str], scale: str) -> str:
+    """What the design chose among, and which discrepancy scale it learns."""
+    words = {"ballbar": "new ball-bar runs of the catalogue within the travels (bar lengths other than the "
+                        "campaign's and more repeats of measured runs are not designed: a campaign has one bar "
+                        "length, and a later session cannot add repeats to a measured run)",
+             "probe": "touch-probe runs of the probe catalogue (each with its own stylus and sphere terms)",
+             "rtest": "R-test runs of the R-test catalogue"}
+    names = {"ballbar": "σ_model", "probe": "σ_model_probe", "rtest": "σ_model_rtest"}
+    others = [names[i] for i in instruments if i != scale]
+    return ("candidates: " + "; ".join(words[i] for i in instruments)
+            + f"; the discrepancy scale the data teach and the search integrates out is {names[scale]}"
+            + (f" ({', '.join(others)} at the rms of {'its' if len(others) == 1 else 'their'} prior in the search, "
+               "integrated out in the exact check)" if others else "")
+            + " (docs/design.md, \"Every instrument\")")
 
 
 def _remembered(minutes):

@@ -13,6 +13,7 @@ from .. import units
 from ..campaign import DesignGoal, PlannedRun
 from .design_make import Design
 from .design_problem import PROMISE
+from .design_other_runs import FILL_IN, fill_in_tables, other_program_name, other_record
 from .design_runs import geometry_of
 from .run_records import program_name
 from .machine_kit import kit_of
@@ -29,8 +30,17 @@ def run_columns(design: Design) -> list[str]:
 
 
 def run_records(design: Design, programs: bool = False) -> list[dict]:
-    """The ``runs`` of ``design --json``, in measuring order (as the machine's planning kit writes them)."""
-    return kit_of(design.campaign).run_records(design, programs)
+    """The ``runs`` of ``design --json``, in measuring order: the ball bar's as the machine's planning kit writes
+    them, then the probe's and the R-test's (:func:`.design_other_runs.other_record`)."""
+    bar = [i for i, r in enumerate(design.runs) if r.instrument == "ballbar"]
+    if len(bar) == len(design.runs):
+        return kit_of(design.campaign).run_records(design, programs)
+    view = copy.copy(design)  # the ball bar's runs come first in measuring order: their records keep their order
+    view.runs, view.minutes, view.why = ([x[i] for i in bar] for x in (design.runs, design.minutes, design.why))
+    out = kit_of(design.campaign).run_records(view, programs)
+    return out + [other_record(i, r, minutes=m, why=why, programs=programs)
+                  for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)
+                  if r.instrument != "ballbar"]
 
 
 def _where(rec: dict) -> str:
@@ -92,6 +102,10 @@ def design_text(design: Design) -> str:
     lines = [f"designed campaign: {len(design.runs)} run(s), {design.total_minutes:.0f} machine minutes "
              f"(set-up changes included)", ""]
     for rec in run_records(design):
+        if "instrument" in rec:  # a probe or R-test run
+            lines.append(f"{rec['order']:>3}. {rec['candidate']}: {rec['setup']}, {rec['mount']}, {rec['repeats']}× "
+                         f"{rec['minutes']:6.1f} min  {rec['why']}")
+            continue
         lines.append(f"{rec['order']:>3}. {rec['pattern']:<3} setup {rec['setup']:<10} mount {rec['mount']:<12} "
                      f"{_where(rec)}, {rec['repeats']}× "
                      f"{rec['minutes']:6.1f} min  {rec['why']}")
@@ -131,10 +145,12 @@ def designed_campaign(design: Design, goal: DesignGoal | None = None):
     out = copy.copy(base)
     bb = copy.copy(base.ballbar)
     bb.setups, bb.mounts = geometry_of(base, design.runs)
+    bar = [(i, r, m, why) for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)
+           if r.instrument == "ballbar"]  # the probe's and the R-test's: to_fill_in.toml (write_design)
     bb.planned = [PlannedRun(r.pattern, r.setup.id, r.mount.id, r.repeats, minutes=round(m, 1), why=why, order=i)
-                  for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)]
+                  for i, r, m, why in bar]
     kit = kit_of(base)
-    for p, r in zip(bb.planned, design.runs):  # what else a planned run records (a described one: arc, held axes)
+    for p, (_, r, _, _) in zip(bb.planned, bar):  # what else a planned run records (a described one: arc, held axes)
         kit.planned_geometry(p, r.candidate, base)
     out.ballbar = bb
     targets = {t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)}
@@ -142,9 +158,12 @@ def designed_campaign(design: Design, goal: DesignGoal | None = None):
     return out
 
 
-def write_design(design: Design, out_dir, *, program, times: dict | None = None) -> tuple[list[str], str]:
+def write_design(design: Design, out_dir, *, program, times: dict | None = None,
+                 other_program=None) -> tuple[list[str], str]:
     """Write design.json, campaign.toml, programs/NN_<pattern>.nc and design.html into ``out_dir``; ``program``
-    (campaign, planned run) -> NC text.  Returns the files written (relative) and the campaign's path."""
+    (campaign, planned run) -> NC text; with probe or R-test runs, their programs (``other_program(campaign,
+    candidate) -> NC text``) and to_fill_in.toml, their tables (:mod:`.design_other_runs`).  Returns the files
+    written (relative) and the campaign's path."""
     from ..io.campaign_writer import save_campaign
     from ..io.json_text import json_text
     from ..io.textfiles import atomic_directory
@@ -161,6 +180,19 @@ def write_design(design: Design, out_dir, *, program, times: dict | None = None)
         for i, (r, p) in enumerate(zip(design.runs, camp.ballbar.planned), start=1):
             (tmp / program_name(i, r.pattern)).write_text(program(camp, p), encoding="utf-8")
             files.append(program_name(i, r.pattern))
+        others = [(i, r) for i, r in enumerate(design.runs, start=1) if r.instrument != "ballbar"]
+        for i, r in others:
+            (tmp / other_program_name(i, r)).write_text(other_program(design.campaign, r.measured), encoding="utf-8")
+            files.append(other_program_name(i, r))
+        if others:
+            from ..io.tomlio import dumps
+
+            (tmp / FILL_IN).write_text(
+                "# The designed touch-probe and R-test runs of design.json, in measuring order: measure each with its\n"
+                "# program, fill in its readings (centres_mm: repeats x positions x 3; displacement_um likewise) and\n"
+                "# add its table to campaign.toml.\n" + dumps(fill_in_tables(design.campaign, others)),
+                encoding="utf-8")
+            files.append(FILL_IN)
         save_campaign(camp, tmp / "campaign.toml", header="designed by mtmcal-bayes design: fill in each planned run "
                       "once measured (delete planned and repeats, give ex_um/ey_um/ez_um), then run mtmcal-bayes next")
         files.insert(0, "campaign.toml")
@@ -206,10 +238,14 @@ def next_text(step: NextStep) -> str:
             lines.append(f"planned runs not needed: {', '.join(step.planned_left)}")
     else:
         r = run_records(step.design)[0]
-        where = (f"{r['setup']} (R_B {r['R_B_mm']:.1f} mm), mount {r['mount']} (R_C {r['R_C_mm']:.0f} mm)"
-                 if "R_C_mm" in r else f"{r['setup']}, mount {r['mount']} ({_where(r)})")
-        lines.append(f"measure next: {r['pattern']} at setup {where}, {r['repeats']} repeats, "
-                     f"~{r['minutes']:.0f} min — {r['why']}")
+        if "instrument" in r:  # a probe or R-test run: its table in to_fill_in.toml once written (-o)
+            lines.append(f"measure next: {r['candidate']} ({r['setup']}, {r['mount']}), {r['repeats']} repeat(s), "
+                         f"~{r['minutes']:.0f} min — {r['why']}")
+        else:
+            where = (f"{r['setup']} (R_B {r['R_B_mm']:.1f} mm), mount {r['mount']} (R_C {r['R_C_mm']:.0f} mm)"
+                     if "R_C_mm" in r else f"{r['setup']}, mount {r['mount']} ({_where(r)})")
+            lines.append(f"measure next: {r['pattern']} at setup {where}, {r['repeats']} repeats, "
+                         f"~{r['minutes']:.0f} min — {r['why']}")
         lines.append(f"time left: {step.minutes_left:.0f} min for {len(step.design.runs)} run(s); every target met "
                      f"at the end in {step.probability_targets_met:.0%} of simulated machines")
         if step.dropped:
@@ -274,12 +310,17 @@ class NextResult:
         return text
 
 
-def write_next(step: NextStep, out_dir, *, program, times: dict | None = None) -> tuple[list[str], str | None]:
+def write_next(step: NextStep, out_dir, *, program, times: dict | None = None,
+               other_program=None) -> tuple[list[str], str | None]:
     """The re-planned campaign (measured runs, then the re-planned runs) and the programs in ``out_dir``."""
     if step.design is None:
         return [], None
-    files, _ = write_design(step.design, out_dir, program=program, times=times)
-    return files, str(Path(out_dir) / program_name(1, step.design.runs[0].pattern)) if step.design.runs else None
+    files, _ = write_design(step.design, out_dir, program=program, times=times, other_program=other_program)
+    if not step.design.runs:
+        return files, None
+    first = step.design.runs[0]
+    name = program_name(1, first.pattern) if first.instrument == "ballbar" else other_program_name(1, first)
+    return files, str(Path(out_dir) / name)
 
 
 __all__ = ["DesignResult", "NextResult", "write_next", "design_document", "design_text", "designed_campaign", "write_design", "next_document", "next_text",

@@ -99,9 +99,40 @@ def prior_means(planner: Planner) -> np.ndarray:
                      for p in planner.space.parameters])
 
 
+def taught_prior(planner: Planner, instrument: str):
+    """The prior (frozen scipy distribution, mm) of ``instrument``'s discrepancy scale (:mod:`.design_instruments`)."""
+    from .design_instruments import SCALE_OF
+    from .scale_priors import scale_prior
+
+    if instrument == "ballbar":
+        return planner.sigma_prior()
+    return scale_prior(planner.campaign, SCALE_OF[instrument], planner.learnt).frozen()
+
+
 def _unseen(norms: np.ndarray, watch: np.ndarray) -> np.ndarray:
     """(B, t) the unseen part of the watched targets, 0 where determined (:data:`.determined.SUBSPACE_TOL`)."""
     return np.where(watch[None] & (norms > SUBSPACE_TOL), norms, 0.0)
+
+
+#: singular values of a candidate's rows below this fraction of its largest are dropped by :func:`_compressed`
+RANK_TOL = 1e-12
+
+
+def _compressed(X: np.ndarray, w: np.ndarray, compress: bool) -> tuple[np.ndarray, np.ndarray, int]:
+    """A candidate's rows ``X`` (r, P') and weights ``w`` (r,), as few rows as their rank where ``compress`` (a probe
+    or R-test run: tens of rows, one weight for all) and the number of rows dropped.
+
+    With one noise variance ``c`` for all its rows everything the criterion takes of a run is invariant under
+    ``X → UᵀX`` (``X = U·R``, ``U`` orthonormal columns spanning ``X``'s): ``XᵀN⁻ʲX``, the Woodbury updates
+    (``W⁻¹ = U W′⁻¹ Uᵀ + (I − UUᵀ)/c``) and, with its own terms integrated out, ``Xᵀ(cI + X_w X_wᵀ)⁻¹X``; only
+    ``tr N⁻²`` counts every row (``dropped · c⁻²`` added back).  So a run is its ``R = S·Vᵀ`` (SVD), at most as many
+    rows as the parameters it touches, and the batched updates are padded to that, not to a sweep's 108 rows."""
+    if not compress or len(X) == 0 or not np.allclose(w, w[0], rtol=1e-12, atol=0.0):
+        return X, w, 0
+    _, sv, vt = np.linalg.svd(X, full_matrices=False)
+    k = int(np.sum(sv > RANK_TOL * sv[0])) if sv.size and sv[0] > 0 else 0
+    k = max(k, 1)
+    return sv[:k, None] * vt[:k], np.full(k, w[0]), len(X) - k
 
 
 def _inv_powers(N: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -120,15 +151,26 @@ class DesignProblem:
     nodes : σ_model values (S,), mm (default :func:`sigma_nodes`)
     """
 
-    def __init__(self, planner: Planner, nodes: np.ndarray | None = None):
+    def __init__(self, planner: Planner, nodes: np.ndarray | None = None, taught: str = "ballbar"):
         self.planner = planner
         self.candidates = planner.candidates
+        #: the instrument whose discrepancy scale is learnt and integrated out (:mod:`.design_instruments`); the
+        #: others' rows at the rms of their priors, as the planner's
+        self.taught = taught
         #: (t,) the targets whose determination by the design's runs is part of the criterion (None: none): a target
         #: the prior alone meets is met only once the runs determine it (:mod:`.determined`)
         self.watch: np.ndarray | None = None
-        self.nodes = sigma_nodes(planner) if nodes is None else np.asarray(nodes, float)
-        self.sigma_prior_var = float(planner.sigma_prior().var())
-        self.sigma_reference_var = planner.contraction_reference()  # None: the prior's
+        if taught == "ballbar":
+            self.nodes = sigma_nodes(planner) if nodes is None else np.asarray(nodes, float)
+            self.sigma_prior_var = float(planner.sigma_prior().var())
+            self.sigma_reference_var = planner.contraction_reference()  # None: the prior's
+        else:  # the campaign's posterior rests on the ball bar's data: this scale is at its prior
+            prior = taught_prior(planner, taught)
+            self.nodes = np.array([float(prior.ppf(q)) for q in NODE_LEVELS]) if nodes is None else \
+                np.asarray(nodes, float)
+            self.sigma_prior_var = float(prior.var())
+            self.sigma_reference_var = None
+        fixed = {"ballbar": planner.sigma_model, "probe": planner.sigma_probe, "rtest": planner.sigma_rtest}
         scale = np.sqrt(planner.prior_var)
         rows = planner.candidate_rows()
         self._rows = [A for A, _ in rows]
@@ -146,16 +188,23 @@ class DesignProblem:
         to_display = np.array([units.from_internal(1.0, u) for u in planner.target_units])
         self.to_display = to_display
         P = len(self.cols)
-        base0 = planner.V - planner.sigma_model**2
-        N0 = base0[None, :] + s2[:, None]  # (S, m)
-        self.base = [np.einsum("mp,sm,mq->spq", X0, N0 ** -j, X0) for j in (1, 2, 3)]  # each (S, P, P)
-        self.base_t = np.sum(N0 ** -2.0, axis=1)  # (S,)
+        if taught == "ballbar":
+            base0 = planner.V - planner.sigma_model**2
+            N0 = base0[None, :] + s2[:, None]  # (S, m)
+            self.base = [np.einsum("mp,sm,mq->spq", X0, N0 ** -j, X0) for j in (1, 2, 3)]  # each (S, P, P)
+            self.base_t = np.sum(N0 ** -2.0, axis=1)  # (S,)
+        else:  # the campaign's ball-bar rows at their fixed scale: nothing about the scale learnt
+            one = np.einsum("mp,m,mq->pq", X0, 1.0 / planner.V, X0)
+            self.base = [np.broadcast_to(one, (len(s2),) + one.shape).copy()] + [np.zeros((len(s2),) + one.shape)] * 2
+            self.base_t = np.zeros(len(s2))
         K, S = len(rows), len(self.nodes)
         self.first = np.zeros((3, K, S, P, P))
         self.again = np.zeros((3, K, S, P, P))
         self.first_t = np.zeros((K, S))
         self.again_t = np.zeros((K, S))
-        r_max = max((len(A) for A, _ in rows), default=1)
+        parts = [_compressed((A * scale)[:, self.cols], w, c.instrument != "ballbar")
+                 for (A, w), c in zip(rows, self.candidates)]
+        r_max = max((len(X) for X, _, _ in parts), default=1)
         # low-rank factors of each run, padded to r_max rows (zero rows, unit noise): rows X (K, r, P) and noise
         # N, N⁻², N⁻³ (K, S, r, r) of a first run (f) and a further one (a), for :meth:`value_plus_one`
         self.Xf, self.Xa = np.zeros((K, r_max, P)), np.zeros((K, r_max, P))
@@ -164,28 +213,34 @@ class DesignProblem:
         self.D2f, self.D3f = np.zeros_like(self.Nf), np.zeros_like(self.Nf)
         self.D2a, self.D3a = np.zeros_like(self.Nf), np.zeros_like(self.Nf)
         names = planner.space.parameters
-        for k, ((A, w), c) in enumerate(zip(rows, self.candidates)):
-            Xc = (A * scale)[:, self.cols]
-            base_c = 1.0 / w - planner.sigma_model**2  # (r,)
-            Nc = base_c[None, :] + s2[:, None]  # (S, r)
-            for j in (1, 2, 3):
-                self.first[j - 1, k] = np.einsum("rp,sr,rq->spq", Xc, Nc ** -j, Xc)
-            self.first_t[k] = np.sum(Nc ** -2.0, axis=1)
-            own = np.array([names[i].group == "mount" and names[i].owner == c.mount.id for i in self.cols])
+        for k, ((Xc, w, dropped), c) in enumerate(zip(parts, self.candidates)):
+            learnt = c.instrument == taught  # its rows' noise follows the learnt scale; else fixed at its rms
+            base_c = 1.0 / w - fixed[c.instrument] ** 2  # (r,)
+            Nc = base_c[None, :] + s2[:, None] if learnt else np.broadcast_to(1.0 / w, (len(s2), len(w)))  # (S, r)
+            # the scale's Fisher information comes from the rows whose noise it is: ∂C/∂σ = 2σ·D, D their indicator,
+            # so N⁻², N⁻³ and tr N⁻² of the others' rows are left out of M₂, M₃ and t
+            self.first[0, k] = np.einsum("rp,sr,rq->spq", Xc, Nc ** -1, Xc)
+            if learnt:
+                for j in (2, 3):
+                    self.first[j - 1, k] = np.einsum("rp,sr,rq->spq", Xc, Nc ** -j, Xc)
+                self.first_t[k] = np.sum(Nc ** -2.0, axis=1) + dropped * Nc[:, 0] ** -2.0
+            renewed = c.renewed()
+            own = np.array([(names[i].group, names[i].owner) in renewed for i in self.cols], dtype=bool)
             Xw = Xc[:, own]
             Xr = np.where(own[None, :], 0.0, Xc)
             Nr = np.einsum("sr,rq->srq", Nc, np.eye(len(base_c))) + (Xw @ Xw.T)[None]
             powers = _inv_powers(Nr)
-            for j, Nj in enumerate(powers):
+            for j, Nj in enumerate(powers if learnt else powers[:1]):
                 self.again[j, k] = np.einsum("rp,srq,qk->spk", Xr, Nj, Xr)
-            self.again_t[k] = np.trace(powers[1], axis1=1, axis2=2)
             r = len(base_c)
             self.Xf[k, :r], self.Xa[k, :r] = Xc, Xr
             self.Nf[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc, np.eye(r))
             self.Na[k, :, :r, :r] = Nr
-            self.D2f[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc ** -2.0, np.eye(r))
-            self.D3f[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc ** -3.0, np.eye(r))
-            self.D2a[k, :, :r, :r], self.D3a[k, :, :r, :r] = powers[1], powers[2]
+            if learnt:
+                self.again_t[k] = np.trace(powers[1], axis1=1, axis2=2) + dropped * Nc[:, 0] ** -2.0
+                self.D2f[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc ** -2.0, np.eye(r))
+                self.D3f[k, :, :r, :r] = np.einsum("sr,rq->srq", Nc ** -3.0, np.eye(r))
+                self.D2a[k, :, :r, :r], self.D3a[k, :, :r, :r] = powers[1], powers[2]
 
     # ------------------------------------------------------------------ criterion
     def moments(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -25,7 +25,7 @@ def beyond_travels(campaign, cands: list[Candidate]) -> list[tuple[Candidate, st
     """The catalogue's new ball-bar runs at the campaign's bar length that the travels exclude, with why (the axis
     and its commands against its travel, as ``plan`` states it)."""
     fits = feasibility_of(campaign)
-    taken = {(c.pattern, c.setup.id, c.mount.id, c.arc_deg, c.hold_deg) for c in cands}
+    taken = {(c.pattern, c.setup.id, c.mount.id, c.arc_deg, c.hold_deg) for c in cands if c.instrument == "ballbar"}
     out = []
     for c in catalogue_of(campaign):
         if c.repeat_of is not None or c.kind == "bar length":
@@ -65,7 +65,8 @@ def what_would_determine(problem, target: str) -> str:
             parts.append(f"the runs determine it only in the combination {c.name}")
             break
     beyond = beyond_travels(campaign, problem.candidates)
-    probes = probe_candidates(campaign)
+    # the catalogue's probe runs where the design does not choose among them already
+    probes = [] if any(c.instrument == "probe" for c in problem.candidates) else probe_candidates(campaign)
     try:
         wide, det = _wider(problem, [c for c, _ in beyond] + probes, target)
     except (ParameterError, KeyError, ValueError):  # a candidate the planner cannot take: say nothing of it
@@ -81,7 +82,7 @@ def what_would_determine(problem, target: str) -> str:
         with_probe = base.copy()
         with_probe[K + len(beyond):] = 1
         if probes and det.determined(with_probe)[0]:
-            parts.append("touch-probe runs would (plan ranks them; design does not choose them yet)")
+            parts.append("touch-probe runs would (--instruments with probe)")
         elif probes:
             parts.append("touch-probe runs of the catalogue would not either")
     if not any("beyond" in p or "touch-probe runs would (" in p for p in parts):

@@ -3,7 +3,8 @@
 A design counts runs per candidate; here each becomes one run.  The first run of a candidate is
 at the candidate's mount; each further one is on a W-ball placement of its own (a re-clamped ball:
 own offsets, the campaign format's rule for a second run of one pattern, setup and mount), named
-``<mount>#2``, ``<mount>#3`` at the same geometry.
+``<mount>#2``, ``<mount>#3`` at the same geometry.  A touch-probe or R-test run has no set-up or mount of the ball
+bar's (None): a further run of such a candidate sets its own terms anew (:meth:`.candidates.WithoutBar.again`).
 """
 
 from __future__ import annotations
@@ -23,8 +24,17 @@ class DesignedRun:
 
     candidate: Candidate
     instance: int
-    setup: Setup
-    mount: Mount
+    setup: Setup | None
+    mount: Mount | None
+
+    @property
+    def instrument(self) -> str:
+        return self.candidate.instrument
+
+    @property
+    def measured(self):
+        """The candidate as this run measures it (a further probe or R-test run: its own terms' owners)."""
+        return self.candidate.again(self.instance)
 
     @property
     def pattern(self) -> str:
@@ -40,6 +50,8 @@ class DesignedRun:
 
     @property
     def label(self) -> str:
+        if self.setup is None:
+            return self.candidate.name + (f" #{self.instance}" if self.instance > 1 else "")
         return f"{self.pattern}@{self.setup.id}/{self.mount.id}"
 
 
@@ -50,6 +62,9 @@ def designed_runs(candidates: list[Candidate], counts: np.ndarray, taken=()) -> 
     out = []
     for k in np.flatnonzero(counts):
         c = candidates[k]
+        if c.instrument != "ballbar":
+            out += [DesignedRun(c, i, None, None) for i in range(1, int(counts[k]) + 1)]
+            continue
         n = 2
         for i in range(1, int(counts[k]) + 1):
             mount = c.mount
@@ -66,13 +81,15 @@ def geometry_of(campaign: Campaign, runs: list[DesignedRun]) -> tuple[dict[str, 
     """The campaign's setups and mounts plus those the runs bring."""
     setups, mounts = dict(campaign.ballbar.setups), dict(campaign.ballbar.mounts)
     for r in runs:
+        if r.setup is None:
+            continue
         setups.setdefault(r.setup.id, r.setup)
         mounts.setdefault(r.mount.id, r.mount)
     return setups, mounts
 
 
 def with_runs(campaign: Campaign, runs: list[DesignedRun], as_run) -> Campaign:
-    """A copy of ``campaign`` with ``runs`` appended as runs of zero eccentricities (``repeats`` each): the rows
+    """A copy of ``campaign`` with the ball-bar ``runs`` appended as runs of zero eccentricities (``repeats`` each): the rows
     of the forward models for them, after the measured runs' rows.  ``as_run(candidate) -> Run`` makes a candidate a
     run (:meth:`.design.Planner.as_run`: with its arc and held axes where it has them); the run is placed at its
     designed mount."""
@@ -81,6 +98,8 @@ def with_runs(campaign: Campaign, runs: list[DesignedRun], as_run) -> Campaign:
     bb.setups, bb.mounts = geometry_of(campaign, runs)
     made = []
     for r in runs:
+        if r.instrument != "ballbar":  # not a ball-bar run: its rows are its candidate's (:mod:`.design_check`)
+            continue
         run = as_run(r.candidate)
         run.setup, run.mount = r.setup.id, r.mount.id
         made.append(run)

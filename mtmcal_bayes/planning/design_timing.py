@@ -1,11 +1,23 @@
-"""The machine-time model applied to designed runs: measuring order, minutes, the schedule's events."""
+"""The machine-time model applied to designed runs: measuring order, minutes, the schedule's events.
+
+A design measures instrument by instrument — the ball bar's runs (grouped by set-up and placement), then the touch
+probe's, then the R-test's — each instrument after the first costing ``instrument_change_min`` and its own set-up
+(``mount_probe_min``, ``mount_rtest_min``); a probe run at another stylus length or sphere position than the one
+before costs ``stylus_change_min`` / ``move_sphere_min``, and so does a further run of one probe candidate (its
+stylus and sphere are set anew: their terms are its own, :meth:`.candidates.WithoutBar.again`).  A probe run
+measures ``repeats × positions × probe_position_min``, an R-test run its positions or its sweep
+(:func:`~mtmcal_bayes.machine_time.rtest_run_minutes`).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..machine_time import TimeModel, canonical_order
+from ..machine_time import Event, Schedule, TimeModel, canonical_order, probe_run_minutes, rtest_run_minutes
 from .machine_kit import kit_of
+
+#: the order in which a session measures the instruments
+SESSION = ("ballbar", "probe", "rtest")
 
 
 class Timing:
@@ -20,19 +32,74 @@ class Timing:
         self.clock = kit_of(campaign).clock(model, campaign)
 
     def order(self, runs, start) -> list[int]:
-        return canonical_order(runs, start[1], start[2])
+        """The measuring order: the ball bar's runs by set-up and placement, then the probe's by stylus and sphere,
+        then the R-test's (module docstring)."""
+        bar = [i for i, r in enumerate(runs) if r.instrument == "ballbar"]
+        out = [bar[j] for j in canonical_order([runs[i] for i in bar], start[1], start[2])]
+        probe = [i for i, r in enumerate(runs) if r.instrument == "probe"]
+        keys = list(dict.fromkeys(_probe_key(runs[i].candidate) for i in probe))
+        out += sorted(probe, key=lambda i: keys.index(_probe_key(runs[i].candidate)))
+        return out + [i for i, r in enumerate(runs) if r.instrument == "rtest"]
 
     def total(self, runs, start) -> float:
         """Minutes of ``runs`` in their measuring order."""
-        return self.clock.total([runs[i] for i in self.order(runs, start)], start)
+        ordered = [runs[i] for i in self.order(runs, start)]
+        bar = [r for r in ordered if r.instrument == "ballbar"]
+        t = self.clock.total(bar, start)
+        for _, _, minutes in self._other_steps([r for r in ordered if r.instrument != "ballbar"],
+                                               start[0] or bool(bar)):
+            t += minutes
+        return t
 
     def per_run(self, runs, start) -> list[float]:
         """Minutes of each run of the ordered ``runs``: measuring plus the set-up changes before it."""
-        return self.clock.schedule(runs, start).run_total_min(len(runs))
+        return self.schedule(runs, start).run_total_min(len(runs))
 
     def events(self, runs, start):
         """The schedule's events of the ordered ``runs``."""
-        return self.clock.schedule(runs, start).events
+        return self.schedule(runs, start).events
+
+    def schedule(self, runs, start) -> Schedule:
+        """The schedule of the ordered ``runs`` (the ball bar's first, as :meth:`order` puts them)."""
+        bar = [r for r in runs if r.instrument == "ballbar"]
+        if len(bar) == len(runs):
+            return self.clock.schedule(runs, start)
+        events = list(self.clock.schedule(bar, start).events)
+        t = sum(e.minutes for e in events)
+        for j, kind, minutes in self._other_steps(runs[len(bar):], start[0] or bool(bar)):
+            events.append(Event(kind, len(bar) + j, t, minutes, runs[len(bar) + j].label))
+            t += minutes
+        return Schedule(events)
+
+    def _other_steps(self, runs, mounted: bool):
+        """``(index, kind, minutes)`` of the probe's and the R-test's runs ``runs`` (in order) after the ball bar's
+        (``mounted``: an instrument is on the machine already)."""
+        m = self.model
+        current, stylus, sphere = "ballbar" if mounted else None, None, None
+        for j, r in enumerate(runs):
+            c = r.candidate
+            if r.instrument != current:
+                if current is not None:
+                    yield j, "change instrument", m.instrument_change_min
+                yield j, f"mount {'probe' if r.instrument == 'probe' else 'R-test'}", \
+                    m.mount_probe_min if r.instrument == "probe" else m.mount_rtest_min
+                current = r.instrument
+                if r.instrument == "probe":
+                    stylus, sphere = c.stylus_length, tuple(c.sphere)
+            if r.instrument == "probe":
+                again = r.instance > 1  # its stylus and sphere set anew
+                if again or c.stylus_length != stylus:
+                    yield j, "stylus change", m.stylus_change_min
+                if again or tuple(c.sphere) != sphere:
+                    yield j, "move sphere", m.move_sphere_min
+                stylus, sphere = c.stylus_length, tuple(c.sphere)
+            yield j, "measure", self._other_minutes(c)
+
+    def _other_minutes(self, c) -> float:
+        """Measuring minutes of one probe or R-test run of candidate ``c`` (its set-up counted apart)."""
+        if c.instrument == "probe":
+            return probe_run_minutes(self.model, len(c.positions[0][1]), c.repeats, set_up=False)
+        return rtest_run_minutes(self.model, c.n_positions, c.repeats, sweep_span_deg=c.sweep_span, set_up=False)
 
     def total_of_counts(self, candidates, counts, start) -> float:
         """:meth:`total` of the runs of ``counts`` (K,) of ``candidates`` (as :func:`.design_runs.designed_runs`
@@ -41,11 +108,16 @@ class Timing:
         search asks this tens of thousands of times; walking stand-in runs through :func:`canonical_order` and
         ``MachineClock._steps`` took half as long again over a whole design, so the walk is written out here
         (``tests/test_machine_time.py`` holds it equal to :meth:`total`)."""
-        # the runs grouped by set-up, then placement, each in the order of first appearance (designed order)
+        # the ball bar's runs grouped by set-up, then placement, each in the order of first appearance (designed
+        # order); the probe's and the R-test's runs apart, as :meth:`order` puts them
         groups: dict = {}
+        others = []
         for k in np.flatnonzero(counts):
             c = candidates[k]
             k = int(k)
+            if c.instrument != "ballbar":
+                others += [_Other(c, i + 1) for i in range(int(counts[k]))]
+                continue
             by_mount = groups.setdefault(c.setup.id, {})
             by_mount.setdefault(c.mount.id, []).append(k)
             for i in range(1, int(counts[k])):
@@ -74,6 +146,10 @@ class Timing:
                         t += m.pattern_change_min
                     t += self._measure(candidates[k])
                     mounted, setup, mount = True, s, mt
+        if others:
+            ordered = [others[i] for i in self.order(others, start)]
+            for _, _, minutes in self._other_steps(ordered, mounted):
+                t += minutes
         return t
 
     def _measure(self, c) -> float:
@@ -90,3 +166,14 @@ class _AsRun:
     def __init__(self, c):
         self.candidate, self.pattern, self.setup, self.mount, self.repeats = c, c.pattern, c.setup, c.mount, c.repeats
 
+
+class _Other:
+    """A probe or R-test candidate's ``instance``-th run seen as a run of a schedule."""
+
+    def __init__(self, c, instance: int):
+        self.candidate, self.instance, self.instrument = c, instance, c.instrument
+
+
+def _probe_key(c) -> tuple:
+    """Probe runs measured one after the other without a change: the same stylus length and sphere position."""
+    return (c.stylus_length, tuple(c.sphere))

@@ -23,6 +23,7 @@ from ..machine_time import TimeModel
 from .candidates import Candidate
 from .chain_candidates import arc_spec
 from .design import Planner
+from .design_instruments import chosen_instruments
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets, reporting_planner
 from .design_problem import current_posterior
 from .determined import Determination
@@ -88,7 +89,8 @@ def _conditional_met(planner: Planner, targets: np.ndarray, contraction_ok: bool
 
 def next_step(campaign, *, targets: dict | None = None, contraction: float | None = None,
               budget_min: float | None = None, time_model: TimeModel | None = None, candidates=None,
-              model: str = "linear", seed: int | None = 0, n_sim: int | None = None, sigma_prior=None) -> NextStep:
+              model: str = "linear", seed: int | None = 0, n_sim: int | None = None, sigma_prior=None,
+              instruments=None) -> NextStep:
     """The next run of a designed campaign, or stop (see the module docstring).  Targets, contraction and budget
     default to the campaign's ``[design]``; ``sigma_prior`` a σ_model prior learnt elsewhere, as for
     :func:`.design_make.make_design` (a campaign does not record the prior it was designed under: give it again)."""
@@ -99,7 +101,8 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     if budget_min is None and goal is not None:
         budget_min = goal.budget_min
     bb = campaign.ballbar
-    cands = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []))
+    instruments = chosen_instruments(campaign, instruments)
+    cands = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []), instruments=instruments)
     planner = reporting_planner(campaign, cands, want, model=model, sigma_prior=sigma_prior)
     tg = np.array([want.get(t, np.nan) for t in planner.targets])
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
@@ -131,7 +134,7 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         design = make_design(campaign, targets=goal, contraction=contraction, budget_min=budget_min,
                              candidates=[c for c in cands if c.kind in ("planned", "user")],
                              time_model=time_model, model=model, seed=seed, start=start, n_sim=n_sim,
-                             sigma_prior=sigma_prior)
+                             sigma_prior=sigma_prior, instruments=instruments)
         if design.runs:
             break
         # the closed form already promises what the exact posterior has not reached: ask it for the ratio more

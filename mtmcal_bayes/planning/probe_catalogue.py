@@ -1,8 +1,9 @@
 """Touch-probe runs as candidate measurements, one catalogue for every machine (SPEC §6, §19): indexed positions of
 each rotary axis, the measurement of the controllers' kinematics cycles, valued through the probe likelihood.
 
-The catalogue of :func:`probe_catalogue` (a campaign with a ``[probe]`` giving a repeatability, a stylus and a run),
-with the campaign's first stylus and its first run's sphere:
+The catalogue of :func:`probe_catalogue` (a campaign with a ``[probe]`` giving a repeatability and a stylus), with the
+campaign's first stylus and its first run's sphere (a described machine's probe without runs: the R-test's sphere,
+else the first W-ball mount's position, else the stylus ball at the home pose):
 
 * each rotary axis K indexed to 0° and up to three of 90°, −90°, 45°, −45°, 30°, −30° (those its travel
   allows; a fully turning axis to 0/90/180/270°), the other rotary axes at 0;
@@ -29,6 +30,7 @@ from ..machines.probe_terms import probe_terms
 from ..models.chain_models import ChainProbeModel, FirstOrderModel
 from ..parameters import ParameterSpace
 from .candidates import WithoutBar
+from ..machines.patterns import tool_home
 from .catalogue import hold_for, holds_within, rules_of, travel_problems
 
 #: repeats of each reading of a probe candidate
@@ -82,6 +84,11 @@ class ProbeCandidate(WithoutBar):
                           styli={run.stylus: self.stylus_length})
         return one
 
+    def renewed(self) -> set[tuple[str, str]]:
+        """The ``(group, owner)`` of the terms a further run of it sets anew: its stylus' and its sphere's (all its
+        terms: a further run re-qualifies the stylus and re-places the sphere)."""
+        return {("probe", self.id), ("probe", f"{self.stylus}#{self.id}")}
+
     def terms(self, campaign) -> list[tuple[str, str]]:
         """Its own nuisance terms as ``(owner, base)`` pairs."""
         return probe_terms(campaign.machine.description, self.alone(campaign).probe)
@@ -114,14 +121,14 @@ def _positions(ax) -> tuple[float, ...]:
 def probe_catalogue(campaign) -> list[ProbeCandidate]:
     """The probe candidates of a campaign (module docstring); none without a usable ``[probe]``."""
     p = campaign.probe
-    if p is None or p.repeatability is None or not p.styli or not p.runs:
+    if p is None or p.repeatability is None or not p.styli or (not p.runs and campaign.machine.description is None):
         return []
     desc = campaign.machine.description
     rules = rules_of(campaign)
     positions = dict(rules.probe_positions)
     stylus = next(iter(p.styli))
     length = p.centre_length(stylus)
-    sphere = np.asarray(p.runs[0].sphere, float)
+    sphere = np.asarray(p.runs[0].sphere if p.runs else _sphere_without_runs(campaign, length), float)
     out: list[ProbeCandidate] = []
 
     def add(name, ax, angles, *, held=(), length_mm=length, at=sphere):
@@ -145,6 +152,19 @@ def probe_catalogue(campaign) -> list[ProbeCandidate]:
         add(f"probe {ax.letter} {shown}°, sphere {HIGHER_SPHERE_MM:g} mm higher", ax, angles,
             at=sphere + np.array([0.0, 0.0, HIGHER_SPHERE_MM]))
     return out
+
+
+def _sphere_without_runs(campaign, length: float) -> np.ndarray:
+    """Where the catalogue puts the sphere of a campaign whose probe has no run yet, mm (home pose): the R-test's
+    sphere, else the first W-ball mount's position, else the stylus ball's centre at the home pose (every axis at
+    0: the sphere under the stylus)."""
+    rt = campaign.rtest
+    if rt is not None and rt.sphere is not None:
+        return np.asarray(rt.sphere, float)
+    mounts = list(campaign.ballbar.mounts.values())
+    if mounts and getattr(mounts[0], "position", None) is not None:
+        return np.asarray(mounts[0].position, float)
+    return tool_home(campaign.machine.description, length)
 
 
 def probe_feasibility(candidate: ProbeCandidate, campaign) -> tuple[bool, str]:

@@ -145,6 +145,10 @@ class RTestCandidate(WithoutBar):
                           runs=[self.run()])
         return one
 
+    def renewed(self) -> set[tuple[str, str]]:
+        """The ``(group, owner)`` of the terms a further run of it sets anew: its zero (the sphere and the nest stay)."""
+        return {("rtest", self.id)}
+
     def terms(self, campaign) -> list[tuple[str, str]]:
         """Its nuisance terms as ``(owner, base)`` pairs: its zero, the placement's and the nest's (shared)."""
         return rtest_terms(campaign.machine.description, self.alone(campaign).rtest)
