@@ -2,10 +2,12 @@
 five-axis program but the thesis machine.
 
     python bench/compensation_described.py [--machines 50] [--type trunnion] [--seed 1] [--model chain|linear]
+                                           [--sigma-model-um 0]
 
 Each machine: deviations drawn from their priors (the nuisance terms too), the demo campaign's measurements
 simulated through the chain (``--model linear``: through its first order, the model the exact posterior is of) with
-the instruments' scatter, the exact posterior sampled; the type's five-axis program
+the instruments' scatter, the exact posterior sampled (σ_model under its prior; ``--sigma-model-um``: fixed, e.g. at
+the truth's 0); the type's five-axis program
 (examples/machines/<type>-five-axis.nc, 60 blocks, every rotary axis moving) compensated.
 
 * Newton: the program compensated with the TRUE deviations, run through the true chain (noise-free): the largest
@@ -71,7 +73,7 @@ def pooled(inside: np.ndarray, rng: np.random.Generator, n_boot: int = 2000) -> 
     return {"share": float(inside.mean()), "machine_bootstrap_95": np.quantile(boot, [0.025, 0.975]).tolist()}
 
 
-def run(machine: str, n: int, seed: int, model: str = "chain") -> dict:
+def run(machine: str, n: int, seed: int, model: str = "chain", sigma_model_um: float | None = None) -> dict:
     base = mb.load_campaign(demo_campaign(machine))
     desc = base.machine.description
     chain = Chain(desc, generated(desc))
@@ -97,7 +99,7 @@ def run(machine: str, n: int, seed: int, model: str = "chain") -> dict:
         newton_um.append(units.from_internal(float(np.abs(np.linalg.norm(at - nominal, axis=-1)).max()), "um"))
         # coverage: compensated with the posterior of a simulated campaign, through the true chain
         c = mb.simulate(base, truth=truth, model=model, noise=True, seed=seed * 1000 + k).synthetic_campaign()
-        posterior = mb.sample(c, sampler="exact", seed=k)
+        posterior = mb.sample(c, sampler="exact", seed=k, sigma_model_um=sigma_model_um)
         result = compensate(c, program, posterior)
         q_c = {**q, **dict(zip(LINEAR, result.xyz_c.T))}
         r_true = units.from_internal(np.linalg.norm(work_tool_point(chain, length, q_c, true1)[0] - nominal, axis=-1),
@@ -126,7 +128,7 @@ def run(machine: str, n: int, seed: int, model: str = "chain") -> dict:
     per_dev = {nm: float(np.mean(v)) for nm, v in in95.items()}
     least = min(per_dev, key=per_dev.get)
     worst, worst_seen = np.array(worst), np.array(worst_seen)
-    return {"machines": n, "blocks": inside.shape[1], "simulated_through": model,
+    return {"machines": n, "blocks": inside.shape[1], "simulated_through": model, "sigma_model_um": sigma_model_um,
             "newton_max_error_um": max(newton_um), "newton_goal_um": 0.1,
             "pointwise_per_block_pooled": pooled(inside, rng),
             "pointwise_machines_covered_at_every_block": float(inside.all(axis=1).mean()),
@@ -151,9 +153,10 @@ def main() -> None:
     ap.add_argument("--type", action="append", default=None)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--model", default="chain", choices=("chain", "linear"))
+    ap.add_argument("--sigma-model-um", type=float, default=None, help="fix the posterior's σ_model (default: sampled)")
     args = ap.parse_args()
     for t in args.type or TYPES:  # each type as it is done
-        print(json.dumps({t: run(t, args.machines, args.seed, args.model)}, indent=2), flush=True)
+        print(json.dumps({t: run(t, args.machines, args.seed, args.model, args.sigma_model_um)}, indent=2), flush=True)
 
 
 if __name__ == "__main__":
