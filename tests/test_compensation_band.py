@@ -14,7 +14,12 @@ import pytest
 import mtmcal_bayes as mb
 from mtmcal_bayes import units
 from mtmcal_bayes.compensation.chain_kinematics import work_tool_point
-from mtmcal_bayes.compensation.compensate import compensate, program_commands, read, worst_block_p95
+from mtmcal_bayes.compensation.compensate import (
+    compensate,
+    program_commands,
+    read,
+    worst_block_p95,
+)
 from mtmcal_bayes.compensation.values import deviation_draws
 from mtmcal_bayes.io.gcode import LINEAR
 from mtmcal_bayes.io.machine_reader import demo_campaign
