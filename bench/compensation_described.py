@@ -47,9 +47,10 @@ from mtmcal_bayes.io.gcode import LINEAR, read_program
 from mtmcal_bayes.io.machine_reader import demo_campaign
 from mtmcal_bayes.machines import generated
 from mtmcal_bayes.machines.chain import Chain
+from mtmcal_bayes.models import default_data
 from mtmcal_bayes.simulation.simulate import truth_from_vector
 
-TYPES = ("vertical-turn-mill", "trunnion", "head-head")
+TYPES = ("vertical-turn-mill", "trunnion", "head-head", "nutating-head")
 #: the simultaneous band's goal: whole-program coverage in this range, or its Clopper–Pearson interval containing 95 %
 GOAL, GOAL_RANGE = 0.95, (0.925, 0.975)
 
@@ -82,7 +83,7 @@ def run(machine: str, n: int, seed: int, model: str = "chain", sigma_model_um: f
     q = program_commands(base, program)
     length = float(next(iter(base.ballbar.setups.values())).R_B)
     nominal = work_tool_point(chain, length, q, {})[0]
-    prior = LogPosterior(base, "linear", data="both", sigma_model=0.0)
+    prior = LogPosterior(base, "linear", data=default_data(base), sigma_model=0.0)  # every instrument's terms
     rng = np.random.default_rng(seed)
     t0 = time.perf_counter()
     newton_um, inside, inside_seen, bands, det_bands, sim_bands, det_sim_bands = ([] for _ in range(7))
