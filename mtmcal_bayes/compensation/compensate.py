@@ -126,6 +126,13 @@ def tilts(kin, q: dict, values: dict[str, float]) -> list[dict]:
                   key=lambda r: -r["tool_tilt_arcsec"])
 
 
+def worst_block_p95(resid: np.ndarray) -> float:
+    """The simultaneous 95 % band of a program, µm: per draw the largest residual over its blocks, the 95 % quantile
+    of those maxima — the error no block of the program exceeds with 95 % probability (≥ every block's own 95 %
+    quantile).  ``resid`` ``(n draws, k blocks)`` µm."""
+    return float(np.quantile(resid.max(axis=1), 0.95))
+
+
 def compensate(campaign, program: Program, posterior, *, method: str = EXACT, model: str | None = None,
                values: str = POSTERIOR, point: str = "tcp", setup: str | None = None,
                mount: str | None = None, label: str | None = None) -> CompensationResult:
@@ -136,7 +143,8 @@ def compensate(campaign, program: Program, posterior, *, method: str = EXACT, mo
     workpiece placement, where the kinematics takes them; ``label``: what the posterior is, as the result states it
     (default: the posterior given, or a :class:`.values.Draws`' own).
 
-    Besides the residual band, ``info["residual_determined_um"]``: the band with the deviations left at zero held at
+    The residual band is stated per block (``residual_p95_um``) and for the whole program at once
+    (``residual_program_p95_um``, :func:`worst_block_p95`).  Besides, ``info["residual_determined_um"]``: the band with the deviations left at zero held at
     zero in every draw too — what the data vouch for; the rest of the band is those deviations' prior spread."""
     machine = campaign.machine
     check_options(campaign, method=method, values=values, point=point)
@@ -182,9 +190,11 @@ def compensate(campaign, program: Program, posterior, *, method: str = EXACT, mo
         info["not_measured"] = notes
         info["residual_determined_um"] = {"mean_max": float(resid_seen.mean(axis=0).max()),
                                           "p95_max": float(np.quantile(resid_seen, 0.95, axis=0).max()),
+                                          "program_p95": worst_block_p95(resid_seen),
                                           "per_block_p95": np.quantile(resid_seen, 0.95, axis=0).tolist()}
     return CompensationResult(rewrite(program, xyz_c), program.source, xyz, xyz_c, resid.mean(axis=0),
                               np.quantile(resid, 0.95, axis=0),
                               units.from_internal(np.linalg.norm(before, axis=-1), "um"), tilts(kin, q, used), info,
                               warnings=warnings,
-                              reading_choice=deviation_marks(campaign, used, unit, posterior=posterior, kind=values))
+                              reading_choice=deviation_marks(campaign, used, unit, posterior=posterior, kind=values),
+                              residual_program_p95_um=worst_block_p95(resid))

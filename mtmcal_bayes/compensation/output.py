@@ -16,9 +16,12 @@ def format_compensation(result) -> str:
                  f"tool-point error before {j['error_before_um']['max']:.1f} µm")
     lines.append(f"  residual tool-point error ({j['uncertainty_from']}): mean ≤ {j['residual_um']['mean_max']:.1f} µm, "
                  f"95 % ≤ {j['residual_um']['p95_max']:.1f} µm per block")
+    lines.append(f"    the whole program: with 95 % probability no block's error exceeds {j['residual_um']['program_p95']:.1f} µm")
     if any(d["status"] == "left at zero" for d in j.get("not_measured", ())):
-        lines.append(f"    with the deviations left at zero taken as zero: 95 % ≤ {j['residual_determined_um']['p95_max']:.1f} µm "
-                     "(what the data vouch for; the rest is their prior spread)")
+        seen = j["residual_determined_um"]
+        lines.append(f"    with the deviations left at zero taken as zero: 95 % ≤ {seen['p95_max']:.1f} µm per block, "
+                     f"{seen['program_p95']:.1f} µm the whole program (what the data vouch for; the rest is their "
+                     "prior spread)")
     lines.append(f"  not compensable by X/Y/Z (tool-axis tilt; error {OFF_TOOL_MM:g} mm along the tool from the "
                  "compensated point):")
     off = f"error_at_{OFF_TOOL_MM:g}mm_off_the_tool_point_um"

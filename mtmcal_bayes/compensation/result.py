@@ -26,6 +26,8 @@ class CompensationResult:
     output: str | None = None  # where :meth:`save` wrote the compensated program
     warnings: list[str] = field(default_factory=list)  # values the data do not determine, or that rest on priors
     reading_choice: dict | None = None  # deviations resting on the campaign's choice of reading (.reading_choice)
+    #: the simultaneous band: the 95 % quantile over the draws of the largest residual over the blocks, µm
+    residual_program_p95_um: float = float("nan")
 
     def save(self, path) -> None:
         """Write the compensated program to ``path`` (atomically)."""
@@ -53,6 +55,7 @@ class CompensationResult:
             "error_before_um": {"max": float(self.error_before_um.max())},
             "residual_um": {"mean_max": float(self.residual_mean_um.max()),
                             "p95_max": float(self.residual_p95_um.max()),
+                            "program_p95": float(self.residual_program_p95_um),
                             "per_block_p95": [float(v) for v in self.residual_p95_um]},
             "not_compensable": self.not_compensable,
             "warnings": self.warnings,

@@ -682,7 +682,7 @@ def _compensation_section(page: Page, c: ReportContent) -> None:
     page.section("compensation", "Compensation")
     base = ("mtmcal-bayes compensate rewrites X/Y/Z of an NC program so the tool point reaches the programmed points "
             "(exact inversion of the kinematic model with the posterior mean; the residual error per block from the "
-            "posterior; docs/compensation.md). ")
+            "posterior, and the error no block of the program exceeds with 95 % probability; docs/compensation.md). ")
     if c.disputed:
         where = ("two of the instruments disagree on " if c.pairs is not None else
                  "the ball bar and the touch probe disagree on ")
