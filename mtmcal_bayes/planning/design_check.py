@@ -12,7 +12,9 @@ and the learnt prior's variance, :meth:`.design.Planner.contraction_reference`).
 
 For a kinematic model the rows are its Jacobian at zero deviations (the model linearised), as in the
 planner; the space, rows and targets are the planner's (:meth:`.design.Planner.rows_for`: on a described machine,
-its chain's first order).
+its chain's first order).  Where that first order misses the machine's kinematics at the drawn machines by more
+than a stated fraction of the targets (or the instrument's accuracy), the designed runs' means are the kinematic
+model's instead, inferred with the same linear posterior (:mod:`.design_chain`).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from ..inference.marginal import MarginalPosterior
 from ..inference.priors import make_prior
 from ..observations import Observations
 from .design import Planner
+from .design_chain import Kinematics, kinematic_means
 from .design_runs import DesignedRun, with_runs
 
 #: simulated machines of the check
@@ -46,6 +49,11 @@ class Preposterior:
     contraction: np.ndarray
     contraction_now: float
     sigma_mean_um: np.ndarray  # (n_sim,) posterior mean of σ_model per machine
+    #: how the machines were measured: through the kinematics or the linear rows (:mod:`.design_chain`)
+    kinematics: Kinematics | None = None
+    #: (n_sim, P) the simulated machines and (n_sim, m_new) the designed runs' simulated readings, mm
+    truth: np.ndarray | None = None
+    readings: np.ndarray | None = None
 
     @property
     def sd_mean(self) -> np.ndarray:
@@ -66,8 +74,11 @@ class Preposterior:
         return float(np.mean(np.all(self.sd <= tg, axis=1)))
 
 
-def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SIM, seed: int | None = 0) -> Preposterior:
-    """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring)."""
+def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SIM, seed: int | None = 0,
+                 targets: np.ndarray | None = None, through: bool | None = None) -> Preposterior:
+    """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring);
+    through the machine's kinematics where the linear model's misfit is large against ``targets`` (t,) (display
+    units, NaN: none) or the instrument, or as ``through`` forces (:func:`.design_chain.kinematic_means`)."""
     rng = np.random.default_rng(seed)
     campaign = planner.campaign
     aug = with_runs(campaign, runs, planner.as_run)
@@ -100,7 +111,9 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
         sigma = sigma_prior.rvs(size=n_sim, random_state=rng)
         sd_now = np.sqrt(np.sum(T**2 * prior_var, axis=1))[None]
         var_now = float(sigma_prior.var())
-    y_new = theta @ A[new].T + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None] + sigma[:, None] ** 2)
+    means, kinematics = kinematic_means(planner, aug, theta, A, new=new, targets=targets,
+                                        through=through)
+    y_new = means + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None] + sigma[:, None] ** 2)
     y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
     after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, sigma_prior, prior_mean=prior_mean,
                               sigma_min=lo, sigma_max=hi)
@@ -112,7 +125,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     prior_var_s = planner.contraction_reference() or float(sigma_prior.var())  # a learnt prior: the wider one's
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     return Preposterior(list(planner.targets), sd * scale, sd_now[0] * scale, 1.0 - var_s / prior_var_s,
-                        float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"))
+                        float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"), kinematics, theta, y_new)
 
 
 __all__ = ["Preposterior", "preposterior", "N_SIM"]
