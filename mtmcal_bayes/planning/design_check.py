@@ -12,7 +12,9 @@ and the learnt prior's variance, :meth:`.design.Planner.contraction_reference`).
 
 For a kinematic model the rows are its Jacobian at zero deviations (the model linearised), as in the
 planner; the space, rows and targets are the planner's (:meth:`.design.Planner.rows_for`: on a described machine,
-its chain's first order).
+its chain's first order).  Where that first order misses the machine's kinematics at the drawn machines by more
+than a stated fraction of the targets (or the instrument's accuracy), the designed runs' means are the kinematic
+model's instead, inferred with the same linear posterior (:mod:`.design_chain`).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from ..inference.priors import make_prior
 from ..observations import Observations
 from ..parameters import ParameterSpace
 from .design import Planner
+from .design_chain import Kinematics, kinematic_means, linear_kinematics
 from .design_problem import taught_prior
 from .design_runs import DesignedRun, with_runs
 from .design_timing import SESSION
@@ -53,6 +56,11 @@ class Preposterior:
     contraction: np.ndarray
     contraction_now: float
     sigma_mean_um: np.ndarray  # (n_sim,) posterior mean of σ_model per machine
+    #: how the machines were measured: through the kinematics or the linear rows (:mod:`.design_chain`)
+    kinematics: Kinematics | None = None
+    #: (n_sim, P) the simulated machines and (n_sim, m_new) the designed runs' simulated readings, mm
+    truth: np.ndarray | None = None
+    readings: np.ndarray | None = None
 
     @property
     def sd_mean(self) -> np.ndarray:
@@ -74,13 +82,18 @@ class Preposterior:
 
 
 def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SIM, seed: int | None = 0,
-                 taught: str = "ballbar") -> Preposterior:
+                 taught: str = "ballbar", targets: np.ndarray | None = None,
+                 through: bool | None = None) -> Preposterior:
     """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring).
 
     Touch-probe and R-test runs among ``runs`` carry their own discrepancy scales: each simulated machine draws
     every scale from its prior (the ball bar's from today's posterior where the campaign has measured it), and the
     exact posterior integrates all of them out on a grid of :data:`CHECK_CELLS` cells per scale; ``taught`` the
-    instrument whose scale's contraction is reported (:mod:`.design_instruments`)."""
+    instrument whose scale's contraction is reported (:mod:`.design_instruments`).  A design of ball-bar runs is
+    measured through the machine's kinematics where the linear model's misfit is large against ``targets`` (t,)
+    (display units, NaN: none) or the instrument, or as ``through`` forces (:func:`.design_chain.kinematic_means`);
+    one with probe or R-test runs through the linear rows (not yet through the kinematics: its ``kinematics`` says
+    so)."""
     rng = np.random.default_rng(seed)
     campaign = planner.campaign
     aug = with_runs(campaign, runs, planner.as_run)
@@ -133,14 +146,15 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
         sd_now = np.sqrt(np.sum(T**2 * prior_var, axis=1))[None]
         var_now = float(sigma_prior.var())
     if scales == ["ballbar"] or not scales:  # one scale: the ball bar's, as before any other instrument
-        y_new = theta @ A[new].T + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None]
-                                                                                         + sigma[:, None] ** 2)
+        means, kinematics = kinematic_means(planner, aug, theta, A, new=new, targets=targets, through=through)
+        y_new = means + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None] + sigma[:, None] ** 2)
         y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
         after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, sigma_prior,
                                   prior_mean=prior_mean, sigma_min=lo, sigma_max=hi)
         s = after.sigma[:, 0]
         prior_var_s = planner.contraction_reference() or float(sigma_prior.var())  # a learnt prior: the wider one's
     else:
+        kinematics = linear_kinematics(planner, A[new], T, targets)
         own = {i: taught_prior(planner, i) for i in scales}
         draws = {i: (sigma if i == "ballbar" else own[i].rvs(size=n_sim, random_state=rng)) for i in scales}
         per_row = np.column_stack([draws[i] for i in scales])[:, groups[new]]  # (n_sim, new rows)
@@ -163,7 +177,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     var_s = (s**2) @ w - mean_s**2
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     return Preposterior(list(planner.targets), sd * scale, sd_now[0] * scale, 1.0 - var_s / prior_var_s,
-                        float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"))
+                        float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"), kinematics, theta, y_new)
 
 
 __all__ = ["Preposterior", "preposterior", "N_SIM"]

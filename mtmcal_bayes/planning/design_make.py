@@ -289,7 +289,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                 break  # a tightened goal out of reach: keep what was found
             _refuse_within_budget(problem, goal, minutes, seed=seed, units_of=planner.target_units)
         runs = designed_runs(cands, result.counts, taken)
-        check = preposterior(planner, runs, seed=seed, taught=problem.taught, **kw)
+        check = preposterior(planner, runs, seed=seed, taught=problem.taught, targets=goal.targets, **kw)
         last = (result, runs, check, rounds)
         if not goal.has_targets or not runs:
             best = last

@@ -93,6 +93,7 @@ def design_document(design: Design, campaign_path: str | None = None, programs: 
             "budget_min": design.goal.budget, "promise": PROMISE,
             "probability_targets_met": design.probability_targets_met(),
             "schedule": [e.__dict__ | {} for e in design.timing.events(design.runs, design.start)],
+            "check_kinematics": None if design.check.kinematics is None else design.check.kinematics.document(),
             "model": design.model, "notes": design.notes, "not_targeted": design.not_targeted,
             "campaign": campaign_path}
 
@@ -126,6 +127,8 @@ def design_text(design: Design) -> str:
     lines += ["", f"σ_model contraction: {design.check.contraction_now:.2f} now → {ctext} after"
               + (f" (target {design.goal.contraction:g})" if design.goal.contraction is not None else "")
               + _against(design.learnt)]
+    if design.check.kinematics is not None and design.check.kinematics.line():
+        lines.append(design.check.kinematics.line())
     lines += [f"note: {n}" for n in design.notes]
     return "\n".join(lines)
 
