@@ -751,8 +751,9 @@ def design(campaign: CampaignLike = None, *, targets: dict | None = None, tolera
            budget_min: float | None = None, contraction: float | None = 0.5, candidates=None, times=None,
            seed: int = 0, model: str = "linear", output=None, sigma_model_prior=None,
            instruments=None) -> DesignResult:
-    """Design the whole campaign: the ball-bar runs, in measuring order, that reach ``targets`` in the fewest
-    machine minutes, or that improve most within ``budget_min`` (docs/design.md).
+    """Design the whole campaign: the runs (ball bar, touch probe, R-test: every instrument the campaign has a set-up
+    for, or those of ``instruments``), in measuring order, that reach ``targets`` in the fewest machine minutes, or
+    that improve most within ``budget_min`` (docs/design.md).
 
     The campaign may hold measured runs (the design extends it) or none (a new machine: its set-ups and mounts).
     ``targets`` {quantity: sd in ″ or µm}; ``tolerances`` a ``[tolerances]`` file or dict (targets at which the

@@ -152,10 +152,11 @@ def _demo_chosen_reading(tmp_path: Path) -> Path:
 
 @pytest.fixture(scope="module")
 def designed_demo(tmp_path_factory) -> Path:
-    """The head-head demo designed on by ``design -o`` for a target below its sd today: its measured runs, the
-    planned runs after them (with their arcs and held axes), its probe runs and its ``[design]``."""
+    """The head-head demo designed on by ``design -o`` with the ball bar for a target below its sd today: its
+    measured runs, the planned runs after them (with their arcs and held axes), its probe runs and its
+    ``[design]``."""
     out = tmp_path_factory.mktemp("designed") / "design"
-    api.design(str(demo_campaign("head-head")), targets={"E_A0C": 0.5}, output=out, seed=1)
+    api.design(str(demo_campaign("head-head")), targets={"E_A0C": 0.5}, output=out, seed=1, instruments="ballbar")
     planned = load_campaign(out / "campaign.toml").ballbar.planned
     assert planned and any(p.hold_deg for p in planned)  # what the case is for
     return out / "campaign.toml"

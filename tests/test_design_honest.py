@@ -36,9 +36,10 @@ def _campaign(kind):
 
 @functools.cache
 def _design(kind, targets: tuple = (), **settings):
-    """``make_design`` of ``kind``'s campaign (``targets``: (quantity, sd) pairs), made once for the tests of this
-    file that ask for the same one; they only read it (a test that changes it changes a copy)."""
-    return make_design(_campaign(kind), targets=dict(targets) or None, **settings)
+    """``make_design`` of ``kind``'s campaign with the ball bar (``targets``: (quantity, sd) pairs; what the rule
+    reads is the ball-bar runs), made once for the tests of this file that ask for the same one; they only read it
+    (a test that changes it changes a copy)."""
+    return make_design(_campaign(kind), targets=dict(targets) or None, instruments="ballbar", **settings)
 
 
 def _determined_by(design, quantity: str) -> bool:
@@ -113,7 +114,8 @@ def test_a_quantity_not_determined_is_never_met(kind="vertical-turn-mill"):
 def test_next_does_not_stop_on_a_target_only_the_prior_meets(run_cli, kind, target):
     """The measured runs leave the quantity undetermined (its sd below the target through its prior): ``next``
     names a run to measure, where before it said "stop: every target reached"."""
-    code, out, err = run_cli("next", api.demo_campaign(kind), "--target", f"{target}=55", "--json")
+    code, out, err = run_cli("next", api.demo_campaign(kind), "--target", f"{target}=55", "--instruments", "ballbar",
+                             "--json")
     assert code == 0, err
     doc = json.loads(out)
     assert doc["expected"][target]["sd_now"] <= 55
