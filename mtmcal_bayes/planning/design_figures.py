@@ -15,10 +15,15 @@ from .design_problem import PROMISE
 
 EVENT_COLOURS = {"mount ball bar": "#555555", "tool change": "#E69F00", "re-clamp W ball": "#CC79A7",
                  "pattern change": "#BBBBBB", "measure": "#0072B2"}
+#: the set-up changes of the touch probe and the R-test, in the legend where a design has them
+OTHER_EVENT_COLOURS = {"change instrument": "#D55E00", "mount probe": "#009E73", "stylus change": "#999933",
+                       "move sphere": "#882255", "mount R-test": "#56B4E9"}
 TIMELINE_CAPTION = (
     "The designed campaign on the machine's clock: each measuring run (blue, numbered in measuring order) and "
     "the set-up changes before it — mounting the ball bar, changing the tool length and re-centring the T ball, "
-    "re-clamping the W ball, re-seating the bar for the next pattern — from the time model of docs/design.md.")
+    "re-clamping the W ball, re-seating the bar for the next pattern; for touch-probe and R-test runs, changing "
+    "the instrument, mounting the probe or the R-test nest, changing the stylus, moving the sphere — from the time "
+    "model of docs/design.md.")
 SD_CAPTION = (
     "Posterior sd of each quantity today (grey bar) and after measuring the design: the mean over simulated "
     "machines (dot) and its 10–90 % spread (line), from the exact σ-marginal posterior of each simulated campaign; "
@@ -27,10 +32,11 @@ SD_CAPTION = (
 
 def timeline_figure(events, runs):
     fig, ax = new_figure(figsize=(11, 3.0))
-    kinds = list(EVENT_COLOURS)
+    colours = EVENT_COLOURS | OTHER_EVENT_COLOURS
+    kinds = list(EVENT_COLOURS) + [k for k in OTHER_EVENT_COLOURS if any(e.kind == k for e in events)]
     for e in events:
         y = 1 if e.kind == "measure" else 0
-        ax.broken_barh([(e.start_min, e.minutes)], (y - 0.35, 0.7), facecolors=EVENT_COLOURS.get(e.kind, "0.5"),
+        ax.broken_barh([(e.start_min, e.minutes)], (y - 0.35, 0.7), facecolors=colours.get(e.kind, "0.5"),
                        edgecolor="white", linewidth=0.6)
         if e.kind == "measure" and e.run_index is not None and e.minutes > 0:
             ax.text(e.start_min + e.minutes / 2, y, str(e.run_index + 1), ha="center", va="center", color="white",
@@ -45,7 +51,7 @@ def timeline_figure(events, runs):
     ax.set_ylim(-0.7, 1.7)
     from matplotlib.patches import Patch
 
-    ax.legend(handles=[Patch(color=EVENT_COLOURS[k], label=k) for k in kinds], ncol=5, fontsize=8, loc="upper center",
+    ax.legend(handles=[Patch(color=colours[k], label=k) for k in kinds], ncol=5, fontsize=8, loc="upper center",
               bbox_to_anchor=(0.5, -0.26), frameon=False)
     ax.set_title(f"{len(runs)} run{'s' * (len(runs) != 1)}, {end:.0f} machine minutes", fontsize=10)
     return fig
