@@ -51,12 +51,13 @@ def targets_for(c) -> dict[str, float]:
     return {q: (3.0 if p.table[q].unit == "arcsec" else 5.0) for q in p.targets}
 
 
-def design_to(c, targets):
-    """The design, the targets relaxed by 25 % steps where the catalogue cannot reach them."""
+def design_to(c, targets, **settings):
+    """The design (``settings`` to ``make_design``, e.g. ``instruments``), the targets relaxed by 25 % steps where the
+    catalogue cannot reach them."""
     relaxed = {}
     for _ in range(12):
         try:
-            return make_design(c, targets=targets, contraction=0.5, seed=0), relaxed
+            return make_design(c, targets=targets, contraction=0.5, seed=0, **settings), relaxed
         except ParameterError as err:
             q = next((t for t in targets if str(err).startswith(f"targets: {t} =")), None)
             if q is None:

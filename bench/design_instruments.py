@@ -22,11 +22,12 @@ from pathlib import Path
 
 from mtmcal_bayes import api, units
 from mtmcal_bayes.campaign import Ballbar
-from mtmcal_bayes.errors import ParameterError
 from mtmcal_bayes.io import load_campaign
 from mtmcal_bayes.planning.design_instruments import other_candidates
-from mtmcal_bayes.planning.design_make import make_design
 from mtmcal_bayes.planning.machine_kit import planner_for
+
+sys.path.insert(0, str(Path(__file__).parent))
+from design_described import design_to  # noqa: E402  (the targets relaxed where they cannot be reached)
 
 ROOT = Path(__file__).resolve().parents[1]
 TYPES = tuple(sys.argv[1:]) or ("trunnion", "head-head", "vertical-turn-mill", "nutating-head")
@@ -44,27 +45,13 @@ def probe_only(kind: str):
     return c, "controller-cycle campaign" if cycle.is_file() else "demo"
 
 
-def design_to(c, targets):
-    relaxed = {}
-    for _ in range(12):
-        try:
-            return make_design(c, targets=targets, contraction=0.5, seed=0, instruments="probe"), relaxed
-        except ParameterError as err:
-            q = next((t for t in targets if str(err).startswith(f"targets: {t} =")), None)
-            if q is None:
-                raise
-            targets = {**targets, q: targets[q] * 1.25}
-            relaxed[q] = targets[q]
-    raise RuntimeError("no reachable targets")
-
-
 def main() -> None:
     for kind in TYPES:
         t0 = time.perf_counter()
         c, where = probe_only(kind)
         p = planner_for(c, other_candidates(c, ["probe"]), None)
         targets = {q: (3.0 if p.table[q].unit == "arcsec" else 5.0) for q in p.targets}
-        d, relaxed = design_to(c, targets)
+        d, relaxed = design_to(c, targets, instruments="probe")
         s = c.probe.runs[0].sphere
         print(f"\n{kind} (sphere at ({s[0]:g}, {s[1]:g}, {s[2]:g}) mm, from the {where}): {len(d.runs)} probe runs, "
               f"{d.total_minutes:.0f} min ({time.perf_counter() - t0:.0f} s)")
