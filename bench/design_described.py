@@ -29,10 +29,10 @@ from mtmcal_bayes.campaign import Truth
 from mtmcal_bayes.errors import ParameterError
 from mtmcal_bayes.inference.priors import make_prior
 from mtmcal_bayes.machines.space import described_space
-from mtmcal_bayes.planning.machine_kit import planner_for
 from mtmcal_bayes.planning.design_make import design_candidates, make_design
 from mtmcal_bayes.planning.design_output import designed_campaign
 from mtmcal_bayes.planning.design_problem import PROMISE
+from mtmcal_bayes.planning.machine_kit import planner_for
 from mtmcal_bayes.planning.scale_priors import scale_prior
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
 
