@@ -205,6 +205,13 @@ class DesignProblem:
         parts = [_compressed((A * scale)[:, self.cols], w, c.instrument != "ballbar")
                  for (A, w), c in zip(rows, self.candidates)]
         r_max = max((len(X) for X, _, _ in parts), default=1)
+        # the candidates by instrument, each group's updates at its own largest rank (a probe's or an R-test's
+        # compressed rows are tens where a ball-bar run's are two or three: padded to theirs, every ball-bar
+        # candidate's update cost as much); with the ball bar alone one group at r_max, as before
+        self._groups = []
+        for instrument in dict.fromkeys(c.instrument for c in self.candidates):
+            idx = np.array([k for k, c in enumerate(self.candidates) if c.instrument == instrument])
+            self._groups.append((idx, max(len(parts[k][0]) for k in idx)))
         # low-rank factors of each run, padded to r_max rows (zero rows, unit noise): rows X (K, r, P) and noise
         # N, N⁻², N⁻³ (K, S, r, r) of a first run (f) and a further one (a), for :meth:`value_plus_one`
         self.Xf, self.Xa = np.zeros((K, r_max, P)), np.zeros((K, r_max, P))
@@ -292,8 +299,9 @@ class DesignProblem:
         """The criterion of ``counts`` plus one more run of each candidate ``k`` (K designs) and which of them are
         allowed (fewer than :data:`MAX_INSTANCES` runs of ``k``).
 
-        One inverse per σ node for the design as it is; each candidate then by rank-r updates (Woodbury, r ≤ 3
-        rows per run), with ``Σ`` the design's posterior covariance, ``X`` the run's rows and ``N`` their noise
+        One inverse per σ node for the design as it is; each candidate then by rank-r updates (Woodbury; r rows per
+        run: two or three of a ball-bar run, the compressed rank of a probe or R-test run, each instrument's
+        candidates at their own largest r), with ``Σ`` the design's posterior covariance, ``X`` the run's rows and ``N`` their noise
         covariance: ``Σ′ = Σ − Z``, ``Z = ΣXᵀ W⁻¹ XΣ``, ``W = N + XΣXᵀ``; the target variances fall by
         ``diag(TZTᵀ)``; with ``Y = Xᵀ N⁻² X`` and ``A = Σ M₂``, ``Σ′(M₂ + Y) = A + ΣXᵀ R`` with
         ``R = N⁻²X − W⁻¹(XΣM₂) − W⁻¹(XΣXᵀ)N⁻²X``, so ``tr((Σ′M₂′)²) = tr A² + 2 tr(R A ΣXᵀ) + tr((R ΣXᵀ)²)`` and
@@ -309,26 +317,13 @@ class DesignProblem:
         var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched  # (S, t)
         trA2 = np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1))  # (S,)
         trSM3 = np.sum(Sig * M3, axis=(-2, -1))
-        first = (counts == 0)[:, None, None, None]
-        X = np.where(first[..., 0], self.Xf, self.Xa)  # (K, r, P)
-        N = np.where(first, self.Nf, self.Na)  # (K, S, r, r)
-        D2 = np.where(first, self.D2f, self.D2a)
-        D3 = np.where(first, self.D3f, self.D3a)
         dt = np.where(counts[:, None] == 0, self.first_t, self.again_t)  # (K, S)
-        XS = np.einsum("krp,spq->ksrq", X, Sig)  # (K, S, r, P): XΣ
-        XSt = np.swapaxes(XS, -1, -2)
-        H = XS @ np.swapaxes(X, -1, -2)[:, None]  # (K, S, r, r): XΣXᵀ
-        Winv = np.linalg.inv(N + H)
-        Q = XS @ self.Tp.T  # (K, S, r, t)
-        var_new = var[None] - np.sum(Q * (Winv @ Q), axis=-2)
-        D2X = D2 @ X[:, None]  # (K, S, r, P)
-        R = D2X - Winv @ (XS @ M2[None]) - Winv @ (H @ D2X)
-        AXSt = A[None] @ XSt  # (K, S, P, r)
-        RX = R @ XSt  # (K, S, r, r)
-        trE2 = trA2[None] + 2.0 * np.einsum("ksrp,kspr->ks", R, AXSt) + np.einsum("ksij,ksji->ks", RX, RX)
-        XSM3XS = XS @ M3[None] @ XSt
-        trSM3_new = (trSM3[None] + np.einsum("ksij,ksji->ks", D3, H)
-                     - np.einsum("ksij,ksji->ks", Winv, XSM3XS + H @ D3 @ H))
+        K, S = len(self.candidates), len(Sig)
+        var_new = np.empty((K, S, len(self.Tp)))
+        trE2, trSM3_new = np.empty((K, S)), np.empty((K, S))
+        for idx, r in self._groups:
+            var_new[idx], trE2[idx], trSM3_new[idx] = self._updates(counts[idx] == 0, idx, r, Sig=Sig, M2=M2,
+                                                                    M3=M3, A=A, var=var, trA2=trA2, trSM3=trSM3)
         tr = t[0][None] + dt - 2.0 * trSM3_new + trE2
         fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
         sd = np.sqrt(np.maximum(var_new, 0.0)) * self.to_display
@@ -337,6 +332,30 @@ class DesignProblem:
         if self._watched():
             v.undetermined = _unseen(self.determination.unseen_plus_one(counts), self.watch)
         return v, counts < MAX_INSTANCES
+
+    def _updates(self, fresh: np.ndarray, idx: np.ndarray, r: int, *, Sig, M2, M3, A, var, trA2, trSM3):
+        """The rank-``r`` updates of :meth:`value_plus_one` for the candidates ``idx`` (their first run where
+        ``fresh``): the target variances ``(k, S, t)``, ``tr((Σ′M₂′)²)`` and ``tr(Σ′M₃′)`` ``(k, S)``."""
+        first = fresh[:, None, None, None]
+        X = np.where(first[..., 0], self.Xf[idx, :r], self.Xa[idx, :r])  # (k, r, P)
+        N = np.where(first, self.Nf[idx][:, :, :r, :r], self.Na[idx][:, :, :r, :r])  # (k, S, r, r)
+        D2 = np.where(first, self.D2f[idx][:, :, :r, :r], self.D2a[idx][:, :, :r, :r])
+        D3 = np.where(first, self.D3f[idx][:, :, :r, :r], self.D3a[idx][:, :, :r, :r])
+        XS = np.einsum("krp,spq->ksrq", X, Sig)  # (k, S, r, P): XΣ
+        XSt = np.swapaxes(XS, -1, -2)
+        H = XS @ np.swapaxes(X, -1, -2)[:, None]  # (k, S, r, r): XΣXᵀ
+        Winv = np.linalg.inv(N + H)
+        Q = XS @ self.Tp.T  # (k, S, r, t)
+        var_new = var[None] - np.sum(Q * (Winv @ Q), axis=-2)
+        D2X = D2 @ X[:, None]  # (k, S, r, P)
+        R = D2X - Winv @ (XS @ M2[None]) - Winv @ (H @ D2X)
+        AXSt = A[None] @ XSt  # (k, S, P, r)
+        RX = R @ XSt  # (k, S, r, r)
+        trE2 = trA2[None] + 2.0 * np.einsum("ksrp,kspr->ks", R, AXSt) + np.einsum("ksij,ksji->ks", RX, RX)
+        XSM3XS = XS @ M3[None] @ XSt
+        trSM3_new = (trSM3[None] + np.einsum("ksij,ksji->ks", D3, H)
+                     - np.einsum("ksij,ksji->ks", Winv, XSM3XS + H @ D3 @ H))
+        return var_new, trE2, trSM3_new
 
     def value_now(self) -> DesignValue:
         """The criterion of the campaign as it is."""
