@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from targets import run  # noqa: E402  (a fresh process, its wall time and peak memory)
+from targets import ratio_row, run  # noqa: E402  (a fresh process, its wall time and peak memory)
 
 TYPES = ("vertical-turn-mill", "trunnion", "head-head")
 FLOOR = ["python", "-c", "import arviz, emcee, scipy.stats, numpy"]
@@ -49,7 +49,7 @@ def command_ratios(repeats: int) -> dict:
         for name, ts in times.items():
             goal = 1.3 if name.startswith("sample") else 3.0
             med = float(np.median(ts))
-            out[name] = {"wall_s": med, "ratio_to_t_ref": med / t_ref, "goal": goal, "met": med / t_ref <= goal}
+            out[name] = ratio_row(med, t_ref, goal)
     return out
 
 

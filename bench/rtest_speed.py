@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from targets import timed_against_floor  # noqa: E402  (fresh processes, each after the import floor)
+from targets import ratio_row, timed_against_floor  # noqa: E402  (fresh processes, each after the import floor)
 
 from mtmcal_bayes.inference.log_posterior import LogPosterior  # noqa: E402
 from mtmcal_bayes.io.campaign_reader import parse_campaign  # noqa: E402
@@ -56,8 +56,7 @@ def ratios(repeats: int) -> dict:
         t_ref, times = timed_against_floor(commands, cwd, repeats)
         out["t_ref_s"] = t_ref
         for t, med in times.items():
-            out[f"sample --data rtest {t}"] = {"wall_s": med, "ratio_to_t_ref": med / t_ref, "goal": GOAL,
-                                               "met": med / t_ref <= GOAL}
+            out[f"sample --data rtest {t}"] = ratio_row(med, t_ref, GOAL)
     return out
 
 

@@ -73,6 +73,12 @@ def timed_against_floor(commands: dict, cwd: Path, repeats: int) -> tuple[float,
     return float(np.median(floors)), {name: float(np.median(ts)) for name, ts in times.items()}
 
 
+def ratio_row(wall_s: float, t_ref: float, goal: float) -> dict:
+    """One command's entry of a speed bench's JSON: its median wall time, its ratio to the import floor, the goal
+    and whether the ratio meets it."""
+    return {"wall_s": wall_s, "ratio_to_t_ref": wall_s / t_ref, "goal": goal, "met": wall_s / t_ref <= goal}
+
+
 def floor_rows(tmp: Path, repeats: int, row) -> None:
     """Issue 25: report, a ball-bar-only report and sample as ratios to the import floor, each command timed
     right after a floor run (pairs; medians of each)."""
