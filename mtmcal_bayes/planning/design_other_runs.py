@@ -9,7 +9,7 @@ campaign.
 
 from __future__ import annotations
 
-from .plan import rtest_run_table
+from .plan import rtest_run_table, rtest_where
 
 #: the file of a design's probe and R-test tables
 FILL_IN = "to_fill_in.toml"
@@ -32,9 +32,8 @@ def other_record(order: int, run, *, minutes: float, why: str, programs: bool) -
         where = {"setup": f"stylus {c.stylus_length:g} mm", "mount": "sphere at [" + ", ".join(
             f"{x:g}" for x in c.sphere) + "] mm", "angles_deg": {a: list(v) for a, v in c.positions}}
     else:
-        s = c.setup
-        where = {"setup": f"nest {s.nest} {s.length:g} mm", "mount": f"sphere {s.placement} at [" + ", ".join(
-            f"{x:g}" for x in s.sphere) + "] mm", "angles_deg": c.angles_deg(), "swept": c.sweep_span is not None}
+        where = {k: rtest_where(c)[k] for k in ("setup", "mount")} | {"angles_deg": c.angles_deg(),
+                                                                      "swept": c.sweep_span is not None}
     return {"order": order, "pattern": c.pattern, "instrument": c.instrument, **where, "repeats": c.repeats,
             "minutes": round(minutes, 2), "program": other_program_name(order, run) if programs else None,
             "why": why, "candidate": run.label, "table": run_id(order, run)}

@@ -106,7 +106,7 @@ def _table(planner: Planner, candidates: list[Candidate], campaign) -> pd.DataFr
     return _tables(planner, candidates, campaign)[0]
 
 
-def _rtest_where(c: RTestCandidate) -> dict:
+def rtest_where(c: RTestCandidate) -> dict:
     """The geometry columns of an R-test candidate: its nest (length in ``R_B_mm``) and its sphere."""
     s = c.setup
     return {"setup": f"nest {s.nest} {s.length:g} mm", "R_B_mm": s.length, "Z_T_mm": np.nan,
@@ -131,7 +131,7 @@ def _tables(planner: Planner, candidates: list[Candidate], campaign,
         newly = [t for i, t in enumerate(ev.targets) if ev.identified_after[k, i] and not ev.identified_before[i]]
         where = ({"setup": f"stylus {c.stylus_length:g} mm", "R_B_mm": c.stylus_length, "Z_T_mm": np.nan,
                   "mount": f"sphere at Z_C {c.Z_C:g} mm", "R_C_mm": c.R_C} if probe else
-                 _rtest_where(c) if rtest else kit.where(c))
+                 rtest_where(c) if rtest else kit.where(c))
         row = {"name": c.name, "kind": c.kind, "pattern": c.pattern, **where, "L_B_mm": c.length,
                "repeats": c.repeats, **({"minutes": c.minutes(times) if rtest else np.nan} if timed else {}),
                "extension_mm": c.extension, "feasible": ok, "feasibility": why,
