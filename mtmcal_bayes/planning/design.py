@@ -371,8 +371,8 @@ class Planner:
 
     def _rows_of_each(self, candidates: list) -> list[tuple[np.ndarray, np.ndarray]]:
         """:meth:`_rows_of` of each candidate, the new runs' at one mount the campaign measured, one bar length and
-        one set-up from one model of them all (:meth:`_new_runs_rows`: a catalogue's hundreds of runs in a few models, not one
-        model each)."""
+        one set-up from one model of them all (:meth:`_new_runs_rows`: a catalogue's hundreds of runs in a few
+        models, not one model each)."""
         out: list = [None] * len(candidates)
         groups: dict[tuple, list[int]] = {}
         measured = {r.mount for r in self.campaign.ballbar.runs}
@@ -406,8 +406,8 @@ class Planner:
         return self.A[keys], 1.0 / v_new - 1.0 / self.V[keys]
 
     def _new_runs_rows(self, cands: list[Candidate]) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Rows and weights of each new run of ``cands`` (one mount, one bar length, one set-up), from a campaign of those runs
-        after the campaign's first run at their mount: a model that places a mount's W ball by the first run there
+        """Rows and weights of each new run of ``cands`` (one mount, one bar length, one set-up), from a campaign of
+        those runs after the campaign's first run at their mount: a model that places a mount's W ball by the first run there
         (the chain: that run's set-up enters the rows of every run at the mount) sees each candidate where the
         campaign placed it; one that does not, the same rows as in the campaign itself.  After that first run a
         run's rows depend on its own set-up and mount alone, so several runs share one model; at a mount the
@@ -423,9 +423,8 @@ class Planner:
         aug.ballbar = bb
         design = self.rows_for(aug, self.space)
         run_of = np.array([k.run for k in Observations.from_campaign(aug).keys])
-        return [(design[run_of == len(before) + j], np.full(int((run_of == len(before) + j).sum()),
-                                                            1.0 / self.noise_var(c.repeats)))
-                for j, c in enumerate(cands)]
+        rows = [design[run_of == len(before) + j] for j in range(len(cands))]
+        return [(A, np.full(len(A), 1.0 / self.noise_var(c.repeats))) for A, c in zip(rows, cands)]
 
     # ------------------------------------------------------------------ posterior
     def _precision(self, widen: float = 1.0) -> np.ndarray:
