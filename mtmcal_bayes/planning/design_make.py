@@ -25,7 +25,7 @@ from .candidates import Candidate
 from .machine_kit import catalogue_of, feasibility_of
 from .design import Planner, target_names
 from .design_check import Preposterior, preposterior
-from .design_instruments import chosen_instruments, other_candidates, taught
+from .design_instruments import SCALE_OF, chosen_instruments, other_candidates, taught
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
 from .design_runs import DesignedRun, designed_runs
 from .design_search import Goal, Search
@@ -360,7 +360,7 @@ def _candidates_note(instruments: list[str], scale: str) -> str:
                         "length, and a later session cannot add repeats to a measured run)",
              "probe": "touch-probe runs of the probe catalogue (each with its own stylus and sphere terms)",
              "rtest": "R-test runs of the R-test catalogue"}
-    names = {"ballbar": "σ_model", "probe": "σ_model_probe", "rtest": "σ_model_rtest"}
+    names = {i: SCALE_OF[i].replace("sigma_", "σ_") for i in instruments}  # σ_model, σ_model_probe, ...
     others = [names[i] for i in instruments if i != scale]
     return ("candidates: " + "; ".join(words[i] for i in instruments)
             + f"; the discrepancy scale the data teach and the search integrates out is {names[scale]}"
