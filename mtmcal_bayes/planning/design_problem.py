@@ -38,6 +38,8 @@ from .determined import SUBSPACE_TOL, Determination
 
 #: most runs of one candidate in a design (each further one on its own W-ball placement)
 MAX_INSTANCES = 3
+#: a design differing from the last one summed in full in at most this many candidates is summed from it
+NEAR = 4
 #: quantiles of σ_model at which the criterion is evaluated
 NODE_LEVELS = (0.1, 0.3, 0.5, 0.7, 0.9)
 #: the share of machines for which a design promises its targets: the sd is taken at this quantile of σ_model
@@ -160,6 +162,7 @@ class DesignProblem:
         #: (t,) the targets whose determination by the design's runs is part of the criterion (None: none): a target
         #: the prior alone meets is met only once the runs determine it (:mod:`.determined`)
         self.watch: np.ndarray | None = None
+        self._anchor = None  # (counts (K,), M, t) of the last design summed in full (:meth:`moments`)
         if taught == "ballbar":
             self.nodes = sigma_nodes(planner) if nodes is None else np.asarray(nodes, float)
             self.sigma_prior_var = float(planner.sigma_prior().var())
@@ -251,8 +254,34 @@ class DesignProblem:
 
     # ------------------------------------------------------------------ criterion
     def moments(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(M (3, B, S, P, P), t (B, S))`` of designs ``counts`` (B, K)."""
+        """``(M (3, B, S, P, P), t (B, S))`` of designs ``counts`` (B, K).
+
+        One design within :data:`NEAR` candidates of the last one summed in full (the search's next step, a
+        drop or a swap) is that sum plus the changed candidates' terms: a search asks thousands of such designs,
+        and a full sum reads every used candidate's (3, S, P, P) terms."""
         counts = np.atleast_2d(counts)
+        if len(counts) == 1 and self._anchor is not None:
+            c0, M0, t0 = self._anchor
+            changed = np.flatnonzero(counts[0] != c0)
+            if len(changed) <= NEAR:
+                M, t = M0.copy(), t0.copy()
+                for k in changed:
+                    new, old = int(counts[0, k]), int(c0[k])
+                    d_first, d_again = float(new >= 1) - float(old >= 1), max(new - 1, 0) - max(old - 1, 0)
+                    if d_first:
+                        M[:, 0] += d_first * self.first[:, k]
+                        t[0] += d_first * self.first_t[k]
+                    if d_again:
+                        M[:, 0] += d_again * self.again[:, k]
+                        t[0] += d_again * self.again_t[k]
+                return M, t
+        M, t = self._summed(counts)
+        if len(counts) == 1:
+            self._anchor = (counts[0].copy(), M, t)
+        return M.copy(), t.copy()
+
+    def _summed(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`moments` of ``counts`` (B, K) summed over every candidate they run."""
         # the candidates some design runs (a design runs a few of a hundred: the others' terms are not read)
         used = np.flatnonzero(counts.any(axis=0))
         counts = counts[:, used]
@@ -341,18 +370,24 @@ class DesignProblem:
         N = np.where(first, self.Nf[idx][:, :, :r, :r], self.Na[idx][:, :, :r, :r])  # (k, S, r, r)
         D2 = np.where(first, self.D2f[idx][:, :, :r, :r], self.D2a[idx][:, :, :r, :r])
         D3 = np.where(first, self.D3f[idx][:, :, :r, :r], self.D3a[idx][:, :, :r, :r])
-        XS = np.einsum("krp,spq->ksrq", X, Sig)  # (k, S, r, P): XΣ
+        k, P = len(X), X.shape[-1]
+        # every product with a P × P matrix as one matrix product per σ node over all candidates' rows stacked
+        # (k·r, P), then back to (k, S, r, ·): the batched small products left are r × r and r × P
+        flat = X.reshape(k * r, P)
+        back = lambda Y: np.moveaxis(Y.reshape(len(Sig), k, r, -1), 0, 1)  # noqa: E731  (S, k·r, n) -> (k, S, r, n)
+        XS_flat = flat @ Sig  # (S, k·r, P): XΣ
+        XS = back(XS_flat)
         XSt = np.swapaxes(XS, -1, -2)
         H = XS @ np.swapaxes(X, -1, -2)[:, None]  # (k, S, r, r): XΣXᵀ
         Winv = np.linalg.inv(N + H)
-        Q = XS @ self.Tp.T  # (k, S, r, t)
+        Q = back(XS_flat @ self.Tp.T)  # (k, S, r, t)
         var_new = var[None] - np.sum(Q * (Winv @ Q), axis=-2)
         D2X = D2 @ X[:, None]  # (k, S, r, P)
-        R = D2X - Winv @ (XS @ M2[None]) - Winv @ (H @ D2X)
-        AXSt = A[None] @ XSt  # (k, S, P, r)
+        R = D2X - Winv @ back(XS_flat @ M2) - Winv @ (H @ D2X)
+        XSA = back(XS_flat @ np.swapaxes(A, -1, -2))  # (k, S, r, P): (AΣXᵀ)ᵀ
         RX = R @ XSt  # (k, S, r, r)
-        trE2 = trA2[None] + 2.0 * np.einsum("ksrp,kspr->ks", R, AXSt) + np.einsum("ksij,ksji->ks", RX, RX)
-        XSM3XS = XS @ M3[None] @ XSt
+        trE2 = trA2[None] + 2.0 * np.einsum("ksrp,ksrp->ks", R, XSA) + np.einsum("ksij,ksji->ks", RX, RX)
+        XSM3XS = back(XS_flat @ M3) @ XSt
         trSM3_new = (trSM3[None] + np.einsum("ksij,ksji->ks", D3, H)
                      - np.einsum("ksij,ksji->ks", Winv, XSM3XS + H @ D3 @ H))
         return var_new, trE2, trSM3_new
