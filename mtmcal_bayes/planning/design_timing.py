@@ -110,17 +110,18 @@ class Timing:
         (``tests/test_machine_time.py`` holds it equal to :meth:`total`)."""
         # the ball bar's runs grouped by set-up, then placement, each in the order of first appearance (designed
         # order); the probe's and the R-test's runs apart, as :meth:`order` puts them
+        setup_of, mount_of, measure = self._keys(candidates)
         groups: dict = {}
         others = []
-        for k in np.flatnonzero(counts):
-            c = candidates[k]
-            k = int(k)
-            if c.instrument != "ballbar":
-                others += [_Other(c, i + 1) for i in range(int(counts[k]))]
+        n_of = counts.tolist()
+        for k in np.flatnonzero(counts).tolist():
+            n = n_of[k]
+            if measure[k] is None:
+                others += [_Other(candidates[k], i + 1) for i in range(n)]
                 continue
-            by_mount = groups.setdefault(c.setup.id, {})
-            by_mount.setdefault(c.mount.id, []).append(k)
-            for i in range(1, int(counts[k])):
+            by_mount = groups.setdefault(setup_of[k], {})
+            by_mount.setdefault(mount_of[k], []).append(k)
+            for i in range(1, n):
                 by_mount[("again", k, i)] = [k]
         setups = list(groups)
         if start[1] in groups:
@@ -135,22 +136,39 @@ class Timing:
                 mounts.remove(start[2])
                 mounts.insert(0, start[2])
             for mt in mounts:
-                for k in groups[s][mt]:
-                    if not mounted:
-                        t += m.mount_ballbar_min
-                    if s != setup:
-                        t += m.tool_change_min
-                    if mt != mount:
-                        t += m.reclamp_w_ball_min
-                    if mounted and s == setup and mt == mount:
-                        t += m.pattern_change_min
-                    t += self._measure(candidates[k])
-                    mounted, setup, mount = True, s, mt
+                ks = groups[s][mt]
+                # the group's first run after whatever came before; the others each a pattern change (the same
+                # additions, in the same order, as the schedule's walk)
+                if not mounted:
+                    t += m.mount_ballbar_min
+                if s != setup:
+                    t += m.tool_change_min
+                if mt != mount:
+                    t += m.reclamp_w_ball_min
+                if mounted and s == setup and mt == mount:
+                    t += m.pattern_change_min
+                t += measure[ks[0]]
+                for k in ks[1:]:
+                    t += m.pattern_change_min
+                    t += measure[k]
+                mounted, setup, mount = True, s, mt
         if others:
             ordered = [others[i] for i in self.order(others, start)]
             for _, _, minutes in self._other_steps(ordered, mounted):
                 t += minutes
         return t
+
+    def _keys(self, candidates) -> tuple[list, list, list]:
+        """Per candidate of ``candidates``: its set-up id, its mount id and its measuring minutes (None: a probe or
+        R-test candidate), made once per list of candidates."""
+        cache = self.__dict__.setdefault("_keyed", {})
+        if id(candidates) not in cache:
+            bar = [c.instrument == "ballbar" for c in candidates]
+            cache[id(candidates)] = (candidates, (
+                [c.setup.id if b else None for c, b in zip(candidates, bar)],
+                [c.mount.id if b else None for c, b in zip(candidates, bar)],
+                [self._measure(c) if b else None for c, b in zip(candidates, bar)]))  # candidates kept: ids stay
+        return cache[id(candidates)][1]
 
     def _measure(self, c) -> float:
         """Measuring minutes of one run of candidate ``c`` (every run of it alike), each candidate's once."""
