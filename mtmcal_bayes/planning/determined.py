@@ -50,6 +50,7 @@ class Determination:
         norm = np.linalg.norm(C, axis=1, keepdims=True)
         self.C = C / np.where(norm > 0, norm, 1.0)
         self._null: dict[bytes, np.ndarray] = {}
+        self._plus_one: dict[bytes, np.ndarray] = {}
 
     def _null_of(self, support: np.ndarray) -> np.ndarray:
         """Orthonormal basis ``(F, k)`` of the null space of the campaign's rows and the rows of ``support`` (K,)."""
@@ -59,7 +60,9 @@ class Determination:
             if not len(J):
                 self._null[key] = np.eye(len(self.free))
             else:
-                _, s, vt = np.linalg.svd(J, full_matrices=True)
+                # vt in full (its last rows span the null space), U only as wide as needed: a probe's or an
+                # R-test's rows are hundreds, and U in full would be their square
+                _, s, vt = np.linalg.svd(J, full_matrices=len(J) < J.shape[1])
                 self._null[key] = vt[int(np.sum(s > self.tol)):].T
         return self._null[key]
 
@@ -80,14 +83,21 @@ class Determination:
         return np.stack([self.unseen(c) for c in np.atleast_2d(counts)])
 
     def unseen_plus_one(self, counts: np.ndarray) -> np.ndarray:
-        """(K, t) :meth:`unseen` after one more run of each candidate ``k`` added to ``counts`` (K,)."""
+        """(K, t) :meth:`unseen` after one more run of each candidate ``k`` added to ``counts`` (K,); a design's
+        support decides it, so it is made once per support (the search asks it again and again)."""
         counts = np.asarray(counts)
+        key = (counts > 0).tobytes()
+        if key not in self._plus_one:
+            self._plus_one[key] = self._unseen_plus_one(counts)
+        return self._plus_one[key]
+
+    def _unseen_plus_one(self, counts: np.ndarray) -> np.ndarray:
         Z = self._null_of(counts > 0)
         K, t = len(self.R), len(self.C)
         if Z.shape[1] == 0:
             return np.zeros((K, t))
         B = self.R @ Z  # (K, r, kz)
-        _, s, vt = np.linalg.svd(B, full_matrices=True)  # vt (K, kz, kz)
+        _, s, vt = np.linalg.svd(B, full_matrices=B.shape[1] < B.shape[2])  # vt (K, kz, kz); U no wider than B
         rank = np.sum(s > self.tol, axis=1)  # (K,)
         left = np.arange(Z.shape[1])[None, :] >= rank[:, None]  # (K, kz): rows of vt spanning null(R Z)
         G = np.einsum("tz,kjz->ktj", self.C @ Z, vt)  # (K, t, kz): the targets along each null direction
