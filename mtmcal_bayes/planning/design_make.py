@@ -40,6 +40,10 @@ CONTRACTION = 0.5
 ROUNDS = 4
 #: the working targets are loosened while the exact check finds every target met with this much room (sd ratio)
 LOOSEN_ABOVE = 1.1
+#: a target shapes the design when its closed-form sd is at least this fraction of its working target; one met with
+#: more room is not loosened further (the rounds end once every target that shapes the design is kept with
+#: less than LOOSEN_ABOVE to spare)
+BINDING = 0.7
 #: a run "identifies" a quantity when dropping it would raise that quantity's sd by this fraction
 WHY_SD = 0.05
 #: ... or "teaches σ_model" when dropping it would lower the contraction by this much
@@ -283,7 +287,9 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     kw = {} if n_sim is None else {"n_sim": n_sim}
     best, last = None, None
     for rounds in range(1, ROUNDS + 1):
-        result = Search(problem, working, minutes).run(seed)
+        # a later round's goal moved by a few per cent: its search starts from the last round's design, once
+        warm = {} if last is None else {"start": last[0].counts, "restarts": 0}
+        result = Search(problem, working, minutes).run(seed, **warm)
         if goal.has_targets and not result.met:
             if best is not None or last is not None:
                 break  # a tightened goal out of reach: keep what was found
@@ -301,7 +307,9 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         if not short_sd.any() and not short_c and (best is None or result.minutes < best[0].minutes):
             best = last
         slack = np.where(has, goal.targets / p, 1.0)  # > 1: the promise is kept with room to spare
-        if not short_sd.any() and not short_c and np.all(slack[has] < LOOSEN_ABOVE):
+        # only the targets that shape the design are worth loosening: the others' room changes nothing
+        binding = has & (result.value.sd_promised[0] >= BINDING * working.targets)
+        if not short_sd.any() and not short_c and np.all(slack[binding] < LOOSEN_ABOVE):
             break
         # the closed form's promise is off by what the exact check found: move the working targets by it
         working.targets = np.where(has, working.targets * np.clip(slack * 0.98, 0.5, 1.5), working.targets)

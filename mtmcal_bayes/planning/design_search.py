@@ -88,6 +88,7 @@ class Search:
     def __init__(self, problem: DesignProblem, goal: Goal, minutes: Callable[[np.ndarray], float],
                  allowed: np.ndarray | None = None):
         self.problem, self.goal, self._minutes = problem, goal, minutes
+        self.has_targets = goal.has_targets  # asked at every step: the goal does not change during a search
         K = len(problem.candidates)
         self.allowed = np.ones(K, dtype=bool) if allowed is None else np.asarray(allowed, dtype=bool)
         self.now = problem.value_now()
@@ -101,7 +102,7 @@ class Search:
 
     def _score(self, v: DesignValue) -> np.ndarray:
         """Lower is better: the shortfall with targets, minus the improvement without."""
-        return shortfall(v, self.goal) if self.goal.has_targets else -improvement(v, self.now)
+        return shortfall(v, self.goal) if self.has_targets else -improvement(v, self.now)
 
     def _fits(self, m: float) -> bool:
         return self.goal.budget is None or m <= self.goal.budget + 1e-9
@@ -112,7 +113,7 @@ class Search:
         counts = np.zeros(K, dtype=int) if start is None else start.copy()
         score = float(self._score(self.problem.value(counts))[0])
         while True:
-            if self.goal.has_targets and score <= MET:
+            if self.has_targets and score <= MET:
                 return counts
             vp, ok = self.problem.value_plus_one(counts)
             ok &= self.allowed
@@ -138,7 +139,7 @@ class Search:
 
     # ------------------------------------------------------------------ exchange
     def _better(self, score: float, m: float, score0: float, m0: float) -> bool:
-        if self.goal.has_targets:  # meet the targets, then fewer minutes
+        if self.has_targets:  # meet the targets, then fewer minutes
             if score0 > MET:
                 return score < score0 - MET
             return score <= MET and m < m0 - 1e-9
@@ -165,14 +166,14 @@ class Search:
                 for j in np.flatnonzero(ok):
                     # with targets a swap must meet them (the design met them) or come nearer (it did not): the
                     # minutes of the others are not needed
-                    if self.goal.has_targets and (scores[j] > MET if score0 <= MET else scores[j] >= score0 - MET):
+                    if self.has_targets and (scores[j] > MET if score0 <= MET else scores[j] >= score0 - MET):
                         continue
                     trial = less.copy()
                     trial[j] += 1
                     m = self.minutes(trial)
                     if self._better(float(scores[j]), m, score0, m0):
                         best = self._keep(best, (float(scores[j]), m, trial))
-            if not self.goal.has_targets:  # within a budget, room may be left for one more run
+            if not self.has_targets:  # within a budget, room may be left for one more run
                 vp, ok = self.problem.value_plus_one(counts)
                 scores = self._score(vp)
                 for j in np.flatnonzero(ok & self.allowed & (scores < score0 - 1e-9)):
@@ -189,20 +190,22 @@ class Search:
     def _keep(self, best, new):
         if best is None:
             return new
-        if self.goal.has_targets:
+        if self.has_targets:
             return new if (new[0], new[1]) < (best[0], best[1]) else best
         return new if (new[0], new[1]) < (best[0], best[1]) else best
 
     # ------------------------------------------------------------------ run
-    def run(self, seed: int | None = 0, restarts: int = RESTARTS) -> SearchResult:
+    def run(self, seed: int | None = 0, restarts: int = RESTARTS, start: np.ndarray | None = None) -> SearchResult:
+        """The best of a plain greedy start and ``restarts`` randomised ones, each refined by exchange; ``start``
+        (K,) a design to begin every greedy from (a previous round's, its goal since moved), else none."""
         rng = np.random.default_rng(seed)
         best = None
         for r in range(restarts + 1):
-            counts = self.exchange(self.greedy(rng if r else None))
+            counts = self.exchange(self.greedy(rng if r else None, start=start))
             v = self.problem.value(counts)
             score = float(self._score(v)[0])
             m = self.minutes(counts)
-            key = (score if self.goal.has_targets and score > MET else 0.0, m) if self.goal.has_targets else (score, m)
+            key = (score if self.has_targets and score > MET else 0.0, m) if self.has_targets else (score, m)
             if best is None or key < best[0]:
                 best = (key, counts, v)
         counts, v = best[1], best[2]
