@@ -38,14 +38,24 @@ class Determination:
                              dtype=int)
         scale = space.display_scale()[self.free]  # per µm and per ″: columns on one footing
         self.J0 = planner.A[:, self.free] * scale
-        r_max = max((len(A) for A in rows), default=1)
-        self.R = np.zeros((len(rows), r_max, len(self.free)))
-        for k, A in enumerate(rows):
-            self.R[k, :len(A)] = A[:, self.free] * scale
+        # each candidate's rows as few as the columns: R → S·Vᵀ (its SVD) has the same singular values times any
+        # basis Z, so the same null spaces; a probe's or an R-test's hundreds of rows, padded for all, made every
+        # candidate's SVD as large as theirs
+        own = [_as_few_rows(A[:, self.free] * scale) for A in rows]
         self.rows = rows
-        allrows = np.vstack([self.J0] + [r for r in self.R])
+        allrows = np.vstack([self.J0] + own)
         s = np.linalg.svd(allrows, compute_uv=False) if allrows.size else np.zeros(0)
         self.tol = RTOL * (s[0] if s.size and s[0] > 0 else 1.0)
+        # then without the rows of singular values far below the rule's (a thousandth of it: the rank decisions at
+        # the tolerance are the same), and the candidates in groups of their row counts, each group's SVDs as
+        # large as its own rows (a ball-bar run's two to eighteen, a probe's tens)
+        own = [_as_few_rows(A, self.tol * 1e-3) for A in own]
+        r_max = max((len(A) for A in own), default=1)
+        self.R = np.zeros((len(rows), r_max, len(self.free)))
+        for k, A in enumerate(own):
+            self.R[k, :len(A)] = A
+        sizes = np.array([max(len(A), 1) for A in own], dtype=int)
+        self._groups = [(np.flatnonzero(sizes == r), int(r)) for r in np.unique(sizes)]
         C = planner.T[:, self.free] * scale  # (t, F) display units: what each target weighs
         norm = np.linalg.norm(C, axis=1, keepdims=True)
         self.C = C / np.where(norm > 0, norm, 1.0)
@@ -96,12 +106,16 @@ class Determination:
         K, t = len(self.R), len(self.C)
         if Z.shape[1] == 0:
             return np.zeros((K, t))
-        B = self.R @ Z  # (K, r, kz)
-        _, s, vt = np.linalg.svd(B, full_matrices=B.shape[1] < B.shape[2])  # vt (K, kz, kz); U no wider than B
-        rank = np.sum(s > self.tol, axis=1)  # (K,)
-        left = np.arange(Z.shape[1])[None, :] >= rank[:, None]  # (K, kz): rows of vt spanning null(R Z)
-        G = np.einsum("tz,kjz->ktj", self.C @ Z, vt)  # (K, t, kz): the targets along each null direction
-        after = np.linalg.norm(np.where(left[:, None, :], G, 0.0), axis=2)
+        g = self.C @ Z  # (t, kz): the targets in the null space's basis
+        after = np.empty((K, t))
+        for idx, r in self._groups:
+            B = self.R[idx, :r] @ Z  # (k, r, kz)
+            _, s, vt = np.linalg.svd(B, full_matrices=False)  # vt (k, min(r, kz), kz)
+            seen = np.arange(vt.shape[1])[None, :] < np.sum(s > self.tol, axis=1)[:, None]  # rows spanning B's rows
+            G = np.einsum("tz,kjz->ktj", g, vt)  # (k, t, ·): the targets along each direction B sees
+            # what is left unseen: the part of each target outside B's row space
+            after[idx] = np.sqrt(np.maximum(np.sum(g**2, axis=1)[None]
+                                            - np.sum(np.where(seen[:, None, :], G, 0.0) ** 2, axis=2), 0.0))
         return np.where(counts[:, None] > 0, self.unseen(counts)[None, :], after)  # a further run adds nothing
 
     def determined_plus_one(self, counts: np.ndarray) -> np.ndarray:
@@ -116,6 +130,16 @@ class Determination:
         space = self.planner.space
         known = [b for b in CENTRED if any(p.base == b for p in space.parameters)]
         return identifiability(np.vstack(rows), space, known=known)
+
+
+def _as_few_rows(R: np.ndarray, below: float | None = None) -> np.ndarray:
+    """``R`` (r, F) as ``S·Vᵀ`` (min(r, F), F) where it has more rows than columns, else as it is; with ``below``
+    always as ``S·Vᵀ``, without the rows of singular values at or below it."""
+    if below is None and len(R) <= R.shape[1]:
+        return R
+    _, s, vt = np.linalg.svd(R, full_matrices=False)
+    keep = s > (below if below is not None else -1.0)
+    return s[keep, None] * vt[keep]
 
 
 def single_deviation(planner) -> list[str | None]:
