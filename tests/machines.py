@@ -15,13 +15,13 @@ import copy
 
 import numpy as np
 
+from mtmcal_bayes import units
 from mtmcal_bayes.inference.log_posterior import parameter_space
 from mtmcal_bayes.inference.priors import make_prior
 from mtmcal_bayes.models import default_kinematic_model
 from mtmcal_bayes.planning.design import Planner
 from mtmcal_bayes.planning.design_problem import current_posterior
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
-from mtmcal_bayes import units
 
 
 class SimulatedMachine:
@@ -78,7 +78,7 @@ def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int =
     """``next`` after every run on ``machine``: measure the run it names until it says stop.  Where ``next`` changed
     the plan (a run dropped or added) the campaign carries its re-plan from then on, as ``next -o`` writes it.
     Returns the measured campaign, the minutes used and the last answer; ``trail`` receives per run measured
-    ``(label, minutes, why, changed)``, ``changed`` whether the plan it came from was ``next``'s own."""
+    ``(label, minutes, why, added, dropped)``: the runs ``next`` added to and dropped from the plan at that step."""
     from mtmcal_bayes.planning.design_output import designed_campaign
     from mtmcal_bayes.planning.next_run import next_step
 
@@ -87,13 +87,12 @@ def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int =
         step = next_step(c, n_sim=n_sim)
         if step.status == "stop":
             break
-        changed = bool(step.added or step.dropped)
-        if changed:
+        if step.added or step.dropped:
             c = designed_campaign(step.design, c.design)
         run = step.design.runs[0]
         minutes += step.design.minutes[0]
         if trail is not None:
-            trail.append((run.label, step.design.minutes[0], step.design.why[0], changed))
+            trail.append((run.label, step.design.minutes[0], step.design.why[0], step.added, step.dropped))
         c = machine.measure(c, next(j for j, p in enumerate(c.ballbar.planned) if p.label == run.label))
     return c, minutes, step
 

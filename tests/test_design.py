@@ -211,8 +211,8 @@ def test_promised_share_holds_on_simulated_machines(new_machine):
     tg = {"alpha_XB": 1.5, "dy_CZ": 8.0, "alpha_CZ": 10.0}
     d = mb.design(new_machine, targets=tg).design
     dc = designed_campaign(d)
-    sds = np.array([realised_sd(SimulatedMachine(new_machine, 1000 + i).measure_all(dc), list(tg))
-                    for i in range(60)])
+    machines = [SimulatedMachine(new_machine, 1000 + i, model="linear") for i in range(60)]
+    sds = np.array([realised_sd(m.measure_all(dc), list(tg)) for m in machines])
     share = np.mean(sds <= np.array(list(tg.values())), axis=0)
     floor = stats.binom.ppf(0.01, 60, PROMISE) / 60
     assert np.all(share >= floor), share
@@ -222,15 +222,11 @@ def test_promised_share_holds_on_simulated_machines(new_machine):
         assert abs(s - promised[d.targets.index(q)]) < 3 * np.sqrt(0.1 * 0.9 / 60)
 
 
-# not run while the gap is not being worked on (issue 44): it costs ~25 s of every test run to confirm it is still open
-@pytest.mark.xfail(strict=True, run=False, reason="known gap (issue 42): with the honest rule the fixed design is 5 runs, 88 min "
-                   "(δy_CZ is determined by no 4-run design); on machine 2000 next measures the same five and then "
-                   "BY@RB1+25 for σ_model's contraction, which the fixed design promises only in expectation and the "
-                   "twin check here does not ask of it: [102.3, 88.2, 90.9] min against 88.2")
 def test_sequential_measuring_stops_no_later_than_the_fixed_design(new_machine):
-    """``next`` after every run on simulated machines: it stops with every target met, and where the fixed design
-    also meets them (the same machine measuring it) it uses no more machine minutes than the fixed design on
-    average (3 machines here; 50 in bench/design.py, which also reports the machines the fixed design fails on)."""
+    """``next`` after every run on simulated machines (measured through the thesis machine's kinematic model): it
+    stops with every target met; on every machine where the fixed design also meets them (the same machine measuring
+    it) it uses no more machine minutes than the fixed design; every run it names says which target it serves
+    (3 machines here; 50 per type in bench/next_sequential.py)."""
     import copy
 
     import mtmcal_bayes as mb
@@ -241,16 +237,19 @@ def test_sequential_measuring_stops_no_later_than_the_fixed_design(new_machine):
     limit = np.array(list(tg.values()))
     d = mb.design(new_machine, targets=tg).design
     fixed = d.total_minutes
-    used = []
+    compared = 0
     for i in range(3):
         machine = SimulatedMachine(new_machine, 2000 + i)
         twin = copy.deepcopy(machine)
-        c, minutes, step = measure_sequentially(machine, designed_campaign(d))
+        trail = []
+        c, minutes, step = measure_sequentially(machine, designed_campaign(d), trail=trail)
         assert step.status == "stop"
         assert np.all(realised_sd(c, list(tg)) <= limit)
+        assert trail and all(any(q in why for q in tg) for _, _, why, *_ in trail), trail
         if np.all(realised_sd(twin.measure_all(designed_campaign(d)), list(tg)) <= limit):
-            used.append(minutes)
-    assert used and np.mean(used) <= fixed + 1e-9, (used, fixed)
+            compared += 1
+            assert minutes <= fixed + 1e-9, (i, minutes, fixed)
+    assert compared
 
 
 # ---------------------------------------------------------------------------------------------------- command line

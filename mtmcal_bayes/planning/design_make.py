@@ -137,7 +137,7 @@ def targets_from_tolerances(planner: Planner, tolerances: dict, source: str = "t
 
 
 def design_candidates(campaign, extra: list[Candidate] | None = None, source: str = "candidates",
-                      instruments=("ballbar",), catalogue: bool = True) -> list[Candidate]:
+                      instruments=("ballbar",), *, catalogue: bool = True) -> list[Candidate]:
     """``extra`` (the user's, or a designed campaign's planned runs; each checked: within the travels, at the
     campaign's bar length), the catalogue's new ball-bar runs within the travels (with the ball bar among
     ``instruments``), one candidate per pattern, set-up, mount and repeats (the first given), then the touch-probe
@@ -212,7 +212,7 @@ def _check_budget(search: Search, goal: Goal) -> None:
                              f"({shortest:.0f} min)")
 
 
-def _why(problem: DesignProblem, counts: np.ndarray, k: int, units_of: list[str],
+def _why(problem: DesignProblem, counts: np.ndarray, k: int, units_of: list[str], *,
          targets: np.ndarray | None = None) -> str:
     """What run ``k``'s last instance adds: the targeted quantities (``targets`` (t,), NaN: none) whose sd it lowers,
     then the others it lowers most, two at least where there are, and what it teaches σ_model."""
@@ -317,8 +317,9 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                 1.0 - check.contraction.mean(), 1e-9))
     kept = best is not None
     result, runs, check, rounds = best or last
-    return _assembled(campaign, cands, planner, problem, goal, timing, start, result.counts, result.value, runs,
-                      check, rounds, kept, model=model, instruments=instruments, sigma_prior=sigma_prior,
+    return _assembled(campaign, cands, planner, problem, goal=goal, timing=timing, start=start,
+                      counts=result.counts, value=result.value, runs=runs, check=check, rounds=rounds, kept=kept,
+                      model=model, instruments=instruments, sigma_prior=sigma_prior,
                       short_note=f"the exact check finds some target met in fewer than {PROMISE:.0%} of the simulated "
                       f"machines after {ROUNDS} rounds (see 'met in'): the promise is not kept in full")
 
@@ -343,15 +344,16 @@ def design_of_plan(campaign, cands: list[Candidate], counts: np.ndarray, *, targ
     check = preposterior(planner, runs, seed=seed, taught=problem.taught, targets=goal.targets, **kw)
     kept = bool(np.all(check.share_met(goal.targets)[np.isfinite(goal.targets)] >= PROMISE)) and (
         goal.contraction is None or check.contraction.mean() >= goal.contraction)
-    return _assembled(campaign, cands, planner, problem, goal, timing, start or (False, None, None), counts,
-                      problem.value(counts), runs, check, 1, kept, model=model, instruments=instruments,
+    return _assembled(campaign, cands, planner, problem, goal=goal, timing=timing,
+                      start=start or (False, None, None), counts=counts, value=problem.value(counts), runs=runs,
+                      check=check, rounds=1, kept=kept, model=model, instruments=instruments,
                       sigma_prior=sigma_prior,
                       short_note=f"the exact check from today's posterior finds some target met in fewer than "
                       f"{PROMISE:.0%} of the simulated machines: the plan's promise is not kept in full here (next "
                       "keeps a plan while the data leave it likelier to meet each target than to miss it)")
 
 
-def _assembled(campaign, cands, planner, problem, goal, timing, start, counts, value, runs, check, rounds, kept, *,
+def _assembled(campaign, cands, planner, problem, *, goal, timing, start, counts, value, runs, check, rounds, kept,
                model, instruments, sigma_prior, short_note: str) -> Design:
     """The :class:`Design` of the chosen ``counts`` (their closed-form ``value``, ``runs`` and exact ``check``): the
     runs in measuring order, each one's minutes and why, the notes (``short_note`` where the promise is not
@@ -364,7 +366,7 @@ def _assembled(campaign, cands, planner, problem, goal, timing, start, counts, v
     for r in runs:
         k = index[id(r.candidate)]
         seen[k] = seen.get(k, 0) + 1
-        why.append(_why(problem, counts, k, planner.target_units, goal.targets))
+        why.append(_why(problem, counts, k, planner.target_units, targets=goal.targets))
     minutes_each = timing.per_run(runs, start)
     nodes = ", ".join(f"{units.from_internal(s, 'um'):.2f}" for s in problem.nodes)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"

@@ -26,13 +26,19 @@ from .candidates import Candidate
 from .chain_candidates import arc_spec
 from .design import Planner
 from .design_instruments import chosen_instruments
-from .design_make import (CONTRACTION, Design, design_candidates, design_of_plan, make_design, parse_targets,
-                          reporting_planner)
+from .design_make import (
+    CONTRACTION,
+    Design,
+    design_candidates,
+    design_of_plan,
+    make_design,
+    parse_targets,
+    reporting_planner,
+)
 from .design_problem import current_posterior
 from .determined import Determination
 from .next_plan import contraction_delivered, plan_holds, without_unneeded
 from .scale_priors import learnt_summary
-
 
 #: re-plans with the targets tightened when the closed form finds nothing left to measure but the exact posterior
 #: has not met them yet
@@ -120,8 +126,8 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
                 determined_now=determined_now)
     if targets_met and contraction_delivered(campaign, c_now, contraction):
         return NextStep("stop", probability_targets_met=_conditional_met(planner, tg), **base)
-    settings = dict(targets=want, contraction=contraction, budget_min=budget_min, time_model=time_model, model=model,
-                    seed=seed, n_sim=n_sim, sigma_prior=sigma_prior, instruments=instruments)
+    settings = {"targets": want, "contraction": contraction, "budget_min": budget_min, "time_model": time_model,
+                "model": model, "seed": seed, "n_sim": n_sim, "sigma_prior": sigma_prior, "instruments": instruments}
     start = (True, bb.runs[-1].setup, bb.runs[-1].mount) if bb.runs else (False, None, None)
     design = None
     if bb.planned:
@@ -134,7 +140,7 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     if design is None:
         if campaign.design is not None and not bb.planned:
             settings["contraction"] = None  # the designed plan, measured in full, delivered it: the targets are left
-        design = _designed_again(campaign, plan, planner, sd_now, c_now, start, settings)
+        design = _designed_again(campaign, plan, planner, sd_now=sd_now, c_now=c_now, start=start, settings=settings)
     planned = {p.label for p in bb.planned}
     chosen = {r.label for r in design.runs}
     return NextStep("measure", probability_targets_met=design.probability_targets_met(), design=design,
@@ -157,7 +163,7 @@ def _now(planner: Planner, measured: bool) -> tuple[np.ndarray, float]:
             0.0 if ref is None else float(1.0 - planner.sigma_prior().var() / ref))
 
 
-def _designed_again(campaign, plan, planner, sd_now, c_now, start, settings) -> Design:
+def _designed_again(campaign, plan, planner, *, sd_now, c_now, start, settings) -> Design:
     """The rest designed again from the machine's current state, the plan's runs among the catalogue's candidates;
     where the closed form finds nothing left to measure but the exact posterior has not met the targets yet, the
     targets tightened by the ratio (and σ_model's contraction goal raised), at most :data:`RETRIES` times."""
