@@ -222,20 +222,67 @@ def test_promised_share_holds_on_simulated_machines(new_machine):
         assert abs(s - promised[d.targets.index(q)]) < 3 * np.sqrt(0.1 * 0.9 / 60)
 
 
-def test_sequential_measuring_stops_no_later_than_the_fixed_design(new_machine):
+@pytest.fixture(scope="module")
+def sequential_design(new_machine):
+    """The design of the sequential tests: α_XB ≤ 1.5″, δy_CZ ≤ 8 µm on the thesis machine from nothing."""
+    import mtmcal_bayes as mb
+
+    return mb.design(new_machine, targets={"alpha_XB": 1.5, "dy_CZ": 8.0}).design
+
+
+def test_next_keeps_a_plan_that_still_holds_without_the_search(new_machine, sequential_design, monkeypatch):
+    """After the first planned run, measured on a simulated machine, ``next`` names the plan's next run as planned
+    (nothing added or dropped) from the plan's exact check alone: the search is not run (it would raise here)."""
+    from mtmcal_bayes.planning import next_run
+    from mtmcal_bayes.planning.design_output import designed_campaign
+    from mtmcal_bayes.planning.next_plan import KEEP_SHARE
+    from tests.machines import SimulatedMachine
+
+    def no_search(*args, **kwargs):
+        raise AssertionError("the search ran for a plan that still holds")
+
+    monkeypatch.setattr(next_run, "make_design", no_search)
+    planned = designed_campaign(sequential_design)
+    c = SimulatedMachine(new_machine, 2000).measure(planned, 0)
+    step = next_run.next_step(c, n_sim=200)
+    assert step.status == "measure" and not step.added and not step.dropped
+    assert [r.label for r in step.design.runs] == [p.label for p in c.ballbar.planned]
+    d = step.design
+    assert np.all(d.check.share_met(d.goal.targets)[np.isfinite(d.goal.targets)] >= KEEP_SHARE)
+
+
+def test_next_stops_on_the_plan_measured_in_full_when_its_targets_are_met(new_machine, sequential_design):
+    """The design promises σ_model's contraction in expectation over machines; measured in full on a machine where
+    the targets are met but the realised contraction falls short of 0.5, ``next`` stops (and says why) where the
+    earlier rule measured on.  Without the campaign's plan (no ``[design]``), the same data are measured on."""
+    from mtmcal_bayes.planning.design_output import designed_campaign, next_text
+    from mtmcal_bayes.planning.next_run import next_step
+    from tests.machines import SimulatedMachine, realised_sd
+
+    c = SimulatedMachine(new_machine, 2000).measure_all(designed_campaign(sequential_design))
+    assert np.all(realised_sd(c, ["alpha_XB", "dy_CZ"]) <= [1.5, 8.0])
+    step = next_step(c, n_sim=100)
+    assert step.contraction_now < 0.5  # the case of the rule (this machine's realised contraction)
+    assert step.status == "stop"
+    assert "promised it in expectation" in next_text(step)
+    c.design = None
+    again = next_step(c, targets={"alpha_XB": 1.5, "dy_CZ": 8.0}, contraction=0.5, n_sim=100)
+    assert again.status == "measure"
+
+
+def test_sequential_measuring_stops_no_later_than_the_fixed_design(new_machine, sequential_design):
     """``next`` after every run on simulated machines (measured through the thesis machine's kinematic model): it
     stops with every target met; on every machine where the fixed design also meets them (the same machine measuring
     it) it uses no more machine minutes than the fixed design; every run it names says which target it serves
     (3 machines here; 50 per type in bench/next_sequential.py)."""
     import copy
 
-    import mtmcal_bayes as mb
     from mtmcal_bayes.planning.design_output import designed_campaign
     from tests.machines import SimulatedMachine, measure_sequentially, realised_sd
 
     tg = {"alpha_XB": 1.5, "dy_CZ": 8.0}
     limit = np.array(list(tg.values()))
-    d = mb.design(new_machine, targets=tg).design
+    d = sequential_design
     fixed = d.total_minutes
     compared = 0
     for i in range(3):
