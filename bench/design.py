@@ -1,6 +1,6 @@
 """The campaign designer (docs/design.md): speed, the thesis set-up, the promise kept, sequential measuring.
 
-    python bench/design.py [--machines 200] [--sequential 50]
+    python bench/design.py [--machines 200]
 
 1. ``mtmcal-bayes design`` on the thesis campaign, whole process, against the import floor
    (``python -c "import arviz, emcee, scipy.stats, numpy"``), both timed in this run (best of 3).
@@ -10,7 +10,7 @@
    it; a design from the measured thesis campaign to σ_model contraction 0.5.
 4. The promise: a design from nothing measured on N machines drawn from the priors (data from ``simulate``
    plus σ_model's discrepancy; exact posterior): share of machines meeting each target.
-5. Sequential measuring (``next`` after every run) against the fixed design on M machines: minutes used.
+5. (Sequential measuring, ``next`` after every run, against the fixed design: ``bench/next_sequential.py``.)
 6. On one simulated machine: the thesis campaign's runs measured, then the design from them to contraction
    0.5 measured: the eight quantities' posterior mean ± sd before and after, beside the truth.
 """
@@ -36,7 +36,7 @@ from mtmcal_bayes.planning.design_output import designed_campaign  # noqa: E402
 from mtmcal_bayes.planning.design_problem import MAX_INSTANCES  # noqa: E402
 from mtmcal_bayes.planning.design_search import Goal, Search, exhaustive  # noqa: E402
 from mtmcal_bayes.plugins.thesis.timing import campaign_clock  # noqa: E402
-from tests.machines import SimulatedMachine, measure_sequentially, realised_sd, small_problem  # noqa: E402
+from tests.machines import SimulatedMachine, realised_sd, small_problem  # noqa: E402
 
 
 def whole_process(cmd: list[str], repeat: int = 3) -> float:
@@ -145,7 +145,7 @@ def section_promise(thesis, n: int):
     d = mb.design(nm, targets=tg).design
     dc = designed_campaign(d)
     t0 = time.perf_counter()
-    sds = np.array([realised_sd(SimulatedMachine(nm, 1000 + i).measure_all(dc), list(tg)) for i in range(n)])
+    sds = np.array([realised_sd(SimulatedMachine(nm, 1000 + i, model="linear").measure_all(dc), list(tg)) for i in range(n)])
     share = np.mean(sds <= np.array(list(tg.values())), axis=0)
     promised = d.check.share_met(np.array([tg.get(q, np.nan) for q in d.targets]))
     print(f"4. promise: design from nothing for {tg}: {len(d.runs)} runs, {d.total_minutes:.0f} min; on {n} machines "
@@ -153,30 +153,9 @@ def section_promise(thesis, n: int):
           f"(preposterior {', '.join(f'{promised[d.targets.index(q)]:.0%}' for q in tg)}; promise 90 %)")
 
 
-def section_sequential(thesis, n: int):
-    nm = new_machine(thesis)
-    tg = {"alpha_XB": 1.5, "dy_CZ": 8.0}
-    d = mb.design(nm, targets=tg).design
-    used, met, fixed_met, t0 = [], 0, [], time.perf_counter()
-    for i in range(n):
-        machine = SimulatedMachine(nm, 2000 + i)
-        twin = copy.deepcopy(machine)  # the same machine measuring the fixed design
-        c, minutes, _ = measure_sequentially(machine, designed_campaign(d))
-        met += bool(np.all(realised_sd(c, list(tg)) <= np.array(list(tg.values()))))
-        fixed = twin.measure_all(designed_campaign(d))
-        fixed_met.append(bool(np.all(realised_sd(fixed, list(tg)) <= np.array(list(tg.values())))))
-        used.append(minutes)
-    used, fixed_met = np.array(used), np.array(fixed_met)
-    print(f"5. sequential (next after every run) on {n} machines ({time.perf_counter() - t0:.0f} s): mean "
-          f"{used.mean():.1f} min (10–90 %: {np.quantile(used, 0.1):.0f}–{np.quantile(used, 0.9):.0f}) vs the fixed "
-          f"design's {d.total_minutes:.1f} min; every target met at the stop on {met}/{n} machines, by the fixed "
-          f"design on {fixed_met.sum()}/{n}; where the fixed design meets them the sequential loop takes "
-          f"{used[fixed_met].mean():.1f} min on average, where it does not {used[~fixed_met].mean() if (~fixed_met).any() else float('nan'):.1f} min")
-
-
 def section_intervals(thesis):
     nm = new_machine(thesis)
-    machine = SimulatedMachine(nm, 11)
+    machine = SimulatedMachine(nm, 11, model="linear")
     c = copy.deepcopy(nm)
     c.ballbar.planned = [PlannedRun(r.pattern, r.setup, r.mount, len(next(iter(r.repeats.values())))) for r in
                          thesis.ballbar.runs]
@@ -208,14 +187,12 @@ def section_intervals(thesis):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--machines", type=int, default=200)
-    ap.add_argument("--sequential", type=int, default=50)
     args = ap.parse_args()
     thesis = mb.load_campaign()
     section_speed()
     section_search(thesis)
     section_thesis(thesis)
     section_promise(thesis, args.machines)
-    section_sequential(thesis, args.sequential)
     section_intervals(thesis)
 
 

@@ -1,10 +1,12 @@
 """Simulated machines for the design's validation (tests/test_design.py, bench/design.py).
 
 A machine's truth — deviations, every set-up's and placement's nuisance offsets, σ_model — is drawn from the
-campaign's priors, each offset when first needed (a run at a new set-up or placement).  A planned run is
-measured through ``simulate`` (the linear model, the instrument error and the repeat scatter) plus a model
-discrepancy of sd σ_model on each component, shared by its repeats: the data-generating process the
-likelihood assumes.
+campaign's priors, each offset when first needed (a run at a new set-up or placement); its parameters are the
+posterior's (:func:`~mtmcal_bayes.inference.log_posterior.parameter_space`: the thesis plug-in's, a described
+machine's selection).  A planned run is measured through ``simulate`` (by default through the machine's kinematic
+model — the thesis plug-in's ``htm-thesis``, a described machine's chain —, ``model="linear"`` its first order; the
+instrument error and the repeat scatter) plus a model discrepancy of sd σ_model on each component, shared by its
+repeats.
 """
 
 from __future__ import annotations
@@ -13,26 +15,27 @@ import copy
 
 import numpy as np
 
-from mtmcal_bayes.inference.log_posterior import SAMPLED_DEVIATIONS
+from mtmcal_bayes import units
+from mtmcal_bayes.inference.log_posterior import parameter_space
 from mtmcal_bayes.inference.priors import make_prior
-from mtmcal_bayes.parameters import ParameterSpace
+from mtmcal_bayes.models import default_kinematic_model
 from mtmcal_bayes.planning.design import Planner
 from mtmcal_bayes.planning.design_problem import current_posterior
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
-from mtmcal_bayes import units
 
 
 class SimulatedMachine:
-    def __init__(self, campaign, seed: int):
+    def __init__(self, campaign, seed: int, model: str | None = None):
+        """``model`` the one the runs are measured through (None: the machine's kinematic model)."""
         self.rng = np.random.default_rng(seed)
         self.values: dict[str, float] = {}
         self.priors = campaign.priors
+        self.model = model or default_kinematic_model(campaign.machine)
         self.sigma = float(make_prior("sigma_model", "sigma_model", "length", campaign.priors).frozen().rvs(
             random_state=self.rng))
 
     def truth(self, campaign):
-        bb = campaign.ballbar
-        space = ParameterSpace(list(bb.setups), list(bb.mounts), SAMPLED_DEVIATIONS)
+        space = parameter_space(campaign, False, "ballbar")
         for p in space.parameters:
             if p.name not in self.values:
                 prior = make_prior(p.name, p.base, p.kind, self.priors)
@@ -44,7 +47,7 @@ class SimulatedMachine:
         bb = campaign.ballbar
         one = copy.deepcopy(campaign)
         one.ballbar.planned = [bb.planned[index]]
-        filled = synthetic_campaign(one, self.truth(campaign), model="linear", noise=True,
+        filled = synthetic_campaign(one, self.truth(campaign), model=self.model, noise=True,
                                     seed=int(self.rng.integers(2**31)))
         run = filled.ballbar.runs[-1]
         for comp in run.repeats:  # the model discrepancy: one offset per component, shared by its repeats
@@ -70,10 +73,13 @@ def realised_sd(campaign, targets) -> np.ndarray:
     return sd[0] * np.array([units.from_internal(1.0, u) for u in pl.target_units])
 
 
-def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int = 12, n_sim: int = 100):
-    """``next`` after every run on ``machine``: measure the run it names (planning it first when the re-plan added
-    it) until it says stop.  Returns the measured campaign, the minutes used and the last answer."""
-    from mtmcal_bayes.campaign import PlannedRun
+def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int = 30, n_sim: int = 200,
+                         trail: list | None = None):
+    """``next`` after every run on ``machine``: measure the run it names until it says stop.  Where ``next`` changed
+    the plan (a run dropped or added) the campaign carries its re-plan from then on, as ``next -o`` writes it.
+    Returns the measured campaign, the minutes used and the last answer; ``trail`` receives per run measured
+    ``(label, minutes, why, added, dropped)``: the runs ``next`` added to and dropped from the plan at that step."""
+    from mtmcal_bayes.planning.design_output import designed_campaign
     from mtmcal_bayes.planning.next_run import next_step
 
     c, minutes = campaign, 0.0
@@ -81,16 +87,13 @@ def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int =
         step = next_step(c, n_sim=n_sim)
         if step.status == "stop":
             break
+        if step.added or step.dropped:
+            c = designed_campaign(step.design, c.design)
         run = step.design.runs[0]
         minutes += step.design.minutes[0]
-        index = next((j for j, p in enumerate(c.ballbar.planned) if p.label == run.label), None)
-        if index is None:  # the re-plan added a run: plan it, then measure it
-            c = copy.deepcopy(c)
-            c.ballbar.setups.setdefault(run.setup.id, run.setup)
-            c.ballbar.mounts.setdefault(run.mount.id, run.mount)
-            c.ballbar.planned.append(PlannedRun(run.pattern, run.setup.id, run.mount.id, run.repeats))
-            index = len(c.ballbar.planned) - 1
-        c = machine.measure(c, index)
+        if trail is not None:
+            trail.append((run.label, step.design.minutes[0], step.design.why[0], step.added, step.dropped))
+        c = machine.measure(c, next(j for j, p in enumerate(c.ballbar.planned) if p.label == run.label))
     return c, minutes, step
 
 

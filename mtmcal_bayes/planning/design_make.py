@@ -141,11 +141,12 @@ def targets_from_tolerances(planner: Planner, tolerances: dict, source: str = "t
 
 
 def design_candidates(campaign, extra: list[Candidate] | None = None, source: str = "candidates",
-                      instruments=("ballbar",)) -> list[Candidate]:
+                      instruments=("ballbar",), *, catalogue: bool = True) -> list[Candidate]:
     """``extra`` (the user's, or a designed campaign's planned runs; each checked: within the travels, at the
     campaign's bar length), the catalogue's new ball-bar runs within the travels (with the ball bar among
     ``instruments``), one candidate per pattern, set-up, mount and repeats (the first given), then the touch-probe
-    and R-test runs of the catalogues within the travels (:func:`.design_instruments.other_candidates`)."""
+    and R-test runs of the catalogues within the travels (:func:`.design_instruments.other_candidates`); without
+    ``catalogue`` ``extra`` alone, checked."""
     out = []
     fits = feasibility_of(campaign)
     for i, c in enumerate(extra or []):
@@ -157,6 +158,8 @@ def design_candidates(campaign, extra: list[Candidate] | None = None, source: st
             raise InputError(source, f"{where}.length_mm", f"{c.length:g} mm: a campaign has one bar length "
                              f"({campaign.ballbar.length:g} mm); design another bar length as a campaign of its own")
         out.append(c)
+    if not catalogue:
+        return out
     for c in catalogue_of(campaign) if "ballbar" in instruments else []:
         if c.repeat_of is None and c.kind != "bar length" and fits(c)[0]:
             out.append(c)
@@ -213,16 +216,20 @@ def _check_budget(search: Search, goal: Goal) -> None:
                              f"({shortest:.0f} min)")
 
 
-def _why(problem: DesignProblem, counts: np.ndarray, k: int, units_of: list[str]) -> str:
-    """What run ``k``'s last instance adds: the quantities whose sd it lowers most and what it teaches σ_model."""
+def _why(problem: DesignProblem, counts: np.ndarray, k: int, units_of: list[str], *,
+         targets: np.ndarray | None = None) -> str:
+    """What run ``k``'s last instance adds: the targeted quantities (``targets`` (t,), NaN: none) whose sd it lowers,
+    then the others it lowers most, two at least where there are, and what it teaches σ_model."""
     with_it = problem.value(counts)
     less = counts.copy()
     less[k] -= 1
     without = problem.value(less)
     a, b = with_it.sd_promised[0], without.sd_promised[0]
     rel = b / a - 1.0
+    served = np.zeros(len(rel), dtype=bool) if targets is None else np.isfinite(targets) & (rel > WHY_SD)
+    first = [i for i in np.argsort(-rel) if served[i]]
     parts = []
-    for i in np.argsort(-rel)[:2]:
+    for i in first + [i for i in np.argsort(-rel) if not served[i]][:max(0, 2 - len(first))]:
         if rel[i] > WHY_SD:
             u = units.SYMBOL[units_of[i]]
             parts.append(f"{problem.planner.targets[i]} {b[i]:.3g} → {a[i]:.3g} {u}")
@@ -318,15 +325,56 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                 1.0 - check.contraction.mean(), 1e-9))
     kept = best is not None
     result, runs, check, rounds = best or last
+    return _assembled(campaign, cands, planner, problem, goal=goal, timing=timing, start=start,
+                      counts=result.counts, value=result.value, runs=runs, check=check, rounds=rounds, kept=kept,
+                      model=model, instruments=instruments, sigma_prior=sigma_prior,
+                      short_note=f"the exact check finds some target met in fewer than {PROMISE:.0%} of the simulated "
+                      f"machines after {ROUNDS} rounds (see 'met in'): the promise is not kept in full")
+
+
+def design_of_plan(campaign, cands: list[Candidate], counts: np.ndarray, *, targets: dict | None = None,
+                   contraction: float | None = CONTRACTION, budget_min: float | None = None,
+                   time_model: TimeModel | None = None, model: str = "linear", seed: int | None = 0, start=None,
+                   n_sim: int | None = None, sigma_prior=None, instruments=None, planner: Planner | None = None) -> Design:
+    """The design of ``counts`` (K,) runs of ``cands`` as they are, no search: its exact check from today's posterior,
+    its minutes from ``start`` and each run's why, as :func:`make_design` gives them (``next`` keeping a plan,
+    :mod:`.next_plan`).  ``planner`` the reporting planner of ``cands`` when already made."""
+    want = parse_targets(targets, campaign)
+    instruments = chosen_instruments(campaign, instruments)
+    planner = planner or reporting_planner(campaign, cands, want, model=model, sigma_prior=sigma_prior)
+    problem = DesignProblem(planner, taught=taught(instruments))
+    goal = Goal(_goal_vector(planner, want), contraction, budget_min)
+    problem.watch = np.isfinite(goal.targets) & ~problem.determination.determined()
+    timing = Timing(campaign, time_model or TimeModel())
+    taken = set(campaign.ballbar.mounts) | {c.mount.id for c in cands if c.instrument == "ballbar"}
+    runs = designed_runs(cands, counts, taken)
+    kw = {} if n_sim is None else {"n_sim": n_sim}
+    check = preposterior(planner, runs, seed=seed, taught=problem.taught, targets=goal.targets, **kw)
+    kept = bool(np.all(check.share_met(goal.targets)[np.isfinite(goal.targets)] >= PROMISE)) and (
+        goal.contraction is None or check.contraction.mean() >= goal.contraction)
+    return _assembled(campaign, cands, planner, problem, goal=goal, timing=timing,
+                      start=start or (False, None, None), counts=counts, value=problem.value(counts), runs=runs,
+                      check=check, rounds=1, kept=kept, model=model, instruments=instruments,
+                      sigma_prior=sigma_prior,
+                      short_note=f"the exact check from today's posterior finds some target met in fewer than "
+                      f"{PROMISE:.0%} of the simulated machines: the plan's promise is not kept in full here (next "
+                      "keeps a plan while the data leave it likelier to meet each target than to miss it)")
+
+
+def _assembled(campaign, cands, planner, problem, *, goal, timing, start, counts, value, runs, check, rounds, kept,
+               model, instruments, sigma_prior, short_note: str) -> Design:
+    """The :class:`Design` of the chosen ``counts`` (their closed-form ``value``, ``runs`` and exact ``check``): the
+    runs in measuring order, each one's minutes and why, the notes (``short_note`` where the promise is not
+    ``kept``)."""
+    det = problem.determination
     order = timing.order(runs, start)
     runs = [runs[i] for i in order]
-    counts = result.counts
     index = {id(c): k for k, c in enumerate(cands)}
     why, seen = [], {}
     for r in runs:
         k = index[id(r.candidate)]
         seen[k] = seen.get(k, 0) + 1
-        why.append(_why(problem, counts, k, planner.target_units))
+        why.append(_why(problem, counts, k, planner.target_units, targets=goal.targets))
     minutes_each = timing.per_run(runs, start)
     nodes = ", ".join(f"{units.from_internal(s, 'um'):.2f}" for s in problem.nodes)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"
@@ -351,11 +399,10 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         notes.append(f"not determined by the campaign and the designed runs: {', '.join(left)} (within the budget): "
                      "their targets are not met, whatever their prior's sd")
     if not kept:
-        notes.append(f"the exact check finds some target met in fewer than {PROMISE:.0%} of the simulated machines "
-                     f"after {ROUNDS} rounds (see 'met in'): the promise is not kept in full")
+        notes.append(short_note)
     return Design(campaign, runs, minutes_each, why, timing, list(planner.targets), list(planner.target_units), goal,
-                  check, {"sd_promised": result.value.sd_promised[0], "sd_mean": result.value.sd_mean[0],
-                          "contraction": float(result.value.contraction[0]),
+                  check, {"sd_promised": value.sd_promised[0], "sd_mean": value.sd_mean[0],
+                          "contraction": float(value.contraction[0]),
                           "contraction_now": c_now},
                   cands, model, notes, start, rounds, learnt_summary(campaign, sigma_prior), determined,
                   not_targeted(planner, det.identifiability()), list(instruments))
@@ -421,4 +468,4 @@ def _refuse_within_budget(problem: DesignProblem, goal: Goal, minutes, *, seed, 
                          "each is alone: raise the budget or relax a target")
 
 
-__all__ = ["Design", "make_design", "parse_targets", "targets_from_tolerances", "design_candidates", "CONTRACTION"]
+__all__ = ["Design", "make_design", "design_of_plan", "parse_targets", "targets_from_tolerances", "design_candidates", "CONTRACTION"]

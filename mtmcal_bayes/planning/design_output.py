@@ -239,6 +239,9 @@ def next_text(step: NextStep) -> str:
                      f"posterior) after {step.measured} measured run(s)")
         if step.planned_left:
             lines.append(f"planned runs not needed: {', '.join(step.planned_left)}")
+        if step.contraction_target is not None and step.contraction_now < step.contraction_target:
+            lines.append(f"σ_model's contraction {step.contraction_now:.2f}, short of {step.contraction_target:g}: the "
+                         "designed plan, which promised it in expectation over machines, has been measured in full")
     else:
         r = run_records(step.design)[0]
         if "instrument" in r:  # a probe or R-test run: its table in to_fill_in.toml once written (-o)
