@@ -19,6 +19,8 @@ from ..inference.identifiability import CENTRED, SUBSPACE_TOL, identifiability
 #: singular values below this fraction of the largest of all rows (campaign plus every candidate) count as zero:
 #: the rule of :func:`~mtmcal_bayes.inference.identifiability.identifiability` (its ``rtol``)
 RTOL = 1e-7
+#: a candidate's rows of singular values below this fraction of the rule's tolerance are dropped (they decide no rank)
+FAR_BELOW = 1e-3
 
 
 class Determination:
@@ -46,10 +48,10 @@ class Determination:
         allrows = np.vstack([self.J0] + own)
         s = np.linalg.svd(allrows, compute_uv=False) if allrows.size else np.zeros(0)
         self.tol = RTOL * (s[0] if s.size and s[0] > 0 else 1.0)
-        # then without the rows of singular values far below the rule's (a thousandth of it: the rank decisions at
+        # then without the rows of singular values far below the rule's (FAR_BELOW of it: the rank decisions at
         # the tolerance are the same), and the candidates in groups of their row counts, each group's SVDs as
         # large as its own rows (a ball-bar run's two to eighteen, a probe's tens)
-        own = [_as_few_rows(A, self.tol * 1e-3) for A in own]
+        own = [_as_few_rows(A, self.tol * FAR_BELOW) for A in own]
         r_max = max((len(A) for A in own), default=1)
         self.R = np.zeros((len(rows), r_max, len(self.free)))
         for k, A in enumerate(own):
