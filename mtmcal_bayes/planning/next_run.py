@@ -23,9 +23,9 @@ from ..machine_time import TimeModel
 from .candidates import Candidate
 from .chain_candidates import arc_spec
 from .design import Planner
-from .design_instruments import chosen_instruments
+from .design_instruments import chosen_instruments, taught
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets, reporting_planner
-from .design_problem import current_posterior
+from .design_now import now_of, taught_prior
 from .determined import Determination
 from .scale_priors import learnt_summary
 
@@ -75,16 +75,34 @@ def planned_candidates(campaign) -> list[Candidate]:
 
 
 def _conditional_met(planner: Planner, targets: np.ndarray, contraction_ok: bool) -> float:
-    """Posterior probability of the σ_model values at which every σ-conditional target sd meets its target."""
+    """Posterior probability of the discrepancy scales' values at which every σ-conditional target sd meets its
+    target (the grid cells of every measured instrument's scale, :class:`.design_now.Now`)."""
     if not contraction_ok:
         return 0.0
-    now = current_posterior(planner)
-    w = now.weights(planner.observations.mean[None])[:, 0]
-    var = np.einsum("tp,gpq,tq->gt", planner.T, now.cov, planner.T)
+    w, var = now_of(planner).cell_target_var(planner.T)
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     sd = np.sqrt(np.maximum(var, 0.0)) * scale
     ok = np.all(sd <= np.where(np.isfinite(targets), targets, np.inf), axis=1)
     return float(w @ ok)
+
+
+def measured_runs(campaign, instruments) -> int:
+    """How many runs of ``instruments`` the campaign has measured (the ball bar's, the probe's, the R-test's)."""
+    count = {"ballbar": len(campaign.ballbar.runs),
+             "probe": len(campaign.probe.runs) if campaign.probe is not None else 0,
+             "rtest": len(campaign.rtest.runs) if campaign.rtest is not None else 0}
+    return sum(count[i] for i in instruments)
+
+
+def _contraction_now(planner: Planner, instrument: str) -> float:
+    """``1 − var/var_prior`` of ``instrument``'s scale today (the ball bar's under a learnt prior against the wider
+    prior's variance, :meth:`.design.Planner.contraction_reference`)."""
+    now = now_of(planner)
+    if instrument == "ballbar":
+        prior_var = planner.contraction_reference() or float(planner.sigma_prior().var())
+    else:
+        prior_var = float(taught_prior(planner, instrument).var())
+    return float(1.0 - now.variance(instrument) / prior_var)
 
 
 def next_step(campaign, *, targets: dict | None = None, contraction: float | None = None,
@@ -103,27 +121,18 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     bb = campaign.ballbar
     instruments = chosen_instruments(campaign, instruments)
     cands = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []), instruments=instruments)
-    planner = reporting_planner(campaign, cands, want, model=model, sigma_prior=sigma_prior)
+    planner = reporting_planner(campaign, cands, want, model=model, sigma_prior=sigma_prior, instruments=instruments)
     tg = np.array([want.get(t, np.nan) for t in planner.targets])
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
-    if bb.runs:
-        now = current_posterior(planner)
-        _, sd = now.target_moments(planner.observations.mean[None], planner.T)
-        sd_now = sd[0] * scale
-        w = now.weights(planner.observations.mean[None])[:, 0]
-        s = now.sigma[:, 0]
-        prior_var = planner.contraction_reference() or float(planner.sigma_prior().var())
-        c_now = float(1.0 - (w @ s**2 - (w @ s) ** 2) / prior_var)
-    else:  # nothing measured yet: the priors (a learnt σ_model prior measured against the wider one's variance)
-        sd_now = np.sqrt((planner.T**2) @ planner.prior_var) * scale
-        ref = planner.contraction_reference()
-        c_now = 0.0 if ref is None else float(1.0 - planner.sigma_prior().var() / ref)
+    # every measured reading of the instruments: the ball bar's, the probe's and the R-test's (:mod:`.design_now`)
+    sd_now = now_of(planner).target_moments(planner.T)[1] * scale
+    c_now = _contraction_now(planner, taught(instruments))
     # a target counts as reached only where the measured runs determine its quantity (not its prior alone)
     determined_now = Determination(planner, []).determined()
     met = (bool(np.all(sd_now <= np.where(np.isfinite(tg), tg, np.inf))) and c_now >= contraction
            and bool(np.all(determined_now | ~np.isfinite(tg))))
     base = dict(targets=list(planner.targets), target_units=list(planner.target_units), target_sd=tg, sd_now=sd_now,
-                contraction_now=c_now, contraction_target=contraction, measured=len(bb.runs),
+                contraction_now=c_now, contraction_target=contraction, measured=measured_runs(campaign, instruments),
                 planned_left=[p.label for p in bb.planned], learnt=learnt_summary(campaign, sigma_prior),
                 determined_now=determined_now)
     if met:
