@@ -29,6 +29,8 @@ class SimulatedMachine:
         self.priors = campaign.priors
         self.sigma = float(make_prior("sigma_model", "sigma_model", "length", campaign.priors).frozen().rvs(
             random_state=self.rng))
+        #: the touch probe's and the R-test's discrepancy scales, drawn when first measured (:meth:`measure_other`)
+        self.scales: dict[str, float] = {}
 
     def truth(self, campaign):
         bb = campaign.ballbar
@@ -55,6 +57,54 @@ class SimulatedMachine:
         out.design = campaign.design
         return out
 
+    def measure_other(self, campaign, run, order: int = 1, table_id: str | None = None):
+        """A copy of ``campaign`` with the designed touch-probe or R-test ``run`` (a :class:`DesignedRun` that
+        ``design`` or ``next`` names, ``order`` its place there) measured on this machine and added as the user adds
+        it: its table as ``to_fill_in.toml`` gives it, read back with the readings the linear model gives at this
+        machine's truth, scattered by the instrument's repeatability, plus a discrepancy of its scale's sd on each
+        reading, shared by the repeats; ``table_id`` the id its table has (default the one ``to_fill_in.toml``
+        gives a run of that order)."""
+        from mtmcal_bayes.inference.log_posterior import parameter_space
+        from mtmcal_bayes.io import campaign_to_dict, parse_campaign
+        from mtmcal_bayes.io.tomlio import dumps
+        from mtmcal_bayes.planning.design_instruments import SCALE_OF
+        from mtmcal_bayes.planning.design_other_runs import fill_in_tables
+        from mtmcal_bayes.simulation.simulate import synthetic_campaign
+
+        kind = run.instrument
+        table = fill_in_tables(campaign, [(order, run)])[kind]["runs"][0]
+        table["id"] = table_id or table["id"]
+        k = len(next(iter(table["angles_deg"].values())))
+        table["centres_mm" if kind == "probe" else "displacement_um"] = np.zeros((run.repeats, k, 3)).tolist()
+        doc = campaign_to_dict(campaign)
+        doc.setdefault(kind, {}).setdefault("runs", []).append(table)
+        out = parse_campaign(dumps(doc), campaign.source)
+        one = copy.deepcopy(out)  # the new run alone: the measured readings are not simulated again
+        one.ballbar.runs, one.ballbar.planned = [], []
+        part = getattr(one, kind)
+        part.runs = part.runs[-1:]
+        space = parameter_space(one, False, kind)
+        stated = one.rtest.prior_sds() if kind == "rtest" else None
+        for p in space.parameters:
+            if p.name not in self.values:
+                prior = make_prior(p.name, p.base, p.kind, self.priors, stated=stated)
+                self.values[p.name] = float(prior.frozen().rvs(random_state=self.rng))
+        truth = truth_from_vector(space, np.array([self.values[n] for n in space.names]))
+        filled = getattr(synthetic_campaign(one, truth, model="linear", noise=True,
+                                            seed=int(self.rng.integers(2**31))), kind).runs[-1]
+        scale = SCALE_OF[kind]
+        if scale not in self.scales:
+            self.scales[scale] = float(make_prior(scale, scale, "length", self.priors).frozen().rvs(
+                random_state=self.rng))
+        readings = filled.centres if kind == "probe" else filled.displacements
+        readings = readings + self.rng.normal(0.0, self.scales[scale], readings.shape[1:])  # shared by the repeats
+        new = getattr(out, kind).runs[-1]
+        if kind == "probe":
+            new.replace_centres(readings)
+        else:
+            new.displacements = readings
+        return out
+
     def measure_all(self, campaign):
         out = campaign
         while out.ballbar.planned:
@@ -70,19 +120,26 @@ def realised_sd(campaign, targets) -> np.ndarray:
     return sd[0] * np.array([units.from_internal(1.0, u) for u in pl.target_units])
 
 
-def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int = 12, n_sim: int = 100):
-    """``next`` after every run on ``machine``: measure the run it names (planning it first when the re-plan added
-    it) until it says stop.  Returns the measured campaign, the minutes used and the last answer."""
+def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int = 12, n_sim: int = 100,
+                         instruments=None):
+    """``next`` after every run on ``machine`` (choosing among ``instruments``, default every one the campaign has):
+    measure the run it names (planning it first when the re-plan added it) until it says stop.  Returns the measured
+    campaign, the minutes used and the last answer."""
     from mtmcal_bayes.campaign import PlannedRun
+    from mtmcal_bayes.planning.design_other_runs import planned_other
     from mtmcal_bayes.planning.next_run import next_step
 
     c, minutes = campaign, 0.0
     for _ in range(max_runs):
-        step = next_step(c, n_sim=n_sim)
+        step = next_step(c, n_sim=n_sim, instruments=instruments)
         if step.status == "stop":
             break
         run = step.design.runs[0]
         minutes += step.design.minutes[0]
+        if run.instrument != "ballbar":  # a probe or R-test run: its table filled in and added, under its planned id
+            planned = planned_other(c)
+            c = machine.measure_other(c, run, table_id=next((k for k, v in planned.items() if v == run.label), None))
+            continue
         index = next((j for j, p in enumerate(c.ballbar.planned) if p.label == run.label), None)
         if index is None:  # the re-plan added a run: plan it, then measure it
             c = copy.deepcopy(c)

@@ -1,12 +1,15 @@
 """``next``: on a partly measured designed campaign, the next run to measure or "stop: every target reached".
 
-The posterior so far is the exact σ-marginal posterior of the measured runs (σ_model learnt from what
-is measured).  When every target sd is met by it and σ_model's contraction reached, the answer is
-*stop*, with the probability that the targets are met: the posterior probability of σ_model's values
-at which the σ-conditional sds all meet them (the sds themselves are known, σ_model is not).  Otherwise
+The posterior so far is the exact σ-marginal posterior of every measured run of the design's instruments — the ball
+bar's, the touch probe's, the R-test's, each with its own discrepancy scale learnt from what is measured
+(:mod:`.design_now`).  When every target sd is met by it and σ_model's contraction reached, the answer is
+*stop*, with the probability that the targets are met: the posterior probability of the scales' values
+at which the σ-conditional sds all meet them (the sds themselves are known, the scales are not).  Otherwise
 the rest of the campaign is designed again from the machine's current state (the ball bar mounted at
 the last measured run's set-up and placement), the remaining planned runs among the candidates: a
-planned run may be dropped, another added, when the data differ from what the design expected.  The
+planned run may be dropped, another added, when the data differ from what the design expected.  A designed probe
+or R-test run is planned while its table (``[design] to_fill_in``, :mod:`.design_other_runs`) is not among the
+campaign's runs; the re-plan chooses among the catalogues' probe and R-test runs again, which hold it.  The
 first run of that re-plan is the next one; the probability is the share of simulated machines in which
 the re-plan meets every target (:mod:`.design_check`).
 """
@@ -26,6 +29,7 @@ from .design import Planner
 from .design_instruments import chosen_instruments, taught
 from .design_make import CONTRACTION, Design, design_candidates, make_design, parse_targets, reporting_planner
 from .design_now import now_of, taught_prior
+from .design_other_runs import planned_other
 from .determined import Determination
 from .scale_priors import learnt_summary
 
@@ -127,13 +131,15 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     # every measured reading of the instruments: the ball bar's, the probe's and the R-test's (:mod:`.design_now`)
     sd_now = now_of(planner).target_moments(planner.T)[1] * scale
     c_now = _contraction_now(planner, taught(instruments))
+    others = planned_other(campaign)  # the designed probe and R-test runs not measured yet
     # a target counts as reached only where the measured runs determine its quantity (not its prior alone)
     determined_now = Determination(planner, []).determined()
     met = (bool(np.all(sd_now <= np.where(np.isfinite(tg), tg, np.inf))) and c_now >= contraction
            and bool(np.all(determined_now | ~np.isfinite(tg))))
     base = dict(targets=list(planner.targets), target_units=list(planner.target_units), target_sd=tg, sd_now=sd_now,
                 contraction_now=c_now, contraction_target=contraction, measured=measured_runs(campaign, instruments),
-                planned_left=[p.label for p in bb.planned], learnt=learnt_summary(campaign, sigma_prior),
+                planned_left=[p.label for p in bb.planned] + list(others.values()),
+                learnt=learnt_summary(campaign, sigma_prior),
                 determined_now=determined_now)
     if met:
         return NextStep("stop", probability_targets_met=_conditional_met(planner, tg, c_now >= contraction), **base)
@@ -154,7 +160,7 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         short = [q for q in want if sd_now[planner.targets.index(q)] > want[q]]
         raise ParameterError("targets", f"{', '.join(short) or 'σ_model contraction'} not reached yet, and no candidate "
                              "run lowers it further in the closed form: relax the target or add candidates")
-    planned = {p.label for p in bb.planned}
+    planned = {p.label for p in bb.planned} | set(others.values())
     chosen = {r.label for r in design.runs}
     return NextStep("measure", probability_targets_met=design.probability_targets_met(), design=design,
                     dropped=sorted(planned - chosen), added=sorted(chosen - planned), **base)
