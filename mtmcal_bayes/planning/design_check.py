@@ -1,8 +1,9 @@
 """The exact preposterior of a whole design: what measuring it delivers, σ_model learnt from the data.
 
-Machines are drawn from what is known now — the parameters and σ_model from the exact σ-marginal
-posterior given the measured runs (:class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`), from
-the priors for a new machine; the new runs' own nuisance offsets from their priors — the design's
+Machines are drawn from what is known now — the parameters and the discrepancy scales from the exact σ-marginal
+posterior given every measured reading, the ball bar's, the probe's and the R-test's (:mod:`.design_now`;
+:class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`), from the priors for a new machine; the new runs' own
+nuisance offsets from their priors — the design's
 means are simulated with the repeat scatter, the instrument error and σ_model, and the exact
 posterior of each simulated campaign gives the realised posterior sd of every target and the realised
 posterior variance of σ_model.  Reported: their mean and 10–90 % spread, the share of machines whose
@@ -87,7 +88,8 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring).
 
     Touch-probe and R-test runs among ``runs`` carry their own discrepancy scales: each simulated machine draws
-    every scale from its prior (the ball bar's from today's posterior where the campaign has measured it), and the
+    every scale from its prior (a measured instrument's, with the parameters, from today's posterior: every measured
+    reading is in it and in each simulated campaign's posterior), and the
     exact posterior integrates all of them out on a grid of :data:`CHECK_CELLS` cells per scale; ``taught`` the
     instrument whose scale's contraction is reported (:mod:`.design_instruments`).  A design of ball-bar runs is
     measured through the machine's kinematics where the linear model's misfit is large against ``targets`` (t,)

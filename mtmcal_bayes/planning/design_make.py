@@ -26,7 +26,7 @@ from .machine_kit import catalogue_of, feasibility_of
 from .design import Planner, target_names
 from .design_check import Preposterior, preposterior
 from .design_instruments import SCALE_OF, chosen_instruments, other_candidates, taught
-from .design_now import measured_data, now_of
+from .design_now import left_out, measured_data, now_of
 from .design_problem import MAX_INSTANCES, PROMISE, DesignProblem
 from .design_runs import DesignedRun, designed_runs
 from .design_search import Goal, Search
@@ -275,7 +275,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         _check_reachable(problem, search, goal, planner.target_units)
     working = Goal(goal.targets.copy(), goal.contraction, goal.budget)
     kw = {} if n_sim is None else {"n_sim": n_sim}
-    best, last = None, None
+    best, last, checked = None, None, {}
     for rounds in range(1, ROUNDS + 1):
         result = Search(problem, working, minutes).run(seed)
         if goal.has_targets and not result.met:
@@ -283,7 +283,10 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
                 break  # a tightened goal out of reach: keep what was found
             _refuse_within_budget(problem, goal, minutes, seed=seed, units_of=planner.target_units)
         runs = designed_runs(cands, result.counts, taken)
-        check = preposterior(planner, runs, seed=seed, taught=problem.taught, targets=goal.targets, **kw)
+        key = np.asarray(result.counts).tobytes()  # a round that finds a design checked before: the same check
+        if key not in checked:
+            checked[key] = preposterior(planner, runs, seed=seed, taught=problem.taught, targets=goal.targets, **kw)
+        check = checked[key]
         last = (result, runs, check, rounds)
         has = np.isfinite(goal.targets)
         short_sd = has & (check.share_met(goal.targets) < PROMISE)
@@ -328,6 +331,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         "the set-up a new id",
     ]
     notes += learnt_notes(campaign, sigma_prior, "σ_model's quantiles, its contraction and the exact check use it")
+    notes += [n for n in [left_out(campaign, instruments)] if n]
     c_now = float(problem.value_now().contraction[0])
     if planner.learnt is not None and goal.contraction is not None and c_now >= goal.contraction:
         notes.append(f"σ_model's contraction target {goal.contraction:g} is met before any run ({c_now:.2f}): with "

@@ -30,12 +30,22 @@ CELLS_OF_THREE = 24
 
 def measured_data(campaign, instruments) -> str:
     """The ``data`` value (:data:`~mtmcal_bayes.parameters.DATA_INSTRUMENTS`) of the measured readings of
-    ``instruments``; ``"ballbar"`` where none is measured (a new machine, planned for the data to come)."""
-    have = {"ballbar": bool(campaign.ballbar.runs), "probe": campaign.has_probe_readings(),
+    ``instruments``; ``"ballbar"`` where none is measured (a new machine, planned for the data to come).  Probe
+    readings the probe model cannot take (a gap of the campaign, :func:`left_out`) are not among them."""
+    have = {"ballbar": bool(campaign.ballbar.runs),
+            "probe": campaign.has_probe_readings() and campaign.probe_gap() is None,
             "rtest": campaign.has_rtest_readings()}
     used = tuple(i for i in SESSION if i in instruments and have[i])
     by = {v: k for k, v in DATA_INSTRUMENTS.items() if v is not None} | {SESSION: "all"}
     return by.get(used, "ballbar")
+
+
+def left_out(campaign, instruments) -> str | None:
+    """The sentence of a design that goes on without the campaign's probe readings (a gap keeps the probe model from
+    them: the thesis' first published format's C-axis run naming no stylus), or None."""
+    if "probe" in instruments and campaign.has_probe_readings() and (gap := campaign.probe_gap()) is not None:
+        return gap.skipped("the touch probe's readings in today's posterior")
+    return None
 
 
 def prior_means(planner) -> np.ndarray:
@@ -148,4 +158,4 @@ def now_of(planner) -> Now:
     return now
 
 
-__all__ = ["Now", "now_of", "measured_data", "prior_means", "taught_prior", "CELLS_OF_THREE"]
+__all__ = ["Now", "now_of", "measured_data", "left_out", "prior_means", "taught_prior", "CELLS_OF_THREE"]

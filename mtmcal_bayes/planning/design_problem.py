@@ -7,8 +7,8 @@ integrated out (they add ``X_W X_Wᵀ`` to that run's noise covariance, as in
 :meth:`Planner._trace_new_runs`).
 
 σ_model is unknown.  The criterion is evaluated at :data:`NODE_LEVELS` quantiles ``σ_s`` of its
-current distribution (its prior for a new machine, else its exact posterior given the measured
-runs, :class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`).  At a fixed σ the linear model's
+current distribution (its prior where its instrument has no measured reading, else its exact posterior given every
+measured reading, :class:`.design_now.Now`).  At a fixed σ the linear model's
 posterior is exact and does not depend on the data, so in the parameters' prior-sd coordinates
 (``X = A·diag(prior sd)``) every run adds ``Xᵀ N⁻¹ X`` to the precision ``I + M₁`` and the moments
 ``Mⱼ = Xᵀ N⁻ʲ X`` (j = 1, 2, 3) and ``t = tr N⁻²`` from which the Fisher information about σ,
@@ -124,7 +124,8 @@ class DesignProblem:
 
     Parameters
     ----------
-    planner : :class:`.design.Planner` over the campaign (ball-bar data) and the candidates
+    planner : :class:`.design.Planner` over the campaign (the measured readings of the design's instruments,
+        :func:`.design_now.measured_data`) and the candidates
     nodes : σ_model values (S,), mm (default :func:`sigma_nodes`)
     """
 
