@@ -18,10 +18,10 @@ from mtmcal_bayes.io import parse_campaign
 from mtmcal_bayes.planning.design_check import preposterior
 from mtmcal_bayes.planning.design_instruments import other_candidates
 from mtmcal_bayes.planning.design_make import design_candidates, make_design, reporting_planner
-from mtmcal_bayes.planning.design_problem import DesignProblem
-from mtmcal_bayes.planning.design_runs import designed_runs
 from mtmcal_bayes.planning.design_other_runs import planned_other
 from mtmcal_bayes.planning.design_output import designed_campaign, next_text
+from mtmcal_bayes.planning.design_problem import DesignProblem
+from mtmcal_bayes.planning.design_runs import designed_runs
 from mtmcal_bayes.planning.next_run import next_step
 from tests.machines import SimulatedMachine, measure_sequentially
 
@@ -86,7 +86,7 @@ def test_a_designed_campaign_names_its_runs_to_fill_in(measured):
 
 def test_next_counts_a_measured_run(measured):
     """The filled-in run is measured; the other designed runs are still planned."""
-    kind, design, planned, one, table, _, step = measured
+    kind, design, _, one, table, _, step = measured
     assert step.measured == 1
     assert [r.id for r in getattr(one, kind).runs] == [table]
     assert step.planned_left == [r.label for r in design.runs[1:]]
@@ -106,7 +106,7 @@ def test_next_starts_from_the_measured_readings(measured):
 def test_next_names_the_next_run_as_design_does(measured):
     """The re-plan's first run is a run of the instrument named as the design names its runs (its catalogue name),
     and the sequential loop of the validation measures it under its planned table's id."""
-    kind, design, planned, one, _, machine, step = measured
+    kind, _, _, one, _, machine, step = measured
     assert step.status == "measure"
     nxt = step.design.runs[0]
     assert nxt.instrument == kind and nxt.label in next_text(step)

@@ -158,4 +158,4 @@ def now_of(planner) -> Now:
     return now
 
 
-__all__ = ["Now", "now_of", "measured_data", "left_out", "prior_means", "taught_prior", "CELLS_OF_THREE"]
+__all__ = ["CELLS_OF_THREE", "Now", "left_out", "measured_data", "now_of", "prior_means", "taught_prior"]
