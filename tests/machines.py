@@ -17,7 +17,8 @@ from mtmcal_bayes.inference.log_posterior import SAMPLED_DEVIATIONS
 from mtmcal_bayes.inference.priors import make_prior
 from mtmcal_bayes.parameters import ParameterSpace
 from mtmcal_bayes.planning.design import Planner
-from mtmcal_bayes.planning.design_problem import current_posterior
+from mtmcal_bayes.planning.design_instruments import INSTRUMENTS
+from mtmcal_bayes.planning.design_now import measured_data, now_of
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
 from mtmcal_bayes import units
 
@@ -113,11 +114,10 @@ class SimulatedMachine:
 
 
 def realised_sd(campaign, targets) -> np.ndarray:
-    """The exact posterior sd of ``targets`` given the campaign's measured runs (display units)."""
-    pl = Planner(campaign, [], targets)
-    now = current_posterior(pl)
-    _, sd = now.target_moments(pl.observations.mean[None], pl.T)
-    return sd[0] * np.array([units.from_internal(1.0, u) for u in pl.target_units])
+    """The exact posterior sd of ``targets`` given the campaign's measured runs of every instrument (display units)."""
+    pl = Planner(campaign, [], targets, data=measured_data(campaign, INSTRUMENTS))
+    _, sd = now_of(pl).target_moments(pl.T)
+    return sd * np.array([units.from_internal(1.0, u) for u in pl.target_units])
 
 
 def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int = 12, n_sim: int = 100,
