@@ -205,6 +205,18 @@ def test_design_starts_from_every_measured_instrument(thesis_design, thesis_exac
     assert d.instruments == ["ballbar", "probe"]
 
 
+def test_a_design_without_the_ball_bar_leaves_its_readings_out(thesis):
+    """``--instruments probe`` on the thesis campaign: today's posterior is the probe's readings' alone (the
+    ball bar's runs are measured but not among the instruments), as ``sample --sampler exact --data probe``'s."""
+    from mtmcal_bayes.inference.approximation import PosteriorApproximation
+    from mtmcal_bayes.inference.log_posterior import LogPosterior
+    from mtmcal_bayes.planning.design_make import make_design
+
+    d = make_design(thesis, instruments=["probe"], n_sim=50)
+    exact = PosteriorApproximation(LogPosterior(thesis, "linear", data="probe")).moments(d.targets)
+    np.testing.assert_allclose(d.check.sd_now, [exact[t][1] for t in d.targets], rtol=1e-6)
+
+
 def test_exact_check_agrees_with_the_closed_form_at_a_known_sigma(thesis):
     """With σ_model's prior narrowed to a point, the Monte-Carlo realised sds equal the closed form's (the linear
     posterior sd does not depend on the data at a known σ): a check of the simulation and the exact posterior."""

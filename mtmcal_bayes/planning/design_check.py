@@ -20,6 +20,7 @@ model's instead, inferred with the same linear posterior (:mod:`.design_chain`).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,6 +99,11 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     so)."""
     rng = np.random.default_rng(seed)
     campaign = planner.campaign
+    if campaign.ballbar.runs and "ballbar" not in set(planner.row_instrument):
+        # the ball bar's readings are not in today's posterior (a design without the ball bar): nor are its runs here
+        campaign = copy.copy(campaign)
+        campaign.ballbar = copy.copy(campaign.ballbar)
+        campaign.ballbar.runs = []
     aug = with_runs(campaign, runs, planner.as_run)
     others = [r.measured for r in runs if r.instrument != "ballbar"]
     measured_other = planner.row_instrument != "ballbar"  # the campaign's probe and R-test readings
@@ -142,7 +148,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     lo, hi = float(sigma_prior.ppf(1e-5)), float(sigma_prior.ppf(0.99999))
     own = {i: taught_prior(planner, i) for i in scales}
     highs = {i: float(own[i].ppf(0.99999)) for i in scales if i != "ballbar"}
-    y_now = planner.observations.mean if not measured_other.any() else planner.y
+    y_now = planner.y
     measured = [i for i in SESSION if i in set(planner.row_instrument)]  # the scales of today's posterior
     if measured:
         now = _now_posterior(planner, A[~new], base_now, prior_var=prior_var, prior_mean=prior_mean, y=y_now,

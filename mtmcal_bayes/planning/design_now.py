@@ -31,10 +31,11 @@ CELLS_OF_THREE = 24
 def measured_data(campaign, instruments) -> str:
     """The ``data`` value (:data:`~mtmcal_bayes.parameters.DATA_INSTRUMENTS`) of the measured readings of
     ``instruments``; ``"ballbar"`` where none is measured (a new machine, planned for the data to come).  Probe
-    readings the probe model cannot take (a gap of the campaign, :func:`left_out`) are not among them."""
+    readings the probe model cannot take (a gap of the campaign, :func:`left_out`) are not among them, nor R-test
+    readings without the machine's description (the R-test model's chain)."""
     have = {"ballbar": bool(campaign.ballbar.runs),
             "probe": campaign.has_probe_readings() and campaign.probe_gap() is None,
-            "rtest": campaign.has_rtest_readings()}
+            "rtest": campaign.has_rtest_readings() and campaign.machine.description is not None}
     used = tuple(i for i in SESSION if i in instruments and have[i])
     by = {v: k for k, v in DATA_INSTRUMENTS.items() if v is not None} | {SESSION: "all"}
     return by.get(used, "ballbar")
