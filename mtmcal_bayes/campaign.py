@@ -439,12 +439,15 @@ class DesignGoal:
     should reach, in display units (″ for angles, µm for lengths: ``parameters.QUANTITIES[name].unit``);
     ``contraction`` the share by which σ_model's uncertainty should shrink (0 < c < 1; None: the planner's
     default); ``budget_min`` the machine minutes available (None: no limit); ``times`` overrides of the
-    machine-time model, minutes by name (validated by the planner)."""
+    machine-time model, minutes by name (validated by the planner); ``to_fill_in`` the designed touch-probe and
+    R-test runs, the id of each one's table in ``to_fill_in.toml`` -> its name in the design (a run whose id the
+    campaign's ``[[probe.runs]]`` / ``[[rtest.runs]]`` hold is measured, the others planned)."""
 
     targets: dict[str, float] = field(default_factory=dict)
     contraction: float | None = None
     budget_min: float | None = None
     times: dict[str, float] = field(default_factory=dict)
+    to_fill_in: dict[str, str] = field(default_factory=dict)
 
 
 def _chain_frames(ballbar: Ballbar, machine: Machine) -> None:

@@ -20,7 +20,8 @@ from mtmcal_bayes.inference.log_posterior import parameter_space
 from mtmcal_bayes.inference.priors import make_prior
 from mtmcal_bayes.models import default_kinematic_model
 from mtmcal_bayes.planning.design import Planner
-from mtmcal_bayes.planning.design_problem import current_posterior
+from mtmcal_bayes.planning.design_instruments import INSTRUMENTS
+from mtmcal_bayes.planning.design_now import measured_data, now_of
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
 
 
@@ -33,6 +34,8 @@ class SimulatedMachine:
         self.model = model or default_kinematic_model(campaign.machine)
         self.sigma = float(make_prior("sigma_model", "sigma_model", "length", campaign.priors).frozen().rvs(
             random_state=self.rng))
+        #: the touch probe's and the R-test's discrepancy scales, drawn when first measured (:meth:`measure_other`)
+        self.scales: dict[str, float] = {}
 
     def truth(self, campaign):
         space = parameter_space(campaign, False, "ballbar")
@@ -58,6 +61,54 @@ class SimulatedMachine:
         out.design = campaign.design
         return out
 
+    def measure_other(self, campaign, run, order: int = 1, table_id: str | None = None):
+        """A copy of ``campaign`` with the designed touch-probe or R-test ``run`` (a :class:`DesignedRun` that
+        ``design`` or ``next`` names, ``order`` its place there) measured on this machine and added as the user adds
+        it: its table as ``to_fill_in.toml`` gives it, read back with the readings the linear model gives at this
+        machine's truth, scattered by the instrument's repeatability, plus a discrepancy of its scale's sd on each
+        reading, shared by the repeats; ``table_id`` the id its table has (default the one ``to_fill_in.toml``
+        gives a run of that order)."""
+        from mtmcal_bayes.inference.log_posterior import parameter_space
+        from mtmcal_bayes.io import campaign_to_dict, parse_campaign
+        from mtmcal_bayes.io.tomlio import dumps
+        from mtmcal_bayes.planning.design_instruments import SCALE_OF
+        from mtmcal_bayes.planning.design_other_runs import fill_in_tables
+        from mtmcal_bayes.simulation.simulate import synthetic_campaign
+
+        kind = run.instrument
+        table = fill_in_tables(campaign, [(order, run)])[kind]["runs"][0]
+        table["id"] = table_id or table["id"]
+        k = len(next(iter(table["angles_deg"].values())))
+        table["centres_mm" if kind == "probe" else "displacement_um"] = np.zeros((run.repeats, k, 3)).tolist()
+        doc = campaign_to_dict(campaign)
+        doc.setdefault(kind, {}).setdefault("runs", []).append(table)
+        out = parse_campaign(dumps(doc), campaign.source)
+        one = copy.deepcopy(out)  # the new run alone: the measured readings are not simulated again
+        one.ballbar.runs, one.ballbar.planned = [], []
+        part = getattr(one, kind)
+        part.runs = part.runs[-1:]
+        space = parameter_space(one, False, kind)
+        stated = one.rtest.prior_sds() if kind == "rtest" else None
+        for p in space.parameters:
+            if p.name not in self.values:
+                prior = make_prior(p.name, p.base, p.kind, self.priors, stated=stated)
+                self.values[p.name] = float(prior.frozen().rvs(random_state=self.rng))
+        truth = truth_from_vector(space, np.array([self.values[n] for n in space.names]))
+        filled = getattr(synthetic_campaign(one, truth, model="linear", noise=True,
+                                            seed=int(self.rng.integers(2**31))), kind).runs[-1]
+        scale = SCALE_OF[kind]
+        if scale not in self.scales:
+            self.scales[scale] = float(make_prior(scale, scale, "length", self.priors).frozen().rvs(
+                random_state=self.rng))
+        readings = filled.centres if kind == "probe" else filled.displacements
+        readings = readings + self.rng.normal(0.0, self.scales[scale], readings.shape[1:])  # shared by the repeats
+        new = getattr(out, kind).runs[-1]
+        if kind == "probe":
+            new.replace_centres(readings)
+        else:
+            new.displacements = readings
+        return out
+
     def measure_all(self, campaign):
         out = campaign
         while out.ballbar.planned:
@@ -66,25 +117,26 @@ class SimulatedMachine:
 
 
 def realised_sd(campaign, targets) -> np.ndarray:
-    """The exact posterior sd of ``targets`` given the campaign's measured runs (display units)."""
-    pl = Planner(campaign, [], targets)
-    now = current_posterior(pl)
-    _, sd = now.target_moments(pl.observations.mean[None], pl.T)
-    return sd[0] * np.array([units.from_internal(1.0, u) for u in pl.target_units])
+    """The exact posterior sd of ``targets`` given the campaign's measured runs of every instrument (display units)."""
+    pl = Planner(campaign, [], targets, data=measured_data(campaign, INSTRUMENTS))
+    _, sd = now_of(pl).target_moments(pl.T)
+    return sd * np.array([units.from_internal(1.0, u) for u in pl.target_units])
 
 
 def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int = 30, n_sim: int = 200,
-                         trail: list | None = None):
-    """``next`` after every run on ``machine``: measure the run it names until it says stop.  Where ``next`` changed
-    the plan (a run dropped or added) the campaign carries its re-plan from then on, as ``next -o`` writes it.
-    Returns the measured campaign, the minutes used and the last answer; ``trail`` receives per run measured
-    ``(label, minutes, why, added, dropped)``: the runs ``next`` added to and dropped from the plan at that step."""
+                         trail: list | None = None, instruments=None):
+    """``next`` after every run on ``machine`` (choosing among ``instruments``, default every one the campaign has):
+    measure the run it names until it says stop.  Where ``next`` changed the plan (a run dropped or added) the
+    campaign carries its re-plan from then on, as ``next -o`` writes it.  Returns the measured campaign, the minutes
+    used and the last answer; ``trail`` receives per run measured ``(label, minutes, why, added, dropped)``: the runs
+    ``next`` added to and dropped from the plan at that step."""
+    from mtmcal_bayes.planning.design_other_runs import planned_other
     from mtmcal_bayes.planning.design_output import designed_campaign
     from mtmcal_bayes.planning.next_run import next_step
 
     c, minutes = campaign, 0.0
     for _ in range(max_runs):
-        step = next_step(c, n_sim=n_sim)
+        step = next_step(c, n_sim=n_sim, instruments=instruments)
         if step.status == "stop":
             break
         if step.added or step.dropped:
@@ -93,6 +145,10 @@ def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int =
         minutes += step.design.minutes[0]
         if trail is not None:
             trail.append((run.label, step.design.minutes[0], step.design.why[0], step.added, step.dropped))
+        if run.instrument != "ballbar":  # a probe or R-test run: its table filled in and added, under its planned id
+            planned = planned_other(c)
+            c = machine.measure_other(c, run, table_id=next((k for k, v in planned.items() if v == run.label), None))
+            continue
         c = machine.measure(c, next(j for j, p in enumerate(c.ballbar.planned) if p.label == run.label))
     return c, minutes, step
 

@@ -73,8 +73,8 @@ def test_plan_rests_on_every_instrument_by_default(machine, demo_plan):
 def test_design_and_next_state_todays_sd_as_the_exact_posterior(machine, run_cli):
     """On the measured demo (σ_model's contraction already met, no sd target): design adds nothing, next says stop,
     and both state today's sd of every determined deviation as the exact posterior's (against sample --sampler
-    exact's 4000 draws of the ball-bar posterior, which design and next plan from: within 5 % of the sd, about 3.5
-    sampling sds of a sd)."""
+    exact's 4000 draws of the posterior of the ball bar's and the probe's readings, which design and next plan from:
+    within 5 % of the sd, about 3.5 sampling sds of a sd)."""
     code, out, err = run_cli("design", "--machine", machine, "--json")
     assert code == 0, err
     doc = json.loads(out)
@@ -83,7 +83,7 @@ def test_design_and_next_state_todays_sd_as_the_exact_posterior(machine, run_cli
     assert code == 0, err
     step = json.loads(out)
     assert step["status"] == "stop"
-    post = api.sample(demo_campaign(machine), sampler="exact", seed=1, data="ballbar")
+    post = api.sample(demo_campaign(machine), sampler="exact", seed=1, data="both")
     for t, e in doc["expected"].items():
         assert e["sd_before"] == pytest.approx(float(post.summary.loc[t, "sd"]), rel=0.05), t
 

@@ -208,9 +208,10 @@ def _priors(r: TomlReader, t: dict, deviations: dict | None = None) -> dict[str,
 
 def _design(r: TomlReader, t: dict, known: dict) -> DesignGoal:
     """``[design]``: ``targets`` (quantity -> standard uncertainty, ″ or µm), ``contraction`` (0 < c < 1),
-    ``budget_min`` (> 0) and ``times`` (machine-time overrides, minutes; their names are the planner's)."""
+    ``budget_min`` (> 0), ``times`` (machine-time overrides, minutes; their names are the planner's) and
+    ``to_fill_in`` (the designed probe and R-test runs: the id of each one's table -> its name in the design)."""
     P = "design"
-    r.check_keys(t, {"targets", "contraction", "budget_min", "times"}, P)
+    r.check_keys(t, {"targets", "contraction", "budget_min", "times", "to_fill_in"}, P)
     goal = DesignGoal()
     for key in r.table(t, "targets", P, required=False) or {}:
         full = f"{P}.targets.{key}"
@@ -234,6 +235,8 @@ def _design(r: TomlReader, t: dict, known: dict) -> DesignGoal:
     goal.budget_min = r.number(t, "budget_min", P, required=False, positive=True)
     for key in r.table(t, "times", P, required=False) or {}:
         goal.times[key] = r.number(t["times"], key, f"{P}.times", nonnegative=True)
+    for key in r.table(t, "to_fill_in", P, required=False) or {}:
+        goal.to_fill_in[key] = r.string(t["to_fill_in"], key, f"{P}.to_fill_in")
     return goal
 
 

@@ -1,4 +1,5 @@
-"""The ``[design]`` table of a campaign (targets, contraction, budget, time overrides), written alike on any machine."""
+"""The ``[design]`` table of a campaign (targets, contraction, budget, time overrides, the designed probe and R-test
+runs), written alike on any machine."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ from ..parameters import QUANTITIES
 
 
 def design_to_dict(g: DesignGoal, quantities: dict | None = None) -> dict:
-    """The ``[design]`` table: targets with their unit (``alpha_BT_arcsec``), contraction, budget, time overrides."""
+    """The ``[design]`` table: targets with their unit (``alpha_BT_arcsec``), contraction, budget, time overrides, the
+    designed probe and R-test runs' tables (``to_fill_in``: table id -> run name)."""
     d: dict = {}
     if g.contraction is not None:
         d["contraction"] = g.contraction
@@ -18,6 +20,8 @@ def design_to_dict(g: DesignGoal, quantities: dict | None = None) -> dict:
         d["targets"] = {f"{n}_{table[n].unit}": float(v) for n, v in g.targets.items()}
     if g.times:
         d["times"] = {k: float(v) for k, v in g.times.items()}
+    if g.to_fill_in:
+        d["to_fill_in"] = dict(g.to_fill_in)
     return d
 
 

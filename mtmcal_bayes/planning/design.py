@@ -229,17 +229,23 @@ class Planner:
         obs = Observations.from_campaign(campaign)
         self.observations = obs
         self.pooled_sd = obs.pooled_sd()
-        A, V = [np.zeros((0, len(self.space)))], [np.zeros(0)]
+        A, V, y, of = [np.zeros((0, len(self.space)))], [np.zeros(0)], [np.zeros(0)], []
         used = data_instruments(self.data, campaign)
         if "ballbar" in used and len(obs):  # the ball bar's rows first: repeats of its runs index them
             A.append(self.rows_for(campaign, self.space))
             V.append(GaussianMeanLikelihood(obs, bb.accuracy).base_var + self.sigma_model**2)
+            y.append(obs.mean)
+            of += ["ballbar"] * len(obs)
         for instrument, scale in (("probe", self.sigma_probe), ("rtest", self.sigma_rtest)):
             if instrument in used:
                 part = build_model(self.model, campaign, self.space, instrument)
                 A.append(_first_order(part))
                 V.append(part.observations.noise_variance() + scale**2)
+                y.append(part.observations.mean)
+                of += [instrument] * len(part.observations.mean)
         self.A, self.V = np.vstack(A), np.concatenate(V)
+        #: (m,) the measured readings (mm) and the instrument of each row of :attr:`A`
+        self.y, self.row_instrument = np.concatenate(y), np.array(of, dtype=object)
         self.targets = target_names(targets, campaign) if targets else self._default_targets()
         self.T = self.target_matrix(self.space)
         self.target_units = [self.table[t].unit for t in self.targets]
@@ -310,6 +316,22 @@ class Planner:
             else float(sigma_model)
         self.sigma_probe = default_sigma_model(campaign, "sigma_model_probe", sigma_prior)
         self.sigma_rtest = default_sigma_model(campaign, "sigma_model_rtest", sigma_prior)
+
+    def fixed_scale(self, instrument: str) -> float:
+        """The fixed discrepancy scale (mm) of ``instrument``'s rows: the ball bar's :attr:`sigma_model`, the others'
+        the rms of their priors."""
+        return {"ballbar": self.sigma_model, "probe": self.sigma_probe, "rtest": self.sigma_rtest}[instrument]
+
+    @property
+    def base_var(self) -> np.ndarray:
+        """(m,) the variance of each measured reading without its discrepancy scale, mm²."""
+        fixed = np.array([self.fixed_scale(i) for i in self.row_instrument], dtype=float)
+        return self.V - fixed**2
+
+    @property
+    def own_terms(self) -> tuple[list, list]:
+        """The probe's and the R-test's own terms of the measured readings ``(owner, base)`` (with their data)."""
+        return self._own_terms
 
     def retarget(self, targets: list[str]) -> None:
         """Value ``targets`` instead (names checked as at construction; the rows are kept)."""

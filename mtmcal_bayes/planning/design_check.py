@@ -1,8 +1,9 @@
 """The exact preposterior of a whole design: what measuring it delivers, σ_model learnt from the data.
 
-Machines are drawn from what is known now — the parameters and σ_model from the exact σ-marginal
-posterior given the measured runs (:class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`), from
-the priors for a new machine; the new runs' own nuisance offsets from their priors — the design's
+Machines are drawn from what is known now — the parameters and the discrepancy scales from the exact σ-marginal
+posterior given every measured reading, the ball bar's, the probe's and the R-test's (:mod:`.design_now`;
+:class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`), from the priors for a new machine; the new runs' own
+nuisance offsets from their priors — the design's
 means are simulated with the repeat scatter, the instrument error and σ_model, and the exact
 posterior of each simulated campaign gives the realised posterior sd of every target and the realised
 posterior variance of σ_model.  Reported: their mean and 10–90 % spread, the share of machines whose
@@ -19,6 +20,7 @@ model's instead, inferred with the same linear posterior (:mod:`.design_chain`).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +32,7 @@ from ..observations import Observations
 from ..parameters import ParameterSpace
 from .design import Planner
 from .design_chain import Kinematics, kinematic_means, linear_kinematics
-from .design_problem import taught_prior
+from .design_now import CELLS_OF_THREE, taught_prior
 from .design_runs import DesignedRun, with_runs
 from .design_timing import SESSION
 
@@ -87,7 +89,8 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     """Simulate measuring ``runs`` after ``planner``'s campaign on ``n_sim`` machines (see the module docstring).
 
     Touch-probe and R-test runs among ``runs`` carry their own discrepancy scales: each simulated machine draws
-    every scale from its prior (the ball bar's from today's posterior where the campaign has measured it), and the
+    every scale from its prior (a measured instrument's, with the parameters, from today's posterior: every measured
+    reading is in it and in each simulated campaign's posterior), and the
     exact posterior integrates all of them out on a grid of :data:`CHECK_CELLS` cells per scale; ``taught`` the
     instrument whose scale's contraction is reported (:mod:`.design_instruments`).  A design of ball-bar runs is
     measured through the machine's kinematics where the linear model's misfit is large against ``targets`` (t,)
@@ -96,15 +99,22 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     so)."""
     rng = np.random.default_rng(seed)
     campaign = planner.campaign
+    if campaign.ballbar.runs and "ballbar" not in set(planner.row_instrument):
+        # the ball bar's readings are not in today's posterior (a design without the ball bar): nor are its runs here
+        campaign = copy.copy(campaign)
+        campaign.ballbar = copy.copy(campaign.ballbar)
+        campaign.ballbar.runs = []
     aug = with_runs(campaign, runs, planner.as_run)
     others = [r.measured for r in runs if r.instrument != "ballbar"]
+    measured_other = planner.row_instrument != "ballbar"  # the campaign's probe and R-test readings
     space = planner.space_for(aug)
-    if others:
+    if others or measured_other.any():
+        own_probe, own_rtest = planner.own_terms
         space = ParameterSpace(list(aug.ballbar.setups), list(aug.ballbar.mounts), planner.deviations,
-                               [t for c in others if c.instrument == "probe" for t in c.terms(campaign)],
+                               own_probe + [t for c in others if c.instrument == "probe" for t in c.terms(campaign)],
                                table=planner.table,
-                               rtest=list(dict.fromkeys(t for c in others if c.instrument == "rtest"
-                                                        for t in c.terms(campaign))))
+                               rtest=list(dict.fromkeys(own_rtest + [t for c in others if c.instrument == "rtest"
+                                                                     for t in c.terms(campaign)])))
     stated = campaign.rtest.prior_sds() if campaign.rtest is not None else None
     priors = [make_prior(p.name, p.base, p.kind, campaign.priors, stated=stated) for p in space.parameters]
     prior_var = np.array([p.sd for p in priors]) ** 2
@@ -114,35 +124,54 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     m0 = len(campaign.ballbar.runs)
     bar_runs = [r for r in runs if r.instrument == "ballbar"]
     sigma0 = planner.sigma_model
-    base_now = planner.V - sigma0**2
+    base_now = planner.base_var
     base_new = [np.array([planner.noise_var(bar_runs[k.run - m0].repeats) - sigma0**2 for k in keys
                           if k.run >= m0])]
+    new = np.array([k.run >= m0 for k in keys], dtype=bool)
     instrument = ["ballbar"] * len(A)
+    if measured_other.any():  # the measured rows first (the ball bar's, then the others'), then the designed ones
+        A = np.vstack([A[~new], _laid_over(planner, measured_other, space), A[new]])
+        instrument = list(planner.row_instrument) + ["ballbar"] * int(new.sum())
+        new = np.concatenate([np.zeros(len(planner.y), dtype=bool), np.ones(int(new.sum()), dtype=bool)])
     for c in others:
         rows, base = c.rows(campaign, space, planner.deviations, planner.table)
         A = np.vstack([A, rows])
         base_new.append(base)
         instrument += [c.instrument] * len(rows)
     base_new = np.concatenate(base_new)
-    new = np.concatenate([np.array([k.run >= m0 for k in keys], dtype=bool), np.ones(len(A) - len(keys), dtype=bool)])
+    new = np.concatenate([new, np.ones(len(A) - len(new), dtype=bool)])
     scales = [i for i in SESSION if i in instrument]  # the scales with rows, the ball bar's first
     groups = np.array([scales.index(i) for i in instrument], dtype=int)
     T = planner.target_matrix(space)
     sigma_prior = planner.sigma_prior()
     # the grid of the simulated campaigns' posteriors: the prior's range, widened to where the measured data put σ
     lo, hi = float(sigma_prior.ppf(1e-5)), float(sigma_prior.ppf(0.99999))
-    y_now = planner.observations.mean
-    if (~new).any():
-        now = MarginalPosterior(A[~new], base_now, prior_var, sigma_prior, prior_mean=prior_mean, y=y_now)
+    own = {i: taught_prior(planner, i) for i in scales}
+    highs = {i: float(own[i].ppf(0.99999)) for i in scales if i != "ballbar"}
+    y_now = planner.y
+    measured = [i for i in SESSION if i in set(planner.row_instrument)]  # the scales of today's posterior
+    if measured:
+        now = _now_posterior(planner, A[~new], base_now, prior_var=prior_var, prior_mean=prior_mean, y=y_now,
+                             measured=measured)
         theta, sigma = now.draw(y_now, n_sim, rng)
-        sigma = sigma[:, 0]
+        drawn = {i: sigma[:, k] for k, i in enumerate(measured)}  # each measured scale from today's posterior
+        sigma = drawn.get("ballbar")
         _, sd_now = now.target_moments(y_now[None], T)
         w_now = now.weights(y_now[None])[:, 0]
-        var_now = w_now @ now.sigma[:, 0] ** 2 - (w_now @ now.sigma[:, 0]) ** 2
-        hi = min(max(hi, float(now.edges[0][-1])), float(sigma_prior.support()[1]))
+        var_now = float(sigma_prior.var())  # the ball bar's scale at its prior where it has no measured reading
+        for k, i in enumerate(measured):
+            var_i = w_now @ now.sigma[:, k] ** 2 - (w_now @ now.sigma[:, k]) ** 2
+            top = min(max(highs.get(i, hi), float(now.edges[k][-1])), float(taught_prior(planner, i).support()[1]))
+            if i == "ballbar":
+                var_now, hi = var_i, top
+            else:
+                highs[i] = top
+            if i == taught:
+                var_taught = var_i
     else:
         theta = np.column_stack([p.frozen().rvs(size=n_sim, random_state=rng) for p in priors])
         sigma = sigma_prior.rvs(size=n_sim, random_state=rng)
+        drawn = {"ballbar": sigma}
         sd_now = np.sqrt(np.sum(T**2 * prior_var, axis=1))[None]
         var_now = float(sigma_prior.var())
     if scales == ["ballbar"] or not scales:  # one scale: the ball bar's, as before any other instrument
@@ -155,20 +184,19 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
         prior_var_s = planner.contraction_reference() or float(sigma_prior.var())  # a learnt prior: the wider one's
     else:
         kinematics = linear_kinematics(planner, A[new], T, targets)
-        own = {i: taught_prior(planner, i) for i in scales}
-        draws = {i: (sigma if i == "ballbar" else own[i].rvs(size=n_sim, random_state=rng)) for i in scales}
+        draws = {i: (drawn[i] if i in drawn else own[i].rvs(size=n_sim, random_state=rng)) for i in scales}
         per_row = np.column_stack([draws[i] for i in scales])[:, groups[new]]  # (n_sim, new rows)
         y_new = theta @ A[new].T + rng.standard_normal(per_row.shape) * np.sqrt(base_new[None] + per_row**2)
         y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
         lows = [lo if i == "ballbar" else float(own[i].ppf(1e-5)) for i in scales]
-        highs = [hi if i == "ballbar" else float(own[i].ppf(0.99999)) for i in scales]
         after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, [own[i] for i in scales],
-                                  prior_mean=prior_mean, sigma_min=lows, sigma_max=highs, groups=groups,
+                                  prior_mean=prior_mean, sigma_min=lows,
+                                  sigma_max=[hi if i == "ballbar" else highs[i] for i in scales], groups=groups,
                                   cells=CHECK_CELLS[min(len(scales), 3)])
         g = scales.index(taught) if taught in scales else 0
         s = after.sigma[:, g]
-        if taught != "ballbar":  # today's posterior rests on the ball bar: this scale is at its prior
-            var_now = float(own[taught].var()) if taught in own else var_now
+        if taught != "ballbar":  # the taught scale's variance today: its posterior's where measured, else its prior's
+            var_now = var_taught if taught in measured else float(own[taught].var()) if taught in own else var_now
         prior_var_s = (planner.contraction_reference() or float(sigma_prior.var())) if taught == "ballbar" else \
             float(taught_prior(planner, taught).var())
     _, sd = after.target_moments(y_all, T)
@@ -178,6 +206,28 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     return Preposterior(list(planner.targets), sd * scale, sd_now[0] * scale, 1.0 - var_s / prior_var_s,
                         float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"), kinematics, theta, y_new)
+
+
+def _laid_over(planner: Planner, rows: np.ndarray, space: ParameterSpace) -> np.ndarray:
+    """The planner's measured rows ``rows`` (a mask of :attr:`.design.Planner.A`'s rows) over ``space``'s columns
+    (every column they touch is among ``space``'s: the deviations and their instrument's own terms)."""
+    A = planner.A[rows]
+    out = np.zeros((len(A), len(space)))
+    names = set(space.names)
+    kept = [j for j, n in enumerate(planner.space.names) if n in names]
+    out[:, [space.index(planner.space.names[j]) for j in kept]] = A[:, kept]
+    return out
+
+
+def _now_posterior(planner: Planner, A: np.ndarray, base: np.ndarray, *, prior_var, prior_mean, y: np.ndarray,
+                   measured: list[str]) -> MarginalPosterior:
+    """Today's exact posterior over the check's columns: the ball bar's one scale as it always was, several scales
+    as :class:`.design_now.Now` lays them out (its grid)."""
+    if measured == ["ballbar"]:
+        return MarginalPosterior(A, base, prior_var, planner.sigma_prior(), prior_mean=prior_mean, y=y)
+    groups = np.array([measured.index(i) for i in planner.row_instrument], dtype=int)
+    return MarginalPosterior(A, base, prior_var, [taught_prior(planner, i) for i in measured], prior_mean=prior_mean,
+                             y=y, groups=groups, cells=CELLS_OF_THREE if len(measured) >= 3 else None)
 
 
 __all__ = ["Preposterior", "preposterior", "N_SIM"]

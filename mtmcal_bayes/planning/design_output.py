@@ -13,7 +13,7 @@ from .. import units
 from ..campaign import DesignGoal, PlannedRun
 from .design_make import Design
 from .design_problem import PROMISE
-from .design_other_runs import FILL_IN, fill_in_tables, other_program_name, other_record
+from .design_other_runs import FILL_IN, fill_in_tables, other_program_name, other_record, run_id
 from .design_runs import geometry_of
 from .run_records import program_name
 from .machine_kit import kit_of
@@ -38,7 +38,7 @@ def run_records(design: Design, programs: bool = False) -> list[dict]:
     view = copy.copy(design)  # the ball bar's runs come first in measuring order: their records keep their order
     view.runs, view.minutes, view.why = ([x[i] for i in bar] for x in (design.runs, design.minutes, design.why))
     out = kit_of(design.campaign).run_records(view, programs)
-    return out + [other_record(i, r, minutes=m, why=why, programs=programs)
+    return out + [other_record(design.campaign, i, r, minutes=m, why=why, programs=programs)
                   for i, (r, m, why) in enumerate(zip(design.runs, design.minutes, design.why), start=1)
                   if r.instrument != "ballbar"]
 
@@ -157,7 +157,11 @@ def designed_campaign(design: Design, goal: DesignGoal | None = None):
         kit.planned_geometry(p, r.candidate, base)
     out.ballbar = bb
     targets = {t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)}
-    out.design = goal or DesignGoal(targets, design.goal.contraction, design.goal.budget, {})
+    out.design = copy.copy(goal) if goal is not None else DesignGoal(targets, design.goal.contraction,
+                                                                      design.goal.budget, {})
+    # the probe's and the R-test's runs: their tables in to_fill_in.toml, named here so that `next` knows them
+    out.design.to_fill_in = {run_id(base, i, r): r.label for i, r in enumerate(design.runs, start=1)
+                             if r.instrument != "ballbar"}
     return out
 
 

@@ -7,8 +7,8 @@ integrated out (they add ``X_W X_Wᵀ`` to that run's noise covariance, as in
 :meth:`Planner._trace_new_runs`).
 
 σ_model is unknown.  The criterion is evaluated at :data:`NODE_LEVELS` quantiles ``σ_s`` of its
-current distribution (its prior for a new machine, else its exact posterior given the measured
-runs, :class:`~mtmcal_bayes.inference.marginal.MarginalPosterior`).  At a fixed σ the linear model's
+current distribution (its prior where its instrument has no measured reading, else its exact posterior given every
+measured reading, :class:`.design_now.Now`).  At a fixed σ the linear model's
 posterior is exact and does not depend on the data, so in the parameters' prior-sd coordinates
 (``X = A·diag(prior sd)``) every run adds ``Xᵀ N⁻¹ X`` to the precision ``I + M₁`` and the moments
 ``Mⱼ = Xᵀ N⁻ʲ X`` (j = 1, 2, 3) and ``t = tr N⁻²`` from which the Fisher information about σ,
@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from .. import units
 from ..inference.marginal import MarginalPosterior
-from ..inference.priors import make_prior
 from .design import Planner, sigma_contraction
+from .design_now import now_of, prior_means, taught_prior
 from .determined import SUBSPACE_TOL, Determination
 
 #: most runs of one candidate in a design (each further one on its own W-ball placement)
@@ -75,40 +75,17 @@ class DesignValue:
         return self.contraction_nodes.mean(axis=1)
 
 
-def sigma_nodes(planner: Planner, levels=NODE_LEVELS) -> np.ndarray:
-    """σ_model (mm) at ``levels`` of its current distribution: the prior without measured runs, else the exact
-    σ-marginal posterior of the linear model given the measured means."""
-    prior = planner.sigma_prior()
-    if len(planner.V) == 0:
-        return np.array([float(prior.ppf(q)) for q in levels])
-    now = current_posterior(planner)
-    w = now.weights(planner.observations.mean[None])[:, 0]
-    edges = now.edges[0]
-    cdf = np.concatenate([[0.0], np.cumsum(w)])
-    return np.interp(levels, cdf / cdf[-1], edges)
+def sigma_nodes(planner: Planner, levels=NODE_LEVELS, instrument: str = "ballbar") -> np.ndarray:
+    """``instrument``'s discrepancy scale (mm) at ``levels`` of its current distribution: its prior where the
+    campaign has no measured reading of it, else its exact σ-marginal posterior given every measured reading
+    (:class:`.design_now.Now`)."""
+    return now_of(planner).quantiles(instrument, levels)
 
 
 def current_posterior(planner: Planner) -> MarginalPosterior:
-    """The exact σ-marginal posterior of the planner's campaign (ball-bar rows), its data fitted into the grid."""
-    sigma0 = planner.sigma_model
-    return MarginalPosterior(planner.A, planner.V - sigma0**2, planner.prior_var, planner.sigma_prior(),
-                             prior_mean=prior_means(planner), y=planner.observations.mean)
-
-
-def prior_means(planner: Planner) -> np.ndarray:
-    """(P,) prior means of the planner's parameters, internal units."""
-    return np.array([make_prior(p.name, p.base, p.kind, planner.campaign.priors).mean
-                     for p in planner.space.parameters])
-
-
-def taught_prior(planner: Planner, instrument: str):
-    """The prior (frozen scipy distribution, mm) of ``instrument``'s discrepancy scale (:mod:`.design_instruments`)."""
-    from .design_instruments import SCALE_OF
-    from .scale_priors import scale_prior
-
-    if instrument == "ballbar":
-        return planner.sigma_prior()
-    return scale_prior(planner.campaign, SCALE_OF[instrument], planner.learnt).frozen()
+    """The exact σ-marginal posterior of the planner's measured readings, its data fitted into the grid
+    (:class:`.design_now.Now`; with the ball bar's readings alone over every column of the planner)."""
+    return now_of(planner).posterior
 
 
 def _unseen(norms: np.ndarray, watch: np.ndarray) -> np.ndarray:
@@ -149,7 +126,8 @@ class DesignProblem:
 
     Parameters
     ----------
-    planner : :class:`.design.Planner` over the campaign (ball-bar data) and the candidates
+    planner : :class:`.design.Planner` over the campaign (the measured readings of the design's instruments,
+        :func:`.design_now.measured_data`) and the candidates
     nodes : σ_model values (S,), mm (default :func:`sigma_nodes`)
     """
 
@@ -163,17 +141,14 @@ class DesignProblem:
         #: the prior alone meets is met only once the runs determine it (:mod:`.determined`)
         self.watch: np.ndarray | None = None
         self._anchor = None  # (counts (K,), M, t) of the last design summed in full (:meth:`moments`)
+        self.nodes = sigma_nodes(planner, instrument=taught) if nodes is None else np.asarray(nodes, float)
         if taught == "ballbar":
-            self.nodes = sigma_nodes(planner) if nodes is None else np.asarray(nodes, float)
             self.sigma_prior_var = float(planner.sigma_prior().var())
             self.sigma_reference_var = planner.contraction_reference()  # None: the prior's
-        else:  # the campaign's posterior rests on the ball bar's data: this scale is at its prior
-            prior = taught_prior(planner, taught)
-            self.nodes = np.array([float(prior.ppf(q)) for q in NODE_LEVELS]) if nodes is None else \
-                np.asarray(nodes, float)
-            self.sigma_prior_var = float(prior.var())
+        else:
+            self.sigma_prior_var = float(taught_prior(planner, taught).var())
             self.sigma_reference_var = None
-        fixed = {"ballbar": planner.sigma_model, "probe": planner.sigma_probe, "rtest": planner.sigma_rtest}
+        fixed = {i: planner.fixed_scale(i) for i in ("ballbar", "probe", "rtest")}
         scale = np.sqrt(planner.prior_var)
         rows = planner.candidate_rows()
         self._rows = [A for A, _ in rows]
@@ -191,15 +166,16 @@ class DesignProblem:
         to_display = np.array([units.from_internal(1.0, u) for u in planner.target_units])
         self.to_display = to_display
         P = len(self.cols)
-        if taught == "ballbar":
-            base0 = planner.V - planner.sigma_model**2
-            N0 = base0[None, :] + s2[:, None]  # (S, m)
-            self.base = [np.einsum("mp,sm,mq->spq", X0, N0 ** -j, X0) for j in (1, 2, 3)]  # each (S, P, P)
-            self.base_t = np.sum(N0 ** -2.0, axis=1)  # (S,)
-        else:  # the campaign's ball-bar rows at their fixed scale: nothing about the scale learnt
-            one = np.einsum("mp,m,mq->pq", X0, 1.0 / planner.V, X0)
-            self.base = [np.broadcast_to(one, (len(s2),) + one.shape).copy()] + [np.zeros((len(s2),) + one.shape)] * 2
-            self.base_t = np.zeros(len(s2))
+        # the measured readings of the learnt scale's instrument: their noise follows it; the others' at their fixed
+        # scales (the rms of their priors) enter M₁ only (nothing about the learnt scale in them)
+        learnt_rows = planner.row_instrument == taught
+        N0 = (planner.V[learnt_rows] - fixed[taught] ** 2)[None, :] + s2[:, None]  # (S, m)
+        X0l = X0[learnt_rows]
+        self.base = [np.einsum("mp,sm,mq->spq", X0l, N0 ** -j, X0l) for j in (1, 2, 3)]  # each (S, P, P)
+        self.base_t = np.sum(N0 ** -2.0, axis=1)  # (S,)
+        if not learnt_rows.all():
+            Xf = X0[~learnt_rows]
+            self.base[0] = self.base[0] + np.einsum("mp,m,mq->pq", Xf, 1.0 / planner.V[~learnt_rows], Xf)[None]
         K, S = len(rows), len(self.nodes)
         self.first = np.zeros((3, K, S, P, P))
         self.again = np.zeros((3, K, S, P, P))

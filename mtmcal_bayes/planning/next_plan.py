@@ -26,6 +26,7 @@ import numpy as np
 
 from .design_instruments import taught
 from .design_make import Design, design_of_plan
+from .design_other_runs import planned_other
 from .design_problem import PROMISE, DesignProblem
 
 #: a plan is kept while the data leave each target met on at least this share of the machines simulated from today
@@ -36,7 +37,7 @@ def contraction_delivered(campaign, c_now: float, contraction: float | None) -> 
     """Whether σ_model's contraction is asked no more: none asked, reached now (``c_now``), or promised in
     expectation by the campaign's designed plan, now measured in full."""
     return (contraction is None or c_now >= contraction
-            or (campaign.design is not None and not campaign.ballbar.planned))
+            or (campaign.design is not None and not campaign.ballbar.planned and not planned_other(campaign)))
 
 
 def plan_holds(design: Design) -> bool:

@@ -1,16 +1,18 @@
 """``next``: on a partly measured designed campaign, the next run to measure or "stop: every target reached".
 
-The posterior so far is the exact σ-marginal posterior of the measured runs (σ_model learnt from what
-is measured).  When every target sd is met by it and σ_model's contraction reached (or promised in
-expectation by the designed plan, now measured in full), the answer is *stop*, with the probability that
-the targets are met: the posterior probability of σ_model's values at which the σ-conditional sds all
-meet them (the sds themselves are known, σ_model is not).  Otherwise the remaining planned runs are kept
-while their exact check from today's posterior still leaves each target likelier met than missed (runs
-the data made unnecessary dropped), and the rest is designed again from the machine's current state
-(the ball bar mounted at the last measured run's set-up and placement, the remaining planned runs among
-the candidates) only where the plan falls short: :mod:`.next_plan`.  The first run of the plan is the
-next one; the probability is the share of simulated machines in which the plan meets every target
-(:mod:`.design_check`).
+The posterior so far is the exact σ-marginal posterior of every measured run of the design's instruments — the ball
+bar's, the touch probe's, the R-test's, each with its own discrepancy scale learnt from what is measured
+(:mod:`.design_now`).  When every target sd is met by it and σ_model's contraction reached (or promised in
+expectation by the designed plan, now measured in full), the answer is *stop*, with the probability that the
+targets are met: the posterior probability of the scales' values at which the σ-conditional sds all meet them (the
+sds themselves are known, the scales are not).  Otherwise the remaining planned runs are kept while their exact
+check from today's posterior still leaves each target likelier met than missed (runs the data made unnecessary
+dropped), and the rest is designed again from the machine's current state (the ball bar mounted at the last
+measured run's set-up and placement, the remaining planned runs among the candidates) only where the plan falls
+short: :mod:`.next_plan`.  A designed probe or R-test run is planned while its table (``[design] to_fill_in``,
+:mod:`.design_other_runs`) is not among the campaign's runs; a re-plan chooses among the catalogues' probe and
+R-test runs again, which hold it.  The first run of the plan is the next one; the probability is the share of
+simulated machines in which the plan meets every target (:mod:`.design_check`).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from ..machine_time import TimeModel
 from .candidates import Candidate
 from .chain_candidates import arc_spec
 from .design import Planner
-from .design_instruments import chosen_instruments
+from .design_instruments import chosen_instruments, taught
 from .design_make import (
     CONTRACTION,
     Design,
@@ -35,7 +37,8 @@ from .design_make import (
     parse_targets,
     reporting_planner,
 )
-from .design_problem import current_posterior
+from .design_now import now_of, taught_prior
+from .design_other_runs import planned_other
 from .determined import Determination
 from .next_plan import contraction_delivered, plan_holds, without_unneeded
 from .scale_priors import learnt_summary
@@ -85,14 +88,32 @@ def planned_candidates(campaign) -> list[Candidate]:
 
 
 def _conditional_met(planner: Planner, targets: np.ndarray) -> float:
-    """Posterior probability of the σ_model values at which every σ-conditional target sd meets its target."""
-    now = current_posterior(planner)
-    w = now.weights(planner.observations.mean[None])[:, 0]
-    var = np.einsum("tp,gpq,tq->gt", planner.T, now.cov, planner.T)
+    """Posterior probability of the discrepancy scales' values at which every σ-conditional target sd meets its
+    target (the grid cells of every measured instrument's scale, :class:`.design_now.Now`)."""
+    w, var = now_of(planner).cell_target_var(planner.T)
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     sd = np.sqrt(np.maximum(var, 0.0)) * scale
     ok = np.all(sd <= np.where(np.isfinite(targets), targets, np.inf), axis=1)
     return float(w @ ok)
+
+
+def measured_runs(campaign, instruments) -> int:
+    """How many runs of ``instruments`` the campaign has measured (the ball bar's, the probe's, the R-test's)."""
+    count = {"ballbar": len(campaign.ballbar.runs),
+             "probe": len(campaign.probe.runs) if campaign.probe is not None else 0,
+             "rtest": len(campaign.rtest.runs) if campaign.rtest is not None else 0}
+    return sum(count[i] for i in instruments)
+
+
+def _contraction_now(planner: Planner, instrument: str) -> float:
+    """``1 − var/var_prior`` of ``instrument``'s scale today (the ball bar's under a learnt prior against the wider
+    prior's variance, :meth:`.design.Planner.contraction_reference`)."""
+    now = now_of(planner)
+    if instrument == "ballbar":
+        prior_var = planner.contraction_reference() or float(planner.sigma_prior().var())
+    else:
+        prior_var = float(taught_prior(planner, instrument).var())
+    return float(1.0 - now.variance(instrument) / prior_var)
 
 
 def next_step(campaign, *, targets: dict | None = None, contraction: float | None = None,
@@ -113,16 +134,21 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
     # the plan and the user's candidates only: the catalogue is read when the rest is designed again
     plan = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []), instruments=instruments,
                              catalogue=False)
-    planner = reporting_planner(campaign, plan, want, model=model, sigma_prior=sigma_prior)
+    planner = reporting_planner(campaign, plan, want, model=model, sigma_prior=sigma_prior, instruments=instruments)
     tg = np.array([want.get(t, np.nan) for t in planner.targets])
-    sd_now, c_now = _now(planner, bool(bb.runs))
+    scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
+    # every measured reading of the instruments: the ball bar's, the probe's and the R-test's (:mod:`.design_now`)
+    sd_now = now_of(planner).target_moments(planner.T)[1] * scale
+    c_now = _contraction_now(planner, taught(instruments))
+    others = planned_other(campaign)  # the designed probe and R-test runs not measured yet
     # a target counts as reached only where the measured runs determine its quantity (not its prior alone)
     determined_now = Determination(planner, []).determined()
     targets_met = (bool(np.all(sd_now <= np.where(np.isfinite(tg), tg, np.inf)))
                    and bool(np.all(determined_now | ~np.isfinite(tg))))
     base = dict(targets=list(planner.targets), target_units=list(planner.target_units), target_sd=tg, sd_now=sd_now,
-                contraction_now=c_now, contraction_target=contraction, measured=len(bb.runs),
-                planned_left=[p.label for p in bb.planned], learnt=learnt_summary(campaign, sigma_prior),
+                contraction_now=c_now, contraction_target=contraction, measured=measured_runs(campaign, instruments),
+                planned_left=[p.label for p in bb.planned] + list(others.values()),
+                learnt=learnt_summary(campaign, sigma_prior),
                 determined_now=determined_now)
     if targets_met and contraction_delivered(campaign, c_now, contraction):
         return NextStep("stop", probability_targets_met=_conditional_met(planner, tg), **base)
@@ -138,29 +164,13 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         else:
             design = None
     if design is None:
-        if campaign.design is not None and not bb.planned:
+        if campaign.design is not None and not bb.planned and not others:
             settings["contraction"] = None  # the designed plan, measured in full, delivered it: the targets are left
         design = _designed_again(campaign, plan, planner, sd_now=sd_now, c_now=c_now, start=start, settings=settings)
-    planned = {p.label for p in bb.planned}
+    planned = {p.label for p in bb.planned} | set(others.values())
     chosen = {r.label for r in design.runs}
     return NextStep("measure", probability_targets_met=design.probability_targets_met(), design=design,
                     dropped=sorted(planned - chosen), added=sorted(chosen - planned), **base)
-
-
-def _now(planner: Planner, measured: bool) -> tuple[np.ndarray, float]:
-    """The exact posterior sds of the planner's targets today (display units) and σ_model's contraction."""
-    scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
-    if measured:
-        now = current_posterior(planner)
-        _, sd = now.target_moments(planner.observations.mean[None], planner.T)
-        w = now.weights(planner.observations.mean[None])[:, 0]
-        s = now.sigma[:, 0]
-        prior_var = planner.contraction_reference() or float(planner.sigma_prior().var())
-        return sd[0] * scale, float(1.0 - (w @ s**2 - (w @ s) ** 2) / prior_var)
-    # nothing measured yet: the priors (a learnt σ_model prior measured against the wider one's variance)
-    ref = planner.contraction_reference()
-    return (np.sqrt((planner.T**2) @ planner.prior_var) * scale,
-            0.0 if ref is None else float(1.0 - planner.sigma_prior().var() / ref))
 
 
 def _designed_again(campaign, plan, planner, *, sd_now, c_now, start, settings) -> Design:

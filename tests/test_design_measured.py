@@ -1,0 +1,141 @@
+"""``design`` and ``next`` start from every measured instrument (docs/design.md, "Every instrument").
+
+A new trunnion with a probe and an R-test is designed with the probe alone, and with the R-test alone; the first
+designed run is measured on a simulated machine and added as the user adds it (its ``to_fill_in.toml`` table, filled
+in); ``next`` then counts it as measured, its sds now are the exact posterior's of those readings (``sample --sampler
+exact --data probe`` / ``rtest``) and it re-plans the rest, naming the next run as the design names it.  The thesis
+campaign's own probe runs in the design's sds before are in tests/test_design.py.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mtmcal_bayes.inference.approximation import PosteriorApproximation
+from mtmcal_bayes.inference.log_posterior import LogPosterior
+from mtmcal_bayes.io import parse_campaign
+from mtmcal_bayes.planning.design_check import preposterior
+from mtmcal_bayes.planning.design_instruments import other_candidates
+from mtmcal_bayes.planning.design_make import design_candidates, make_design, reporting_planner
+from mtmcal_bayes.planning.design_other_runs import planned_other
+from mtmcal_bayes.planning.design_output import designed_campaign, next_text
+from mtmcal_bayes.planning.design_problem import DesignProblem
+from mtmcal_bayes.planning.design_runs import designed_runs
+from mtmcal_bayes.planning.next_run import next_step
+from tests.machines import SimulatedMachine, measure_sequentially
+
+CAMPAIGN = """format = "mtmcal-campaign/1"
+
+[machine]
+name = "trunnion, set-ups only"
+description = "trunnion"
+
+[ballbar]
+instrument = "Renishaw QC20-W"
+length_mm = 100.0
+accuracy_um = 0.5
+
+[ballbar.setups.T1]
+R_B_mm = 150.0
+
+[ballbar.mounts.W1]
+position_mm = [0.0, 60.0, 30.0]
+
+[probe]
+instrument = "touch-trigger probe"
+repeatability_um = 1.0
+
+[probe.styli.S1]
+length_mm = 150.0
+
+[rtest]
+instrument = "R-test, 3 sensors"
+repeatability_um = 0.5
+sphere_mm = [0.0, 60.0, 30.0]
+
+[rtest.nests.N1]
+length_mm = 150.0
+"""
+
+N_SIM = 100
+
+
+@pytest.fixture(scope="module", params=["probe", "rtest"])
+def measured(request):
+    """The designed campaign (``E_B0C`` ≤ 8″ with the probe, or with the R-test), its first run measured on machine
+    1, and ``next`` on it."""
+    kind = request.param
+    c = parse_campaign(CAMPAIGN, "trunnion.toml")
+    design = make_design(c, targets={"E_B0C": 8.0}, instruments=[kind], n_sim=N_SIM)
+    planned = designed_campaign(design)
+    first = design.runs[0]
+    table = next(k for k, v in planned.design.to_fill_in.items() if v == first.label)
+    machine = SimulatedMachine(c, seed=1)
+    one = machine.measure_other(planned, first, table_id=table)
+    return kind, design, planned, one, table, machine, next_step(one, instruments=[kind], n_sim=N_SIM)
+
+
+def test_a_designed_campaign_names_its_runs_to_fill_in(measured):
+    """Every designed probe or R-test run is named in the campaign's ``[design] to_fill_in`` by its table's id."""
+    kind, design, planned, *_ = measured
+    assert len(design.runs) >= 2 and all(r.instrument == kind for r in design.runs)
+    assert list(planned.design.to_fill_in.values()) == [r.label for r in design.runs]
+    assert len(planned_other(planned)) == len(design.runs)
+
+
+def test_next_counts_a_measured_run(measured):
+    """The filled-in run is measured; the other designed runs are still planned."""
+    kind, design, _, one, table, _, step = measured
+    assert step.measured == 1
+    assert [r.id for r in getattr(one, kind).runs] == [table]
+    assert step.planned_left == [r.label for r in design.runs[1:]]
+    assert set(step.dropped) <= set(step.planned_left)
+
+
+def test_next_starts_from_the_measured_readings(measured):
+    """``next``'s sds now are the exact posterior's of the run's readings (the same σ-marginal posterior as ``sample
+    --sampler exact --data probe`` / ``rtest``, on the same grid: equal to rounding, 1e-6 of the sd), and the run has
+    narrowed a quantity it determines far below its prior's 60″."""
+    kind, *_, one, _, _, step = measured
+    exact = PosteriorApproximation(LogPosterior(one, "linear", data=kind)).moments(step.targets)
+    np.testing.assert_allclose(step.sd_now, [exact[t][1] for t in step.targets], rtol=1e-6)
+    assert step.sd_now.min() < 10.0
+
+
+def test_next_names_the_next_run_as_design_does(measured):
+    """The re-plan's first run is a run of the instrument named as the design names its runs (its catalogue name),
+    and the sequential loop of the validation measures it under its planned table's id (in the campaign ``next -o``
+    writes where the step changed the plan)."""
+    from mtmcal_bayes.planning.design_output import designed_campaign
+
+    kind, _, _, one, _, machine, step = measured
+    assert step.status == "measure"
+    nxt = step.design.runs[0]
+    assert nxt.instrument == kind and nxt.label in next_text(step)
+    c, _, _ = measure_sequentially(machine, one, max_runs=1, n_sim=N_SIM, instruments=[kind])
+    runs = getattr(c, kind).runs
+    assert len(runs) == 2
+    plan = designed_campaign(step.design, one.design) if step.added or step.dropped else one
+    planned_id = [k for k, v in planned_other(plan).items() if v == nxt.label]
+    assert runs[-1].id == (planned_id[0] if planned_id else f"design 01 {kind} {nxt.candidate.axis}")
+
+
+def test_a_campaign_with_probe_or_rtest_data_alone_designs(measured):
+    """A campaign whose only readings are the probe's or the R-test's (set-ups of the ball bar, none of its runs)
+    designs with the ball bar and that instrument: σ_model at its prior (the learnt scale, nothing measured of it),
+    the readings in the criterion and in the exact check, whose sds before are those of the readings and fall with
+    the runs."""
+    kind, *_, one, _, _, step = measured
+    both = ["ballbar", kind]
+    cands = [c for c in design_candidates(one, instruments=both) if c.instrument == "ballbar"][:3] + \
+        other_candidates(one, [kind])[:2]
+    planner = reporting_planner(one, cands, dict.fromkeys(step.targets, 8.0), instruments=both)
+    assert planner.data == kind
+    problem = DesignProblem(planner)
+    counts = np.array([1, 0, 0, 1, 0])
+    assert np.all(np.isfinite(problem.value(counts).sd_nodes))
+    check = preposterior(planner, designed_runs(cands, counts), n_sim=50, seed=1)
+    now = dict(zip(planner.targets, check.sd_now))
+    np.testing.assert_allclose([now[t] for t in step.targets], step.sd_now, rtol=1e-6)
+    assert np.all(check.sd_mean <= check.sd_now * (1 + 1e-9))
