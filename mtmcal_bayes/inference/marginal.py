@@ -223,7 +223,10 @@ class _BlockWhitening:
         k, t = v.shape[1], x.shape[1]
         vv = (u_v**2).sum(axis=1)[None] + self._over_first(p_v**2)  # (n0, Gb, k)
         xx = (u_x**2).sum(axis=1)[None] + self._over_first(p_x**2)
-        vx = (np.swapaxes(u_v, 1, 2) @ u_x)[None] + self._over_first(p_v[:, :, :, None] * p_x[:, :, None, :])
+        # Σ_j p_v[g, j, n] p_x[g, j, t] / eigenvalues[i, g, j] as one matrix product per cell of the others (the
+        # outer product p_v ⊗ p_x, (Gb, ma, k, t), is hundreds of megabytes for a design's check)
+        scaled = np.swapaxes(1.0 / self.eigenvalues, 0, 1)[..., None] * p_x[:, None]  # (Gb, n0, ma, t)
+        vx = (np.swapaxes(u_v, 1, 2) @ u_x)[None] + np.swapaxes(np.swapaxes(p_v, 1, 2)[:, None] @ scaled, 0, 1)
         return vv.reshape(-1, k), vx.reshape(-1, k, t), xx.reshape(-1, t)
 
 
