@@ -317,6 +317,8 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         binding = has & (result.value.sd_promised[0] >= BINDING * working.targets)
         if not short_sd.any() and not short_c and np.all(slack[binding] < LOOSEN_ABOVE):
             break
+        if best is not None and best is not last:
+            break  # loosened past the promise: tightening back would land between the two; the kept one stands
         # the closed form's promise is off by what the exact check found: move the working targets by it
         working.targets = np.where(has, working.targets * np.clip(slack * 0.98, 0.5, 1.5), working.targets)
         if short_c:
