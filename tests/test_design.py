@@ -136,6 +136,35 @@ def test_search_meets_targets_within_the_margin_of_exhaustive_search(new_machine
         compared += 1
 
 
+def test_greedy_asks_the_schedule_of_the_candidates_that_could_win_and_picks_the_same(new_machine):
+    """With each candidate's floor of minutes (its measuring time) the greedy asks the schedule best bound first and
+    stops where no bound beats the best rate found; its picks are those of asking every candidate in turn, for the
+    plain start and randomised ones (the same jitter drawn for the same candidates), and it asks fewer schedules."""
+    from mtmcal_bayes.machine_time import TimeModel
+    from mtmcal_bayes.planning.design_make import design_candidates
+    from mtmcal_bayes.planning.design_problem import DesignProblem
+    from mtmcal_bayes.planning.design_timing import Timing
+
+    cands = design_candidates(new_machine)
+    dp = DesignProblem(Planner(new_machine, cands, ["alpha_XB", "dy_CZ", "beta_CZ"]))
+    timing = Timing(new_machine, TimeModel())
+    asked = {"floor": 0, "turn": 0}
+
+    def counted(name):
+        def minutes(counts):
+            asked[name] += 1
+            return timing.total_of_counts(cands, counts, (False, None, None))
+        return minutes
+
+    goal = Goal(np.array([1.5, 6.0, 3.0]), 0.5)
+    for seed in (None, 1, 2):
+        rng = lambda: None if seed is None else np.random.default_rng(seed)  # noqa: E731
+        with_floor = Search(dp, goal, counted("floor"), floor=timing.floor(cands)).greedy(rng())
+        in_turn = Search(dp, goal, counted("turn")).greedy(rng())
+        assert np.array_equal(with_floor, in_turn) and with_floor.sum() > 2
+    assert asked["floor"] < asked["turn"]
+
+
 def test_search_within_a_budget_near_the_exhaustive_best(new_machine):
     """With a budget alone, the improvement J of the search's design is within 10 % of the exhaustive best's (0–2 runs
     of each of 6 candidates) and its minutes within the budget (bench/design.py: 17 of 18 problems at the best, the

@@ -280,7 +280,8 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     timing = Timing(campaign, time_model or TimeModel())
     start = start or (False, None, None)
     minutes = _remembered(lambda counts: timing.total_of_counts(cands, counts, start))
-    search = Search(problem, goal, minutes)
+    floor = timing.floor(cands)
+    search = Search(problem, goal, minutes, floor=floor)
     _check_budget(search, goal)
     if goal.has_targets:
         _check_reachable(problem, search, goal, planner.target_units)
@@ -290,7 +291,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
     for rounds in range(1, ROUNDS + 1):
         # a later round's goal moved by a few per cent: its search starts from the last round's design, once
         warm = {} if last is None else {"start": last[0].counts, "restarts": 0}
-        result = Search(problem, working, minutes).run(seed, **warm)
+        result = Search(problem, working, minutes, floor=floor).run(seed, **warm)
         if goal.has_targets and not result.met:
             if best is not None or last is not None:
                 break  # a tightened goal out of reach: keep what was found

@@ -86,8 +86,12 @@ class Search:
     """The search over count vectors of ``problem``'s candidates with the time model ``minutes(counts)``."""
 
     def __init__(self, problem: DesignProblem, goal: Goal, minutes: Callable[[np.ndarray], float],
-                 allowed: np.ndarray | None = None):
+                 allowed: np.ndarray | None = None, floor: np.ndarray | None = None):
         self.problem, self.goal, self._minutes = problem, goal, minutes
+        #: (K,) the fewest minutes one more run of each candidate adds (its measuring time, set-up changes aside;
+        #: None: unknown): a step's rate is at most its gain over it, so the schedule is asked of the candidates
+        #: that could still win, best bound first, and a swap only of those that could save minutes
+        self.floor = None if floor is None else np.asarray(floor, float)
         self.has_targets = goal.has_targets  # asked at every step: the goal does not change during a search
         K = len(problem.candidates)
         self.allowed = np.ones(K, dtype=bool) if allowed is None else np.asarray(allowed, dtype=bool)
@@ -120,6 +124,13 @@ class Search:
             scores = self._score(vp)
             gain = score - scores
             m0 = self.minutes(counts)
+            if self.floor is not None and self.goal.budget is None:
+                pick = self._best_rate(counts, gain, np.flatnonzero(ok & (gain > MET)), m0, rng)
+                if pick < 0:
+                    return counts
+                counts[pick] += 1
+                score = float(scores[pick])
+                continue
             best, pick = -np.inf, -1
             for k in np.flatnonzero(ok & (gain > MET)):
                 trial = counts.copy()
@@ -137,6 +148,24 @@ class Search:
             counts[pick] += 1
             score = float(scores[pick])
 
+    def _best_rate(self, counts, gain, idx, m0, rng) -> int:
+        """The greedy step's pick among ``idx`` (the same as trying every one in turn, without a budget): the
+        schedule asked in the order of each candidate's bound ``gain / floor`` until no bound can beat the best rate
+        found; ties to the first candidate, as in turn."""
+        jitter = np.exp(JITTER * rng.standard_normal(len(idx))) if rng is not None else np.ones(len(idx))
+        bound = gain[idx] * jitter / np.maximum(self.floor[idx], 1e-6)
+        best, pick = -np.inf, -1
+        for o in np.argsort(-bound, kind="stable"):
+            if bound[o] < best:
+                break
+            k = int(idx[o])
+            trial = counts.copy()
+            trial[k] += 1
+            rate = gain[k] / max(self.minutes(trial) - m0, 1e-6) * jitter[o]
+            if rate > best or (rate == best and k < pick):
+                best, pick = rate, k
+        return pick
+
     # ------------------------------------------------------------------ exchange
     def _better(self, score: float, m: float, score0: float, m0: float) -> bool:
         if self.has_targets:  # meet the targets, then fewer minutes
@@ -146,11 +175,18 @@ class Search:
         return self._fits(m) and (score < score0 - 1e-9 or (abs(score - score0) <= 1e-9 and m < m0 - 1e-9))
 
     def exchange(self, counts: np.ndarray) -> np.ndarray:
-        """Drops and swaps that improve the design, best first, until none does."""
+        """Drops and swaps that improve the design, best first, until none does; a design that meets its targets
+        drops a run where one can go (the best drop) before any swap is looked for (a swap costs a rank-r update of
+        every candidate, a drop one criterion)."""
         counts = counts.copy()
         for _ in range(MAX_PASSES):
             score0 = float(self._score(self.problem.value(counts))[0])
             m0 = self.minutes(counts)
+            if self.has_targets and score0 <= MET:
+                drop = self._best_drop(counts, score0, m0)
+                if drop is not None:
+                    counts = drop
+                    continue
             best = None
             for k in np.flatnonzero(counts > 0):
                 less = counts.copy()
@@ -159,8 +195,14 @@ class Search:
                 m_less = self.minutes(less)
                 if self._better(s_less, m_less, score0, m0):
                     best = self._keep(best, (s_less, m_less, less))
+                could = self.allowed.copy()
+                if self.floor is not None and self.has_targets and score0 <= MET:
+                    could &= self.floor < m0 - m_less - 1e-9  # only a swap that could save minutes
+                    could[k] = False
+                    if not could.any():
+                        continue
                 vp, ok = self.problem.value_plus_one(less)
-                ok &= self.allowed
+                ok &= could
                 ok[k] = False
                 scores = self._score(vp)
                 for j in np.flatnonzero(ok):
@@ -186,6 +228,20 @@ class Search:
                 return counts
             counts = best[2]
         return counts
+
+    def _best_drop(self, counts, score0, m0):
+        """The design ``counts`` less the one run whose dropping keeps its targets met and saves most minutes, or
+        None where no run can go."""
+        best = None
+        for k in np.flatnonzero(counts > 0):
+            less = counts.copy()
+            less[k] -= 1
+            s_less = float(self._score(self.problem.value(less))[0])
+            if s_less <= MET:
+                m_less = self.minutes(less)
+                if self._better(s_less, m_less, score0, m0):
+                    best = self._keep(best, (s_less, m_less, less))
+        return None if best is None else best[2]
 
     def _keep(self, best, new):
         if best is None:

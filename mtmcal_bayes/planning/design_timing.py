@@ -158,6 +158,12 @@ class Timing:
                 t += minutes
         return t
 
+    def floor(self, candidates) -> np.ndarray:
+        """(K,) the fewest minutes one more run of each of ``candidates`` adds to any schedule: its measuring minutes
+        (set-up changes, pattern changes and instrument changes come on top)."""
+        return np.array([self._measure(c) if c.instrument == "ballbar" else self._other_minutes(c)
+                         for c in candidates])
+
     def _keys(self, candidates) -> tuple[list, list, list]:
         """Per candidate of ``candidates``: its set-up id, its mount id and its measuring minutes (None: a probe or
         R-test candidate), made once per list of candidates."""
