@@ -86,7 +86,7 @@ class Search:
     """The search over count vectors of ``problem``'s candidates with the time model ``minutes(counts)``."""
 
     def __init__(self, problem: DesignProblem, goal: Goal, minutes: Callable[[np.ndarray], float],
-                 allowed: np.ndarray | None = None, floor: np.ndarray | None = None):
+                 allowed: np.ndarray | None = None, *, floor: np.ndarray | None = None):
         self.problem, self.goal, self._minutes = problem, goal, minutes
         #: (K,) the fewest minutes one more run of each candidate adds (its measuring time, set-up changes aside;
         #: None: unknown): a step's rate is at most its gain over it, so the schedule is asked of the candidates
@@ -125,7 +125,7 @@ class Search:
             gain = score - scores
             m0 = self.minutes(counts)
             if self.floor is not None and self.goal.budget is None:
-                pick = self._best_rate(counts, gain, np.flatnonzero(ok & (gain > MET)), m0, rng)
+                pick = self._best_rate(counts, gain, np.flatnonzero(ok & (gain > MET)), m0=m0, rng=rng)
                 if pick < 0:
                     return counts
                 counts[pick] += 1
@@ -148,7 +148,7 @@ class Search:
             counts[pick] += 1
             score = float(scores[pick])
 
-    def _best_rate(self, counts, gain, idx, m0, rng) -> int:
+    def _best_rate(self, counts, gain, idx, *, m0, rng) -> int:
         """The greedy step's pick among ``idx`` (the same as trying every one in turn, without a budget): the
         schedule asked in the order of each candidate's bound ``gain / floor`` until no bound can beat the best rate
         found; ties to the first candidate, as in turn."""
