@@ -7,7 +7,10 @@
    (:mod:`.design_problem`) with the machine-time model (:mod:`mtmcal_bayes.machine_time`).
 3. The exact preposterior check (:mod:`.design_check`); where it finds a target met in fewer than
    :data:`.design_problem.PROMISE` of the simulated machines, or the contraction short in expectation, the
-   search runs again with that goal tightened by the shortfall (at most :data:`ROUNDS` times).
+   search runs again with that goal tightened by the shortfall, and where a target that shapes the design
+   (:data:`BINDING`) is kept with more than :data:`LOOSEN_ABOVE` to spare, loosened by it (at most :data:`ROUNDS`
+   rounds; a later round's search starts once from the last round's design; the rounds end when a loosened goal's
+   design falls short, the one kept before standing).
 4. The runs in measuring order (set-up changes grouped), each with its minutes and why it is there.
 """
 

@@ -5,7 +5,10 @@ one run for another, whenever the targets stay met and the minutes fall; within 
 improvement grows), repeated from :data:`RESTARTS` randomised greedy starts (each score multiplied by
 a log-normal factor, the randomised-exchange idea of the optimal-design literature) and the best kept.
 Minutes are not additive — set-up changes are shared by the runs at one set-up — so every step asks the
-time model for the whole design's schedule.  ``tests/test_design.py`` compares the result with
+time model for the whole design's schedule; given each candidate's floor (its measuring minutes, which one more run
+of it adds at least), the greedy asks it of the candidates in the order of their bound ``gain / floor`` until none
+can beat the best rate found (the same pick), and the exchange looks for a swap only where a run could save minutes,
+after the drops (a design meeting its targets drops its best run to drop first).  ``tests/test_design.py`` compares the result with
 exhaustive search on small candidate sets.
 
 The criterion (:mod:`.design_problem`) is in log units so that sds and the σ_model contraction add up:
