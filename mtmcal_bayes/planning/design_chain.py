@@ -38,7 +38,7 @@ from ..models.probe import DEFAULT_REPEATABILITY
 from .design_problem import PROMISE
 
 #: the check goes through the kinematics where the misfit exceeds this fraction of the smallest target, in reading
-#: units (or the ball bar's accuracy, whichever is smaller)
+#: units (or the instruments' smallest accuracy, whichever is smaller)
 MISFIT_FRACTION = 0.1
 
 
