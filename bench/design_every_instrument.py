@@ -7,7 +7,8 @@ run has it (``[rtest] sphere_mm``, else the probe's first run: the catalogues' s
 docs/design.md "Every instrument").  ``design`` with every instrument to 3″ for every determinable angle and 5 µm for
 every determinable length (relaxed by 25 % steps where the catalogue cannot reach them: ``design_described``),
 σ_model contraction 0.5; with ``--probe`` the probe-only design of ``bench/design_instruments.py`` (the type's
-description with a ``[probe]`` alone, ``--instruments probe``).
+description with a ``[probe]`` alone, ``--instruments probe``), its sphere's run replaced by a W-ball mount at the
+sphere (:func:`new_probe_machine`: a new machine, no reading in the design's posterior).
 
 Then ``N`` machines drawn from the priors — every deviation and every nuisance term of the designed campaign (the ball
 bar's set-ups and placements, each probe run's stylus and sphere, the R-test's nest, placement and zeros) and every
@@ -35,7 +36,7 @@ import numpy as np
 from scipy import stats
 
 from mtmcal_bayes import api, units
-from mtmcal_bayes.campaign import Probe, RTest, RTestNest
+from mtmcal_bayes.campaign import Mount, Probe, RTest, RTestNest
 from mtmcal_bayes.errors import ParameterError
 from mtmcal_bayes.inference.priors import make_prior
 from mtmcal_bayes.machines.space import described_space
@@ -73,6 +74,17 @@ def new_machine(kind: str):
     if c.rtest is not None:
         c.rtest.runs = []
     c.ballbar.runs, c.probe.runs, c.truth = [], [], None
+    return c
+
+
+def new_probe_machine(kind: str):
+    """The type's probe-only machine of ``bench/design_instruments.py`` made new: its probe run (there to place the
+    sphere, and whose readings the design's posterior would take) replaced by a W-ball mount at the sphere, where the
+    probe catalogue of a campaign without probe runs puts its sphere (no ball-bar set-up: not an instrument here)."""
+    c, _ = probe_only(kind)
+    sphere = np.asarray(c.probe.runs[0].sphere, float)
+    c.probe.runs = []
+    c.ballbar.mounts = {"sphere": Mount("sphere", float(sphere[2]), 0.0, position=sphere)}
     return c
 
 
@@ -132,7 +144,7 @@ def simulate(c, truth, sigmas, rng):
 def design_for(kind: str):
     """The type's machine, its targets (3″ / 5 µm on every deviation its candidates determine) and its design."""
     if PROBE_ONLY:
-        c, _ = probe_only(kind)
+        c = new_probe_machine(kind)
         p = planner_for(c, other_candidates(c, ["probe"]), None)
         settings = {"instruments": "probe"}
     else:
