@@ -13,9 +13,11 @@ and the learnt prior's variance, :meth:`.design.Planner.contraction_reference`).
 
 For a kinematic model the rows are its Jacobian at zero deviations (the model linearised), as in the
 planner; the space, rows and targets are the planner's (:meth:`.design.Planner.rows_for`: on a described machine,
-its chain's first order).  Where that first order misses the machine's kinematics at the drawn machines by more
-than a stated fraction of the targets (or the instrument's accuracy), the designed runs' means are the kinematic
-model's instead, inferred with the same linear posterior (:mod:`.design_chain`).
+its chain's first order; a probe or R-test run's, the first order of its model through the chain).  Where that
+first order misses the machine's kinematics at the drawn machines by more than a stated fraction of the targets (or
+the instruments' accuracy), the designed runs' means — every instrument's — are the kinematic models' instead,
+inferred with the same linear posterior (:mod:`.design_chain`).  One path for one scale and several: a design of
+ball-bar runs is the case of the ball bar's scale alone.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from ..inference.priors import make_prior
 from ..observations import Observations
 from ..parameters import ParameterSpace
 from .design import Planner
-from .design_chain import Kinematics, kinematic_means, linear_kinematics
+from .design_chain import Kinematics, kinematic_means
 from .design_now import CELLS_OF_THREE, taught_prior
 from .design_runs import DesignedRun, with_runs
 from .design_timing import SESSION
@@ -63,6 +65,8 @@ class Preposterior:
     #: (n_sim, P) the simulated machines and (n_sim, m_new) the designed runs' simulated readings, mm
     truth: np.ndarray | None = None
     readings: np.ndarray | None = None
+    #: the space of ``truth``'s columns: the deviations and every nuisance term of the designed campaign
+    space: ParameterSpace | None = None
 
     @property
     def sd_mean(self) -> np.ndarray:
@@ -92,11 +96,10 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     every scale from its prior (a measured instrument's, with the parameters, from today's posterior: every measured
     reading is in it and in each simulated campaign's posterior), and the
     exact posterior integrates all of them out on a grid of :data:`CHECK_CELLS` cells per scale; ``taught`` the
-    instrument whose scale's contraction is reported (:mod:`.design_instruments`).  A design of ball-bar runs is
-    measured through the machine's kinematics where the linear model's misfit is large against ``targets`` (t,)
-    (display units, NaN: none) or the instrument, or as ``through`` forces (:func:`.design_chain.kinematic_means`);
-    one with probe or R-test runs through the linear rows (not yet through the kinematics: its ``kinematics`` says
-    so)."""
+    instrument whose scale's contraction is reported (:mod:`.design_instruments`; where it has no rows, the first
+    scale's).  The designed runs — ball bar, probe and R-test — are measured through the machine's kinematics where
+    the linear model's misfit is large against ``targets`` (t,) (display units, NaN: none) or the instruments'
+    accuracy, or as ``through`` forces (:func:`.design_chain.kinematic_means`)."""
     rng = np.random.default_rng(seed)
     campaign = planner.campaign
     if campaign.ballbar.runs and "ballbar" not in set(planner.row_instrument):
@@ -140,7 +143,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
         instrument += [c.instrument] * len(rows)
     base_new = np.concatenate(base_new)
     new = np.concatenate([new, np.ones(len(A) - len(new), dtype=bool)])
-    scales = [i for i in SESSION if i in instrument]  # the scales with rows, the ball bar's first
+    scales = [i for i in SESSION if i in instrument] or ["ballbar"]  # the scales with rows, the ball bar's first
     groups = np.array([scales.index(i) for i in instrument], dtype=int)
     T = planner.target_matrix(space)
     sigma_prior = planner.sigma_prior()
@@ -159,6 +162,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
         _, sd_now = now.target_moments(y_now[None], T)
         w_now = now.weights(y_now[None])[:, 0]
         var_now = float(sigma_prior.var())  # the ball bar's scale at its prior where it has no measured reading
+        var_of = {}  # each measured scale's variance today
         for k, i in enumerate(measured):
             var_i = w_now @ now.sigma[:, k] ** 2 - (w_now @ now.sigma[:, k]) ** 2
             top = min(max(highs.get(i, hi), float(now.edges[k][-1])), float(taught_prior(planner, i).support()[1]))
@@ -166,46 +170,39 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
                 var_now, hi = var_i, top
             else:
                 highs[i] = top
-            if i == taught:
-                var_taught = var_i
+            var_of[i] = var_i
     else:
+        var_of = {}
         theta = np.column_stack([p.frozen().rvs(size=n_sim, random_state=rng) for p in priors])
         sigma = sigma_prior.rvs(size=n_sim, random_state=rng)
         drawn = {"ballbar": sigma}
         sd_now = np.sqrt(np.sum(T**2 * prior_var, axis=1))[None]
         var_now = float(sigma_prior.var())
-    if scales == ["ballbar"] or not scales:  # one scale: the ball bar's, as before any other instrument
-        means, kinematics = kinematic_means(planner, aug, theta, A, new=new, targets=targets, through=through)
-        y_new = means + rng.standard_normal((n_sim, int(new.sum()))) * np.sqrt(base_new[None] + sigma[:, None] ** 2)
-        y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
-        after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, sigma_prior,
-                                  prior_mean=prior_mean, sigma_min=lo, sigma_max=hi)
-        s = after.sigma[:, 0]
-        prior_var_s = planner.contraction_reference() or float(sigma_prior.var())  # a learnt prior: the wider one's
-    else:
-        kinematics = linear_kinematics(planner, A[new], T, targets)
-        draws = {i: (drawn[i] if i in drawn else own[i].rvs(size=n_sim, random_state=rng)) for i in scales}
-        per_row = np.column_stack([draws[i] for i in scales])[:, groups[new]]  # (n_sim, new rows)
-        y_new = theta @ A[new].T + rng.standard_normal(per_row.shape) * np.sqrt(base_new[None] + per_row**2)
-        y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
-        lows = [lo if i == "ballbar" else float(own[i].ppf(1e-5)) for i in scales]
-        after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, [own[i] for i in scales],
-                                  prior_mean=prior_mean, sigma_min=lows,
-                                  sigma_max=[hi if i == "ballbar" else highs[i] for i in scales], groups=groups,
-                                  cells=CHECK_CELLS[min(len(scales), 3)])
-        g = scales.index(taught) if taught in scales else 0
-        s = after.sigma[:, g]
-        if taught != "ballbar":  # the taught scale's variance today: its posterior's where measured, else its prior's
-            var_now = var_taught if taught in measured else float(own[taught].var()) if taught in own else var_now
-        prior_var_s = (planner.contraction_reference() or float(sigma_prior.var())) if taught == "ballbar" else \
-            float(taught_prior(planner, taught).var())
+    draws = {i: (drawn[i] if i in drawn else own[i].rvs(size=n_sim, random_state=rng)) for i in scales}
+    per_row = np.column_stack([draws[i] for i in scales])[:, groups[new]]  # (n_sim, new rows)
+    means, kinematics = kinematic_means(planner, aug, theta, A, new=new, space=space, others=others,
+                                        instrument=instrument, targets=targets, through=through)
+    y_new = means + rng.standard_normal(per_row.shape) * np.sqrt(base_new[None] + per_row**2)
+    y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
+    lows = [lo if i == "ballbar" else float(own[i].ppf(1e-5)) for i in scales]
+    after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, [own[i] for i in scales],
+                              prior_mean=prior_mean, sigma_min=lows,
+                              sigma_max=[hi if i == "ballbar" else highs[i] for i in scales], groups=groups,
+                              cells=CHECK_CELLS[min(len(scales), 3)])
+    taught = taught if taught in scales else scales[0]  # no row of the taught scale: the first scale's
+    s = after.sigma[:, scales.index(taught)]
+    if taught != "ballbar":  # the taught scale's variance today: its posterior's where measured, else its prior's
+        var_now = var_of[taught] if taught in var_of else float(own[taught].var())
+    prior_var_s = (planner.contraction_reference() or float(sigma_prior.var())) if taught == "ballbar" else \
+        float(own[taught].var())  # a learnt prior: the wider one's
     _, sd = after.target_moments(y_all, T)
     w = after.weights(y_all)  # (G, n)
     mean_s = s @ w
     var_s = (s**2) @ w - mean_s**2
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
     return Preposterior(list(planner.targets), sd * scale, sd_now[0] * scale, 1.0 - var_s / prior_var_s,
-                        float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"), kinematics, theta, y_new)
+                        float(1.0 - var_now / prior_var_s), units.from_internal(mean_s, "um"), kinematics, theta, y_new,
+                        space)
 
 
 def _laid_over(planner: Planner, rows: np.ndarray, space: ParameterSpace) -> np.ndarray:

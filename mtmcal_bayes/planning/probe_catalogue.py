@@ -93,13 +93,17 @@ class ProbeCandidate(WithoutBar):
         """Its own nuisance terms as ``(owner, base)`` pairs."""
         return probe_terms(campaign.machine.description, self.alone(campaign).probe)
 
+    def model(self, campaign, deviations, table):
+        """Its kinematic model: the probe model through the chain on a campaign of this run alone, over its own
+        space (``deviations`` and its terms); :meth:`rows` are its first order."""
+        own = ParameterSpace([], [], deviations, self.terms(campaign), table=table)
+        return ChainProbeModel(self.alone(campaign), own)
+
     def rows(self, campaign, space: ParameterSpace, deviations, table) -> tuple[np.ndarray, np.ndarray]:
         """Its rows ``(3k, P)`` over ``space`` and their base noise ``(3k,)`` mm² (repeatability² / repeats)."""
-        one = self.alone(campaign)
-        own = ParameterSpace([], [], deviations, self.terms(campaign), table=table)
-        model = FirstOrderModel(ChainProbeModel(one, own))
+        model = FirstOrderModel(self.model(campaign, deviations, table))
         A = np.zeros((model.design.shape[0], len(space)))
-        A[:, [space.index(n) for n in own.names]] = model.design
+        A[:, [space.index(n) for n in model.space.names]] = model.design
         return A, np.full(len(A), campaign.probe.repeatability**2 / self.repeats)
 
     def commands(self, campaign) -> dict:

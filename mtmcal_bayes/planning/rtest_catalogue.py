@@ -153,14 +153,19 @@ class RTestCandidate(WithoutBar):
         """Its nuisance terms as ``(owner, base)`` pairs: its zero, the placement's and the nest's (shared)."""
         return rtest_terms(campaign.machine.description, self.alone(campaign).rtest)
 
+    def model(self, campaign, deviations, table) -> RTestModel:
+        """Its kinematic model: the R-test model through the chain on a campaign of this run alone, over its own
+        space (``deviations`` and its terms); :meth:`rows` are its first order."""
+        own = ParameterSpace([], [], deviations, table=table, rtest=self.terms(campaign))
+        return RTestModel(self.alone(campaign), own)
+
     def rows(self, campaign, space: ParameterSpace, deviations, table) -> tuple[np.ndarray, np.ndarray]:
         """Its rows ``(3k, P)`` over ``space`` (first order of the R-test model) and their base noise ``(3k,)``
         mm² (the repeatability squared over the repeats)."""
-        one = self.alone(campaign)
-        own = ParameterSpace([], [], deviations, table=table, rtest=self.terms(campaign))
-        design = FirstOrderModel(RTestModel(one, own)).design
+        model = FirstOrderModel(self.model(campaign, deviations, table))
+        design = model.design
         A = np.zeros((design.shape[0], len(space)))
-        A[:, [space.index(n) for n in own.names]] = design
+        A[:, [space.index(n) for n in model.space.names]] = design
         sd = campaign.rtest.repeatability if campaign.rtest.repeatability is not None else DEFAULT_REPEATABILITY
         return A, np.full(len(A), sd**2 / self.repeats)
 

@@ -1,0 +1,205 @@
+"""Does a design with every instrument keep its promise through the kinematics?  (issue 44 item 2, validation)
+
+For each built-in type a new machine: its demo's description, ball-bar set-ups and mounts, its ``[probe]`` (the
+stylus, the repeatability) and the ``[rtest]`` of its demo or of its R-test demo (the nest, the sensors'
+repeatability), no run of any instrument; the sphere of the probe and of the R-test stated where the demo's first
+run has it (``[rtest] sphere_mm``, else the probe's first run: the catalogues' sphere of a campaign without runs,
+docs/design.md "Every instrument").  ``design`` with every instrument to 3″ for every determinable angle and 5 µm for
+every determinable length (relaxed by 25 % steps where the catalogue cannot reach them: ``design_described``),
+σ_model contraction 0.5; with ``--probe`` the probe-only design of ``bench/design_instruments.py`` (the type's
+description with a ``[probe]`` alone, ``--instruments probe``), its sphere's run replaced by a W-ball mount at the
+sphere (:func:`new_probe_machine`: a new machine, no reading in the design's posterior).
+
+Then ``N`` machines drawn from the priors — every deviation and every nuisance term of the designed campaign (the ball
+bar's set-ups and placements, each probe run's stylus and sphere, the R-test's nest, placement and zeros) and every
+discrepancy scale — measured through the chain: the designed runs as campaign runs (the probe's and the R-test's as
+the tables to fill in become once measured), simulated by ``synthetic_campaign`` (the ball bar's repeat scatter,
+instrument error and σ_model; the probe's and R-test's repeatability), each probe and R-test reading with its own
+discrepancy ``N(0, σ_model_probe²)``, ``N(0, σ_model_rtest²)`` shared by its repeats; each machine's exact posterior
+(``sample --sampler exact``: every instrument's data, every scale integrated out).  Per target: the mean realised
+sd, the share of machines meeting it with its Clopper–Pearson 95 % interval (``scipy.stats.binomtest``), beside the
+design's own check (400 machines; through the kinematics or not, :mod:`mtmcal_bayes.planning.design_chain`).  The
+promise holds where the interval contains :data:`~mtmcal_bayes.planning.design_problem.PROMISE` or lies above it.
+
+Run: ``python bench/design_every_instrument.py [N] [--probe] [TYPE ...]`` (default 50 machines, every built-in
+described type).
+"""
+
+from __future__ import annotations
+
+import copy
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+from mtmcal_bayes import api, units
+from mtmcal_bayes.campaign import Mount, Probe, RTest, RTestNest
+from mtmcal_bayes.errors import ParameterError
+from mtmcal_bayes.inference.priors import make_prior
+from mtmcal_bayes.machines.space import described_space
+from mtmcal_bayes.planning.design_instruments import other_candidates
+from mtmcal_bayes.planning.design_make import design_candidates
+from mtmcal_bayes.planning.design_output import designed_campaign
+from mtmcal_bayes.planning.design_problem import PROMISE
+from mtmcal_bayes.planning.machine_kit import planner_for
+from mtmcal_bayes.planning.scale_priors import scale_prior
+from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
+
+sys.path.insert(0, str(Path(__file__).parent))
+from design_described import design_to
+from design_instruments import probe_only
+
+ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
+PROBE_ONLY = "--probe" in sys.argv
+TYPES = tuple(a for a in ARGS if not a.isdigit()) or ("trunnion", "head-head", "vertical-turn-mill", "nutating-head")
+#: the discrepancy scale of each instrument's readings
+SCALES = {"ballbar": "sigma_model", "probe": "sigma_model_probe", "rtest": "sigma_model_rtest"}
+
+
+def new_machine(kind: str):
+    """The type's new machine with every instrument's set-up and no run (module docstring)."""
+    c = copy.deepcopy(api.campaign_of(api.demo_campaign(kind)))
+    if c.rtest is None:
+        try:
+            c.rtest = copy.deepcopy(api.campaign_of(api.rtest_demo_campaign(kind)).rtest)
+        except ParameterError:  # a type without an R-test demo: its new machine has no R-test
+            c.rtest = None
+    if c.rtest is not None and c.rtest.sphere is None and c.rtest.runs:
+        c.rtest.sphere = np.asarray(c.rtest.runs[0].sphere, float)
+    if c.rtest is not None and c.rtest.sphere is None and c.probe is not None and c.probe.runs:
+        c.rtest.sphere = np.asarray(c.probe.runs[0].sphere, float)
+    if c.rtest is not None:
+        c.rtest.runs = []
+    c.ballbar.runs, c.probe.runs, c.truth = [], [], None
+    return c
+
+
+def new_probe_machine(kind: str):
+    """The type's probe-only machine of ``bench/design_instruments.py`` made new: its probe run (there to place the
+    sphere, and whose readings the design's posterior would take) replaced by a W-ball mount at the sphere, where the
+    probe catalogue of a campaign without probe runs puts its sphere (no ball-bar set-up: not an instrument here)."""
+    c, _ = probe_only(kind)
+    sphere = np.asarray(c.probe.runs[0].sphere, float)
+    c.probe.runs = []
+    c.ballbar.mounts = {"sphere": Mount("sphere", float(sphere[2]), 0.0, position=sphere)}
+    return c
+
+
+def measured(d):
+    """The designed campaign with its probe and R-test runs as campaign runs (zero readings: to be simulated)."""
+    c = copy.deepcopy(designed_campaign(d))
+    probe = [r.measured for r in d.runs if r.instrument == "probe"]
+    rtest = [r.measured for r in d.runs if r.instrument == "rtest"]
+    if probe:
+        runs = [p.probe_run() for p in probe]
+        c.probe = Probe(c.probe.instrument, c.probe.repeatability, runs=runs,
+                        styli={run.stylus: p.stylus_length for run, p in zip(runs, probe)})
+    else:
+        c.probe = None
+    if rtest:
+        rt = c.rtest
+        c.rtest = RTest(rt.instrument, rt.repeatability, rt.placement_sd, rt.nest_length_sd, rt.nest_offset_sd,
+                        nests={r.setup.nest: RTestNest(r.setup.length, r.setup.calibrated) for r in rtest},
+                        runs=[r.run() for r in rtest])
+    else:
+        c.rtest = None
+    return c
+
+
+def draw_machine(c, rng):
+    """A machine from the priors: every deviation and nuisance term of ``c``'s space, and every scale."""
+    space = described_space(c, data=data_of(c))
+    stated = c.rtest.prior_sds() if c.rtest is not None else None
+    theta = [make_prior(p.name, p.base, p.kind, c.priors, stated=stated).frozen().rvs(random_state=rng)
+             for p in space.parameters]
+    sigmas = {i: float(scale_prior(c, s, None).frozen().rvs(random_state=rng)) for i, s in SCALES.items()}
+    return truth_from_vector(space, np.asarray(theta, float)), sigmas
+
+
+def data_of(c) -> str:
+    """The likelihood's data: every instrument the designed campaign has runs of."""
+    have = [bool(c.ballbar.runs or c.ballbar.planned), c.probe is not None and bool(c.probe.runs),
+            c.rtest is not None and bool(c.rtest.runs)]
+    if have[2]:
+        return "all"
+    return "both" if have[0] and have[1] else "probe" if have[1] else "ballbar"
+
+
+def simulate(c, truth, sigmas, rng):
+    """``c`` measured on the machine ``truth`` through the chain, every reading with its scale's discrepancy."""
+    syn = synthetic_campaign(c, truth, "chain", noise=True, seed=int(rng.integers(2**31)),
+                             sigma_model=sigmas["ballbar"])
+    if syn.probe is not None:
+        for run in syn.probe.runs:
+            run.replace_centres(run.centres + rng.normal(0.0, sigmas["probe"], run.centres.shape[1:]))
+    if syn.rtest is not None:
+        for run in syn.rtest.runs:
+            run.displacements = run.displacements + rng.normal(0.0, sigmas["rtest"], run.displacements.shape[1:])
+    return syn
+
+
+def design_for(kind: str):
+    """The type's machine, its targets (3″ / 5 µm on every deviation its candidates determine) and its design."""
+    if PROBE_ONLY:
+        c = new_probe_machine(kind)
+        p = planner_for(c, other_candidates(c, ["probe"]), None)
+        settings = {"instruments": "probe"}
+    else:
+        c = new_machine(kind)
+        p = planner_for(c, design_candidates(c) + other_candidates(c, ["probe", "rtest"]), None)
+        settings = {}
+    targets = {q: (3.0 if p.table[q].unit == "arcsec" else 5.0) for q in p.targets}
+    d, relaxed = design_to(c, targets, **settings)
+    return d, relaxed, p.not_targeted
+
+
+def main(n: int) -> None:
+    for kind in TYPES:
+        t0 = time.perf_counter()
+        d, relaxed, left = design_for(kind)
+        t_design = time.perf_counter() - t0
+        c = measured(d)
+        rng = np.random.default_rng(1)
+        sds = []
+        for _ in range(n):
+            truth, sigmas = draw_machine(c, rng)
+            syn = simulate(c, truth, sigmas, rng)
+            s = api.sample(syn, sampler="exact", seed=1, data=data_of(c)).summary["sd"]
+            sds.append([float(s[q]) for q in d.targets])
+        sds = np.array(sds)
+        goal = d.goal.targets
+        met = sds <= np.where(np.isfinite(goal), goal, np.inf)
+        k = d.check.kinematics
+        runs = {i: sum(r.instrument == i for r in d.runs) for i in ("ballbar", "probe", "rtest")}
+        print(f"\n{kind}{' (probe only)' if PROBE_ONLY else ''}: {len(d.runs)} runs ("
+              + ", ".join(f"{v} {i}" for i, v in runs.items() if v) + f"), {d.total_minutes:.0f} min, "
+              f"{d.rounds} round(s), designed in {t_design:.0f} s; {n} machines from the priors through the chain "
+              f"({time.perf_counter() - t0:.0f} s)")
+        print(f"  design's check through the {k.model}: {k.through} (misfit {k.misfit_um:.3g} µm, threshold "
+              f"{k.threshold_um:.3g} µm)")
+        print(f"  not determined by the catalogue: {', '.join(left) or 'none'}")
+        if relaxed:
+            print("  relaxed (the catalogue cannot reach 3″/5 µm): " +
+                  ", ".join(f"{q} → {v:.3g}" for q, v in relaxed.items()))
+        for r, m in zip(d.runs, d.minutes):
+            if r.instrument != "ballbar":
+                print(f"  {r.label}: {m:.1f} min")
+        print(f"  {'target':<12} {'goal':>6} {'realised mean sd':>17} {'share met':>10} {'95 % interval':>14} "
+              f"{'holds':>6} {'design check':>13} {'check mean sd':>14}")
+        check = d.check.share_met(goal)
+        for j, q in enumerate(d.targets):
+            if np.isfinite(goal[j]):
+                u = units.SYMBOL[d.target_units[j]]
+                ci = stats.binomtest(int(met[:, j].sum()), n).proportion_ci(0.95, method="exact")
+                holds = "yes" if ci.high >= PROMISE else "NO"
+                print(f"  {q:<12} {goal[j]:>5.3g}{u} {sds[:, j].mean():>15.3g}{u} {met[:, j].mean():>10.1%} "
+                      f"{ci.low:>6.1%}–{ci.high:<6.1%} {holds:>6} {check[j]:>13.1%} {d.check.sd_mean[j]:>12.3g}{u}",
+                      flush=True)
+        print(f"  promise: each target met in at least {PROMISE:.0%} of machines", flush=True)
+
+
+if __name__ == "__main__":
+    main(int(next((a for a in ARGS if a.isdigit()), 50)))
