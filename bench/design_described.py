@@ -75,6 +75,24 @@ def draw_truth(c, rng) -> tuple[Truth, float]:
     return truth_from_vector(space, np.asarray(theta, float)), sigma
 
 
+def share_table(d, sds: np.ndarray) -> None:
+    """Per target of design ``d``: its goal, the mean realised sd over the machines ``sds`` (n, t), the share met with
+    its Clopper–Pearson 95 % interval, whether the promise holds, and the design's own check beside them."""
+    n, goal = len(sds), d.goal.targets
+    met = sds <= np.where(np.isfinite(goal), goal, np.inf)
+    print(f"  {'target':<12} {'goal':>6} {'realised mean sd':>17} {'share met':>10} {'95 % interval':>14} "
+          f"{'holds':>6} {'design check':>13} {'check mean sd':>14}")
+    check = d.check.share_met(goal)
+    for j, q in enumerate(d.targets):
+        if np.isfinite(goal[j]):
+            u = units.SYMBOL[d.target_units[j]]
+            ci = stats.binomtest(int(met[:, j].sum()), n).proportion_ci(0.95, method="exact")
+            holds = "yes" if ci.high >= PROMISE else "NO"
+            print(f"  {q:<12} {goal[j]:>5.3g}{u} {sds[:, j].mean():>15.3g}{u} {met[:, j].mean():>10.1%} "
+                  f"{ci.low:>6.1%}–{ci.high:<6.1%} {holds:>6} {check[j]:>13.1%} {d.check.sd_mean[j]:>12.3g}{u}",
+                  flush=True)
+
+
 def main(n: int) -> None:
     for kind in TYPES:
         t0 = time.perf_counter()
@@ -94,9 +112,6 @@ def main(n: int) -> None:
             s = r.summary["sd"]
             sds.append([float(s[q]) for q in d.targets])
         sds = np.array(sds)
-        goal = d.goal.targets
-        met = sds <= np.where(np.isfinite(goal), goal, np.inf)
-        share = met.mean(axis=0)
         k = d.check.kinematics
         print(f"\n{kind}: {len(d.runs)} runs, {d.total_minutes:.0f} min, {d.rounds} round(s); {n} machines from the "
               f"priors ({time.perf_counter() - t0:.0f} s)")
@@ -105,17 +120,7 @@ def main(n: int) -> None:
         if relaxed:
             print("  relaxed (the catalogue cannot reach 3″/5 µm): " +
                   ", ".join(f"{q} → {v:.3g}" for q, v in relaxed.items()))
-        print(f"  {'target':<12} {'goal':>6} {'realised mean sd':>17} {'share met':>10} {'95 % interval':>14} "
-              f"{'holds':>6} {'design check':>13} {'check mean sd':>14}")
-        check = d.check.share_met(goal)
-        for j, q in enumerate(d.targets):
-            if np.isfinite(goal[j]):
-                u = units.SYMBOL[d.target_units[j]]
-                ci = stats.binomtest(int(met[:, j].sum()), n).proportion_ci(0.95, method="exact")
-                holds = "yes" if ci.high >= PROMISE else "NO"
-                print(f"  {q:<12} {goal[j]:>5.3g}{u} {sds[:, j].mean():>15.3g}{u} {share[j]:>10.1%} "
-                      f"{ci.low:>6.1%}–{ci.high:<6.1%} {holds:>6} {check[j]:>13.1%} {d.check.sd_mean[j]:>12.3g}{u}",
-                      flush=True)
+        share_table(d, sds)
         print(f"  promise: each target met in at least {PROMISE:.0%} of machines")
 
 

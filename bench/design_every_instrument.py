@@ -33,9 +33,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
 
-from mtmcal_bayes import api, units
+from mtmcal_bayes import api
 from mtmcal_bayes.campaign import Mount, Probe, RTest, RTestNest
 from mtmcal_bayes.errors import ParameterError
 from mtmcal_bayes.inference.priors import make_prior
@@ -49,7 +48,7 @@ from mtmcal_bayes.planning.scale_priors import scale_prior
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
 
 sys.path.insert(0, str(Path(__file__).parent))
-from design_described import design_to
+from design_described import design_to, share_table
 from design_instruments import probe_only
 
 ARGS = [a for a in sys.argv[1:] if not a.startswith("--")]
@@ -170,8 +169,6 @@ def main(n: int) -> None:
             s = api.sample(syn, sampler="exact", seed=1, data=data_of(c)).summary["sd"]
             sds.append([float(s[q]) for q in d.targets])
         sds = np.array(sds)
-        goal = d.goal.targets
-        met = sds <= np.where(np.isfinite(goal), goal, np.inf)
         k = d.check.kinematics
         runs = {i: sum(r.instrument == i for r in d.runs) for i in ("ballbar", "probe", "rtest")}
         print(f"\n{kind}{' (probe only)' if PROBE_ONLY else ''}: {len(d.runs)} runs ("
@@ -187,17 +184,7 @@ def main(n: int) -> None:
         for r, m in zip(d.runs, d.minutes):
             if r.instrument != "ballbar":
                 print(f"  {r.label}: {m:.1f} min")
-        print(f"  {'target':<12} {'goal':>6} {'realised mean sd':>17} {'share met':>10} {'95 % interval':>14} "
-              f"{'holds':>6} {'design check':>13} {'check mean sd':>14}")
-        check = d.check.share_met(goal)
-        for j, q in enumerate(d.targets):
-            if np.isfinite(goal[j]):
-                u = units.SYMBOL[d.target_units[j]]
-                ci = stats.binomtest(int(met[:, j].sum()), n).proportion_ci(0.95, method="exact")
-                holds = "yes" if ci.high >= PROMISE else "NO"
-                print(f"  {q:<12} {goal[j]:>5.3g}{u} {sds[:, j].mean():>15.3g}{u} {met[:, j].mean():>10.1%} "
-                      f"{ci.low:>6.1%}–{ci.high:<6.1%} {holds:>6} {check[j]:>13.1%} {d.check.sd_mean[j]:>12.3g}{u}",
-                      flush=True)
+        share_table(d, sds)
         print(f"  promise: each target met in at least {PROMISE:.0%} of machines", flush=True)
 
 

@@ -24,39 +24,11 @@ from mtmcal_bayes.planning.design_problem import DesignProblem
 from mtmcal_bayes.planning.design_runs import designed_runs
 from mtmcal_bayes.planning.next_run import next_step
 from tests.machines import SimulatedMachine, measure_sequentially
+from tests.test_design_instruments import CAMPAIGN as INSTRUMENTS_CAMPAIGN
+from tests.test_design_instruments import RTEST
 
-CAMPAIGN = """format = "mtmcal-campaign/1"
-
-[machine]
-name = "trunnion, set-ups only"
-description = "trunnion"
-
-[ballbar]
-instrument = "Renishaw QC20-W"
-length_mm = 100.0
-accuracy_um = 0.5
-
-[ballbar.setups.T1]
-R_B_mm = 150.0
-
-[ballbar.mounts.W1]
-position_mm = [0.0, 60.0, 30.0]
-
-[probe]
-instrument = "touch-trigger probe"
-repeatability_um = 1.0
-
-[probe.styli.S1]
-length_mm = 150.0
-
-[rtest]
-instrument = "R-test, 3 sensors"
-repeatability_um = 0.5
-sphere_mm = [0.0, 60.0, 30.0]
-
-[rtest.nests.N1]
-length_mm = 150.0
-"""
+# the new trunnion with a ball bar, a probe and an R-test set-up, no run: the instruments test's
+CAMPAIGN = INSTRUMENTS_CAMPAIGN + RTEST
 
 N_SIM = 100
 
