@@ -9,8 +9,8 @@
    :data:`.design_problem.PROMISE` of the simulated machines, or the contraction short in expectation, the
    search runs again with that goal tightened by the shortfall, and where a target that shapes the design
    (:data:`BINDING`) is kept with more than :data:`LOOSEN_ABOVE` to spare, loosened by it (at most :data:`ROUNDS`
-   rounds; a later round's search starts once from the last round's design; the rounds end when a loosened goal's
-   design falls short, the one kept before standing).
+   rounds; a later round's search starts once from the last round's design; the rounds end when a moved goal's
+   design is not kept — short of the promise, or longer than the one kept before, which stands).
 4. The runs in measuring order (set-up changes grouped), each with its minutes and why it is there.
 """
 
@@ -322,7 +322,7 @@ def make_design(campaign, *, targets: dict | None = None, tolerances: dict | Non
         if not short_sd.any() and not short_c and np.all(slack[binding] < LOOSEN_ABOVE):
             break
         if best is not None and best is not last:
-            break  # loosened past the promise: tightening back would land between the two; the kept one stands
+            break  # a moved goal gave a design not kept (short of the promise, or longer): the kept one stands
         # the closed form's promise is off by what the exact check found: move the working targets by it
         working.targets = np.where(has, working.targets * np.clip(slack * 0.98, 0.5, 1.5), working.targets)
         if short_c:

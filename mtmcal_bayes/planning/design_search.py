@@ -185,7 +185,8 @@ class Search:
         for _ in range(MAX_PASSES):
             score0 = float(self._score(self.problem.value(counts))[0])
             m0 = self.minutes(counts)
-            if self.has_targets and score0 <= MET:
+            met = self.has_targets and score0 <= MET
+            if met:
                 drop = self._best_drop(counts, score0, m0)
                 if drop is not None:
                     counts = drop
@@ -194,12 +195,13 @@ class Search:
             for k in np.flatnonzero(counts > 0):
                 less = counts.copy()
                 less[k] -= 1
-                s_less = float(self._score(self.problem.value(less))[0])
                 m_less = self.minutes(less)
-                if self._better(s_less, m_less, score0, m0):
-                    best = self._keep(best, (s_less, m_less, less))
+                if not met:  # a design meeting its targets had its drops weighed above: none helps
+                    s_less = float(self._score(self.problem.value(less))[0])
+                    if self._better(s_less, m_less, score0, m0):
+                        best = self._keep(best, (s_less, m_less, less))
                 could = self.allowed.copy()
-                if self.floor is not None and self.has_targets and score0 <= MET:
+                if self.floor is not None and met:
                     could &= self.floor < m0 - m_less - 1e-9  # only a swap that could save minutes
                     could[k] = False
                     if not could.any():
@@ -246,12 +248,10 @@ class Search:
                     best = self._keep(best, (s_less, m_less, less))
         return None if best is None else best[2]
 
-    def _keep(self, best, new):
-        if best is None:
-            return new
-        if self.has_targets:
-            return new if (new[0], new[1]) < (best[0], best[1]) else best
-        return new if (new[0], new[1]) < (best[0], best[1]) else best
+    @staticmethod
+    def _keep(best, new):
+        """The better of two ``(score, minutes, counts)``: lower score, then fewer minutes."""
+        return new if best is None or (new[0], new[1]) < (best[0], best[1]) else best
 
     # ------------------------------------------------------------------ run
     def run(self, seed: int | None = 0, restarts: int = RESTARTS, start: np.ndarray | None = None) -> SearchResult:
