@@ -40,17 +40,15 @@ class Determination:
                              dtype=int)
         scale = space.display_scale()[self.free]  # per µm and per ″: columns on one footing
         self.J0 = planner.A[:, self.free] * scale
-        # each candidate's rows as few as the columns: R → S·Vᵀ (its SVD) has the same singular values times any
-        # basis Z, so the same null spaces; a probe's or an R-test's hundreds of rows, padded for all, made every
-        # candidate's SVD as large as theirs
-        own = [_as_few_rows(A[:, self.free] * scale) for A in rows]
+        own = [A[:, self.free] * scale for A in rows]
         self.rows = rows
         allrows = np.vstack([self.J0] + own)
         s = np.linalg.svd(allrows, compute_uv=False) if allrows.size else np.zeros(0)
         self.tol = RTOL * (s[0] if s.size and s[0] > 0 else 1.0)
-        # then without the rows of singular values far below the rule's (FAR_BELOW of it: the rank decisions at
-        # the tolerance are the same), and the candidates in groups of their row counts, each group's SVDs as
-        # large as its own rows (a ball-bar run's two to eighteen, a probe's tens)
+        # each candidate's rows as S·Vᵀ (its SVD: the same singular values times any basis Z, so the same null
+        # spaces) without the rows of singular values far below the rule's (FAR_BELOW of it: the rank decisions at
+        # the tolerance are the same), and the candidates in groups of their row counts: a probe's or an R-test's
+        # hundreds of rows, padded for all, made every candidate's SVD as large as theirs
         own = [_as_few_rows(A, self.tol * FAR_BELOW) for A in own]
         r_max = max((len(A) for A in own), default=1)
         self.R = np.zeros((len(rows), r_max, len(self.free)))
@@ -134,13 +132,10 @@ class Determination:
         return identifiability(np.vstack(rows), space, known=known)
 
 
-def _as_few_rows(R: np.ndarray, below: float | None = None) -> np.ndarray:
-    """``R`` (r, F) as ``S·Vᵀ`` (min(r, F), F) where it has more rows than columns, else as it is; with ``below``
-    always as ``S·Vᵀ``, without the rows of singular values at or below it."""
-    if below is None and len(R) <= R.shape[1]:
-        return R
+def _as_few_rows(R: np.ndarray, below: float) -> np.ndarray:
+    """``R`` (r, F) as ``S·Vᵀ`` (at most min(r, F) rows) without the rows of singular values at or below ``below``."""
     _, s, vt = np.linalg.svd(R, full_matrices=False)
-    keep = s > (below if below is not None else -1.0)
+    keep = s > below
     return s[keep, None] * vt[keep]
 
 
