@@ -139,7 +139,7 @@ def test_three_scale_proposal_factors_cells_when_used_as_all_at_once(every_instr
 @pytest.mark.parametrize("scales", [1, 2, 3])
 def test_moments_of_many_data_vectors_equal_each_vectors_own(every_instrument, scales):
     """A design's check asks the moments of hundreds of simulated data vectors at once, from the whitened inner
-    products (:meth:`_BlockWhitening.gram`); one data vector's moments (below three scales) come from each cell's
+    products (:meth:`_BlockWhitening.inner_pairs`); one data vector's moments (below three scales) come from each cell's
     whitened data.  The two agree to the algebra's round-off (1e-9 relative) on one, two and three scales."""
     post, (A, base, prior_var, priors), kwargs = every_instrument
     groups = np.minimum(post.scale_of, scales - 1)

@@ -17,7 +17,7 @@ to the quadrature error, below 1e-3 of the posterior sd (tests: coarse against f
 were 2e-8 sd apart, though the demo's scales are piled against 0).
 From three scales on (:data:`BY_SCALE`) each cell's algebra is assembled scale by scale, not cell by cell: the
 others' block of the whitening is whitened by blocks in turn, each cell's precision is a sum of one term per
-scale, the targets' moments come from the whitened inner products (:meth:`_BlockWhitening.gram`) and the proposal's
+scale, the targets' moments come from the whitened inner products (:meth:`_BlockWhitening.inner_pairs`) and the proposal's
 cells are factored when first used (seconds instead of minutes for 110 592 cells).
 
 For the ``linear`` model this is the exact posterior: the reference the sampler is checked
@@ -45,7 +45,7 @@ GRID = 128
 #: cells per scale when there are two (the grid is their product)
 GRID_2D = 48
 #: from this many discrepancy scales on (a grid of GRID_2D³ cells and more) each cell's algebra is assembled scale by
-#: scale: its precision the sum of one term per scale, its whitened inner products from :meth:`_BlockWhitening.gram`.
+#: scale: its precision the sum of one term per scale, its whitened inner products from :meth:`_BlockWhitening.inner_pairs`.
 #: The same numbers to rounding; fewer scales keep the cell-by-cell products their published numbers were made with
 BY_SCALE = 3
 #: largest draws × parameters² of one gathered product in :meth:`GridProposal.draw` (8 MB of Cholesky factors);
@@ -60,6 +60,9 @@ DROP = 30.0
 #: spans the posterior's: the σ of an R-test simulated without discrepancy, 0.06 ± 0.04 µm, lay within 2 of the
 #: 128 cells over 0–8.8 µm, its moments 6–8 % off)
 FINE = 16
+#: a grid cell whose posterior weight for a data vector is below this adds nothing to that vector's moments (at most
+#: cells × this of the weight, 1e-14 on 24³ cells) and is left out of them
+WEIGHT_FLOOR = 1e-18
 #: points of each log-spaced scan of :func:`sigma_range` (about 11 per factor of e over its seven decades)
 SCAN_POINTS = 160
 
@@ -201,10 +204,8 @@ class _BlockWhitening:
         return u_b, np.swapaxes(self.Q, 1, 2) @ v_a
 
     def norms(self, v: np.ndarray) -> np.ndarray:
-        """``(T v)ᵀ(T v)``'s diagonal ``(G, k)`` of every cell for ``v`` ``(m, k)`` (:meth:`gram`)."""
-        u_v, p_v = self._parts(v)
-        vv = (u_v**2).sum(axis=1)[None] + self._over_first(p_v**2)
-        return vv.reshape(-1, v.shape[1])
+        """``(T v)ᵀ(T v)``'s diagonal ``(G, k)`` of every cell for ``v`` ``(m, k)``, without forming ``T v``."""
+        return self.norms_of(self._parts(v))
 
     def _over_first(self, prod: np.ndarray) -> np.ndarray:
         """``Σ_j prod[g, j, …] / eigenvalues[i, g, j]`` ``(n0, Gb, …)`` of ``prod`` ``(Gb or 1, ma, …)``."""
@@ -213,21 +214,28 @@ class _BlockWhitening:
         out = np.swapaxes(inv, 0, 1) @ prod.reshape(prod.shape[0], ma, -1)  # (Gb, n0, r)
         return np.swapaxes(out, 0, 1).reshape((n0, Gb) + prod.shape[2:])
 
-    def gram(self, v: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(T v)ᵀ(T v)``'s diagonal ``(G, k)``, ``(T v)ᵀ(T x)`` ``(G, k, t)`` and ``(T x)ᵀ(T x)``'s diagonal
-        ``(G, t)`` of every cell for ``v`` ``(m, k)`` and ``x`` ``(m, t)``, without forming ``T v`` cell by cell: the
-        others' part is the same for every cell of the first scale, and the first scale's is a sum over the
-        eigenvectors weighted by ``1 / eigenvalue`` (the same numbers as from :meth:`__call__`, to rounding)."""
-        u_v, p_v = self._parts(v)
-        u_x, p_x = self._parts(x)
-        k, t = v.shape[1], x.shape[1]
-        vv = (u_v**2).sum(axis=1)[None] + self._over_first(p_v**2)  # (n0, Gb, k)
-        xx = (u_x**2).sum(axis=1)[None] + self._over_first(p_x**2)
-        # Σ_j p_v[g, j, n] p_x[g, j, t] / eigenvalues[i, g, j] as one matrix product per cell of the others (the
-        # outer product p_v ⊗ p_x, (Gb, ma, k, t), is hundreds of megabytes for a design's check)
-        scaled = np.swapaxes(1.0 / self.eigenvalues, 0, 1)[..., None] * p_x[:, None]  # (Gb, n0, ma, t)
-        vx = (np.swapaxes(u_v, 1, 2) @ u_x)[None] + np.swapaxes(np.swapaxes(p_v, 1, 2)[:, None] @ scaled, 0, 1)
-        return vv.reshape(-1, k), vx.reshape(-1, k, t), xx.reshape(-1, t)
+    def norms_of(self, parts: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+        """:meth:`norms` ``(G, k)`` from the :meth:`_parts` of ``v``."""
+        u, p = parts
+        return ((u**2).sum(axis=1)[None] + self._over_first(p**2)).reshape(-1, p.shape[2])
+
+    def inner_pairs(self, parts_v: tuple[np.ndarray, np.ndarray], parts_x: tuple[np.ndarray, np.ndarray],
+                    cells: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """``(T v[:, cols[q]])ᵀ (T x)`` in cell ``cells[q]`` for each pair ``q``, ``(pairs, t)``, from the
+        :meth:`_parts` of ``v`` ``(m, k)`` and ``x`` ``(m, t)``, without forming ``T v`` cell by cell: the others' part
+        is the same for every cell of the first scale, the first scale's a sum over the eigenvectors weighted by
+        ``1 / eigenvalue`` (the same numbers as from :meth:`__call__`, to rounding)."""
+        (u_v, p_v), (u_x, p_x) = parts_v, parts_x
+        n0, Gb, ma = self.eigenvalues.shape
+        first, other = np.divmod(cells, Gb)
+        out = (np.swapaxes(u_v, 1, 2) @ u_x)[other, cols]  # the others' part, (Gb, k, t) gathered
+        scaled = p_v[other, :, cols] / self.eigenvalues[first, other]  # (pairs, ma)
+        order = np.argsort(other, kind="stable")
+        starts = np.flatnonzero(np.r_[True, np.diff(other[order]) != 0])
+        for a, b in zip(starts, np.r_[starts[1:], len(order)]):  # one product per cell of the others
+            q = order[a:b]
+            out[q] += scaled[q] @ p_x[other[q[0]]]
+        return out
 
 
 class MarginalPosterior:
@@ -461,9 +469,11 @@ class MarginalPosterior:
             return self._joint_of_norms(r, self._blocks.norms(r.T))
         return self._joint_of_whitened(r, self._whiten(r)[0])
 
-    def weights(self, y: np.ndarray) -> np.ndarray:
-        """Posterior weights of the grid, ``(G, N)`` for data ``y`` of shape ``(N, m)``."""
-        return self._normalised(self.log_joint(y))
+    def weights(self, y: np.ndarray, log_extra: np.ndarray | None = None) -> np.ndarray:
+        """Posterior weights of the grid, ``(G, N)`` for data ``y`` of shape ``(N, m)``; ``log_extra`` ``(G, N)``: a
+        log-likelihood of each cell from readings not among the rows (:meth:`.row_reduction.RowReduction.log_rest`)."""
+        lj = self.log_joint(y)
+        return self._normalised(lj if log_extra is None else lj + log_extra)
 
     @staticmethod
     def _normalised(lw: np.ndarray) -> np.ndarray:
@@ -494,8 +504,10 @@ class MarginalPosterior:
         w = self.weights(y[None])[:, 0]
         return np.einsum("g,gp->p", w, self.means(y[None])[:, 0])
 
-    def target_moments(self, y: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Posterior mean and sd of the targets ``T @ θ``, each ``(N, t)``, for data ``(N, m)``.
+    def target_moments(self, y: np.ndarray, T: np.ndarray,
+                       log_extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Posterior mean and sd of the targets ``T @ θ``, each ``(N, t)``, for data ``(N, m)`` (``log_extra`` as
+        in :meth:`weights`).
 
         In the data's space, which costs the ``t`` targets rather than the ``P`` parameters: with ``K = Σ0 Aᵀ``
         and ``S`` a cell's prior predictive covariance, ``E[Tθ] = Tμ0 + T K S⁻¹ r`` and
@@ -504,15 +516,26 @@ class MarginalPosterior:
         r = self._residual(y)
         # the inner products of the whitened, scale by scale: from three scales on, and for many data vectors (a
         # design's check: 400 simulated campaigns on 48² cells would whiten gigabytes cell by cell)
+        prior_sd2 = np.sum((T * self.prior_var) * T, axis=1)  # (t,)
         if self._blocks is not None and (self._by_scale or len(r) > 1):
-            zz, zx, xx = self._blocks.gram(r.T, TK.T)  # (G, N), (G, N, t), (G, t)
-            w = self._normalised(self._joint_of_norms(r, zz))
-        else:
-            Z, X = self._whiten(r, TK.T)  # (G, m, N): L⁻¹ r; (G, m, t): L⁻¹ KᵀTᵀ
-            w = self._normalised(self._joint_of_whitened(r, Z))  # (G, N)
-            zx, xx = np.swapaxes(Z, 1, 2) @ X, np.sum(X**2, axis=1)
-        mean_g = (T @ self.prior_mean)[None, None, :] + zx  # (G, N, t)
-        var_g = np.sum((T * self.prior_var) * T, axis=1)[None] - xx  # (G, t)
+            parts_r, parts_x = self._blocks._parts(r.T), self._blocks._parts(TK.T)
+            lj = self._joint_of_norms(r, self._blocks.norms_of(parts_r))
+            w = self._normalised(lj if log_extra is None else lj + log_extra)  # (G, N)
+            # the cells' means only where their weight counts: each vector's posterior of the scales lies in a few
+            # hundred of 24³ cells, and the rest (at most G × WEIGHT_FLOOR of its weight) moves no moment
+            n, cells = np.nonzero(w.T > WEIGHT_FLOOR)  # the pairs, by vector
+            mean_q = (T @ self.prior_mean)[None] + self._blocks.inner_pairs(parts_r, parts_x, cells, n)  # (pairs, t)
+            w_q = w[cells, n][:, None]
+            starts = np.flatnonzero(np.r_[True, np.diff(n) != 0])  # every vector has its heaviest cell
+            mean = np.add.reduceat(w_q * mean_q, starts, axis=0)
+            var_g = prior_sd2[None] - self._blocks.norms_of(parts_x)  # (G, t)
+            second = np.add.reduceat(w_q * mean_q**2, starts, axis=0) + w.T @ var_g
+            return mean, np.sqrt(np.maximum(second - mean**2, 0.0))
+        Z, X = self._whiten(r, TK.T)  # (G, m, N): L⁻¹ r; (G, m, t): L⁻¹ KᵀTᵀ
+        lj = self._joint_of_whitened(r, Z)  # (G, N)
+        w = self._normalised(lj if log_extra is None else lj + log_extra)
+        mean_g = (T @ self.prior_mean)[None, None, :] + np.swapaxes(Z, 1, 2) @ X  # (G, N, t)
+        var_g = prior_sd2[None] - np.sum(X**2, axis=1)  # (G, t)
         mean = np.einsum("gn,gnt->nt", w, mean_g)
         second = np.einsum("gn,gnt->nt", w, mean_g**2 + var_g[:, None, :])
         return mean, np.sqrt(np.maximum(second - mean**2, 0.0))

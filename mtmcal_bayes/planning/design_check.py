@@ -30,6 +30,7 @@ import numpy as np
 from .. import units
 from ..inference.marginal import MarginalPosterior
 from ..inference.priors import make_prior
+from ..inference.row_reduction import RowReduction
 from ..observations import Observations
 from ..parameters import ParameterSpace
 from .design import Planner
@@ -185,18 +186,22 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
     y_new = means + rng.standard_normal(per_row.shape) * np.sqrt(base_new[None] + per_row**2)
     y_all = np.hstack([np.broadcast_to(y_now, (n_sim, len(y_now))), y_new])
     lows = [lo if i == "ballbar" else float(own[i].ppf(1e-5)) for i in scales]
-    after = MarginalPosterior(A, np.concatenate([base_now, base_new]), prior_var, [own[i] for i in scales],
+    # the simulated campaigns' posteriors: the rows of one run kind reduced to their rank (the same posterior)
+    rows = RowReduction(A, np.concatenate([base_now, base_new]), groups)
+    after = MarginalPosterior(rows.A, rows.base_var, prior_var, [own[i] for i in scales],
                               prior_mean=prior_mean, sigma_min=lows,
-                              sigma_max=[hi if i == "ballbar" else highs[i] for i in scales], groups=groups,
+                              sigma_max=[hi if i == "ballbar" else highs[i] for i in scales], groups=rows.groups,
                               cells=CHECK_CELLS[min(len(scales), 3)])
+    rest = rows.log_rest(y_all - A @ prior_mean, after.sigma)  # (G, n): what the reduction leaves out
+    y_all = rows.data(y_all)
     taught = taught if taught in scales else scales[0]  # no row of the taught scale: the first scale's
     s = after.sigma[:, scales.index(taught)]
     if taught != "ballbar":  # the taught scale's variance today: its posterior's where measured, else its prior's
         var_now = var_of[taught] if taught in var_of else float(own[taught].var())
     prior_var_s = (planner.contraction_reference() or float(sigma_prior.var())) if taught == "ballbar" else \
         float(own[taught].var())  # a learnt prior: the wider one's
-    _, sd = after.target_moments(y_all, T)
-    w = after.weights(y_all)  # (G, n)
+    _, sd = after.target_moments(y_all, T, log_extra=rest)
+    w = after.weights(y_all, log_extra=rest)  # (G, n)
     mean_s = s @ w
     var_s = (s**2) @ w - mean_s**2
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
