@@ -95,6 +95,37 @@ def test_one_more_run_by_rank_updates_equals_the_direct_inverse(problem):
         np.testing.assert_allclose(fast.contraction_nodes[ok], direct.contraction_nodes[ok], rtol=1e-7, atol=1e-10)
 
 
+def test_one_run_less_by_rank_downdates_equals_the_direct_inverse(problem):
+    """value_minus_one (Woodbury downdates) equals value() of each design with one run taken away, its only run of
+    the candidate or a further one; a perturbed sign of the downdate would not."""
+    rng = np.random.default_rng(6)
+    K = len(problem.candidates)
+    for _ in range(3):
+        counts = rng.integers(0, MAX_INSTANCES + 1, size=K) * (rng.random(K) < 0.3)
+        assert (counts == 1).any() and (counts > 1).any()
+        fast, less = problem.value_minus_one(counts)
+        np.testing.assert_array_equal(less.sum(axis=1), counts.sum() - 1)
+        direct = problem.value(less)
+        np.testing.assert_allclose(fast.sd_nodes, direct.sd_nodes, rtol=1e-7)
+        np.testing.assert_allclose(fast.contraction_nodes, direct.contraction_nodes, rtol=1e-7, atol=1e-10)
+
+
+def test_a_contraction_goal_met_stays_met_one_run_later(problem):
+    """With the design's contraction at the goal, value_plus_one gives the design's own contraction for every larger
+    design (not updating its traces): a lower bound of each one's own, the sds unchanged."""
+    rng = np.random.default_rng(7)
+    K = len(problem.candidates)
+    counts = rng.integers(0, MAX_INSTANCES, size=K) * (rng.random(K) < 0.3)
+    own = float(problem.value(counts).contraction[0])
+    full, ok = problem.value_plus_one(counts)
+    bound, _ = problem.value_plus_one(counts, contraction_met=own)
+    np.testing.assert_array_equal(bound.sd_nodes, full.sd_nodes)
+    np.testing.assert_allclose(bound.contraction, own, rtol=1e-9)
+    assert np.all(full.contraction[ok] >= own - 1e-9)  # a run added never lowers the information about σ
+    again, _ = problem.value_plus_one(counts, contraction_met=own + 1e-3)  # not met: every design its own
+    np.testing.assert_array_equal(again.contraction_nodes, full.contraction_nodes)
+
+
 # ---------------------------------------------------------------------------------------------------- search
 @pytest.fixture(scope="module")
 def new_machine(thesis):

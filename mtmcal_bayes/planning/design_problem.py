@@ -300,9 +300,15 @@ class DesignProblem:
         fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
         return DesignValue(sd, sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var))
 
-    def value_plus_one(self, counts: np.ndarray) -> tuple[DesignValue, np.ndarray]:
+    def value_plus_one(self, counts: np.ndarray, *,
+                       contraction_met: float | None = None) -> tuple[DesignValue, np.ndarray]:
         """The criterion of ``counts`` plus one more run of each candidate ``k`` (K designs) and which of them are
         allowed (fewer than :data:`MAX_INSTANCES` runs of ``k``).
+
+        Where ``counts``' own σ_model contraction reaches ``contraction_met`` (a goal's), each design's contraction
+        is given as ``counts``' own, a lower bound, and its updates are not made: a run added never lowers the
+        Fisher information about σ (the smaller design's data are a function of the larger's), so the goal stays
+        met, and the updates of the traces are three of the four products with P × P matrices.
 
         One inverse per σ node for the design as it is; each candidate then by rank-r updates (Woodbury; r rows per
         run: two or three of a ball-bar run, the compressed rank of a probe or R-test run, each instrument's
@@ -322,30 +328,73 @@ class DesignProblem:
         var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched  # (S, t)
         trA2 = np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1))  # (S,)
         trSM3 = np.sum(Sig * M3, axis=(-2, -1))
-        dt = np.where(counts[:, None] == 0, self.first_t, self.again_t)  # (K, S)
         K, S = len(self.candidates), len(Sig)
+        fisher_now = 2.0 * self.nodes**2 * np.maximum(t[0] - 2.0 * trSM3 + trA2, 0.0)  # (S,): of counts
+        contraction_now = sigma_contraction(fisher_now, self.sigma_prior_var, self.sigma_reference_var)
+        traces = contraction_met is None or contraction_now.mean() < contraction_met
         var_new = np.empty((K, S, len(self.Tp)))
         trE2, trSM3_new = np.empty((K, S)), np.empty((K, S))
         for idx, r in self._groups:
-            var_new[idx], trE2[idx], trSM3_new[idx] = self._updates(counts[idx] == 0, idx, r, Sig=Sig, M2=M2,
-                                                                    M3=M3, A=A, var=var, trA2=trA2, trSM3=trSM3)
-        tr = t[0][None] + dt - 2.0 * trSM3_new + trE2
-        fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
+            out = self._updates(counts[idx] == 0, idx, r, Sig=Sig, M2=M2, M3=M3, A=A, var=var, trA2=trA2,
+                                trSM3=trSM3, traces=traces)
+            var_new[idx] = out[0]
+            if traces:
+                trE2[idx], trSM3_new[idx] = out[1:]
         sd = np.sqrt(np.maximum(var_new, 0.0)) * self.to_display
-        contraction = sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)
+        if traces:
+            dt = np.where(counts[:, None] == 0, self.first_t, self.again_t)  # (K, S)
+            fisher = 2.0 * self.nodes**2 * np.maximum(t[0][None] + dt - 2.0 * trSM3_new + trE2, 0.0)
+            contraction = sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)
+        else:
+            contraction = np.broadcast_to(contraction_now, (K, S))
         v = DesignValue(sd, contraction)
         if self._watched():
             v.undetermined = _unseen(self.determination.unseen_plus_one(counts), self.watch)
         return v, counts < MAX_INSTANCES
 
-    def _updates(self, fresh: np.ndarray, idx: np.ndarray, r: int, *, Sig, M2, M3, A, var, trA2, trSM3):
+    def value_minus_one(self, counts: np.ndarray) -> tuple[DesignValue, np.ndarray]:
+        """The criterion of ``counts`` less one run of each candidate it runs (a design each, in the order of
+        ``np.flatnonzero(counts)``) and those designs ``(B, K)``: by rank-r downdates of ``counts``' posterior, as
+        :meth:`value_plus_one` adds (a first run's terms where the candidate runs once, a further run's where more);
+        equal to :meth:`value` of each (``tests/test_design.py``).  A search weighs every drop of a design at once."""
+        counts = np.asarray(counts)
+        used = np.flatnonzero(counts)
+        less = np.repeat(counts[None], len(used), axis=0)
+        less[np.arange(len(used)), used] -= 1
+        M, t = self.moments(counts)
+        P = M.shape[-1]
+        Sig = np.linalg.inv(np.eye(P) + M[0, 0])  # (S, P, P)
+        M2, M3 = M[1, 0], M[2, 0]
+        A = Sig @ M2
+        var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched
+        trA2 = np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1))
+        trSM3 = np.sum(Sig * M3, axis=(-2, -1))
+        B, S = len(used), len(Sig)
+        var_new = np.empty((B, S, len(self.Tp)))
+        trE2, trSM3_new = np.empty((B, S)), np.empty((B, S))
+        for idx, r in self._groups:
+            at = np.flatnonzero(np.isin(used, idx))  # the drops of this group's candidates
+            if len(at):
+                var_new[at], trE2[at], trSM3_new[at] = self._updates(
+                    counts[used[at]] == 1, used[at], r, Sig=Sig, M2=M2, M3=M3, A=A, var=var, trA2=trA2,
+                    trSM3=trSM3, sign=-1.0)
+        dt = np.where(counts[used, None] == 1, self.first_t[used], self.again_t[used])  # (B, S)
+        fisher = 2.0 * self.nodes**2 * np.maximum(t[0][None] - dt - 2.0 * trSM3_new + trE2, 0.0)
+        v = DesignValue(np.sqrt(np.maximum(var_new, 0.0)) * self.to_display,
+                        sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var))
+        if self._watched():
+            v.undetermined = _unseen(self.determination.unseen_many(less), self.watch)
+        return v, less
+
+    def _updates(self, fresh: np.ndarray, idx: np.ndarray, r: int, *, Sig, M2, M3, A, var, trA2, trSM3,
+                 traces: bool = True, sign: float = 1.0):
         """The rank-``r`` updates of :meth:`value_plus_one` for the candidates ``idx`` (their first run where
-        ``fresh``): the target variances ``(k, S, t)``, ``tr((Σ′M₂′)²)`` and ``tr(Σ′M₃′)`` ``(k, S)``."""
+        ``fresh``): the target variances ``(k, S, t)`` and, with ``traces``, ``tr((Σ′M₂′)²)`` and ``tr(Σ′M₃′)``
+        ``(k, S)``.  With ``sign`` −1 the run is taken away (:meth:`value_minus_one`): the precision gains
+        ``sign·XᵀN⁻¹X``, so ``W = sign·N + XΣXᵀ`` and every term of the run's own moments changes sign."""
         first = fresh[:, None, None, None]
         X = np.where(first[..., 0], self.Xf[idx, :r], self.Xa[idx, :r])  # (k, r, P)
         N = np.where(first, self.Nf[idx][:, :, :r, :r], self.Na[idx][:, :, :r, :r])  # (k, S, r, r)
-        D2 = np.where(first, self.D2f[idx][:, :, :r, :r], self.D2a[idx][:, :, :r, :r])
-        D3 = np.where(first, self.D3f[idx][:, :, :r, :r], self.D3a[idx][:, :, :r, :r])
         k, P = len(X), X.shape[-1]
         # every product with a P × P matrix as one matrix product per σ node over all candidates' rows stacked
         # (k·r, P), then back to (k, S, r, ·): the batched small products left are r × r and r × P
@@ -355,17 +404,21 @@ class DesignProblem:
         XS = back(XS_flat)
         XSt = np.swapaxes(XS, -1, -2)
         H = XS @ np.swapaxes(X, -1, -2)[:, None]  # (k, S, r, r): XΣXᵀ
-        Winv = np.linalg.inv(N + H)
+        Winv = np.linalg.inv(sign * N + H)
         Q = back(XS_flat @ self.Tp.T)  # (k, S, r, t)
         var_new = var[None] - np.sum(Q * (Winv @ Q), axis=-2)
+        if not traces:
+            return (var_new,)
+        D2 = np.where(first, self.D2f[idx][:, :, :r, :r], self.D2a[idx][:, :, :r, :r])
+        D3 = np.where(first, self.D3f[idx][:, :, :r, :r], self.D3a[idx][:, :, :r, :r])
         D2X = D2 @ X[:, None]  # (k, S, r, P)
-        R = D2X - Winv @ back(XS_flat @ M2) - Winv @ (H @ D2X)
+        R = sign * D2X - Winv @ back(XS_flat @ M2) - sign * (Winv @ (H @ D2X))
         XSA = back(XS_flat @ np.swapaxes(A, -1, -2))  # (k, S, r, P): (AΣXᵀ)ᵀ
         RX = R @ XSt  # (k, S, r, r)
         trE2 = trA2[None] + 2.0 * np.einsum("ksrp,ksrp->ks", R, XSA) + np.einsum("ksij,ksji->ks", RX, RX)
         XSM3XS = back(XS_flat @ M3) @ XSt
-        trSM3_new = (trSM3[None] + np.einsum("ksij,ksji->ks", D3, H)
-                     - np.einsum("ksij,ksji->ks", Winv, XSM3XS + H @ D3 @ H))
+        trSM3_new = (trSM3[None] + sign * np.einsum("ksij,ksji->ks", D3, H)
+                     - np.einsum("ksij,ksji->ks", Winv, XSM3XS + sign * (H @ D3 @ H)))
         return var_new, trE2, trSM3_new
 
     def value_now(self) -> DesignValue:

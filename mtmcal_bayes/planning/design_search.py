@@ -96,6 +96,10 @@ class Search:
         #: that could still win, best bound first, and a swap only of those that could save minutes
         self.floor = None if floor is None else np.asarray(floor, float)
         self.has_targets = goal.has_targets  # asked at every step: the goal does not change during a search
+        #: the contraction a design's shortfall no longer counts (a goal's, met; none: every contraction): the
+        #: designs one run larger need not be given theirs (:meth:`.design_problem.DesignProblem.value_plus_one`)
+        self._contraction_met = None if not self.has_targets else \
+            -np.inf if goal.contraction is None else goal.contraction
         K = len(problem.candidates)
         self.allowed = np.ones(K, dtype=bool) if allowed is None else np.asarray(allowed, dtype=bool)
         self.now = problem.value_now()
@@ -122,7 +126,7 @@ class Search:
         while True:
             if self.has_targets and score <= MET:
                 return counts
-            vp, ok = self.problem.value_plus_one(counts)
+            vp, ok = self.problem.value_plus_one(counts, contraction_met=self._contraction_met)
             ok &= self.allowed
             scores = self._score(vp)
             gain = score - scores
@@ -206,7 +210,7 @@ class Search:
                     could[k] = False
                     if not could.any():
                         continue
-                vp, ok = self.problem.value_plus_one(less)
+                vp, ok = self.problem.value_plus_one(less, contraction_met=self._contraction_met)
                 ok &= could
                 ok[k] = False
                 scores = self._score(vp)
@@ -236,16 +240,14 @@ class Search:
 
     def _best_drop(self, counts, score0, m0):
         """The design ``counts`` less the one run whose dropping keeps its targets met and saves most minutes, or
-        None where no run can go."""
+        None where no run can go (every drop weighed at once, :meth:`.DesignProblem.value_minus_one`)."""
         best = None
-        for k in np.flatnonzero(counts > 0):
-            less = counts.copy()
-            less[k] -= 1
-            s_less = float(self._score(self.problem.value(less))[0])
+        v, designs = self.problem.value_minus_one(counts)
+        for s_less, less in zip(self._score(v), designs):
             if s_less <= MET:
                 m_less = self.minutes(less)
-                if self._better(s_less, m_less, score0, m0):
-                    best = self._keep(best, (s_less, m_less, less))
+                if self._better(float(s_less), m_less, score0, m0):
+                    best = self._keep(best, (float(s_less), m_less, less))
         return None if best is None else best[2]
 
     @staticmethod
