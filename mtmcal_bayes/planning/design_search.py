@@ -196,6 +196,7 @@ class Search:
                     counts = drop
                     continue
             best = None
+            bound = self.floor is not None and self.has_targets and self.goal.budget is None
             for k in np.flatnonzero(counts > 0):
                 less = counts.copy()
                 less[k] -= 1
@@ -219,6 +220,9 @@ class Search:
                     # minutes of the others are not needed
                     if self.has_targets and (scores[j] > MET if score0 <= MET else scores[j] >= score0 - MET):
                         continue
+                    if bound and best is not None and (scores[j] > best[0] or (
+                            scores[j] == best[0] and m_less + self.floor[j] >= best[1] + 1e-9)):
+                        continue  # its minutes are at least the floor more than ``less``'s: it cannot beat the best
                     trial = less.copy()
                     trial[j] += 1
                     m = self.minutes(trial)
