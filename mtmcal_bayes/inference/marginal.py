@@ -217,7 +217,7 @@ class _BlockWhitening:
     def norms_of(self, parts: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
         """:meth:`norms` ``(G, k)`` from the :meth:`_parts` of ``v``."""
         u, p = parts
-        return ((u**2).sum(axis=1)[None] + self._over_first(p**2)).reshape(-1, p.shape[2])
+        return (np.einsum("gmk,gmk->gk", u, u)[None] + self._over_first(p**2)).reshape(-1, p.shape[2])
 
     def inner_pairs(self, parts_v: tuple[np.ndarray, np.ndarray], parts_x: tuple[np.ndarray, np.ndarray],
                     cells: np.ndarray, cols: np.ndarray) -> np.ndarray:
