@@ -110,6 +110,26 @@ def test_one_run_less_by_rank_downdates_equals_the_direct_inverse(problem):
         np.testing.assert_allclose(fast.contraction_nodes, direct.contraction_nodes, rtol=1e-7, atol=1e-10)
 
 
+def test_a_swap_from_the_larger_designs_products_equals_one_more_run_of_the_smaller(problem):
+    """value_swap (the design's products corrected by the run taken away) gives the sds of value_plus_one of the
+    design less that run, for a candidate run once and one run more often; with a contraction goal the smaller design
+    does not reach it is value_plus_one itself."""
+    rng = np.random.default_rng(8)
+    K = len(problem.candidates)
+    counts = rng.integers(0, MAX_INSTANCES + 1, size=K) * (rng.random(K) < 0.3)
+    for k in (np.flatnonzero(counts == 1)[0], np.flatnonzero(counts > 1)[0]):
+        less = counts.copy()
+        less[k] -= 1
+        want, ok_want = problem.value_plus_one(less)
+        fast, ok = problem.value_swap(counts, k, contraction_met=-np.inf)
+        ok_want[k] = False  # not a swap
+        np.testing.assert_array_equal(ok, ok_want)
+        np.testing.assert_allclose(fast.sd_nodes[ok], want.sd_nodes[ok], rtol=1e-8)
+        np.testing.assert_allclose(fast.contraction, problem.value(less).contraction[0], rtol=1e-8)
+        slow, _ = problem.value_swap(counts, k, contraction_met=np.inf)
+        np.testing.assert_array_equal(slow.contraction_nodes, want.contraction_nodes)
+
+
 def test_a_contraction_goal_met_stays_met_one_run_later(problem):
     """With the design's contraction at the goal, value_plus_one gives the design's own contraction for every larger
     design (not updating its traces): a lower bound of each one's own, the sds unchanged."""

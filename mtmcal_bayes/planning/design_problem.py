@@ -39,7 +39,7 @@ from .determined import SUBSPACE_TOL, Determination
 #: most runs of one candidate in a design (each further one on its own W-ball placement)
 MAX_INSTANCES = 3
 #: a design differing from the last one summed in full in at most this many candidates is summed from it
-NEAR = 4
+NEAR = 32
 #: quantiles of σ_model at which the criterion is evaluated
 NODE_LEVELS = (0.1, 0.3, 0.5, 0.7, 0.9)
 #: the share of machines for which a design promises its targets: the sd is taken at this quantile of σ_model
@@ -352,6 +352,94 @@ class DesignProblem:
         if self._watched():
             v.undetermined = _unseen(self.determination.unseen_plus_one(counts), self.watch)
         return v, counts < MAX_INSTANCES
+
+    def _state(self, counts: np.ndarray) -> dict:
+        """``counts``' posterior at the σ nodes and what its rank-r updates start from, kept for the next call with
+        the same design (an exchange pass asks it once per run of the design): ``Sig`` (S, P, P), ``M2``, ``M3``,
+        ``A = Σ M₂``, ``var`` (S, t), ``trA2``, ``trSM3`` (S,), ``t`` (S,), and per candidate group the products with
+        its rows made when first asked (``E``: ``XΣ`` (S, k·r, P), ``ETp``: ``XΣTpᵀ``, ``H``: ``XΣXᵀ`` (k, S, r, r))."""
+        key = counts.tobytes()
+        if getattr(self, "_last_state", None) is not None and self._last_state[0] == key:
+            return self._last_state[1]
+        M, t = self.moments(counts)
+        P = M.shape[-1]
+        Sig = np.linalg.inv(np.eye(P) + M[0, 0])
+        M2, M3 = M[1, 0], M[2, 0]
+        A = Sig @ M2
+        state = dict(Sig=Sig, M2=M2, M3=M3, A=A, t=t[0],
+                     var=np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched,
+                     trA2=np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1)), trSM3=np.sum(Sig * M3, axis=(-2, -1)),
+                     groups={})
+        self._last_state = (key, state)
+        return state
+
+    def value_swap(self, counts: np.ndarray, k: int, *,
+                   contraction_met: float | None = None) -> tuple[DesignValue, np.ndarray]:
+        """:meth:`value_plus_one` of ``counts`` less one run of candidate ``k`` (an exchange's swaps out of ``k``:
+        ``k`` itself is not allowed).
+
+        Where that smaller design's contraction reaches ``contraction_met`` only the target sds are needed, and they
+        come from ``counts``' own products with every candidate's rows (:meth:`_state`) corrected by the run taken
+        away, a rank-r term: ``Σ_D = Σ + B_kᵀ V⁻¹ B_k`` (``B_k = X_kΣ``, ``V = N_k − X_kΣX_kᵀ``), so ``XΣ_D = XΣ +
+        (XΣX_kᵀ) V⁻¹ B_k`` costs ``r_k`` columns, not a product with a P × P matrix per σ node.  Else as
+        :meth:`value_plus_one`.  Equal to it (``tests/test_design.py``)."""
+        counts = np.asarray(counts)
+        less = counts.copy()
+        less[k] -= 1
+        st = self._state(counts)
+        group = next((idx, r) for idx, r in self._groups if k in idx)
+        # the smaller design's own contraction: the downdate of run k with its traces
+        _, trE2, trSM3_less = self._updates(counts[[k]] == 1, np.array([k]), group[1], Sig=st["Sig"], M2=st["M2"],
+                                            M3=st["M3"], A=st["A"], var=st["var"], trA2=st["trA2"],
+                                            trSM3=st["trSM3"], sign=-1.0)
+        dt = self.first_t[k] if counts[k] == 1 else self.again_t[k]
+        fisher = 2.0 * self.nodes**2 * np.maximum(st["t"] - dt - 2.0 * trSM3_less[0] + trE2[0], 0.0)
+        contraction_less = sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)  # (S,)
+        if contraction_met is None or contraction_less.mean() < contraction_met:
+            v, ok = self.value_plus_one(less, contraction_met=contraction_met)
+            ok[k] = False
+            return v, ok
+        Sig, S = st["Sig"], len(st["Sig"])
+        r_k = group[1]
+        Xk = (self.Xf if counts[k] == 1 else self.Xa)[k, :r_k]  # (r_k, P): the run taken away
+        Nk = (self.Nf if counts[k] == 1 else self.Na)[k][:, :r_k, :r_k]  # (S, r_k, r_k)
+        Bk = Xk[None] @ Sig  # (S, r_k, P)
+        Vinv = np.linalg.inv(Nk - Bk @ Xk.T)  # (S, r_k, r_k)
+        BT = Bk @ self.Tp.T  # (S, r_k, t)
+        var_less = st["var"] + np.sum(BT * (Vinv @ BT), axis=-2)
+        K = len(self.candidates)
+        var_new = np.empty((K, S, len(self.Tp)))
+        for idx, r in self._groups:
+            fresh = counts[idx] == 0  # as in ``less``: k itself is not a swap's partner
+            X, N, E, ETp, H = self._products(st, idx, r, fresh)
+            n = len(idx)
+            C = np.moveaxis((E @ Xk.T).reshape(S, n, r, r_k), 0, 1)  # (n, S, r, r_k): XΣX_kᵀ
+            CV = C @ Vinv[None]
+            Q = ETp + CV @ BT[None]  # (n, S, r, t): XΣ_D Tpᵀ
+            W = N + H + CV @ np.swapaxes(C, -1, -2)
+            var_new[idx] = var_less[None] - np.sum(Q * np.linalg.solve(W, Q), axis=-2)
+        v = DesignValue(np.sqrt(np.maximum(var_new, 0.0)) * self.to_display,
+                        np.broadcast_to(contraction_less, (K, S)))
+        if self._watched():
+            v.undetermined = _unseen(self.determination.unseen_plus_one(less), self.watch)
+        ok = less < MAX_INSTANCES
+        ok[k] = False  # its sds above are of a further run of k (as ``counts`` has it), not of ``less``'s
+        return v, ok
+
+    def _products(self, st: dict, idx: np.ndarray, r: int, fresh: np.ndarray):
+        """The rows ``X`` (n, r, P) and noise ``N`` (n, S, r, r) of one more run of the candidates ``idx`` (a first
+        run where ``fresh``) and their products with :meth:`_state`'s ``Σ``: ``E = XΣ`` (S, n·r, P), ``XΣTpᵀ`` and
+        ``XΣXᵀ`` (n, S, r, ·), made once per design and group."""
+        key = (idx[0], fresh.tobytes())
+        if key not in st["groups"]:
+            first = fresh[:, None, None, None]
+            X = np.where(first[..., 0], self.Xf[idx, :r], self.Xa[idx, :r])
+            N = np.where(first, self.Nf[idx][:, :, :r, :r], self.Na[idx][:, :, :r, :r])
+            Sig = st["Sig"]
+            E = X.reshape(len(idx) * r, -1) @ Sig  # (S, n·r, P)
+            back = lambda Y: np.moveaxis(Y.reshape(len(Sig), len(idx), r, -1), 0, 1)  # noqa: E731
+            st["groups"][key] = (X, N, E, back(E @ self.Tp.T), back(E) @ np.swapaxes(X, -1, -2)[:, None])
+        return st["groups"][key]
 
     def value_minus_one(self, counts: np.ndarray) -> tuple[DesignValue, np.ndarray]:
         """The criterion of ``counts`` less one run of each candidate it runs (a design each, in the order of

@@ -211,9 +211,8 @@ class Search:
                     could[k] = False
                     if not could.any():
                         continue
-                vp, ok = self.problem.value_plus_one(less, contraction_met=self._contraction_met)
+                vp, ok = self.problem.value_swap(counts, k, contraction_met=self._contraction_met)
                 ok &= could
-                ok[k] = False
                 scores = self._score(vp)
                 for j in np.flatnonzero(ok):
                     # with targets a swap must meet them (the design met them) or come nearer (it did not): the
