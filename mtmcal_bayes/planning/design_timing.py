@@ -96,10 +96,15 @@ class Timing:
             yield j, "measure", self._other_minutes(c)
 
     def _other_minutes(self, c) -> float:
-        """Measuring minutes of one probe or R-test run of candidate ``c`` (its set-up counted apart)."""
-        if c.instrument == "probe":
-            return probe_run_minutes(self.model, len(c.positions[0][1]), c.repeats, set_up=False)
-        return rtest_run_minutes(self.model, c.n_positions, c.repeats, sweep_span_deg=c.sweep_span, set_up=False)
+        """Measuring minutes of one probe or R-test run of candidate ``c`` (its set-up counted apart), each
+        candidate's once (the search walks its schedule hundreds of thousands of times)."""
+        cache = self.__dict__.setdefault("_other_measured", {})
+        if id(c) not in cache:
+            minutes = probe_run_minutes(self.model, len(c.positions[0][1]), c.repeats, set_up=False) \
+                if c.instrument == "probe" else \
+                rtest_run_minutes(self.model, c.n_positions, c.repeats, sweep_span_deg=c.sweep_span, set_up=False)
+            cache[id(c)] = (c, minutes)  # c kept: its id stays its own
+        return cache[id(c)][1]
 
     def total_of_counts(self, candidates, counts, start) -> float:
         """:meth:`total` of the runs of ``counts`` (K,) of ``candidates`` (as :func:`.design_runs.designed_runs`
