@@ -273,7 +273,6 @@ def report(campaign: CampaignLike = None, *, output="report", model: str = "line
     """
     from .errors import ParameterError
     from .models import check_data, check_model
-    from .parameters import data_instruments
     from .reporting.start import begin
 
     c = campaign_of(campaign, measured=True)

@@ -12,7 +12,7 @@ import pandas as pd
 from matplotlib.lines import Line2D
 
 from .. import units
-from ..figure_style import COLOURS, new_figure, tight_layout
+from ..figure_style import new_figure, tight_layout
 from ..html_page import Page
 from ..inference.results import observation_parts
 
