@@ -117,6 +117,27 @@ def test_the_catalogues_rows_made_together_equal_each_made_alone(campaign):
         assert np.array_equal(w, w1)
 
 
+@pytest.mark.parametrize("kind", ["trunnion", "head-head"])
+def test_rows_made_together_at_a_new_mount_equal_each_made_alone(kind):
+    """On a new machine (no run yet) the planner makes the rows of the runs at one mount, bar length and set-up from
+    one model, the first run placing the W ball for the others at the set-up they share: each candidate's rows and
+    weights equal a planner's given it alone, to the bit."""
+    c = copy.deepcopy(api.campaign_of(api.demo_campaign(kind)))
+    c.ballbar.runs, c.probe, c.rtest, c.truth = [], None, None, None
+    groups: dict = {}
+    for cand in catalogue_of(c):
+        if cand.repeat_of is None:
+            groups.setdefault((cand.mount.id, cand.length, cand.setup.id), []).append(cand)
+    cands = [x for g in groups.values() if len(g) > 2 for x in g[:3]][:12]
+    assert len(cands) == 12  # four groups of three runs made together
+    together = Planner(c, cands, None)
+    for cand, (A, w) in zip(cands, together.candidate_rows()):
+        alone = Planner(c, [cand], None)
+        (A1, w1), = alone.candidate_rows()
+        assert np.array_equal(A, _columns(A1, alone.space.names, together.space.names)), cand.name
+        assert np.array_equal(w, w1)
+
+
 @pytest.mark.parametrize("machine", ["thesis", "nutating-head"])
 def test_an_extended_planner_values_new_candidates_as_a_new_planner_does(machine):
     """The tool-length sweep's candidates (new set-ups) valued by the report's planner extended to them and by a

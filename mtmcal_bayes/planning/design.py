@@ -392,17 +392,16 @@ class Planner:
         return self._rows_of_each(candidates)
 
     def _rows_of_each(self, candidates: list) -> list[tuple[np.ndarray, np.ndarray]]:
-        """:meth:`_rows_of` of each candidate, the new runs' at one mount the campaign measured, one bar length and
-        one set-up from one model of them all (:meth:`_new_runs_rows`: a catalogue's hundreds of runs in a few
-        models, not one model each)."""
+        """:meth:`_rows_of` of each candidate, the new runs' at one mount, one bar length and one set-up from one
+        model of them all (:meth:`_new_runs_rows`: a catalogue's hundreds of runs in a few models, not one model
+        each)."""
         out: list = [None] * len(candidates)
         groups: dict[tuple, list[int]] = {}
-        measured = {r.mount for r in self.campaign.ballbar.runs}
         for i, c in enumerate(candidates):
-            # at a mount the campaign has not measured, the first run there would place the W ball for the others:
-            # each such candidate in a model of its own
-            if isinstance(c, Candidate) and c.repeat_of is None and c.mount.id in measured:
-                # one set-up too: each set-up's terms are columns the model differentiates every run's rows in
+            # one set-up: each set-up's terms are columns the model differentiates every run's rows in, and at a mount
+            # the campaign has not measured the first run there places the W ball for the others (at its set-up's
+            # tool length: the same placement as each run's own)
+            if isinstance(c, Candidate) and c.repeat_of is None:
                 groups.setdefault((c.mount.id, c.length, c.setup.id), []).append(i)
             else:
                 out[i] = self._rows_of(c)
@@ -433,7 +432,8 @@ class Planner:
         (the chain: that run's set-up enters the rows of every run at the mount) sees each candidate where the
         campaign placed it; one that does not, the same rows as in the campaign itself.  After that first run a
         run's rows depend on its own set-up and mount alone, so several runs share one model; at a mount the
-        campaign has not measured, one candidate at a time (the first would place the others)."""
+        campaign has not measured, the first of them places the W ball for the others, at the set-up they share,
+        where each would place it alone (the same rows, to the bit, on every built-in type's catalogue)."""
         c0 = cands[0]
         first = next((r for r in self.campaign.ballbar.runs if r.mount == c0.mount.id), None)
         aug = copy.copy(self.campaign)
