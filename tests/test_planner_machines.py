@@ -138,6 +138,36 @@ def test_rows_made_together_at_a_new_mount_equal_each_made_alone(kind):
         assert np.array_equal(w, w1)
 
 
+@pytest.mark.parametrize("kind", ["integrex-i200", "head-head"])
+def test_the_jacobian_by_disjoint_columns_is_the_jacobian_column_by_column(kind):
+    """The complex-step Jacobian of a ball-bar model steps the columns of disjoint support together (a run's readings
+    depend on the deviations and its own set-up's and mount's terms, and on the set-up that placed its W ball):
+    the same matrix, to the bit, as one column at a time, on a campaign of many runs at several mounts and set-ups
+    (the demo's runs and a catalogue run at each of its mounts and set-ups)."""
+    import importlib
+
+    from mtmcal_bayes.machines.space import described_space
+    from mtmcal_bayes.models.ballbar import BallbarModel
+
+    jac = importlib.import_module("mtmcal_bayes.models.jacobian")
+    c = copy.deepcopy(api.campaign_of(None if kind == "integrex-i200" else api.demo_campaign(kind)))
+    first: dict = {}
+    for cand in catalogue_of(c):  # one catalogue run per mount, bar length and set-up
+        if cand.repeat_of is None and cand.length == c.ballbar.length:
+            first.setdefault((cand.mount.id, cand.setup.id), cand)
+    cands = list(first.values())[:16]
+    planner = Planner(c, cands, None)
+    c.ballbar = copy.copy(c.ballbar)
+    c.ballbar.setups, c.ballbar.mounts = planner._setups, planner._mounts
+    c.ballbar.runs = list(c.ballbar.runs) + [planner.as_run(x) for x in cands]
+    model = BallbarModel(c, described_space(c, data="ballbar"))
+    colours = jac._colours(model.column_support())
+    assert colours.max() + 1 < len(colours)  # columns are stepped together
+    h = 1e-20 * model.space.display_scale()
+    one_by_one = (model.predict(1j * np.diag(h)).imag / h[:, None]).T
+    assert np.array_equal(jac.complex_step_jacobian(model), one_by_one)
+
+
 @pytest.mark.parametrize("machine", ["thesis", "nutating-head"])
 def test_an_extended_planner_values_new_candidates_as_a_new_planner_does(machine):
     """The tool-length sweep's candidates (new set-ups) valued by the report's planner extended to them and by a

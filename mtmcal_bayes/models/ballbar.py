@@ -221,6 +221,28 @@ class BallbarModel:
             out.append(EccentricityFit(coef, comps, np.sqrt(np.mean(np.abs(dL - coef @ D.T) ** 2, axis=-1))))
         return out
 
+    def column_support(self) -> np.ndarray:
+        """``(m, p)`` whether observation ``i`` can depend on parameter ``j``: a deviation every one; a set-up's or a
+        mount's nuisance term those of the runs whose points carry it, or whose W ball's placement point does (the
+        Jacobian's structure: columns of disjoint support share one evaluation, :func:`.jacobian.complex_step_jacobian`)."""
+        pts = self.points()
+        p = len(self.space)
+        point = np.zeros((len(pts.length), p + 1), dtype=bool)  # the last column: absent terms (-1)
+        point[:, [i for i, q in enumerate(self.space.parameters) if q.group == "deviation"]] = True
+        rows = np.arange(len(pts.length))
+        for cols in pts.setup_cols.values():
+            point[rows, cols] = True
+            point[rows, cols[pts.placement]] = True
+        for cols in pts.mount_cols.values():
+            point[rows, cols] = True
+        out = np.zeros((len(self.observations), p), dtype=bool)
+        for sl, cols in zip(pts.runs, self._out):
+            run = point[sl, :p].any(axis=0)
+            for i, _ in cols:
+                if i is not None:
+                    out[i] = run
+        return out
+
     def predict(self, theta: np.ndarray) -> np.ndarray:
         """Eccentricities, mm: ``(n, p)`` -> ``(n, m)``; ``(p,)`` -> ``(m,)``."""
         theta = as_numbers(theta)
