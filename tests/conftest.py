@@ -5,9 +5,11 @@ import sys
 # source tree, and a shell with PYTHONDONTWRITEBYTECODE set would have each process compile all of them again)
 sys.dont_write_bytecode = False
 
-if os.environ.get("PYTEST_XDIST_WORKER"):  # one process per core already (pytest -n): one BLAS thread each, not two
-    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
+# one BLAS thread in every test process (set before numpy is first imported, inherited by the processes the tests
+# start): under pytest -n there is one process per core already; under -n 0 on a machine whose cores are busy
+# OpenBLAS's second thread waits on the first, and a test then took up to 15 times as long (an SVD, a solve)
+for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(var, "1")
 
 import io
 import shutil

@@ -210,7 +210,8 @@ def test_a_design_without_runs_is_written_whole_and_replaces_an_earlier_one(run_
     """design -o: the thesis campaign's ball-bar design (one BA run for σ_model; ``--instruments ballbar``: with the
     probe the design is a probe run) and then, into the same folder, its design under a tight learnt prior (no run):
     every file written, the earlier run's program gone, the timeline saying why it is empty; a design that fails
-    while writing leaves the folder as it was."""
+    while writing leaves the folder as it was (the ball-bar design again, whose run and program would differ from
+    what the folder holds: a write begun in place would show)."""
     from mtmcal_bayes.planning import design_figures
     from mtmcal_bayes.io.campaign_reader import load_campaign
     from mtmcal_bayes.planning.machine_kit import kit_of
@@ -236,7 +237,7 @@ def test_a_design_without_runs_is_written_whole_and_replaces_an_earlier_one(run_
         raise RuntimeError("simulated failure while drawing")
 
     monkeypatch.setattr(design_figures, "sd_figure", broken)
-    code, text, err = run_cli("design", "-o", out)
+    code, text, err = run_cli("design", "-o", out, "--instruments", "ballbar")
     assert code == 1 and "simulated failure" in err
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["design", "prior.toml"]  # no temporary folder left
