@@ -23,7 +23,7 @@ from mtmcal_bayes.inference.marginal import MarginalPosterior
 from mtmcal_bayes.inference.priors import Prior, PriorSet
 from mtmcal_bayes.io import parse_campaign
 from mtmcal_bayes.machines.rotations import rotation
-from mtmcal_bayes.models.ballbar import CHUNK
+from mtmcal_bayes.models.ballbar import CHUNK_POINTS
 from mtmcal_bayes.plugins.thesis.kinematic import HTMModel
 from mtmcal_bayes.observations import ProbeKey
 from mtmcal_bayes.parameters import weights
@@ -353,7 +353,8 @@ def test_campaign_without_second_tool_length_still_converges_quickly():
 def test_kinematic_chunks_are_the_whole_batch(thesis):
     """A batch larger than the chunk gives the rows it gives one chunk at a time (memory bound, same numbers)."""
     m = HTMModel(thesis, "htm-thesis")
-    theta = np.random.default_rng(7).normal(size=(CHUNK + 37, len(m.space))) * m.space.display_scale() * 30
+    rows = CHUNK_POINTS // len(m.points().length)  # the rows of one chunk
+    theta = np.random.default_rng(7).normal(size=(rows + 37, len(m.space))) * m.space.display_scale() * 30
     whole = m.predict(theta)
     parts = np.vstack([m.predict(theta[:50]), m.predict(theta[50:])])
     np.testing.assert_allclose(whole, parts, rtol=0, atol=1e-15)
