@@ -504,10 +504,10 @@ class MarginalPosterior:
         w = self.weights(y[None])[:, 0]
         return np.einsum("g,gp->p", w, self.means(y[None])[:, 0])
 
-    def target_moments(self, y: np.ndarray, T: np.ndarray,
-                       log_extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def target_moments(self, y: np.ndarray, T: np.ndarray, log_extra: np.ndarray | None = None, *,
+                       with_weights: bool = False) -> tuple[np.ndarray, ...]:
         """Posterior mean and sd of the targets ``T @ θ``, each ``(N, t)``, for data ``(N, m)`` (``log_extra`` as
-        in :meth:`weights`).
+        in :meth:`weights`); ``with_weights``: and the cells' weights ``(G, N)`` they were made with.
 
         In the data's space, which costs the ``t`` targets rather than the ``P`` parameters: with ``K = Σ0 Aᵀ``
         and ``S`` a cell's prior predictive covariance, ``E[Tθ] = Tμ0 + T K S⁻¹ r`` and
@@ -530,7 +530,7 @@ class MarginalPosterior:
             mean = np.add.reduceat(w_q * mean_q, starts, axis=0)
             var_g = prior_sd2[None] - self._blocks.norms_of(parts_x)  # (G, t)
             second = np.add.reduceat(w_q * mean_q**2, starts, axis=0) + w.T @ var_g
-            return mean, np.sqrt(np.maximum(second - mean**2, 0.0))
+            return (mean, np.sqrt(np.maximum(second - mean**2, 0.0))) + ((w,) if with_weights else ())
         Z, X = self._whiten(r, TK.T)  # (G, m, N): L⁻¹ r; (G, m, t): L⁻¹ KᵀTᵀ
         lj = self._joint_of_whitened(r, Z)  # (G, N)
         w = self._normalised(lj if log_extra is None else lj + log_extra)
@@ -538,7 +538,7 @@ class MarginalPosterior:
         var_g = prior_sd2[None] - np.sum(X**2, axis=1)  # (G, t)
         mean = np.einsum("gn,gnt->nt", w, mean_g)
         second = np.einsum("gn,gnt->nt", w, mean_g**2 + var_g[:, None, :])
-        return mean, np.sqrt(np.maximum(second - mean**2, 0.0))
+        return (mean, np.sqrt(np.maximum(second - mean**2, 0.0))) + ((w,) if with_weights else ())
 
     def sigma_moments(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Posterior mean and sd of each scale, each ``(s,)`` mm, for one data vector ``y`` (m,)."""

@@ -200,8 +200,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
         var_now = var_of[taught] if taught in var_of else float(own[taught].var())
     prior_var_s = (planner.contraction_reference() or float(sigma_prior.var())) if taught == "ballbar" else \
         float(own[taught].var())  # a learnt prior: the wider one's
-    _, sd = after.target_moments(y_all, T, log_extra=rest)
-    w = after.weights(y_all, log_extra=rest)  # (G, n)
+    _, sd, w = after.target_moments(y_all, T, log_extra=rest, with_weights=True)  # w: (G, n)
     mean_s = s @ w
     var_s = (s**2) @ w - mean_s**2
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
