@@ -265,10 +265,12 @@ class DesignProblem:
         first = (counts >= 1).astype(float)
         again = np.maximum(counts - 1, 0).astype(float)
         K = len(self.candidates)
-        flat = lambda a: a.reshape(3, K, -1)[:, used]  # noqa: E731  (candidates × everything else, one matmul)
+        flat = lambda a, idx: a.reshape(3, K, -1)[:, idx]  # noqa: E731  (candidates × everything else, one matmul)
         shape = (3, len(counts)) + self.first.shape[2:]
-        M = (np.stack(self.base)[:, None] + (first @ flat(self.first)).reshape(shape)
-             + (again @ flat(self.again)).reshape(shape))
+        M = np.stack(self.base)[:, None] + (first @ flat(self.first, used)).reshape(shape)
+        twice = np.flatnonzero(again.any(axis=0))  # the candidates run more than once (few): their further runs
+        if len(twice):
+            M = M + (again[:, twice] @ flat(self.again, used[twice])).reshape(shape)
         t = self.base_t[None] + first @ self.first_t[used] + again @ self.again_t[used]
         return M, t
 
