@@ -24,8 +24,9 @@ design's) with the Clopper–Pearson 95 % interval (``scipy.stats.binomtest``); 
 and among them those where the fixed design met every target; the mean minutes of each; the share meeting every
 target (the realised posterior sd of every instrument's data) at ``next``'s stop and after the fixed design, with
 the fixed design's share per target; the machines where ``next`` designed the rest again (a run added), dropped a
-planned run, stopped with planned runs left; the runs ``next`` named per instrument and the share whose ``why`` names
-a target.  Each machine where ``next`` stopped later is listed: its minutes, the fixed design's unmet targets.
+planned run, stopped with planned runs left; the runs ``next`` named per instrument, the share whose ``why`` names
+a target and the share whose ``why`` names σ_model's contraction alone (a run there to teach it).  Each machine
+where ``next`` stopped later is listed: its minutes, the fixed design's unmet targets.
 
 ``--joint-keep``: the alternative keep rule (docs/design.md, "`next` against the fixed design"): a plan is kept while
 its check from today's posterior meets every target *at once* on ``KEEP_SHARE`` of the simulated machines (instead of
@@ -151,7 +152,9 @@ def one_type(kind: str, n: int) -> dict:
                      "added": any(t[3] for t in trail),  # the rest designed again with a run added
                      "dropped": any(t[4] and not t[3] for t in trail),  # a kept plan's run dropped
                      "early": bool(step.status == "stop" and step.planned_left),  # stopped with planned runs left
-                     "kinds": [t[5] for t in trail], "serving": sum(any(q in t[2] for q in names) for t in trail)})
+                     "kinds": [t[5] for t in trail], "serving": sum(any(q in t[2] for q in names) for t in trail),
+                     "teaching": sum("teaches σ_model" in t[2] and not any(q in t[2] for q in names)
+                                     for t in trail)})
         r = rows[-1]
         print(f"  machine {3000 + i}: next {minutes:.1f} min, {len(trail)} runs, every target met at its stop "
               f"{r['met']}; the fixed design {fixed:.1f} min, every target met {bool(r['fixed_each'].all())} "
@@ -170,7 +173,8 @@ def one_type(kind: str, n: int) -> dict:
            "met_fixed_each": dict(zip(names, fixed_each.mean(axis=0))), "met_fixed_ci": cp(int(fixed_met.sum()), n),
            "added": sum(r["added"] for r in rows), "dropped": sum(r["dropped"] for r in rows),
            "early": sum(r["early"] for r in rows),
-           "why": sum(r["serving"] for r in rows) / max(len(kinds), 1), "seconds": time.perf_counter() - t0,
+           "why": sum(r["serving"] for r in rows) / max(len(kinds), 1),
+           "why_sigma": sum(r["teaching"] for r in rows) / max(len(kinds), 1), "seconds": time.perf_counter() - t0,
            "later": int(later.sum()), "later_where_fixed_met": int(np.sum(later & fixed_met))}
     print(f"{kind}: {n} machines in {row['seconds']:.0f} s; next no later than the fixed design on {row['no_later']}; "
           f"later on {row['later']}, of which the fixed design met every target on {row['later_where_fixed_met']}; "
@@ -180,7 +184,7 @@ def one_type(kind: str, n: int) -> dict:
           + ", ".join(f"{q} {v:.0%}" for q, v in row["met_fixed_each"].items())
           + f"); machines where next designed the rest again {row['added']}, dropped a planned run "
           f"{row['dropped']}, stopped with planned runs left {row['early']}; runs whose why names a target "
-          f"{row['why']:.0%}", flush=True)
+          f"{row['why']:.0%}, σ_model's contraction alone {row['why_sigma']:.0%}", flush=True)
     for i in np.flatnonzero(later):
         r = rows[i]
         unmet = [f"{q} {s:.3g} > {v:.3g}" for q, s, v, ok in zip(names, r["fixed_sd"], limit, r["fixed_each"])
@@ -200,14 +204,15 @@ def main(n: int, kinds) -> None:
     rows = [one_type(k, n) for k in kinds]
     print("\n| type | targets | fixed design: runs, min (its check: all met) | `next` no later (95 % CI) | later / of "
           "which the fixed design met every target | mean min `next` / fixed | mean runs `next` (instruments) | "
-          "every target met at the stop: `next` / fixed | re-designed / dropped / stopped early | why names a target |")
+          "every target met at the stop: `next` / fixed | re-designed / dropped / stopped early | why names a target "
+          "(σ_model alone) |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['type']} | {r['targets']} | {r['runs']} ({r['design_runs']}), {r['fixed']:.1f} "
               f"({r['check_all']:.0%}) | {r['no_later']} | {r['later']} / {r['later_where_fixed_met']} | "
               f"{r['next_min']:.1f} / {r['fixed']:.1f} | {r['next_runs']:.1f} ({r['next_kinds']}) | "
               f"{r['met_next']:.0%} / {r['met_fixed_ci']} | {r['added']} / {r['dropped']} / {r['early']} | "
-              f"{r['why']:.0%} |")
+              f"{r['why']:.0%} ({r['why_sigma']:.0%}) |")
 
 
 if __name__ == "__main__":
