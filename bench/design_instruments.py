@@ -4,8 +4,10 @@ measurement").
 
 For each type: its description with a ``[probe]`` alone (1 µm repeatability, a 150 mm stylus; no ball bar): the
 sphere where the controller-cycle campaign puts it (``tests/data/controller_cycles/<type>-cycle.toml``: trunnion,
-head-head), else where the type's demo probe run has it; that run's readings are not used (the design's posterior
-rests on the campaign's ball-bar data, of which there are none: a new machine).  Targets: 3″ for every angle and 5 µm
+head-head), else where the type's demo probe run has it; that run is kept, measured: its readings enter the design's
+posterior (every measured instrument's readings do: docs/design.md, "Every instrument"), so the design starts from
+a machine probed once (``bench/design_every_instrument.py --probe`` designs the same machine new: the run replaced
+by a W-ball mount at the sphere).  Targets: 3″ for every angle and 5 µm
 for every length the probe catalogue determines one by one (relaxed by 25 % steps where it cannot reach them),
 σ_model_probe's contraction 0.5.  Printed: the runs (axis, positions, held axes, stylus, sphere), the minutes, and
 per target the design's promised sd and the exact check's share met.
@@ -34,12 +36,13 @@ TYPES = tuple(sys.argv[1:]) or ("trunnion", "head-head", "vertical-turn-mill", "
 
 
 def probe_only(kind: str):
-    """The type's machine with its probe alone, no runs of any instrument but the sphere's (module docstring)."""
+    """The type's machine with its probe alone, no runs of any instrument but the sphere's, measured (module
+    docstring)."""
     c = copy.deepcopy(api.campaign_of(api.demo_campaign(kind)))
     cycle = ROOT / "tests" / "data" / "controller_cycles" / f"{kind}-cycle.toml"
     source = load_campaign(cycle) if cycle.is_file() else c
     probe = copy.deepcopy(source.probe)
-    probe.runs = probe.runs[:1]  # where the sphere sits (its readings unused: no probe data in the design's posterior)
+    probe.runs = probe.runs[:1]  # where the sphere sits; its readings are in the design's posterior (measured)
     c.ballbar = Ballbar(length=c.ballbar.length, accuracy=c.ballbar.accuracy)
     c.probe, c.rtest, c.truth = probe, None, None
     return c, "controller-cycle campaign" if cycle.is_file() else "demo"

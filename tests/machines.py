@@ -6,7 +6,9 @@ posterior's (:func:`~mtmcal_bayes.inference.log_posterior.parameter_space`: the 
 machine's selection).  A planned run is measured through ``simulate`` (by default through the machine's kinematic
 model — the thesis plug-in's ``htm-thesis``, a described machine's chain —, ``model="linear"`` its first order; the
 instrument error and the repeat scatter) plus a model discrepancy of sd σ_model on each component, shared by its
-repeats.
+repeats.  A designed touch-probe or R-test run likewise (:meth:`SimulatedMachine.measure_other`): through the same
+model, with its own nuisance terms (stylus, sphere, datum; nest, placement, zero) drawn from their priors, the
+instrument's repeatability and its own discrepancy scale (σ_model_probe, σ_model_rtest) shared by the repeats.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ class SimulatedMachine:
         bb = campaign.ballbar
         one = copy.deepcopy(campaign)
         one.ballbar.planned = [bb.planned[index]]
+        one.probe = one.rtest = None  # their readings are measured apart (measure_other): not simulated again here
         filled = synthetic_campaign(one, self.truth(campaign), model=self.model, noise=True,
                                     seed=int(self.rng.integers(2**31)))
         run = filled.ballbar.runs[-1]
@@ -64,8 +67,9 @@ class SimulatedMachine:
     def measure_other(self, campaign, run, order: int = 1, table_id: str | None = None):
         """A copy of ``campaign`` with the designed touch-probe or R-test ``run`` (a :class:`DesignedRun` that
         ``design`` or ``next`` names, ``order`` its place there) measured on this machine and added as the user adds
-        it: its table as ``to_fill_in.toml`` gives it, read back with the readings the linear model gives at this
-        machine's truth, scattered by the instrument's repeatability, plus a discrepancy of its scale's sd on each
+        it: its table as ``to_fill_in.toml`` gives it, read back with the readings this machine's model (the
+        machine's kinematic model unless given: its chain) gives at its truth — the deviations and the run's own
+        nuisance terms —, scattered by the instrument's repeatability, plus a discrepancy of its scale's sd on each
         reading, shared by the repeats; ``table_id`` the id its table has (default the one ``to_fill_in.toml``
         gives a run of that order)."""
         from mtmcal_bayes.inference.log_posterior import parameter_space
@@ -83,10 +87,11 @@ class SimulatedMachine:
         doc = campaign_to_dict(campaign)
         doc.setdefault(kind, {}).setdefault("runs", []).append(table)
         out = parse_campaign(dumps(doc), campaign.source)
-        one = copy.deepcopy(out)  # the new run alone: the measured readings are not simulated again
+        # the instrument's runs with the new one last (its terms named as the campaign names them: an R-test run
+        # shares the placement of the runs before it at its sphere); only the new run's readings are taken
+        one = copy.deepcopy(out)
         one.ballbar.runs, one.ballbar.planned = [], []
-        part = getattr(one, kind)
-        part.runs = part.runs[-1:]
+        setattr(one, "rtest" if kind == "probe" else "probe", None)
         space = parameter_space(one, False, kind)
         stated = one.rtest.prior_sds() if kind == "rtest" else None
         for p in space.parameters:
@@ -94,7 +99,7 @@ class SimulatedMachine:
                 prior = make_prior(p.name, p.base, p.kind, self.priors, stated=stated)
                 self.values[p.name] = float(prior.frozen().rvs(random_state=self.rng))
         truth = truth_from_vector(space, np.array([self.values[n] for n in space.names]))
-        filled = getattr(synthetic_campaign(one, truth, model="linear", noise=True,
+        filled = getattr(synthetic_campaign(one, truth, model=self.model, noise=True,
                                             seed=int(self.rng.integers(2**31))), kind).runs[-1]
         scale = SCALE_OF[kind]
         if scale not in self.scales:
@@ -109,10 +114,15 @@ class SimulatedMachine:
             new.displacements = readings
         return out
 
-    def measure_all(self, campaign):
+    def measure_all(self, campaign, design=None):
+        """``campaign`` with its planned ball-bar runs measured, then ``design``'s touch-probe and R-test runs (its
+        ``[design] to_fill_in`` tables: ``campaign`` is ``designed_campaign(design)``), in the design's order."""
         out = campaign
         while out.ballbar.planned:
             out = self.measure(out, 0)
+        for order, run in enumerate(design.runs if design is not None else [], start=1):
+            if run.instrument != "ballbar":
+                out = self.measure_other(out, run, order=order)
         return out
 
 
@@ -128,8 +138,8 @@ def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int =
     """``next`` after every run on ``machine`` (choosing among ``instruments``, default every one the campaign has):
     measure the run it names until it says stop.  Where ``next`` changed the plan (a run dropped or added) the
     campaign carries its re-plan from then on, as ``next -o`` writes it.  Returns the measured campaign, the minutes
-    used and the last answer; ``trail`` receives per run measured ``(label, minutes, why, added, dropped)``: the runs
-    ``next`` added to and dropped from the plan at that step."""
+    used and the last answer; ``trail`` receives per run measured ``(label, minutes, why, added, dropped,
+    instrument)``: the runs ``next`` added to and dropped from the plan at that step."""
     from mtmcal_bayes.planning.design_other_runs import planned_other
     from mtmcal_bayes.planning.design_output import designed_campaign
     from mtmcal_bayes.planning.next_run import next_step
@@ -144,7 +154,8 @@ def measure_sequentially(machine: SimulatedMachine, campaign, *, max_runs: int =
         run = step.design.runs[0]
         minutes += step.design.minutes[0]
         if trail is not None:
-            trail.append((run.label, step.design.minutes[0], step.design.why[0], step.added, step.dropped))
+            trail.append((run.label, step.design.minutes[0], step.design.why[0], step.added, step.dropped,
+                          run.instrument))
         if run.instrument != "ballbar":  # a probe or R-test run: its table filled in and added, under its planned id
             planned = planned_other(c)
             c = machine.measure_other(c, run, table_id=next((k for k, v in planned.items() if v == run.label), None))

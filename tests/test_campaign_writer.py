@@ -241,3 +241,22 @@ def _same(a, b, where: str, dirs: tuple) -> None:
 
 def _files(base_dir, names) -> list[str]:
     return [str(Path(base_dir or ".", n).resolve()) for n in names]
+
+
+def test_a_thesis_probe_without_readings_is_saved_and_read_back(tmp_path):
+    """The thesis campaign with its probe runs taken away (a new machine's probe, its styli kept to design with):
+    saved without the thesis' probe sections (their readings are required keys), its styli as ``[probe.styli]`` with
+    their ball radii; read back the same campaign but for the plug-in's record of the sections it no longer has;
+    saved again the same bytes."""
+    original = load_campaign(_write(tmp_path, "thesis.toml", builtin_campaign_text()[0]))
+    original.probe.runs = []
+    save_campaign(original, tmp_path / "a.toml")
+    text = (tmp_path / "a.toml").read_text(encoding="utf-8")
+    assert "[probe.c_axis]" not in text and "[probe.b_axis]" not in text
+    back = load_campaign(tmp_path / "a.toml")
+    assert back.probe.runs == [] and back.probe.styli == original.probe.styli
+    assert back.probe.ball_radii == original.probe.ball_radii
+    original.probe.own = back.probe.own
+    _same_campaign(original, back)
+    save_campaign(back, tmp_path / "b.toml")
+    assert (tmp_path / "b.toml").read_bytes() == (tmp_path / "a.toml").read_bytes()

@@ -29,14 +29,17 @@ def campaigns():
 @pytest.mark.parametrize("name", TYPES)
 def test_every_candidate_has_its_own_name_and_a_new_run_its_own_geometry(campaigns, name):
     """On every built-in type: no two candidates share a name (a repeat names its held axes), and no two new runs
-    are the same run (pattern, set-up, mount, bar, arc, held axes; a new set-up of an existing one's tool length is
-    another run: its own T-ball offsets)."""
+    are the same run (pattern, set-up, mount, bar, arc, held axes); no new set-up has an existing one's tool length
+    (the campaign format refuses a second set-up of one length, so a designed campaign naming one could not be read
+    back: the trunnion demo's T1 + 50 mm is its T2, whose runs are candidates of their own)."""
     cands = catalogue(campaigns[name])
     names = Counter(c.name for c in cands)
     assert not [n for n, k in names.items() if k > 1]
     new = Counter((c.pattern, c.setup.id, c.mount.id, c.length, c.arc_deg, c.hold_deg)
                   for c in cands if c.repeat_of is None)
     assert not [k for k, n in new.items() if n > 1]
+    setups = campaigns[name].ballbar.setups
+    assert not [c.name for c in cands if c.setup.id not in setups and c.setup.R_B in {s.R_B for s in setups.values()}]
     base = campaigns[name].primary_setup()
     for c in cands:
         if c.kind == "tool length":

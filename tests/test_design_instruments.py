@@ -229,3 +229,19 @@ def test_next_names_a_probe_run(paths):
     step = next_step(c, targets={"E_B0C": 5.0}, contraction=None, seed=0, n_sim=100, instruments=["probe"])
     assert step.status == "measure" and step.design.runs[0].instrument == "probe"
     assert next_text(step).startswith(f"measure next: {step.design.runs[0].candidate.name} (stylus 150 mm, sphere at")
+
+
+def test_an_rtest_candidate_names_its_sphere_once(paths):
+    """On a campaign without R-test runs the sphere has the default placement (named "sphere" itself): a candidate's
+    place is "sphere at [...] mm", not "sphere sphere at"; where a run places it, the placement is named."""
+    from mtmcal_bayes.planning.plan import rtest_where
+
+    c = load_campaign(paths / "all.toml")
+    cand = other_candidates(c, ["rtest"])[0]
+    assert not cand.setup.measured
+    assert rtest_where(cand)["mount"] == "sphere at [0, 60, 30] mm"
+    measured = load_campaign(paths / "all.toml")
+    run = cand.run()
+    run.placement = None  # named after the run that places it
+    measured.rtest.runs = [run]
+    assert rtest_where(other_candidates(measured, ["rtest"])[0])["mount"] == f"sphere {run.id} at [0, 60, 30] mm"

@@ -92,7 +92,9 @@ def probe_runs(p: Probe, path_of: Callable[[str], str]) -> dict:
     where there are neither)."""
     theirs = [r for r in p.runs if r.section is not None]
     used = {r.stylus for r in theirs}
-    styli = {sid: {"length_mm": float(length)} for sid, length in p.styli.items() if sid not in used}
+    styli = {sid: {"length_mm": float(length), **({"ball_radius_mm": float(p.ball_radii[sid])}
+                                                  if p.ball_radii.get(sid) else {})}
+             for sid, length in p.styli.items() if sid not in used}
     runs = [{"id": r.id, "stylus": r.stylus, "sphere_mm": [float(x) for x in r.sphere],
              "angles_deg": {k: [float(x) for x in units.from_internal(v, "deg")] for k, v in r.angles.items()},
              **({"dprnt": [path_of(f) for f in r.dprnt]} if r.dprnt else {"centres_mm": r.centres})}

@@ -65,10 +65,12 @@ def read_probe(r: TomlReader, t: dict, machine: Machine, base_dir=None, *, ballb
         if sid in own_styli:
             r.fail(path, f"{sid!r} names a stylus of {sections} too")
         radius = r.number(s, "ball_radius_mm", path, required=False, nonnegative=True, default=0.0)
-        length = r.number(s, "length_mm", path, positive=True) - radius
-        if length <= 0:
+        length = r.number(s, "length_mm", path, positive=True)
+        if length - radius <= 0:
             r.fail(f"{path}.ball_radius_mm", "longer than the stylus")
-        probe.styli[sid] = length
+        probe.styli[sid] = length  # to the tip, its ball's radius apart (Probe.centre_length), as written
+        if radius:
+            probe.ball_radii[sid] = radius
     raw = t.get("runs", [])  # none where the machine's own sections hold its runs, or the probe is declared only
     declared = probe.instrument or probe.repeatability is not None or probe.styli  # a probe to plan runs with
     if not isinstance(raw, list) or not (raw or probe.runs or declared) or not all(isinstance(x, dict) for x in raw):

@@ -170,8 +170,13 @@ def catalogue(campaign) -> list[Candidate]:
     by_mount: dict[str, list[tuple[str, Mount]]] = {}
     for p, w in lengths:
         by_mount.setdefault(w.id, []).append((p, w))
+    # an extension to an existing set-up's tool length is that set-up's (its candidates below): a second set-up of one
+    # length is refused by the campaign format (a designed campaign naming one could not be read back)
+    lengths_now = {s.R_B for s in bb.setups.values()}
     for group in by_mount.values():  # mount by mount: its tool lengths, extension by extension, its unmeasured set-ups
         for e in rules.extensions_mm:
+            if rules.extended_setup(base, e).id not in bb.setups and rules.extended_setup(base, e).R_B in lengths_now:
+                continue
             for p, w in group:
                 where = "" if not rules.label_mount or w is first_mount else f", mount {w.id}"
                 add(f"{p} @ R_B+{e:g} mm{where}", "tool length", p, rules.extended_setup(base, e), m=w, extension=e)

@@ -13,7 +13,7 @@ from .. import units
 from ..campaign import DesignGoal, PlannedRun
 from .design_make import Design
 from .design_problem import PROMISE
-from .design_other_runs import FILL_IN, fill_in_tables, other_program_name, other_record, run_id
+from .design_other_runs import FILL_IN, fill_in_tables, measured_ids, other_program_name, other_record, run_id
 from .design_runs import geometry_of
 from .run_records import program_name
 from .machine_kit import kit_of
@@ -159,9 +159,13 @@ def designed_campaign(design: Design, goal: DesignGoal | None = None):
     targets = {t: float(v) for t, v in zip(design.targets, design.goal.targets) if np.isfinite(v)}
     out.design = copy.copy(goal) if goal is not None else DesignGoal(targets, design.goal.contraction,
                                                                       design.goal.budget, {})
-    # the probe's and the R-test's runs: their tables in to_fill_in.toml, named here so that `next` knows them
-    out.design.to_fill_in = {run_id(base, i, r): r.label for i, r in enumerate(design.runs, start=1)
-                             if r.instrument != "ballbar"}
+    # the probe's and the R-test's runs: their tables in to_fill_in.toml, named here so that `next` knows them; a
+    # re-plan without ball-bar runs keeps naming the designed runs measured before it (the session goes on with the
+    # probe or the R-test: the last of them is the machine's state, next_run.machine_state)
+    fill = {run_id(base, i, r): r.label for i, r in enumerate(design.runs, start=1) if r.instrument != "ballbar"}
+    done = set(measured_ids(base))
+    before = base.design.to_fill_in if base.design is not None and not bar else {}
+    out.design.to_fill_in = {k: v for k, v in before.items() if k in done} | fill
     return out
 
 

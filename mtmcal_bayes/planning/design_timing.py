@@ -7,6 +7,11 @@ before costs ``stylus_change_min`` / ``move_sphere_min``, and so does a further 
 stylus and sphere are set anew: their terms are its own, :meth:`.candidates.WithoutBar.again`).  A probe run
 measures ``repeats × positions × probe_position_min``, an R-test run its positions or its sweep
 (:func:`~mtmcal_bayes.machine_time.rtest_run_minutes`).
+
+The machine's state at the start, ``start`` = (ball bar mounted, set-up id, mount id[, other]): ``other`` (``next``
+after a probe or R-test run, :func:`.next_run.machine_state`) the instrument on the machine instead of the ball bar,
+``("probe", stylus length, sphere)`` or ``("rtest",)``: its set-up is not counted again, a probe run at its stylus and
+sphere costs no change, and the ball bar's first run costs ``instrument_change_min`` before the bar's own set-up.
 """
 
 from __future__ import annotations
@@ -18,6 +23,13 @@ from .machine_kit import kit_of
 
 #: the order in which a session measures the instruments
 SESSION = ("ballbar", "probe", "rtest")
+#: a new session: nothing mounted
+NEW = (False, None, None)
+
+
+def other_on(start) -> tuple | None:
+    """The probe or R-test state ``start`` has on the machine (module docstring), None where it has none."""
+    return start[3] if len(start) > 3 else None
 
 
 class Timing:
@@ -45,11 +57,25 @@ class Timing:
         """Minutes of ``runs`` in their measuring order."""
         ordered = [runs[i] for i in self.order(runs, start)]
         bar = [r for r in ordered if r.instrument == "ballbar"]
-        t = self.clock.total(bar, start)
+        t = 0.0
+        for e in self._bar_events(bar, start):
+            t += e.minutes
         for _, _, minutes in self._other_steps([r for r in ordered if r.instrument != "ballbar"],
-                                               start[0] or bool(bar)):
+                                               _current(start, bool(bar))):
             t += minutes
         return t
+
+    def _bar_events(self, bar, start) -> list[Event]:
+        """The schedule's events of the ball bar's runs ``bar`` (in order) from ``start``: with a probe or an R-test on
+        the machine, the change of instrument first, then the bar's set-up as in a new session."""
+        if other_on(start) is None:
+            return list(self.clock.schedule(bar, start[:3]).events)
+        if not bar:
+            return []
+        change = self.model.instrument_change_min
+        events = self.clock.schedule(bar, NEW).events
+        return [Event("change instrument", 0, 0.0, change, events[0].label)] + [
+            Event(e.kind, e.run_index, e.start_min + change, e.minutes, e.label) for e in events]
 
     def per_run(self, runs, start) -> list[float]:
         """Minutes of each run of the ordered ``runs``: measuring plus the set-up changes before it."""
@@ -62,20 +88,21 @@ class Timing:
     def schedule(self, runs, start) -> Schedule:
         """The schedule of the ordered ``runs`` (the ball bar's first, as :meth:`order` puts them)."""
         bar = [r for r in runs if r.instrument == "ballbar"]
-        if len(bar) == len(runs):
-            return self.clock.schedule(runs, start)
-        events = list(self.clock.schedule(bar, start).events)
+        if len(bar) == len(runs) and other_on(start) is None:
+            return self.clock.schedule(runs, start[:3])
+        events = self._bar_events(bar, start)
         t = sum(e.minutes for e in events)
-        for j, kind, minutes in self._other_steps(runs[len(bar):], start[0] or bool(bar)):
+        for j, kind, minutes in self._other_steps(runs[len(bar):], _current(start, bool(bar))):
             events.append(Event(kind, len(bar) + j, t, minutes, runs[len(bar) + j].label))
             t += minutes
         return Schedule(events)
 
-    def _other_steps(self, runs, mounted: bool):
-        """``(index, kind, minutes)`` of the probe's and the R-test's runs ``runs`` (in order) after the ball bar's
-        (``mounted``: an instrument is on the machine already)."""
+    def _other_steps(self, runs, current: tuple | None):
+        """``(index, kind, minutes)`` of the probe's and the R-test's runs ``runs`` (in order) after the ball bar's;
+        ``current`` the instrument on the machine before them (:func:`_current`; None: nothing mounted)."""
         m = self.model
-        current, stylus, sphere = "ballbar" if mounted else None, None, None
+        current, stylus, sphere = (current[0], current[1], tuple(current[2])) if current and current[0] == "probe" \
+            else (current[0] if current else None, None, None)
         for j, r in enumerate(runs):
             c = r.candidate
             if r.instrument != current:
@@ -87,7 +114,7 @@ class Timing:
                 if r.instrument == "probe":
                     stylus, sphere = c.stylus_length, tuple(c.sphere)
             if r.instrument == "probe":
-                again = r.instance > 1  # its stylus and sphere set anew
+                again = _further(r)  # its stylus and sphere set anew
                 if again or c.stylus_length != stylus:
                     yield j, "stylus change", m.stylus_change_min
                 if again or tuple(c.sphere) != sphere:
@@ -133,8 +160,12 @@ class Timing:
             setups.remove(start[1])
             setups.insert(0, start[1])
         m = self.model
-        mounted, setup, mount = start
         t = 0.0
+        if groups and other_on(start) is not None:  # the probe or the R-test on the machine: changed for the bar
+            t += m.instrument_change_min
+            mounted, setup, mount = NEW
+        else:
+            mounted, setup, mount = start[:3]
         for s in setups:
             mounts = list(groups[s])
             if s == start[1] and start[2] in groups[s]:
@@ -159,7 +190,7 @@ class Timing:
                 mounted, setup, mount = True, s, mt
         if others:
             ordered = [others[i] for i in self.order(others, start)]
-            for _, _, minutes in self._other_steps(ordered, mounted):
+            for _, _, minutes in self._other_steps(ordered, _current(start, bool(groups))):
                 t += minutes
         return t
 
@@ -201,6 +232,21 @@ class _Other:
 
     def __init__(self, c, instance: int):
         self.candidate, self.instance, self.instrument = c, instance, c.instrument
+
+
+def _further(r) -> bool:
+    """Whether ``r`` is a further run of one probe candidate: its ``instance`` > 1, or a run ``next`` plans as one
+    (its candidate the catalogue's as that run, owners ``<id>#<k>``: :meth:`.candidates.WithoutBar.again`)."""
+    head, sep, k = r.candidate.id.rpartition("#")
+    return r.instance > 1 or bool(head and sep and k.isdigit())
+
+
+def _current(start, bar: bool) -> tuple | None:
+    """The instrument on the machine when the probe's and the R-test's runs begin: the ball bar after its runs
+    (``bar``) or where ``start`` has it mounted, else ``start``'s probe or R-test (None: nothing)."""
+    if bar or start[0]:
+        return ("ballbar",)
+    return other_on(start)
 
 
 def _probe_key(c) -> tuple:

@@ -8,11 +8,13 @@ targets are met: the posterior probability of the scales' values at which the σ
 sds themselves are known, the scales are not).  Otherwise the remaining planned runs are kept while their exact
 check from today's posterior still leaves each target likelier met than missed (runs the data made unnecessary
 dropped), and the rest is designed again from the machine's current state (the ball bar mounted at the last
-measured run's set-up and placement, the remaining planned runs among the candidates) only where the plan falls
-short: :mod:`.next_plan`.  A designed probe or R-test run is planned while its table (``[design] to_fill_in``,
-:mod:`.design_other_runs`) is not among the campaign's runs; a re-plan chooses among the catalogues' probe and
-R-test runs again, which hold it.  The first run of the plan is the next one; the probability is the share of
-simulated machines in which the plan meets every target (:mod:`.design_check`).
+measured run's set-up and placement, or the probe or the R-test after a run of theirs: :func:`machine_state`; the
+remaining planned runs among the candidates) only where the plan falls short: :mod:`.next_plan`.  A designed probe
+or R-test run is planned while its table (``[design] to_fill_in``, :mod:`.design_other_runs`) is not among the
+campaign's runs: the plan kept holds it as the ball bar's planned runs (:func:`planned_other_candidates`); a re-plan
+chooses among the catalogues' probe and R-test runs again, which hold it.  The first run of the plan is the next
+one; the probability is the share of simulated machines in which the plan meets every target
+(:mod:`.design_check`).
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from ..machine_time import TimeModel
 from .candidates import Candidate
 from .chain_candidates import arc_spec
 from .design import Planner
-from .design_instruments import chosen_instruments, taught
+from .design_instruments import chosen_instruments, other_candidates, taught
 from .design_make import (
     CONTRACTION,
     Design,
@@ -87,6 +89,26 @@ def planned_candidates(campaign) -> list[Candidate]:
     return out
 
 
+def planned_other_candidates(campaign, instruments) -> list:
+    """The designed probe and R-test runs the campaign plans (:func:`.design_other_runs.planned_other`) as candidates
+    of the kept plan, each the catalogue's candidate of its name as that run (``<name> #k``: its k-th run, its terms'
+    owners its own, :meth:`.candidates.WithoutBar.again`) named as the run, so the plan names it as the design did.
+    A planned run whose candidate the catalogue of ``instruments`` no longer holds is left to the re-plan."""
+    import dataclasses
+
+    names = planned_other(campaign).values()
+    if not names:
+        return []
+    catalogue = {c.name: c for c in other_candidates(campaign, [i for i in instruments if i != "ballbar"])}
+    out = []
+    for label in names:
+        base, _, k = label.rpartition(" #")
+        name, instance = (base, int(k)) if base and k.isdigit() else (label, 1)
+        if name in catalogue:
+            out.append(dataclasses.replace(catalogue[name].again(instance), name=label))
+    return out
+
+
 def _conditional_met(planner: Planner, targets: np.ndarray) -> float:
     """Posterior probability of the discrepancy scales' values at which every σ-conditional target sd meets its
     target (the grid cells of every measured instrument's scale, :class:`.design_now.Now`)."""
@@ -103,6 +125,28 @@ def measured_runs(campaign, instruments) -> int:
              "probe": len(campaign.probe.runs) if campaign.probe is not None else 0,
              "rtest": len(campaign.rtest.runs) if campaign.rtest is not None else 0}
     return sum(count[i] for i in instruments)
+
+
+def machine_state(campaign) -> tuple:
+    """The machine's state ``next`` continues from (``start`` of :class:`.design_timing.Timing`): the instrument of
+    the last measured run on the machine at its set-up.  A session measures the ball bar's runs, then the probe's,
+    then the R-test's (as a design orders them), so a designed probe or R-test run measured (its table named in the
+    campaign's ``[design] to_fill_in``, which keeps the measured ones while the session goes on with those
+    instruments: :func:`.design_output.designed_campaign`) is the last measured run — the latest of them in the
+    design's order: the probe with that run's stylus and sphere, or the R-test —, else the ball bar's last run
+    (mounted, its set-up and placement current); a new machine has nothing mounted."""
+    goal = campaign.design
+    probe = {r.id: r for r in campaign.probe.runs} if campaign.probe is not None else {}
+    rtest = {r.id for r in campaign.rtest.runs} if campaign.rtest is not None else set()
+    done = [k for k in (goal.to_fill_in if goal is not None else {}) if k in probe or k in rtest]
+    if done and done[-1] in probe:
+        run = probe[done[-1]]
+        return (False, None, None, ("probe", campaign.probe.centre_length(run.stylus),
+                                    tuple(float(x) for x in run.sphere)))
+    if done:
+        return (False, None, None, ("rtest",))
+    bb = campaign.ballbar
+    return (True, bb.runs[-1].setup, bb.runs[-1].mount) if bb.runs else (False, None, None)
 
 
 def _contraction_now(planner: Planner, instrument: str) -> float:
@@ -131,9 +175,12 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         budget_min = goal.budget_min
     bb = campaign.ballbar
     instruments = chosen_instruments(campaign, instruments)
-    # the plan and the user's candidates only: the catalogue is read when the rest is designed again
-    plan = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []), instruments=instruments,
-                             catalogue=False)
+    # the plan (the ball bar's planned runs, the designed probe and R-test runs not measured yet) and the user's
+    # candidates only: the catalogue is read when the rest is designed again
+    bar_plan = design_candidates(campaign, planned_candidates(campaign) + list(candidates or []),
+                                 instruments=instruments, catalogue=False)
+    other_plan = planned_other_candidates(campaign, instruments)
+    plan = bar_plan + other_plan
     planner = reporting_planner(campaign, plan, want, model=model, sigma_prior=sigma_prior, instruments=instruments)
     tg = np.array([want.get(t, np.nan) for t in planner.targets])
     scale = np.array([units.from_internal(1.0, u) for u in planner.target_units])
@@ -154,10 +201,10 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         return NextStep("stop", probability_targets_met=_conditional_met(planner, tg), **base)
     settings = {"targets": want, "contraction": contraction, "budget_min": budget_min, "time_model": time_model,
                 "model": model, "seed": seed, "n_sim": n_sim, "sigma_prior": sigma_prior, "instruments": instruments}
-    start = (True, bb.runs[-1].setup, bb.runs[-1].mount) if bb.runs else (False, None, None)
+    start = machine_state(campaign)
     design = None
-    if bb.planned:
-        counts = np.array([int(c.kind == "planned") for c in plan])
+    if bb.planned or other_plan:
+        counts = np.array([int(c.kind == "planned") for c in bar_plan] + [1] * len(other_plan))
         design = design_of_plan(campaign, plan, counts, start=start, planner=planner, **settings)
         if plan_holds(design):
             design = without_unneeded(design, counts, c_now, start=start, planner=planner, **settings)
@@ -193,4 +240,4 @@ def _designed_again(campaign, plan, planner, *, sd_now, c_now, start, settings) 
                          "run lowers it further in the closed form: relax the target or add candidates")
 
 
-__all__ = ["NextStep", "next_step", "planned_candidates"]
+__all__ = ["NextStep", "next_step", "planned_candidates", "planned_other_candidates", "machine_state"]

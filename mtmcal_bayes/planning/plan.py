@@ -107,10 +107,13 @@ def _table(planner: Planner, candidates: list[Candidate], campaign) -> pd.DataFr
 
 
 def rtest_where(c: RTestCandidate) -> dict:
-    """The geometry columns of an R-test candidate: its nest (length in ``R_B_mm``) and its sphere."""
+    """The geometry columns of an R-test candidate: its nest (length in ``R_B_mm``) and its sphere (named by its
+    placement where the campaign's R-test runs give it one; a campaign without R-test runs has the default
+    placement, named "sphere" itself: "sphere at [...] mm")."""
     s = c.setup
+    name = f"sphere {s.placement}" if s.measured else "sphere"
     return {"setup": f"nest {s.nest} {s.length:g} mm", "R_B_mm": s.length, "Z_T_mm": np.nan,
-            "mount": f"sphere {s.placement} at [" + ", ".join(f"{x:g}" for x in s.sphere) + "] mm", "R_C_mm": np.nan}
+            "mount": f"{name} at [" + ", ".join(f"{x:g}" for x in s.sphere) + "] mm", "R_C_mm": np.nan}
 
 
 def _tables(planner: Planner, candidates: list[Candidate], campaign,
