@@ -16,13 +16,19 @@ discrepancy scale — measured through the chain: the designed runs as campaign 
 the tables to fill in become once measured), simulated by ``synthetic_campaign`` (the ball bar's repeat scatter,
 instrument error and σ_model; the probe's and R-test's repeatability), each probe and R-test reading with its own
 discrepancy ``N(0, σ_model_probe²)``, ``N(0, σ_model_rtest²)`` shared by its repeats; each machine's exact posterior
-(``sample --sampler exact``: every instrument's data, every scale integrated out).  Per target: the mean realised
+(the posterior ``sample --sampler exact`` draws from: every instrument's data, every scale integrated out; its sds in
+closed form, :func:`realised_sd`, the draws' compared on the first three machines).  Per target: the mean realised
 sd, the share of machines meeting it with its Clopper–Pearson 95 % interval (``scipy.stats.binomtest``), beside the
 design's own check (400 machines; through the kinematics or not, :mod:`mtmcal_bayes.planning.design_chain`).  The
-promise holds where the interval contains :data:`~mtmcal_bayes.planning.design_problem.PROMISE` or lies above it.
+promise holds where the interval contains :data:`~mtmcal_bayes.planning.design_problem.PROMISE` or lies above it
+(where the check itself finds a target short of it, the check's share).  Then, per target, the machines' sds against
+the check's at the same discrepancy scale (:func:`given_scale`): whether the two simulate one population.
 
-Run: ``python bench/design_every_instrument.py [N] [--probe] [TYPE ...]`` (default 50 machines, every built-in
-described type).
+Run: ``python bench/design_every_instrument.py [N] [--probe] [--from=K] [--merge] [TYPE ...]`` (default 50 machines,
+every built-in type, the thesis machine's last).  With ``DESIGN_BENCH_OUT=DIR`` each type's design is kept (and read
+again next time) and its machines' sds as they come: ``--from=K`` infers machines K … N−1 only (the earlier ones
+drawn and simulated, not inferred: several processes share one population), ``--merge`` prints the table of every
+machine kept.
 """
 
 from __future__ import annotations
@@ -43,10 +49,12 @@ from mtmcal_bayes.campaign import Mount, Probe, RTest, RTestNest
 from mtmcal_bayes.errors import ParameterError
 from mtmcal_bayes.inference.priors import make_prior
 from mtmcal_bayes.machines.space import described_space
-from mtmcal_bayes.planning.design_instruments import other_candidates
-from mtmcal_bayes.planning.design_make import design_candidates
+from mtmcal_bayes.planning.design_check import preposterior
+from mtmcal_bayes.planning.design_instruments import other_candidates, taught
+from mtmcal_bayes.planning.design_make import design_candidates, reporting_planner
 from mtmcal_bayes.planning.design_output import designed_campaign
 from mtmcal_bayes.planning.design_problem import PROMISE
+from mtmcal_bayes.planning.design_timing import SESSION
 from mtmcal_bayes.planning.machine_kit import planner_for
 from mtmcal_bayes.planning.scale_priors import scale_prior
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
@@ -201,17 +209,41 @@ def _keep(kind: str, d, first: int, sds, scales_drawn) -> None:
                  targets=np.array(d.targets), scales=np.array(scales_drawn), first=first)
 
 
-def _kept(kind: str) -> np.ndarray:
-    """The realised sds (n, t) of every machine kept for ``kind`` (:func:`_keep`), in machine order, checked
-    contiguous from the first."""
+def _kept(kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """The realised sds (n, t) and drawn scales (n, 3) mm of every machine kept for ``kind`` (:func:`_keep`), in machine order (where a process
+    stopped early, its range ends there: every machine is an independent draw of the population, so the kept ones
+    are a sample of it still; the ranges are printed)."""
     parts = sorted((np.load(p) for p in Path(os.environ["DESIGN_BENCH_OUT"]).glob(
         f"{kind}{'-probe' if PROBE_ONLY else ''}-from*.npz")), key=lambda z: int(z["first"]))
-    out = np.zeros((0, len(parts[0]["targets"])))
-    for z in parts:
+    out, scales, ranges = np.zeros((0, len(parts[0]["targets"]))), np.zeros((0, len(SCALES))), []
+    for z, after in zip(parts, [int(z["first"]) for z in parts[1:]] + [None]):
         first = int(z["first"])
-        assert first <= len(out), f"machines {len(out)}–{first - 1} missing"
-        out = np.vstack([out, z["sds"][len(out) - first:]])
-    return out
+        k = len(z["sds"]) if after is None else min(len(z["sds"]), max(after - first, 0))
+        out, scales = np.vstack([out, z["sds"][:k]]), np.vstack([scales, z["scales"][:k]])
+        ranges.append(f"{first}–{first + k - 1}")
+    print(f"  machines kept: {', '.join(ranges)}")
+    return out, scales
+
+
+def given_scale(d, sds: np.ndarray, scales: np.ndarray) -> None:
+    """Per target, the machines' realised sds against the check's at the same discrepancy scale: the check run again
+    (its scales stratified), each target's sd fitted by a quadratic in the scale it follows most closely over the
+    check's machines, and the machines' mean residual from that fit (± its standard error, and relative to the
+    mean sd): zero where the bench and the check simulate one population, whatever luck either had in its scales."""
+    goal = d.goal.targets
+    planner = reporting_planner(d.campaign, d.candidates, {q: g for q, g in zip(d.targets, goal) if np.isfinite(g)},
+                                instruments=d.instruments)
+    pre = preposterior(planner, d.runs, seed=0, taught=taught(d.instruments), targets=goal)
+    used = [i for i in SESSION if i in {r.instrument for r in d.runs}]  # the check's scales, in its order
+    cols = [list(SCALES).index(i) for i in used]
+    print("  given the scale: the machines' mean sd less the check's at their scale")
+    for j, q in enumerate(d.targets):
+        r = [abs(np.corrcoef(pre.sd[:, j], pre.scales[:, k])[0, 1]) for k in range(len(used))]
+        k = int(np.nanargmax(r))
+        fit = np.polyfit(pre.scales[:, k], pre.sd[:, j], 2)
+        res = sds[:, j] - np.polyval(fit, scales[:, cols[k]])
+        print(f"  {q:<12} {used[k]:>8} (r = {r[k]:.2f}): {res.mean():+.3g} ± {res.std(ddof=1) / np.sqrt(len(res)):.2g} "
+              f"({res.mean() / sds[:, j].mean():+.1%})")
 
 
 def main(n: int) -> None:
@@ -238,7 +270,7 @@ def main(n: int) -> None:
                 print(f"  {kind}: machine {i + 1}, {time.perf_counter() - t0:.0f} s", flush=True)
         if sds:
             _keep(kind, d, FIRST, sds, scales_drawn)
-        sds = _kept(kind) if MERGE else np.array(sds)
+        sds, scales = _kept(kind) if MERGE else (np.array(sds), np.array(scales_drawn))
         k = d.check.kinematics
         runs = {i: sum(r.instrument == i for r in d.runs) for i in ("ballbar", "probe", "rtest")}
         print(f"\n{kind}{' (probe only)' if PROBE_ONLY else ''}: {len(d.runs)} runs ("
@@ -256,6 +288,7 @@ def main(n: int) -> None:
                 print(f"  {r.label}: {m:.1f} min")
         share_table(d, sds)
         print(f"  promise: each target met in at least {PROMISE:.0%} of machines", flush=True)
+        given_scale(d, sds, scales)
 
 
 if __name__ == "__main__":
