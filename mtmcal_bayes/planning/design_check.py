@@ -212,7 +212,7 @@ def stratified_draws(prior, n: int, rng: np.random.Generator) -> np.ndarray:
     prior probability, in random order (Latin hypercube sampling, each scale stratified on its own).
 
     The realised sds of the targets a design only just meets follow the scale of their instrument almost one to one
-    (a correlation of 0.99 on the vertical turn-mill), so the share of machines meeting such a target is the prior
+    (a correlation of 0.97 on the vertical turn-mill), so the share of machines meeting such a target is the prior
     probability of the scale below a threshold.  Drawn plainly, the check's 400 scales put that share 1.5 points
     (binomial) off on their own, and the search keeps the cheapest design its draws find meeting the promise:
     designs whose draws were kind (docs/design.md, "Every instrument").  Stratified, the scales follow the prior to
