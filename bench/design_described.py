@@ -77,7 +77,8 @@ def draw_truth(c, rng) -> tuple[Truth, float]:
 
 def share_table(d, sds: np.ndarray) -> None:
     """Per target of design ``d``: its goal, the mean realised sd over the machines ``sds`` (n, t), the share met with
-    its Clopper–Pearson 95 % interval, whether the promise holds, and the design's own check beside them."""
+    its Clopper–Pearson 95 % interval, whether the promise holds (the interval reaches :data:`PROMISE`, or the
+    check's own share where the check finds it short), and the design's own check beside them."""
     n, goal = len(sds), d.goal.targets
     met = sds <= np.where(np.isfinite(goal), goal, np.inf)
     print(f"  {'target':<12} {'goal':>6} {'realised mean sd':>17} {'share met':>10} {'95 % interval':>14} "
@@ -87,7 +88,8 @@ def share_table(d, sds: np.ndarray) -> None:
         if np.isfinite(goal[j]):
             u = units.SYMBOL[d.target_units[j]]
             ci = stats.binomtest(int(met[:, j].sum()), n).proportion_ci(0.95, method="exact")
-            holds = "yes" if ci.high >= PROMISE else "NO"
+            # a target the check itself finds short of the promise: the realised share held against the check's
+            holds = "yes" if ci.high >= min(PROMISE, check[j]) else "NO"
             print(f"  {q:<12} {goal[j]:>5.3g}{u} {sds[:, j].mean():>15.3g}{u} {met[:, j].mean():>10.1%} "
                   f"{ci.low:>6.1%}–{ci.high:<6.1%} {holds:>6} {check[j]:>13.1%} {d.check.sd_mean[j]:>12.3g}{u}",
                   flush=True)
