@@ -139,7 +139,7 @@ BAD_RUNS = [
 @pytest.mark.parametrize("old, new, key, words", BAD_RUNS)
 def test_a_bad_described_measurement_is_one_line(tmp_path, run_cli, old, new, key, words):
     text = builtin_text("machines/trunnion-demo.toml")
-    text = text.replace(f"[probe.runs.angles_deg]\nA = [0.0, 0.0, 0.0, 0.0, -30.0,",
+    text = text.replace("[probe.runs.angles_deg]\nA = [0.0, 0.0, 0.0, 0.0, -30.0,",
                         "[probe.runs.angles_deg]\nA = [0.0, 0.0, 0.0, -30.0,") if "angles" in old else \
         text.replace(old, new, 1)
     path = tmp_path / "c.toml"

@@ -15,7 +15,7 @@ import pytest
 
 from mtmcal_bayes import units
 from mtmcal_bayes.errors import ParameterError
-from mtmcal_bayes.inference.identifiability import Combination, identifiability
+from mtmcal_bayes.inference.identifiability import identifiability
 from mtmcal_bayes.inference.log_posterior import SAMPLED_DEVIATIONS
 from mtmcal_bayes.models import jacobian, make_model
 from mtmcal_bayes.parameters import Parameter, ParameterSpace

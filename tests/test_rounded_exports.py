@@ -5,7 +5,6 @@ noise rule takes the stated repeatability as the floor of a zero pooled scatter 
 from __future__ import annotations
 
 import copy
-from pathlib import Path
 
 import numpy as np
 
