@@ -42,7 +42,8 @@ def test_the_documented_campaign_of_a_described_machine_loads(tmp_path):
     (planned,) = bb.planned
     assert isinstance(planned, PlannedRun) and (planned.repeats, planned.order) == (3, 1)
     probe = c.probe
-    assert probe.styli["S1"] == pytest.approx(150.0) and probe.styli["long"] == 200.0  # less the ball radius
+    assert probe.styli["S1"] == 153.0 and probe.ball_radii["S1"] == 3.0  # as written: to the ball's tip
+    assert probe.centre_length("S1") == pytest.approx(150.0) and probe.centre_length("long") == 200.0
     sphere, long = probe.runs
     assert sphere.id == "sphere" and sphere.centres.shape == (1, 4, 3) and long.stylus == "long"
     assert set(c.priors) == {"E_C0C", "dRB", "sigma_model_probe"}
