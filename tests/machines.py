@@ -188,3 +188,19 @@ def small_problem(campaign, rng, k: int = 6):
     tg = np.full(len(now), np.nan)
     tg[pick] = np.maximum(np.sqrt(now[pick] * most[pick]) * rng.uniform(0.5, 1.0, len(pick)), 1.05 * most[pick])
     return dp, (lambda counts: timing.total(designed_runs(cands, counts), (False, None, None))), tg
+
+
+def new_machine_runs(kind: str, n: int):
+    """A new machine of built-in type ``kind`` (its demo's set-ups and mounts, no run of any instrument), its
+    planner over the catalogue's candidates and the designed runs of the first ``n`` candidates once each."""
+    from mtmcal_bayes import api
+    from mtmcal_bayes.planning.design_make import design_candidates, reporting_planner
+    from mtmcal_bayes.planning.design_runs import designed_runs
+
+    c = copy.deepcopy(api.campaign_of(api.demo_campaign(kind)))
+    c.ballbar.runs, c.probe, c.rtest, c.truth = [], None, None, None
+    cands = design_candidates(c)
+    planner = reporting_planner(c, cands, {})
+    counts = np.zeros(len(cands), dtype=int)
+    counts[:n] = 1
+    return planner, designed_runs(cands, counts)

@@ -4,29 +4,23 @@ the chain, says so, and its readings are the chain's predictions plus the noise 
 
 from __future__ import annotations
 
-import copy
 
 import numpy as np
 import pytest
 
-from mtmcal_bayes import api, units
+from mtmcal_bayes import units
 from mtmcal_bayes.models import build_model
 from mtmcal_bayes.planning.design_chain import MISFIT_FRACTION, threshold
 from mtmcal_bayes.planning.design_check import preposterior
-from mtmcal_bayes.planning.design_make import design_candidates, reporting_planner
-from mtmcal_bayes.planning.design_runs import designed_runs, with_runs
+from mtmcal_bayes.planning.design_runs import with_runs
+
+from .machines import new_machine_runs
 
 
 @pytest.fixture(scope="module")
 def head_head():
     """A new head-head machine (its demo's set-ups and mounts, no runs), its planner and three designed runs."""
-    c = copy.deepcopy(api.campaign_of(api.demo_campaign("head-head")))
-    c.ballbar.runs, c.probe, c.truth = [], None, None
-    cands = design_candidates(c)
-    planner = reporting_planner(c, cands, {})
-    counts = np.zeros(len(cands), dtype=int)
-    counts[:3] = 1
-    return planner, designed_runs(cands, counts)
+    return new_machine_runs("head-head", 3)
 
 
 def test_the_check_goes_through_the_chain_where_the_linear_misfit_is_large(head_head):

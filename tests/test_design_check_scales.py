@@ -4,27 +4,19 @@ below a threshold, and the check's own draws of the scale must not move it by th
 
 from __future__ import annotations
 
-import copy
 
 import numpy as np
 import pytest
 
-from mtmcal_bayes import api
 from mtmcal_bayes.planning.design_check import preposterior
-from mtmcal_bayes.planning.design_make import design_candidates, reporting_planner
-from mtmcal_bayes.planning.design_runs import designed_runs
+
+from .machines import new_machine_runs
 
 
 @pytest.fixture(scope="module")
 def trunnion():
     """A new trunnion (its demo's set-ups and mounts, no runs), its planner and four designed ball-bar runs."""
-    c = copy.deepcopy(api.campaign_of(api.demo_campaign("trunnion")))
-    c.ballbar.runs, c.probe, c.rtest, c.truth = [], None, None, None
-    cands = design_candidates(c)
-    planner = reporting_planner(c, cands, {})
-    counts = np.zeros(len(cands), dtype=int)
-    counts[:4] = 1
-    return planner, designed_runs(cands, counts)
+    return new_machine_runs("trunnion", 4)
 
 
 def test_a_new_machines_scales_are_drawn_one_per_stratum_of_their_prior(trunnion):
