@@ -300,8 +300,13 @@ class DesignProblem:
         G = Sinv @ M[1]
         # traces of products of symmetric matrices as element sums: tr(AB) = Σ A∘B, tr(GG) = Σ G∘Gᵀ
         tr = t - 2.0 * np.sum(Sinv * M[2], axis=(-2, -1)) + np.sum(G * np.swapaxes(G, -1, -2), axis=(-2, -1))
+        return DesignValue(sd, self._contraction(tr))
+
+    def _contraction(self, tr: np.ndarray) -> np.ndarray:
+        """σ_model's contraction at each node ``(…, S)`` from ``tr(C⁻²)``-like traces ``tr`` (…, S): the Fisher
+        information ``2σ²·tr`` (:func:`.design.sigma_contraction`)."""
         fisher = 2.0 * self.nodes**2 * np.maximum(tr, 0.0)
-        return DesignValue(sd, sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var))
+        return sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)
 
     def value_plus_one(self, counts: np.ndarray, *,
                        contraction_met: float | None = None) -> tuple[DesignValue, np.ndarray]:
@@ -323,31 +328,21 @@ class DesignProblem:
         :meth:`value` of each design (``tests/test_design.py``).
         """
         counts = np.asarray(counts)
-        M, t = self.moments(counts)
-        P = M.shape[-1]
-        Sig = np.linalg.inv(np.eye(P) + M[0, 0])  # (S, P, P)
-        M2, M3 = M[1, 0], M[2, 0]
-        A = Sig @ M2
-        var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched  # (S, t)
-        trA2 = np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1))  # (S,)
-        trSM3 = np.sum(Sig * M3, axis=(-2, -1))
-        K, S = len(self.candidates), len(Sig)
-        fisher_now = 2.0 * self.nodes**2 * np.maximum(t[0] - 2.0 * trSM3 + trA2, 0.0)  # (S,): of counts
-        contraction_now = sigma_contraction(fisher_now, self.sigma_prior_var, self.sigma_reference_var)
+        st = self._state(counts)
+        K, S = len(self.candidates), len(st["Sig"])
+        contraction_now = self._contraction(st["t"] - 2.0 * st["trSM3"] + st["trA2"])  # (S,): of counts
         traces = contraction_met is None or contraction_now.mean() < contraction_met
         var_new = np.empty((K, S, len(self.Tp)))
         trE2, trSM3_new = np.empty((K, S)), np.empty((K, S))
         for idx, r in self._groups:
-            out = self._updates(counts[idx] == 0, idx, r, Sig=Sig, M2=M2, M3=M3, A=A, var=var, trA2=trA2,
-                                trSM3=trSM3, traces=traces)
+            out = self._updates(st, counts[idx] == 0, idx, r, traces=traces)
             var_new[idx] = out[0]
             if traces:
                 trE2[idx], trSM3_new[idx] = out[1:]
         sd = np.sqrt(np.maximum(var_new, 0.0)) * self.to_display
         if traces:
             dt = np.where(counts[:, None] == 0, self.first_t, self.again_t)  # (K, S)
-            fisher = 2.0 * self.nodes**2 * np.maximum(t[0][None] + dt - 2.0 * trSM3_new + trE2, 0.0)
-            contraction = sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)
+            contraction = self._contraction(st["t"][None] + dt - 2.0 * trSM3_new + trE2)
         else:
             contraction = np.broadcast_to(contraction_now, (K, S))
         v = DesignValue(sd, contraction)
@@ -391,12 +386,9 @@ class DesignProblem:
         st = self._state(counts)
         group = next((idx, r) for idx, r in self._groups if k in idx)
         # the smaller design's own contraction: the downdate of run k with its traces
-        _, trE2, trSM3_less = self._updates(counts[[k]] == 1, np.array([k]), group[1], Sig=st["Sig"], M2=st["M2"],
-                                            M3=st["M3"], A=st["A"], var=st["var"], trA2=st["trA2"],
-                                            trSM3=st["trSM3"], sign=-1.0)
+        _, trE2, trSM3_less = self._updates(st, counts[[k]] == 1, np.array([k]), group[1], sign=-1.0)
         dt = self.first_t[k] if counts[k] == 1 else self.again_t[k]
-        fisher = 2.0 * self.nodes**2 * np.maximum(st["t"] - dt - 2.0 * trSM3_less[0] + trE2[0], 0.0)
-        contraction_less = sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var)  # (S,)
+        contraction_less = self._contraction(st["t"] - dt - 2.0 * trSM3_less[0] + trE2[0])  # (S,)
         if contraction_met is None or contraction_less.mean() < contraction_met:
             v, ok = self.value_plus_one(less, contraction_met=contraction_met)
             ok[k] = False
@@ -432,7 +424,7 @@ class DesignProblem:
         """The rows ``X`` (n, r, P) and noise ``N`` (n, S, r, r) of one more run of the candidates ``idx`` (a first
         run where ``fresh``) and their products with :meth:`_state`'s ``Σ``: ``E = XΣ`` (S, n·r, P), ``XΣTpᵀ`` and
         ``XΣXᵀ`` (n, S, r, ·), made once per design and group."""
-        key = (idx[0], fresh.tobytes())
+        key = (idx.tobytes(), fresh.tobytes())
         if key not in st["groups"]:
             first = fresh[:, None, None, None]
             X = np.where(first[..., 0], self.Xf[idx, :r], self.Xa[idx, :r])
@@ -452,52 +444,40 @@ class DesignProblem:
         used = np.flatnonzero(counts)
         less = np.repeat(counts[None], len(used), axis=0)
         less[np.arange(len(used)), used] -= 1
-        M, t = self.moments(counts)
-        P = M.shape[-1]
-        Sig = np.linalg.inv(np.eye(P) + M[0, 0])  # (S, P, P)
-        M2, M3 = M[1, 0], M[2, 0]
-        A = Sig @ M2
-        var = np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched
-        trA2 = np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1))
-        trSM3 = np.sum(Sig * M3, axis=(-2, -1))
-        B, S = len(used), len(Sig)
+        st = self._state(counts)
+        B, S = len(used), len(st["Sig"])
         var_new = np.empty((B, S, len(self.Tp)))
         trE2, trSM3_new = np.empty((B, S)), np.empty((B, S))
         for idx, r in self._groups:
             at = np.flatnonzero(np.isin(used, idx))  # the drops of this group's candidates
             if len(at):
-                var_new[at], trE2[at], trSM3_new[at] = self._updates(
-                    counts[used[at]] == 1, used[at], r, Sig=Sig, M2=M2, M3=M3, A=A, var=var, trA2=trA2,
-                    trSM3=trSM3, sign=-1.0)
+                var_new[at], trE2[at], trSM3_new[at] = self._updates(st, counts[used[at]] == 1, used[at], r,
+                                                                     sign=-1.0)
         dt = np.where(counts[used, None] == 1, self.first_t[used], self.again_t[used])  # (B, S)
-        fisher = 2.0 * self.nodes**2 * np.maximum(t[0][None] - dt - 2.0 * trSM3_new + trE2, 0.0)
         v = DesignValue(np.sqrt(np.maximum(var_new, 0.0)) * self.to_display,
-                        sigma_contraction(fisher, self.sigma_prior_var, self.sigma_reference_var))
+                        self._contraction(st["t"][None] - dt - 2.0 * trSM3_new + trE2))
         if self._watched():
             v.undetermined = _unseen(self.determination.unseen_many(less), self.watch)
         return v, less
 
-    def _updates(self, fresh: np.ndarray, idx: np.ndarray, r: int, *, Sig, M2, M3, A, var, trA2, trSM3,
-                 traces: bool = True, sign: float = 1.0):
-        """The rank-``r`` updates of :meth:`value_plus_one` for the candidates ``idx`` (their first run where
-        ``fresh``): the target variances ``(k, S, t)`` and, with ``traces``, ``tr((Σ′M₂′)²)`` and ``tr(Σ′M₃′)``
-        ``(k, S)``.  With ``sign`` −1 the run is taken away (:meth:`value_minus_one`): the precision gains
-        ``sign·XᵀN⁻¹X``, so ``W = sign·N + XΣXᵀ`` and every term of the run's own moments changes sign."""
-        first = fresh[:, None, None, None]
-        X = np.where(first[..., 0], self.Xf[idx, :r], self.Xa[idx, :r])  # (k, r, P)
-        N = np.where(first, self.Nf[idx][:, :, :r, :r], self.Na[idx][:, :, :r, :r])  # (k, S, r, r)
-        k, P = len(X), X.shape[-1]
+    def _updates(self, st: dict, fresh: np.ndarray, idx: np.ndarray, r: int, *, traces: bool = True,
+                 sign: float = 1.0):
+        """The rank-``r`` updates of :meth:`value_plus_one` of the design whose :meth:`_state` is ``st`` for the
+        candidates ``idx`` (their first run where ``fresh``): the target variances ``(k, S, t)`` and, with
+        ``traces``, ``tr((Σ′M₂′)²)`` and ``tr(Σ′M₃′)`` ``(k, S)``.  With ``sign`` −1 the run is taken away
+        (:meth:`value_minus_one`): the precision gains ``sign·XᵀN⁻¹X``, so ``W = sign·N + XΣXᵀ`` and every term of
+        the run's own moments changes sign."""
         # every product with a P × P matrix as one matrix product per σ node over all candidates' rows stacked
-        # (k·r, P), then back to (k, S, r, ·): the batched small products left are r × r and r × P
-        flat = X.reshape(k * r, P)
+        # (k·r, P), then back to (k, S, r, ·) (:meth:`_products`): the batched small products left are r × r, r × P
+        Sig, M2, M3, A = st["Sig"], st["M2"], st["M3"], st["A"]
+        X, N, XS_flat, Q, H = self._products(st, idx, r, fresh)
+        first = fresh[:, None, None, None]
+        k = len(X)
         back = lambda Y: np.moveaxis(Y.reshape(len(Sig), k, r, -1), 0, 1)  # noqa: E731  (S, k·r, n) -> (k, S, r, n)
-        XS_flat = flat @ Sig  # (S, k·r, P): XΣ
         XS = back(XS_flat)
         XSt = np.swapaxes(XS, -1, -2)
-        H = XS @ np.swapaxes(X, -1, -2)[:, None]  # (k, S, r, r): XΣXᵀ
         Winv = np.linalg.inv(sign * N + H)
-        Q = back(XS_flat @ self.Tp.T)  # (k, S, r, t)
-        var_new = var[None] - np.sum(Q * (Winv @ Q), axis=-2)
+        var_new = st["var"][None] - np.sum(Q * (Winv @ Q), axis=-2)
         if not traces:
             return (var_new,)
         D2 = np.where(first, self.D2f[idx][:, :, :r, :r], self.D2a[idx][:, :, :r, :r])
@@ -506,9 +486,9 @@ class DesignProblem:
         R = sign * D2X - Winv @ back(XS_flat @ M2) - sign * (Winv @ (H @ D2X))
         XSA = back(XS_flat @ np.swapaxes(A, -1, -2))  # (k, S, r, P): (AΣXᵀ)ᵀ
         RX = R @ XSt  # (k, S, r, r)
-        trE2 = trA2[None] + 2.0 * np.einsum("ksrp,ksrp->ks", R, XSA) + np.einsum("ksij,ksji->ks", RX, RX)
+        trE2 = st["trA2"][None] + 2.0 * np.einsum("ksrp,ksrp->ks", R, XSA) + np.einsum("ksij,ksji->ks", RX, RX)
         XSM3XS = back(XS_flat @ M3) @ XSt
-        trSM3_new = (trSM3[None] + sign * np.einsum("ksij,ksji->ks", D3, H)
+        trSM3_new = (st["trSM3"][None] + sign * np.einsum("ksij,ksji->ks", D3, H)
                      - np.einsum("ksij,ksji->ks", Winv, XSM3XS + sign * (H @ D3 @ H)))
         return var_new, trE2, trSM3_new
 
