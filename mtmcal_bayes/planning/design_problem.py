@@ -40,6 +40,8 @@ from .determined import SUBSPACE_TOL, Determination
 MAX_INSTANCES = 3
 #: a design differing from the last one summed in full in at most this many candidates is summed from it
 NEAR = 32
+#: steps from one design to the next (:meth:`DesignProblem.moments`) before the moments are summed in full again
+REFRESH = 64
 #: quantiles of σ_model at which the criterion is evaluated
 NODE_LEVELS = (0.1, 0.3, 0.5, 0.7, 0.9)
 #: the share of machines for which a design promises its targets: the sd is taken at this quantile of σ_model
@@ -112,6 +114,17 @@ def _compressed(X: np.ndarray, w: np.ndarray, compress: bool) -> tuple[np.ndarra
     k = int(np.sum(sv > RANK_TOL * sv[0])) if sv.size and sv[0] > 0 else 0
     k = max(k, 1)
     return sv[:k, None] * vt[:k], np.full(k, w[0]), len(X) - k
+
+
+def _plus(M: np.ndarray, d: float, term: np.ndarray, *, fresh: bool) -> np.ndarray:
+    """``M + d·term`` into a new array (``fresh``: ``M`` is kept) or into ``M``: for ``d`` = ±1 an addition or a
+    subtraction, one pass and no temporary (the same floats as ``M + d * term``)."""
+    out = None if fresh else M
+    if d == 1.0:
+        return np.add(M, term, out=out)
+    if d == -1.0:
+        return np.subtract(M, term, out=out)
+    return np.add(M, d * term, out=out)
 
 
 def _inv_powers(N: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -231,31 +244,33 @@ class DesignProblem:
 
     # ------------------------------------------------------------------ criterion
     def moments(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(M (3, B, S, P, P), t (B, S))`` of designs ``counts`` (B, K).
+        """``(M (3, B, S, P, P), t (B, S))`` of designs ``counts`` (B, K); the caller does not write into them.
 
-        One design within :data:`NEAR` candidates of the last one summed in full (the search's next step, a
-        drop or a swap) is that sum plus the changed candidates' terms: a search asks thousands of such designs,
-        and a full sum reads every used candidate's (3, S, P, P) terms."""
+        One design within :data:`NEAR` candidates of the last one asked (the search's next step, a drop or a swap)
+        is that one's sum plus the changed candidates' terms, and becomes the next one's start, up to
+        :data:`REFRESH` steps from a full sum (the rounding of the additions and subtractions stays within a few
+        ulps): a search asks thousands of such designs, and a full sum reads every used candidate's (3, S, P, P)
+        terms."""
         counts = np.atleast_2d(counts)
         if len(counts) == 1 and self._anchor is not None:
-            c0, M0, t0 = self._anchor
+            c0, M0, t0, steps = self._anchor
             changed = np.flatnonzero(counts[0] != c0)
-            if len(changed) <= NEAR:
-                M, t = M0.copy(), t0.copy()
+            if len(changed) <= NEAR and steps < REFRESH:
+                M, t = M0, t0
                 for k in changed:
                     new, old = int(counts[0, k]), int(c0[k])
                     d_first, d_again = float(new >= 1) - float(old >= 1), max(new - 1, 0) - max(old - 1, 0)
-                    if d_first:
-                        M[:, 0] += d_first * self.first[:, k]
-                        t[0] += d_first * self.first_t[k]
-                    if d_again:
-                        M[:, 0] += d_again * self.again[:, k]
-                        t[0] += d_again * self.again_t[k]
+                    for d, term, term_t in ((d_first, self.first, self.first_t), (d_again, self.again, self.again_t)):
+                        if d:  # each addition one pass, into a new array first, then in place
+                            M = _plus(M, d, term[:, k][:, None], fresh=M is M0)
+                            t = t + d * term_t[k]
+                if len(changed):
+                    self._anchor = (counts[0].copy(), M, t, steps + 1)
                 return M, t
         M, t = self._summed(counts)
         if len(counts) == 1:
-            self._anchor = (counts[0].copy(), M, t)
-        return M.copy(), t.copy()
+            self._anchor = (counts[0].copy(), M, t, 0)
+        return M, t
 
     def _summed(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`moments` of ``counts`` (B, K) summed over every candidate they run."""
