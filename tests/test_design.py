@@ -127,7 +127,8 @@ def test_a_swap_from_the_larger_designs_products_equals_one_more_run_of_the_smal
         np.testing.assert_allclose(fast.sd_nodes[ok], want.sd_nodes[ok], rtol=1e-8)
         np.testing.assert_allclose(fast.contraction, problem.value(less).contraction[0], rtol=1e-8)
         slow, _ = problem.value_swap(counts, k, contraction_met=np.inf)
-        np.testing.assert_array_equal(slow.contraction_nodes, want.contraction_nodes)
+        # the smaller design's own updates (its moments reached from the last design asked: the same to rounding)
+        np.testing.assert_allclose(slow.contraction_nodes, want.contraction_nodes, rtol=1e-12)
 
 
 def test_a_contraction_goal_met_stays_met_one_run_later(problem):
