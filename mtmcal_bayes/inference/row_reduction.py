@@ -60,18 +60,35 @@ class RowReduction:
         y = np.atleast_2d(y)
         return np.hstack([y[:, rows] @ basis for rows, basis in self._projections])
 
-    def log_rest(self, residual: np.ndarray, sigma: np.ndarray) -> np.ndarray:
-        """The log-likelihood ``(G, N)`` of what the reduction leaves out, per cell ``sigma`` ``(G, s)`` (mm) and
-        residual ``residual`` ``(N, m)`` (mm: the readings less the prediction at the prior mean)."""
+    def log_rest(self, residual: np.ndarray, sigma: np.ndarray) -> "RestTerms":
+        """The log-likelihood of what the reduction leaves out, per cell ``sigma`` ``(G, s)`` (mm) and residual
+        ``residual`` ``(N, m)`` (mm: the readings less the prediction at the prior mean), as :class:`RestTerms`
+        (``(G, N)`` by :meth:`RestTerms.dense`)."""
         residual = np.atleast_2d(residual)
-        out = np.zeros((len(sigma), len(residual)))
-        for rows, basis, g, b in self._rest:
+        G = len(sigma)
+        const, coef, rss = np.zeros(G), np.zeros((G, len(self._rest))), np.zeros((len(self._rest), len(residual)))
+        for j, (rows, basis, g, b) in enumerate(self._rest):
             r_k = residual[:, rows]
-            rss = np.sum((r_k - (r_k @ basis) @ basis.T) ** 2, axis=1)  # (N,)
+            rss[j] = np.sum((r_k - (r_k @ basis) @ basis.T) ** 2, axis=1)  # (N,)
             d = b + sigma[:, g] ** 2  # (G,)
-            dof = len(rows) - basis.shape[1]
-            out -= 0.5 * (dof * np.log(2.0 * np.pi * d)[:, None] + rss[None] / d[:, None])
+            const -= 0.5 * (len(rows) - basis.shape[1]) * np.log(2.0 * np.pi * d)
+            coef[:, j] = -0.5 / d
+        return RestTerms(const, coef, rss)
+
+
+class RestTerms:
+    """A log-likelihood ``(G, N)`` of ``G`` cells and ``N`` data vectors of the form ``const[:, None] + coef @ rss``:
+    ``const`` (G,), ``coef`` (G, k), ``rss`` (k, N) — one matrix product, added where the cells' weights are made
+    (:meth:`.marginal.MarginalPosterior.target_moments`), instead of a (G, N) pass per block."""
+
+    def __init__(self, const: np.ndarray, coef: np.ndarray, rss: np.ndarray):
+        self.const, self.coef, self.rss = const, coef, rss
+
+    def dense(self) -> np.ndarray:
+        """The log-likelihood ``(G, N)``."""
+        out = self.coef @ self.rss
+        out += self.const[:, None]
         return out
 
 
-__all__ = ["RowReduction"]
+__all__ = ["RowReduction", "RestTerms"]
