@@ -148,6 +148,31 @@ def test_a_contraction_goal_met_stays_met_one_run_later(problem):
 
 
 # ---------------------------------------------------------------------------------------------------- search
+def test_a_design_containing_one_that_determines_the_targets_is_not_asked_again(new_machine):
+    """On a new machine (nothing determined) the watched targets' undetermined parts of designs, and of one more run
+    of each candidate, are the determination's own, whether or not the problem has met a smaller design that
+    determines them all (then it makes no null space for a larger one)."""
+    from mtmcal_bayes.planning.design_problem import _unseen
+
+    cands = design_candidates(new_machine)
+    dp = DesignProblem(Planner(new_machine, cands))
+    det = dp.determination
+    K = len(cands)
+    dp.watch = det.determined(np.ones(K, dtype=int))  # every target the catalogue determines
+    assert dp.watch.any() and not det.determined()[dp.watch].any()
+    rng = np.random.default_rng(5)
+    small = [c for c in (rng.integers(0, 2, size=K) * (rng.random(K) < 0.3) for _ in range(40))
+             if c.any() and det.determined(c)[dp.watch].all()][0]  # a few runs that determine them
+    assert not dp.value(small).undetermined.any()  # now known to determine them
+    designs = [small + rng.integers(0, 2, size=K) * (rng.random(K) < 0.1) for _ in range(3)]  # larger ones
+    designs += [rng.integers(0, 2, size=K) * (rng.random(K) < 0.1) for _ in range(3)]  # others, some not determining
+    assert any(dp._covered(d > 0) for d in designs) and not all(dp._covered(d > 0) for d in designs)
+    for d in designs:
+        np.testing.assert_array_equal(dp.value(d).undetermined, _unseen(det.unseen_many(d), dp.watch))
+        np.testing.assert_array_equal(dp.value_plus_one(d)[0].undetermined,
+                                      _unseen(det.unseen_plus_one(d), dp.watch))
+
+
 @pytest.fixture(scope="module")
 def new_machine(thesis):
     """The thesis machine before any run: its set-ups and mounts only."""

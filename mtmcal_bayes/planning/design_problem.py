@@ -150,9 +150,7 @@ class DesignProblem:
         #: the instrument whose discrepancy scale is learnt and integrated out (:mod:`.design_instruments`); the
         #: others' rows at the rms of their priors, as the planner's
         self.taught = taught
-        #: (t,) the targets whose determination by the design's runs is part of the criterion (None: none): a target
-        #: the prior alone meets is met only once the runs determine it (:mod:`.determined`)
-        self.watch: np.ndarray | None = None
+        self.watch = None  # (the property below)
         self._anchor = None  # (counts (K,), M, t) of the last design summed in full (:meth:`moments`)
         self.nodes = sigma_nodes(planner, instrument=taught) if nodes is None else np.asarray(nodes, float)
         if taught == "ballbar":
@@ -296,6 +294,45 @@ class DesignProblem:
             self._determination = Determination(self.planner, self._rows)
         return self._determination
 
+    @property
+    def watch(self) -> np.ndarray | None:
+        """(t,) the targets whose determination by the design's runs is part of the criterion (None: none): a target
+        the prior alone meets is met only once the runs determine it (:mod:`.determined`)."""
+        return self._watch
+
+    @watch.setter
+    def watch(self, value) -> None:
+        self._watch = None if value is None else np.asarray(value, dtype=bool)
+        #: supports (K,) of designs found to determine every watched target, and them stacked (:meth:`_covered`)
+        self._complete: list[np.ndarray] = []
+        self._complete_stack = np.zeros((0, len(self.candidates)), dtype=bool)
+
+    def _undetermined(self, counts: np.ndarray) -> np.ndarray:
+        """(B, t) :attr:`DesignValue.undetermined` of designs ``counts`` (B, K)."""
+        counts = np.atleast_2d(counts)
+        out = np.zeros((len(counts), len(self.watch)))
+        for b, c in enumerate(counts):
+            if not self._covered(c > 0):
+                out[b] = _unseen(self.determination.unseen(c), self.watch)
+                if not out[b].any():
+                    self._complete.append(c > 0)
+        return out
+
+    def _undetermined_plus_one(self, counts: np.ndarray) -> np.ndarray:
+        """(K, t) :attr:`DesignValue.undetermined` of ``counts`` (K,) plus one run of each candidate."""
+        if not self._undetermined(counts)[0].any():  # a further run keeps them determined
+            return np.zeros((len(self.candidates), len(self.watch)))
+        return _unseen(self.determination.unseen_plus_one(counts), self.watch)
+
+    def _covered(self, support: np.ndarray) -> bool:
+        """Whether the candidates of ``support`` (K,) include those of a design known to determine every watched
+        target: adding rows only shrinks the null space, so they determine them too (no null space made)."""
+        if not self._complete:
+            return False
+        if len(self._complete) != len(self._complete_stack):
+            self._complete_stack = np.array(self._complete)
+        return bool(np.any(np.all(support[None] | ~self._complete_stack, axis=1)))
+
     def _watched(self) -> bool:
         return self.watch is not None and bool(np.any(self.watch))
 
@@ -304,7 +341,7 @@ class DesignProblem:
         M, t = self.moments(counts)
         v = self._value(M, t)
         if self._watched():
-            v.undetermined = _unseen(self.determination.unseen_many(counts), self.watch)
+            v.undetermined = self._undetermined(counts)
         return v
 
     def _value(self, M: np.ndarray, t: np.ndarray) -> DesignValue:
@@ -362,7 +399,7 @@ class DesignProblem:
             contraction = np.broadcast_to(contraction_now, (K, S))
         v = DesignValue(sd, contraction)
         if self._watched():
-            v.undetermined = _unseen(self.determination.unseen_plus_one(counts), self.watch)
+            v.undetermined = self._undetermined_plus_one(counts)
         return v, counts < MAX_INSTANCES
 
     def _state(self, counts: np.ndarray) -> dict:
@@ -430,7 +467,7 @@ class DesignProblem:
         v = DesignValue(np.sqrt(np.maximum(var_new, 0.0)) * self.to_display,
                         np.broadcast_to(contraction_less, (K, S)))
         if self._watched():
-            v.undetermined = _unseen(self.determination.unseen_plus_one(less), self.watch)
+            v.undetermined = self._undetermined_plus_one(less)
         ok = less < MAX_INSTANCES
         ok[k] = False  # its sds above are of a further run of k (as ``counts`` has it), not of ``less``'s
         return v, ok
@@ -472,7 +509,7 @@ class DesignProblem:
         v = DesignValue(np.sqrt(np.maximum(var_new, 0.0)) * self.to_display,
                         self._contraction(st["t"][None] - dt - 2.0 * trSM3_new + trE2))
         if self._watched():
-            v.undetermined = _unseen(self.determination.unseen_many(less), self.watch)
+            v.undetermined = self._undetermined(less)
         return v, less
 
     def _updates(self, st: dict, fresh: np.ndarray, idx: np.ndarray, r: int, *, traces: bool = True,
