@@ -152,6 +152,25 @@ def test_minutes_add_up(small):
                              "change instrument", "mount R-test", "measure"]
 
 
+def test_the_searchs_minutes_of_any_mixed_design_equal_the_schedules(small):
+    """``Timing.total_of_counts`` (the search's minutes, no runs made) equals the schedule of the runs
+    ``designed_runs`` makes, to the last bit, for random designs of every instrument (probe candidates run up to three
+    times), from a new session, with the bar mounted and with a probe or the R-test on the machine."""
+    c, cands, _ = small
+    timing = Timing(c, TimeModel(instrument_change_min=7.0, stylus_change_min=3.0, move_sphere_min=2.0))
+    probe = next(x for x in cands if x.instrument == "probe")
+    bar = next(x for x in cands if x.instrument == "ballbar")
+    starts = [NEW, (True, bar.setup.id, bar.mount.id), (False, None, None, ("probe", probe.stylus_length,
+                                                                            tuple(probe.sphere))),
+              (False, None, None, ("rtest",))]
+    rng = np.random.default_rng(2)
+    for _ in range(60):
+        counts = rng.integers(0, 4, len(cands)) * (rng.random(len(cands)) < 0.3)
+        for start in starts:
+            runs = designed_runs(cands, counts)
+            assert timing.total_of_counts(cands, counts, start) == timing.total(runs, start)
+
+
 def test_instruments_restrict_the_candidates(paths):
     c = load_campaign(paths / "all.toml")
     assert {x.instrument for x in design_candidates(c, instruments=["probe"])} == {"probe"}

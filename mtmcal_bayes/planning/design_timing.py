@@ -144,12 +144,11 @@ class Timing:
         # order); the probe's and the R-test's runs apart, as :meth:`order` puts them
         setup_of, mount_of, measure = self._keys(candidates)
         groups: dict = {}
-        others = []
-        n_of = counts.tolist()
-        for k in np.flatnonzero(counts).tolist():
-            n = n_of[k]
+        others = []  # (candidate, runs) of the probe's and the R-test's
+        nz = np.flatnonzero(counts)
+        for k, n in zip(nz.tolist(), np.asarray(counts)[nz].tolist()):
             if measure[k] is None:
-                others += [_Other(candidates[k], i + 1) for i in range(n)]
+                others.append((k, n))
                 continue
             by_mount = groups.setdefault(setup_of[k], {})
             by_mount.setdefault(mount_of[k], []).append(k)
@@ -189,10 +188,56 @@ class Timing:
                     t += measure[k]
                 mounted, setup, mount = True, s, mt
         if others:
-            ordered = [others[i] for i in self.order(others, start)]
-            for _, _, minutes in self._other_steps(ordered, _current(start, bool(groups))):
-                t += minutes
+            t = self._others_after(t, candidates, others, _current(start, bool(groups)))
         return t
+
+    def _others_after(self, t: float, candidates, others: list[tuple[int, int]], current: tuple | None) -> float:
+        """``t`` plus the minutes of the probe's and the R-test's runs ``others`` ((candidate, runs), in candidate
+        order) in :meth:`order`'s order from ``current`` (:func:`_current`): :meth:`_other_steps`' additions, in the
+        same order (the same float), without making runs."""
+        inst, key, stylus, sphere, minutes, renamed = self._other_keys(candidates)
+        rank: dict = {}
+        probe = [(k, i) for k, n in others if inst[k] == "probe" for i in range(1, n + 1)]
+        for k, _ in probe:
+            rank.setdefault(key[k], len(rank))
+        probe.sort(key=lambda e: rank[key[e[0]]])  # by stylus and sphere in order of first appearance (stable)
+        m = self.model
+        current, sty, sph = (current[0], current[1], tuple(current[2])) if current and current[0] == "probe" \
+            else (current[0] if current else None, None, None)
+        for k, i in probe + [(k, i) for k, n in others if inst[k] == "rtest" for i in range(1, n + 1)]:
+            if inst[k] != current:
+                if current is not None:
+                    t += m.instrument_change_min
+                t += m.mount_probe_min if inst[k] == "probe" else m.mount_rtest_min
+                current = inst[k]
+                if current == "probe":
+                    sty, sph = stylus[k], sphere[k]
+            if current == "probe":
+                again = i > 1 or renamed[k]  # its stylus and sphere set anew (:func:`_further`)
+                if again or stylus[k] != sty:
+                    t += m.stylus_change_min
+                if again or sphere[k] != sph:
+                    t += m.move_sphere_min
+                sty, sph = stylus[k], sphere[k]
+            t += minutes[k]
+        return t
+
+    def _other_keys(self, candidates) -> tuple[list, ...]:
+        """Per candidate of ``candidates``: its instrument, its probe key (stylus length, sphere), stylus length,
+        sphere, measuring minutes and whether it is a further run by its id (:func:`_further`); None for a ball-bar
+        candidate; made once per list of candidates."""
+        cache = self.__dict__.setdefault("_other_keyed", {})
+        if id(candidates) not in cache:
+            probe = [c if c.instrument == "probe" else None for c in candidates]
+            other = [c if c.instrument != "ballbar" else None for c in candidates]
+            cache[id(candidates)] = (candidates, (
+                [c.instrument for c in candidates],
+                [None if c is None else _probe_key(c) for c in probe],
+                [None if c is None else c.stylus_length for c in probe],
+                [None if c is None else tuple(c.sphere) for c in probe],
+                [None if c is None else self._other_minutes(c) for c in other],
+                [c is not None and _further(_Other(c, 1)) for c in other]))
+        return cache[id(candidates)][1]
 
     def floor(self, candidates) -> np.ndarray:
         """(K,) the fewest minutes one more run of each of ``candidates`` adds to any schedule: its measuring minutes
