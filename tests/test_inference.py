@@ -309,3 +309,16 @@ def test_exact_draws_shown_beside_another_posterior_are_summarised_alike_without
     assert b[["r_hat", "ess_bulk", "ess_tail", "mcse_mean", "mcse_sd"]].isna().all().all()
     assert f["r_hat"].notna().all() and beside.reference is None and full.reference is not None
     assert not any("R-hat" in w or "ESS" in w for w in beside.warnings)
+
+
+def test_a_priors_draws_are_its_scipy_distributions(thesis):
+    """``Prior.draw`` gives the frozen scipy distribution's ``rvs`` to the bit, from the same generator state, for
+    every kind of prior (a normal one's without making the distribution)."""
+    from mtmcal_bayes.inference.priors import Prior
+
+    kinds = [Prior("a", "normal", 0.3, 2.0, "um", ""), Prior("b", "halfnormal", 0.0, 1.5, "um", ""),
+             Prior("c", "uniform", -1.0, 3.0, "um", ""), Prior("d", "lognormal", 0.0, 1.2, "um", "", shape=0.4)]
+    for p in kinds:
+        a, b = np.random.default_rng(7), np.random.default_rng(7)
+        np.testing.assert_array_equal(p.draw(50, a), p.frozen().rvs(size=50, random_state=b))
+        assert a.random() == b.random()  # the generators left alike

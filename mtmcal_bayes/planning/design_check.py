@@ -176,7 +176,7 @@ def preposterior(planner: Planner, runs: list[DesignedRun], *, n_sim: int = N_SI
             var_of[i] = var_i
     else:
         var_of = {}
-        theta = np.column_stack([p.frozen().rvs(size=n_sim, random_state=rng) for p in priors])
+        theta = np.column_stack([p.draw(n_sim, rng) for p in priors])
         sigma = stratified_draws(sigma_prior, n_sim, rng)
         drawn = {"ballbar": sigma}
         sd_now = np.sqrt(np.sum(T**2 * prior_var, axis=1))[None]
