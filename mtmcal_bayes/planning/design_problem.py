@@ -273,12 +273,15 @@ class DesignProblem:
     def _summed(self, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`moments` of ``counts`` (B, K) summed over every candidate they run."""
         # the candidates some design runs (a design runs a few of a hundred: the others' terms are not read)
+        K = len(self.candidates)
         used = np.flatnonzero(counts.any(axis=0))
+        if 2 * len(used) >= K:  # most of them: every candidate's terms read in place, not a copy of the used ones'
+            used = np.arange(K)
         counts = counts[:, used]
         first = (counts >= 1).astype(float)
         again = np.maximum(counts - 1, 0).astype(float)
-        K = len(self.candidates)
-        flat = lambda a, idx: a.reshape(3, K, -1)[:, idx]  # noqa: E731  (candidates × everything else, one matmul)
+        # candidates × everything else, one matmul (every candidate: a view, no copy)
+        flat = lambda a, idx: a.reshape(3, K, -1)[:, idx] if len(idx) < K else a.reshape(3, K, -1)  # noqa: E731
         shape = (3, len(counts)) + self.first.shape[2:]
         M = np.stack(self.base)[:, None] + (first @ flat(self.first, used)).reshape(shape)
         twice = np.flatnonzero(again.any(axis=0))  # the candidates run more than once (few): their further runs
