@@ -547,3 +547,35 @@ def test_bad_times_and_candidates_files_name_the_file_and_key(run_cli, tmp_path)
     code, _, err = run_cli("design", "--candidates", cands, "-o", out)
     assert code == 2 and f"{cands}: candidate[0]" in err and "travel" in err, err
     assert not out.exists()
+
+
+def test_each_runs_why_is_what_removing_it_costs(new_machine):
+    """A design's why per run (all drops weighed at once) says what removing that run costs, as the design less that
+    run valued on its own gives it: each targeted sd it lowers by more than WHY_SD, and σ_model's contraction it
+    teaches where the drop exceeds WHY_CONTRACTION (runs that teach it and runs that do not)."""
+    from mtmcal_bayes.planning.design_make import WHY_CONTRACTION, WHY_SD, make_design
+
+    targets = {"alpha_XB": 1.5, "dy_CZ": 8.0}
+    d = make_design(new_machine, targets=targets, contraction=0.5)
+    problem = DesignProblem(Planner(new_machine, d.candidates))
+    counts = np.zeros(len(d.candidates), dtype=int)
+    index = {id(c): k for k, c in enumerate(d.candidates)}
+    for r in d.runs:
+        counts[index[id(r.candidate)]] += 1
+    with_it = problem.value(counts)
+    where = [problem.planner.targets.index(q) for q in targets]
+    teaching = []
+    for r, why in zip(d.runs, d.why):
+        less = counts.copy()
+        less[index[id(r.candidate)]] -= 1
+        without = problem.value(less)
+        a, b = with_it.sd_promised[0], without.sd_promised[0]
+        for q, i in zip(targets, where):
+            if b[i] / a[i] - 1.0 > WHY_SD:
+                assert f"{q} {b[i]:.3g} → {a[i]:.3g}" in why
+        teaching.append(with_it.contraction[0] - without.contraction[0] > WHY_CONTRACTION)
+        if teaching[-1]:
+            assert f"teaches σ_model (contraction {without.contraction[0]:.2f} → {with_it.contraction[0]:.2f})" in why
+        else:
+            assert "teaches" not in why
+    assert any(teaching) and not all(teaching)

@@ -212,15 +212,13 @@ def _check_budget(search: Search, goal: Goal) -> None:
                              f"({shortest:.0f} min)")
 
 
-def _why(problem: DesignProblem, counts: np.ndarray, k: int, units_of: list[str], *,
+def _why(problem: DesignProblem, with_it, without, row: int, units_of: list[str], *,
          targets: np.ndarray | None = None) -> str:
-    """What run ``k``'s last instance adds: the targeted quantities (``targets`` (t,), NaN: none) whose sd it lowers,
-    then the others it lowers most, two at least where there are, and what it teaches σ_model."""
-    with_it = problem.value(counts)
-    less = counts.copy()
-    less[k] -= 1
-    without = problem.value(less)
-    a, b = with_it.sd_promised[0], without.sd_promised[0]
+    """What a run's last instance adds: the targeted quantities (``targets`` (t,), NaN: none) whose sd it lowers,
+    then the others it lowers most, two at least where there are, and what it teaches σ_model; ``with_it`` the
+    design's value, ``without`` the values of the design less one run of each candidate it runs
+    (:meth:`.DesignProblem.value_minus_one`), ``row`` the run's candidate among them."""
+    a, b = with_it.sd_promised[0], without.sd_promised[row]
     rel = b / a - 1.0
     served = np.zeros(len(rel), dtype=bool) if targets is None else np.isfinite(targets) & (rel > WHY_SD)
     first = [i for i in np.argsort(-rel) if served[i]]
@@ -230,9 +228,9 @@ def _why(problem: DesignProblem, counts: np.ndarray, k: int, units_of: list[str]
             u = units.SYMBOL[units_of[i]]
             parts.append(f"{problem.planner.targets[i]} {b[i]:.3g} → {a[i]:.3g} {u}")
     teach = None
-    dc = with_it.contraction[0] - without.contraction[0]
+    dc = with_it.contraction[0] - without.contraction[row]
     if dc > WHY_CONTRACTION:
-        teach = f"teaches σ_model (contraction {without.contraction[0]:.2f} → {with_it.contraction[0]:.2f})"
+        teach = f"teaches σ_model (contraction {without.contraction[row]:.2f} → {with_it.contraction[0]:.2f})"
     if parts and teach:
         return f"identifies {', '.join(parts)}; {teach}"
     if parts:
@@ -375,11 +373,11 @@ def _assembled(campaign, cands, planner, problem, *, goal, timing, start, counts
     order = timing.order(runs, start)
     runs = [runs[i] for i in order]
     index = {id(c): k for k, c in enumerate(cands)}
-    why, seen = [], {}
-    for r in runs:
-        k = index[id(r.candidate)]
-        seen[k] = seen.get(k, 0) + 1
-        why.append(_why(problem, counts, k, planner.target_units, targets=goal.targets))
+    # every run's candidate less one run at once (rank-r downdates of the design), each candidate's why once
+    with_it, (without, _) = problem.value(counts), problem.value_minus_one(counts)
+    row = {k: i for i, k in enumerate(np.flatnonzero(counts))}
+    said = {k: _why(problem, with_it, without, i, planner.target_units, targets=goal.targets) for k, i in row.items()}
+    why = [said[index[id(r.candidate)]] for r in runs]
     minutes_each = timing.per_run(runs, start)
     nodes = ", ".join(f"{units.from_internal(s, 'um'):.2f}" for s in problem.nodes)
     form = "the linear model" if model == "linear" else f"the {model} model linearised at zero deviations"
