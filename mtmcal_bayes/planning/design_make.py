@@ -212,7 +212,7 @@ def _check_budget(search: Search, goal: Goal) -> None:
                              f"({shortest:.0f} min)")
 
 
-def _why(problem: DesignProblem, with_it, without, row: int, units_of: list[str], *,
+def _why(problem: DesignProblem, with_it, without, row: int, *, units_of: list[str],
          targets: np.ndarray | None = None) -> str:
     """What a run's last instance adds: the targeted quantities (``targets`` (t,), NaN: none) whose sd it lowers,
     then the others it lowers most, two at least where there are, and what it teaches σ_model; ``with_it`` the
@@ -376,7 +376,8 @@ def _assembled(campaign, cands, planner, problem, *, goal, timing, start, counts
     # every run's candidate less one run at once (rank-r downdates of the design), each candidate's why once
     with_it, (without, _) = problem.value(counts), problem.value_minus_one(counts)
     row = {k: i for i, k in enumerate(np.flatnonzero(counts))}
-    said = {k: _why(problem, with_it, without, i, planner.target_units, targets=goal.targets) for k, i in row.items()}
+    said = {k: _why(problem, with_it, without, i, units_of=planner.target_units, targets=goal.targets)
+            for k, i in row.items()}
     why = [said[index[id(r.candidate)]] for r in runs]
     minutes_each = timing.per_run(runs, start)
     nodes = ", ".join(f"{units.from_internal(s, 'um'):.2f}" for s in problem.nodes)
