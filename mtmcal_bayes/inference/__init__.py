@@ -5,30 +5,35 @@ priors, nothing of the thesis' deterministic method (the posterior feature,
 :mod:`mtmcal_bayes.posterior`, sets the two side by side).
 """
 
-from .analytic import GaussianPosterior, gaussian_posterior, prior_sensitivity
-from .approximation import IndependenceMove, PosteriorApproximation
-from .identifiability import Combination, Identifiability, identifiability
-from .log_posterior import SAMPLED_DEVIATIONS, LogPosterior
-from .marginal import MarginalPosterior
-from .priors import Prior, PriorSet, make_prior
-from .results import (
-           diagnostics_warnings,
-           display_draws,
-           not_identified,
-           summarize,
-           to_inference_data,
-)
-from .sampling import (
-           SAMPLERS,
-           SamplerSettings,
-           SamplingResult,
-           check_step_budget,
-           run_ensembles,
-           run_exact,
-)
+import importlib
 
-__all__ = ["GaussianPosterior", "gaussian_posterior", "prior_sensitivity", "IndependenceMove",
-           "PosteriorApproximation", "Combination", "Identifiability", "identifiability",
-           "SAMPLED_DEVIATIONS", "LogPosterior", "MarginalPosterior", "Prior", "PriorSet",
-           "make_prior", "diagnostics_warnings", "display_draws", "not_identified", "summarize", "to_inference_data",
-           "SAMPLERS", "SamplerSettings", "SamplingResult", "check_step_budget", "run_ensembles", "run_exact"]
+#: each public name and the module it comes from, imported on first use (PEP 562): a command that needs the exact
+#: posterior or the closed form (``design``, ``plan``) does not load ArviZ, pandas and matplotlib with the sampler's
+#: results
+_HOME = {
+    **dict.fromkeys(("GaussianPosterior", "gaussian_posterior", "prior_sensitivity"), "analytic"),
+    **dict.fromkeys(("IndependenceMove", "PosteriorApproximation"), "approximation"),
+    **dict.fromkeys(("Combination", "Identifiability", "identifiability"), "identifiability"),
+    **dict.fromkeys(("SAMPLED_DEVIATIONS", "LogPosterior"), "log_posterior"),
+    "MarginalPosterior": "marginal",
+    **dict.fromkeys(("Prior", "PriorSet", "make_prior"), "priors"),
+    **dict.fromkeys(("diagnostics_warnings", "display_draws", "not_identified", "summarize", "to_inference_data"),
+                    "results"),
+    **dict.fromkeys(("SAMPLERS", "SamplerSettings", "SamplingResult", "check_step_budget", "run_ensembles",
+                     "run_exact"), "sampling"),
+}
+
+
+def __getattr__(name: str):
+    if name not in _HOME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
+
+
+__all__ = list(_HOME)
