@@ -147,6 +147,31 @@ def test_a_contraction_goal_met_stays_met_one_run_later(problem):
     np.testing.assert_array_equal(again.contraction_nodes, full.contraction_nodes)
 
 
+def test_a_design_containing_one_known_to_meet_the_contraction_goal_meets_it_without_its_traces(thesis):
+    """Once a design is known to reach the contraction goal, a larger one (each candidate run at least as often) is
+    given that design's contraction, a lower bound meeting the goal, with its own sds; a design not containing it
+    still gets its own contraction."""
+    cands = design_candidates(thesis)
+    problem = DesignProblem(Planner(thesis, cands))
+    rng = np.random.default_rng(8)
+    K = len(cands)
+    small = rng.integers(0, 2, size=K) * (rng.random(K) < 0.2)
+    goal = float(problem.value(small).contraction[0]) - 1e-6
+    problem.value_plus_one(small, contraction_met=goal)  # now known to meet it
+    larger = np.minimum(small + rng.integers(0, 2, size=K) * (rng.random(K) < 0.2), MAX_INSTANCES)
+    own = problem.value(larger).contraction[0]
+    assert own >= goal
+    bound, _ = problem.value_plus_one(larger, contraction_met=goal)
+    np.testing.assert_allclose(bound.sd_nodes, problem.value_plus_one(larger)[0].sd_nodes, rtol=1e-12)
+    assert np.all(bound.contraction >= goal) and np.all(bound.contraction <= own + 1e-12)
+    other = np.zeros(K, dtype=int)
+    other[np.flatnonzero(small == 0)[0]] = 1  # one run of a candidate small does not run: short of the goal
+    assert problem.value(other).contraction[0] < goal
+    full, _ = problem.value_plus_one(other)
+    mine, _ = problem.value_plus_one(other, contraction_met=goal)
+    np.testing.assert_allclose(mine.contraction_nodes, full.contraction_nodes, rtol=1e-12)
+
+
 # ---------------------------------------------------------------------------------------------------- search
 def test_a_design_containing_one_that_determines_the_targets_is_not_asked_again(new_machine):
     """On a new machine (nothing determined) the watched targets' undetermined parts of designs, and of one more run

@@ -385,7 +385,7 @@ class DesignProblem:
         counts = np.asarray(counts)
         st = self._state(counts)
         K, S = len(self.candidates), len(st["Sig"])
-        contraction_now = self._contraction(st["t"] - 2.0 * st["trSM3"] + st["trA2"])  # (S,): of counts
+        contraction_now = self._contraction_now(counts, st, contraction_met)  # (S,): of counts, or a bound
         traces = contraction_met is None or contraction_now.mean() < contraction_met
         var_new = np.empty((K, S, len(self.Tp)))
         trE2, trSM3_new = np.empty((K, S)), np.empty((K, S))
@@ -408,22 +408,42 @@ class DesignProblem:
     def _state(self, counts: np.ndarray) -> dict:
         """``counts``' posterior at the σ nodes and what its rank-r updates start from, kept for the next call with
         the same design (an exchange pass asks it once per run of the design): ``Sig`` (S, P, P), ``M2``, ``M3``,
-        ``A = Σ M₂``, ``var`` (S, t), ``trA2``, ``trSM3`` (S,), ``t`` (S,), and per candidate group the products with
-        its rows made when first asked (``E``: ``XΣ`` (S, k·r, P), ``ETp``: ``XΣTpᵀ``, ``H``: ``XΣXᵀ`` (k, S, r, r))."""
+        ``var`` (S, t), ``t`` (S,), the traces ``A = Σ M₂``, ``trA2``, ``trSM3`` (S,) when first needed
+        (:meth:`_traced`), and per candidate group the products with its rows made when first asked (``E``: ``XΣ`` (S, k·r, P), ``ETp``: ``XΣTpᵀ``, ``H``: ``XΣXᵀ`` (k, S, r, r))."""
         key = counts.tobytes()
         if getattr(self, "_last_state", None) is not None and self._last_state[0] == key:
             return self._last_state[1]
         M, t = self.moments(counts)
         P = M.shape[-1]
         Sig = np.linalg.inv(np.eye(P) + M[0, 0])
-        M2, M3 = M[1, 0], M[2, 0]
-        A = Sig @ M2
-        state = dict(Sig=Sig, M2=M2, M3=M3, A=A, t=t[0],
-                     var=np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched,
-                     trA2=np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1)), trSM3=np.sum(Sig * M3, axis=(-2, -1)),
-                     groups={})
+        state = dict(Sig=Sig, M2=M[1, 0], M3=M[2, 0], t=t[0],
+                     var=np.sum((Sig @ self.Tp.T) * self.Tp.T, axis=-2) + self.var_untouched, groups={})
         self._last_state = (key, state)
         return state
+
+    @staticmethod
+    def _traced(st: dict) -> dict:
+        """``st`` (:meth:`_state`) with ``A = Σ M₂``, ``tr A²`` and ``tr(Σ M₃)`` (S,), made when first needed (the
+        contraction's traces: a search whose contraction goal is met needs them for its exchange only)."""
+        if "A" not in st:
+            A = st["Sig"] @ st["M2"]
+            st.update(A=A, trA2=np.sum(A * np.swapaxes(A, -1, -2), axis=(-2, -1)),
+                      trSM3=np.sum(st["Sig"] * st["M3"], axis=(-2, -1)))
+        return st
+
+    def _contraction_now(self, counts: np.ndarray, st: dict, contraction_met: float | None) -> np.ndarray:
+        """(S,) ``counts``' σ_model contraction at the nodes; where a smaller design (each candidate run no more
+        often) is known to reach ``contraction_met``, that design's, a lower bound meeting it too (a run added
+        never lowers the Fisher information about σ), without the traces."""
+        met = getattr(self, "_met", None)
+        if contraction_met is not None and met is not None and met[1].mean() >= contraction_met \
+                and np.all(counts >= met[0]):
+            return met[1]
+        self._traced(st)
+        c = self._contraction(st["t"] - 2.0 * st["trSM3"] + st["trA2"])
+        if contraction_met is not None and c.mean() >= contraction_met:
+            self._met = (counts.copy(), c)
+        return c
 
     def value_swap(self, counts: np.ndarray, k: int, *,
                    contraction_met: float | None = None) -> tuple[DesignValue, np.ndarray]:
@@ -524,7 +544,7 @@ class DesignProblem:
         the run's own moments changes sign."""
         # every product with a P × P matrix as one matrix product per σ node over all candidates' rows stacked
         # (k·r, P), then back to (k, S, r, ·) (:meth:`_products`): the batched small products left are r × r, r × P
-        Sig, M2, M3, A = st["Sig"], st["M2"], st["M3"], st["A"]
+        Sig = st["Sig"]
         X, N, XS_flat, Q, H = self._products(st, idx, r, fresh)
         first = fresh[:, None, None, None]
         k = len(X)
@@ -535,6 +555,7 @@ class DesignProblem:
         var_new = st["var"][None] - np.sum(Q * (Winv @ Q), axis=-2)
         if not traces:
             return (var_new,)
+        M2, M3, A = st["M2"], st["M3"], self._traced(st)["A"]
         D2 = np.where(first, self.D2f[idx][:, :, :r, :r], self.D2a[idx][:, :, :r, :r])
         D3 = np.where(first, self.D3f[idx][:, :, :r, :r], self.D3a[idx][:, :, :r, :r])
         D2X = D2 @ X[:, None]  # (k, S, r, P)
