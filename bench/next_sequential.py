@@ -138,6 +138,8 @@ def one_type(kind: str, n: int) -> dict:
           f"({per_instrument([r.instrument for r in d.runs])}), {fixed:.1f} min, every target met on "
           f"{d.check.share_all_met(d.goal.targets):.0%} of the check's machines; targets "
           + ", ".join(f"{q} {v:.3g}" for q, v in tg.items()), flush=True)
+    print("  its runs: " + "; ".join(f"{r.label} ({r.instrument}) {m:.1f} min" for r, m in zip(d.runs, d.minutes)),
+          flush=True)
     rows = []
     for i in range(n):
         machine = SimulatedMachine(c, 3000 + i)
@@ -152,7 +154,7 @@ def one_type(kind: str, n: int) -> dict:
                      "added": any(t[3] for t in trail),  # the rest designed again with a run added
                      "dropped": any(t[4] and not t[3] for t in trail),  # a kept plan's run dropped
                      "early": bool(step.status == "stop" and step.planned_left),  # stopped with planned runs left
-                     "kinds": [t[5] for t in trail], "serving": sum(any(q in t[2] for q in names) for t in trail),
+                     "kinds": [t[5] for t in trail], "trail": trail, "serving": sum(any(q in t[2] for q in names) for t in trail),
                      "teaching": sum("teaches σ_model" in t[2] and not any(q in t[2] for q in names)
                                      for t in trail)})
         r = rows[-1]
@@ -192,6 +194,10 @@ def one_type(kind: str, n: int) -> dict:
         print(f"  machine {3000 + i}: next {r['minutes']:.1f} min, {r['runs']} runs ({per_instrument(r['kinds'])}); "
               f"the fixed design {'met every target' if not unmet else 'left unmet ' + ', '.join(unmet)}",
               flush=True)
+        for label, minutes, why, added, dropped, instrument in r["trail"]:  # what next did, run by run
+            print(f"    {label} ({instrument}) {minutes:.1f} min"
+                  + (f"; added {', '.join(added)}" if added else "") + (f"; dropped {', '.join(dropped)}" if dropped
+                                                                        else "") + f": {why}", flush=True)
     return row
 
 
