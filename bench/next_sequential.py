@@ -26,7 +26,9 @@ target (the realised posterior sd of every instrument's data) at ``next``'s stop
 the fixed design's share per target; the machines where ``next`` designed the rest again (a run added), dropped a
 planned run, stopped with planned runs left; the runs ``next`` named per instrument, the share whose ``why`` names
 a target and the share whose ``why`` names σ_model's contraction alone (a run there to teach it).  Each machine
-where ``next`` stopped later is listed: its minutes, the fixed design's unmet targets.
+where ``next`` stopped later is listed: its minutes, the fixed design's unmet targets, and run by run what ``next``
+measured (its minutes, the runs it added to and dropped from the plan then, its why); the fixed design's runs are
+listed once.
 
 ``--joint-keep``: the alternative keep rule (docs/design.md, "`next` against the fixed design"): a plan is kept while
 its check from today's posterior meets every target *at once* on ``KEEP_SHARE`` of the simulated machines (instead of
