@@ -26,7 +26,9 @@ target (the realised posterior sd of every instrument's data) at ``next``'s stop
 the fixed design's share per target; the machines where ``next`` designed the rest again (a run added), dropped a
 planned run, stopped with planned runs left; the runs ``next`` named per instrument, the share whose ``why`` names
 a target and the share whose ``why`` names σ_model's contraction alone (a run there to teach it).  Each machine
-where ``next`` stopped later is listed: its minutes, the fixed design's unmet targets.
+where ``next`` stopped later is listed: its minutes, the fixed design's unmet targets, and run by run what ``next``
+measured (its minutes, the runs it added to and dropped from the plan then, its why); the fixed design's runs are
+listed once.
 
 ``--joint-keep``: the alternative keep rule (docs/design.md, "`next` against the fixed design"): a plan is kept while
 its check from today's posterior meets every target *at once* on ``KEEP_SHARE`` of the simulated machines (instead of
@@ -138,6 +140,8 @@ def one_type(kind: str, n: int) -> dict:
           f"({per_instrument([r.instrument for r in d.runs])}), {fixed:.1f} min, every target met on "
           f"{d.check.share_all_met(d.goal.targets):.0%} of the check's machines; targets "
           + ", ".join(f"{q} {v:.3g}" for q, v in tg.items()), flush=True)
+    print("  its runs: " + "; ".join(f"{r.label} ({r.instrument}) {m:.1f} min" for r, m in zip(d.runs, d.minutes)),
+          flush=True)
     rows = []
     for i in range(n):
         machine = SimulatedMachine(c, 3000 + i)
@@ -152,7 +156,7 @@ def one_type(kind: str, n: int) -> dict:
                      "added": any(t[3] for t in trail),  # the rest designed again with a run added
                      "dropped": any(t[4] and not t[3] for t in trail),  # a kept plan's run dropped
                      "early": bool(step.status == "stop" and step.planned_left),  # stopped with planned runs left
-                     "kinds": [t[5] for t in trail], "serving": sum(any(q in t[2] for q in names) for t in trail),
+                     "kinds": [t[5] for t in trail], "trail": trail, "serving": sum(any(q in t[2] for q in names) for t in trail),
                      "teaching": sum("teaches σ_model" in t[2] and not any(q in t[2] for q in names)
                                      for t in trail)})
         r = rows[-1]
@@ -192,6 +196,10 @@ def one_type(kind: str, n: int) -> dict:
         print(f"  machine {3000 + i}: next {r['minutes']:.1f} min, {r['runs']} runs ({per_instrument(r['kinds'])}); "
               f"the fixed design {'met every target' if not unmet else 'left unmet ' + ', '.join(unmet)}",
               flush=True)
+        for label, minutes, why, added, dropped, instrument in r["trail"]:  # what next did, run by run
+            print(f"    {label} ({instrument}) {minutes:.1f} min"
+                  + (f"; added {', '.join(added)}" if added else "") + (f"; dropped {', '.join(dropped)}" if dropped
+                                                                        else "") + f": {why}", flush=True)
     return row
 
 

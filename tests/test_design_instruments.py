@@ -264,3 +264,36 @@ def test_an_rtest_candidate_names_its_sphere_once(paths):
     run.placement = None  # named after the run that places it
     measured.rtest.runs = [run]
     assert rtest_where(other_candidates(measured, ["rtest"])[0])["mount"] == f"sphere {run.id} at [0, 60, 30] mm"
+
+
+def test_next_measures_the_planned_run_before_the_runs_a_replan_adds(paths, monkeypatch):
+    """A re-plan that keeps the planned R-test run and adds another R-test run names the planned one next — their
+    order costs nothing there, and the plan may yet be enough on this machine (the added run then dropped) — where
+    the search lists the added run first (the catalogue's order); the runs keep their whys and the minutes add up as
+    before.  A planned run is not moved where that changes the measuring order: the R-test's run stays after the
+    ball bar's."""
+    from mtmcal_bayes.planning import next_run
+    from mtmcal_bayes.planning.design_make import design_of_plan
+    from mtmcal_bayes.planning.design_output import designed_campaign
+    from mtmcal_bayes.planning.next_plan import planned_first
+
+    c = load_campaign(paths / "all.toml")
+    rtest = {x.name: x for x in other_candidates(c, ["rtest"])}
+    added, kept = rtest["R-test A swept -120…30°"], rtest["R-test C swept 0…350°"]
+    settings = dict(targets={"E_B0C": 1.5}, contraction=None, seed=0, n_sim=100)
+    planned = designed_campaign(design_of_plan(c, [kept], np.array([1]), **settings))
+    replan = design_of_plan(c, [added, kept], np.array([1, 1]), **settings)
+    assert [r.label for r in replan.runs] == [added.name, kept.name]  # the search's order, the added run first
+    monkeypatch.setattr(next_run, "plan_holds", lambda design: False)  # the plan falls short: designed again
+    monkeypatch.setattr(next_run, "_designed_again", lambda *args, **kwargs: replan)
+    step = next_run.next_step(planned, **settings)
+    assert step.status == "measure" and step.added == [added.name] and not step.dropped
+    assert [r.label for r in step.design.runs] == [kept.name, added.name]
+    assert step.design.why == replan.why[::-1]
+    assert sum(step.design.minutes) == pytest.approx(sum(replan.minutes), rel=1e-12)
+    assert step.design.total_minutes == pytest.approx(replan.total_minutes, rel=1e-12)
+
+    bar = design_candidates(c)[0]
+    mixed = design_of_plan(c, [bar, kept], np.array([1, 1]), **settings)
+    assert [r.instrument for r in mixed.runs] == ["ballbar", "rtest"]
+    assert planned_first(mixed, {kept.name}) is mixed

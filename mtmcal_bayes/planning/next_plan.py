@@ -15,12 +15,16 @@ of its plan, no more:
 * **drop** a planned run when the rest without it still promise every target at once on ``PROMISE`` of the
   simulated machines and σ_model's contraction in expectation (:func:`without_unneeded`);
 * **design the rest again** (:func:`.design_make.make_design`) only when the plan falls short — a target met on
-  fewer than ``KEEP_SHARE`` — or is measured in full with a target unmet, or there is no plan.
+  fewer than ``KEEP_SHARE`` — or is measured in full with a target unmet, or there is no plan; the planned runs the
+  re-plan keeps are measured before the runs it adds wherever that costs no minute (:func:`planned_first`): the
+  plan may yet be enough on this machine, and the runs added after it are then dropped.
 
 Keeping a plan costs one exact check and a closed-form screen of its runs, not the search.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
@@ -85,4 +89,30 @@ def without_unneeded(design: Design, counts: np.ndarray, c_now: float, **setting
     return design
 
 
-__all__ = ["KEEP_SHARE", "contraction_delivered", "plan_holds", "without_unneeded"]
+def planned_first(design: Design, planned: set) -> Design:
+    """``design`` (a re-plan) with the runs the plan held (their labels ``planned``) measured before the runs it adds
+    wherever that costs nothing: a planned run moved ahead of an added one next to it while the order stays the
+    measuring order (:meth:`.design_timing.Timing.order`: the same instrument, set-up and placement, or probe
+    station) and the minutes do not grow.  The runs' whys are their own, moved with them."""
+    runs, timing, start = design.runs, design.timing, design.start
+    order, total = list(range(len(runs))), sum(design.minutes)
+    moved = True
+    while moved:  # each move takes a planned run ahead of an added one: at most (planned × added) moves
+        moved = False
+        for j in range(1, len(order)):
+            a, b = order[j - 1], order[j]
+            if runs[b].label not in planned or runs[a].label in planned:
+                continue
+            trial = order[:j - 1] + [b, a] + order[j + 1:]
+            ordered = [runs[i] for i in trial]
+            if (timing.order(ordered, start) == list(range(len(ordered)))
+                    and sum(timing.per_run(ordered, start)) <= total + 1e-9):
+                order, moved = trial, True
+    if order == list(range(len(runs))):
+        return design
+    ordered = [runs[i] for i in order]
+    return dataclasses.replace(design, runs=ordered, minutes=timing.per_run(ordered, start),
+                               why=[design.why[i] for i in order])
+
+
+__all__ = ["KEEP_SHARE", "contraction_delivered", "plan_holds", "planned_first", "without_unneeded"]

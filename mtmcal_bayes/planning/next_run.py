@@ -9,10 +9,11 @@ sds themselves are known, the scales are not).  Otherwise the remaining planned 
 check from today's posterior still leaves each target likelier met than missed (runs the data made unnecessary
 dropped), and the rest is designed again from the machine's current state (the ball bar mounted at the last
 measured run's set-up and placement, or the probe or the R-test after a run of theirs: :func:`machine_state`; the
-remaining planned runs among the candidates) only where the plan falls short: :mod:`.next_plan`.  A designed probe
-or R-test run is planned while its table (``[design] to_fill_in``, :mod:`.design_other_runs`) is not among the
-campaign's runs: the plan kept holds it as the ball bar's planned runs (:func:`planned_other_candidates`); a re-plan
-chooses among the catalogues' probe and R-test runs again, which hold it.  The first run of the plan is the next
+remaining planned runs among the candidates, measured first where that costs nothing) only where the plan falls
+short: :mod:`.next_plan`.  A designed probe or R-test run is planned while its table (``[design] to_fill_in``,
+:mod:`.design_other_runs`) is not among the campaign's runs: the plan kept holds it as the ball bar's planned runs
+(:func:`planned_other_candidates`); a re-plan chooses among the catalogues' probe and R-test runs again, which hold
+it.  The first run of the plan is the next
 one; the probability is the share of simulated machines in which the plan meets every target
 (:mod:`.design_check`).
 """
@@ -42,7 +43,7 @@ from .design_make import (
 from .design_now import now_of, taught_prior
 from .design_other_runs import planned_other
 from .determined import Determination
-from .next_plan import contraction_delivered, plan_holds, without_unneeded
+from .next_plan import contraction_delivered, plan_holds, planned_first, without_unneeded
 from .scale_priors import learnt_summary
 
 #: re-plans with the targets tightened when the closed form finds nothing left to measure but the exact posterior
@@ -214,6 +215,7 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
         if campaign.design is not None and not bb.planned and not others:
             settings["contraction"] = None  # the designed plan, measured in full, delivered it: the targets are left
         design = _designed_again(campaign, plan, planner, sd_now=sd_now, c_now=c_now, start=start, settings=settings)
+        design = planned_first(design, {p.label for p in bb.planned} | set(others.values()))
     planned = {p.label for p in bb.planned} | set(others.values())
     chosen = {r.label for r in design.runs}
     return NextStep("measure", probability_targets_met=design.probability_targets_met(), design=design,
