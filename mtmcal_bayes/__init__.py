@@ -19,6 +19,7 @@ the thesis machine's :class:`LinearModel` and :class:`HTMModel` are its plug-in'
 Layers, each importing only those below it (``tests/test_architecture.py``)::
 
     errors, units, progress, version, datasets,          foundation
+    lazy_names
     arviz_import
     parameters, patterns                                 names of quantities and patterns
     campaign, observations, machine_time                 the data of a calibration, its machine minutes
@@ -35,8 +36,7 @@ Layers, each importing only those below it (``tests/test_architecture.py``)::
 Units: internally mm and rad; files and displays use µm, ″, mm, °.
 """
 
-import importlib
-
+from .lazy_names import lazy_names
 from .version import __version__
 
 #: each public name and the module it comes from, imported on first use (PEP 562): ``import mtmcal_bayes``
@@ -58,18 +58,7 @@ _HOME = {
 }
 
 
-def __getattr__(name: str):
-    if name == "units":
-        return importlib.import_module(".units", __name__)
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(__name__, _HOME, globals(), modules=("units",))
 
 
 __all__ = [

@@ -21,7 +21,7 @@ PACKAGE = Path(mtmcal_bayes.__file__).parent
 #: the allowed layer order, lowest first: a unit (top-level module or subpackage) may import only units of
 #: lower layers; units of one layer are siblings and may not import each other
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "units", "progress", "version", "datasets", "arviz_import", "without_dask"),  # foundation: nothing of the package
+    ("errors", "units", "progress", "version", "datasets", "arviz_import", "without_dask", "lazy_names"),  # foundation: nothing of the package
     ("parameters", "patterns", "sphere", "iso", "cluster"),        # quantity names (ISO symbols), patterns, sphere fit, Dask
     ("conventions", "machines"),                                   # what a ball-bar offset means in machine axes;
                                                                    # machines described: chains and location errors

@@ -5,7 +5,7 @@ priors, nothing of the thesis' deterministic method (the posterior feature,
 :mod:`mtmcal_bayes.posterior`, sets the two side by side).
 """
 
-import importlib
+from ..lazy_names import lazy_names
 
 #: each public name and the module it comes from, imported on first use (PEP 562): a command that needs the exact
 #: posterior or the closed form (``design``, ``plan``) does not load ArviZ, pandas and matplotlib with the sampler's
@@ -24,16 +24,7 @@ _HOME = {
 }
 
 
-def __getattr__(name: str):
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_names(__name__, _HOME, globals())
 
 
 __all__ = list(_HOME)
