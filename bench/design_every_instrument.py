@@ -283,7 +283,7 @@ def main(n: int) -> None:
         print(f"\n{kind}{' (probe only)' if PROBE_ONLY else ''}: {len(d.runs)} runs ("
               + ", ".join(f"{v} {i}" for i, v in runs.items() if v) + f"), {d.total_minutes:.0f} min, "
               f"{d.rounds} round(s), designed in {t_design:.0f} s; {len(sds)} machines from the priors through the "
-              f"chain ({time.perf_counter() - t0:.0f} s)")
+              f"{default_kinematic_model(c.machine)} ({time.perf_counter() - t0:.0f} s)")
         print(f"  design's check through the {k.model}: {k.through} (misfit {k.misfit_um:.3g} µm, threshold "
               f"{k.threshold_um:.3g} µm)")
         print(f"  not determined by the catalogue: {', '.join(left) or 'none'}")
