@@ -10,9 +10,11 @@ every determinable length (relaxed by 25 % steps where the catalogue cannot reac
 description with a ``[probe]`` alone, ``--instruments probe``), its sphere's run replaced by a W-ball mount at the
 sphere (:func:`new_probe_machine`: a new machine, no reading in the design's posterior).
 
-Then ``N`` machines drawn from the priors — every deviation and every nuisance term of the designed campaign (the ball
-bar's set-ups and placements, each probe run's stylus and sphere, the R-test's nest, placement and zeros) and every
-discrepancy scale — measured through the chain: the designed runs as campaign runs (the probe's and the R-test's as
+Then ``N`` machines drawn from the priors — every deviation and every nuisance term of the designed campaign's
+posterior (the ball bar's set-ups and placements, each probe run's stylus and sphere, the R-test's nest, placement and
+zeros; on the thesis machine not the linear axes' squareness, which its model leaves out) and every discrepancy scale
+— measured through the machine's kinematics (a described machine's chain, the thesis plug-in's ``htm-thesis``: the
+models the design's check simulates through): the designed runs as campaign runs (the probe's and the R-test's as
 the tables to fill in become once measured), simulated by ``synthetic_campaign`` (the ball bar's repeat scatter,
 instrument error and σ_model; the probe's and R-test's repeatability), each probe and R-test reading with its own
 discrepancy ``N(0, σ_model_probe²)``, ``N(0, σ_model_rtest²)`` shared by its repeats; each machine's exact posterior
@@ -47,14 +49,15 @@ from mtmcal_bayes import api
 from mtmcal_bayes.analysis import analysis_of
 from mtmcal_bayes.campaign import Mount, Probe, RTest, RTestNest
 from mtmcal_bayes.errors import ParameterError
+from mtmcal_bayes.inference.log_posterior import parameter_space
 from mtmcal_bayes.inference.priors import make_prior
-from mtmcal_bayes.machines.space import described_space
 from mtmcal_bayes.planning.design_check import preposterior
 from mtmcal_bayes.planning.design_instruments import other_candidates, taught
 from mtmcal_bayes.planning.design_make import design_candidates, reporting_planner
 from mtmcal_bayes.planning.design_output import designed_campaign
 from mtmcal_bayes.planning.design_problem import PROMISE
 from mtmcal_bayes.planning.design_timing import SESSION
+from mtmcal_bayes.models import default_kinematic_model
 from mtmcal_bayes.planning.machine_kit import planner_for
 from mtmcal_bayes.planning.scale_priors import scale_prior
 from mtmcal_bayes.simulation.simulate import synthetic_campaign, truth_from_vector
@@ -128,8 +131,10 @@ def measured(d):
 
 
 def draw_machine(c, rng):
-    """A machine from the priors: every deviation and nuisance term of ``c``'s space, and every scale."""
-    space = described_space(c, data=data_of(c))
+    """A machine from the priors: every deviation and nuisance term of the space ``c``'s posterior has (its machine's
+    plug-in's where it has one: the thesis' leaves out the linear axes' squareness, which its model does not
+    estimate; the design's check draws that space too), and every scale."""
+    space = parameter_space(c, False, data_of(c))
     stated = c.rtest.prior_sds() if c.rtest is not None else None
     theta = [make_prior(p.name, p.base, p.kind, c.priors, stated=stated).frozen().rvs(random_state=rng)
              for p in space.parameters]
@@ -147,8 +152,10 @@ def data_of(c) -> str:
 
 
 def simulate(c, truth, sigmas, rng):
-    """``c`` measured on the machine ``truth`` through the chain, every reading with its scale's discrepancy."""
-    syn = synthetic_campaign(c, truth, "chain", noise=True, seed=int(rng.integers(2**31)),
+    """``c`` measured on the machine ``truth`` through its kinematics — the machine's default kinematic model, the
+    one the design's check simulates through (a described machine's chain, the thesis plug-in's ``htm-thesis``) —
+    every reading with its scale's discrepancy."""
+    syn = synthetic_campaign(c, truth, default_kinematic_model(c.machine), noise=True, seed=int(rng.integers(2**31)),
                              sigma_model=sigmas["ballbar"])
     if syn.probe is not None:
         for run in syn.probe.runs:
@@ -276,7 +283,7 @@ def main(n: int) -> None:
         print(f"\n{kind}{' (probe only)' if PROBE_ONLY else ''}: {len(d.runs)} runs ("
               + ", ".join(f"{v} {i}" for i, v in runs.items() if v) + f"), {d.total_minutes:.0f} min, "
               f"{d.rounds} round(s), designed in {t_design:.0f} s; {len(sds)} machines from the priors through the "
-              f"chain ({time.perf_counter() - t0:.0f} s)")
+              f"{default_kinematic_model(c.machine)} ({time.perf_counter() - t0:.0f} s)")
         print(f"  design's check through the {k.model}: {k.through} (misfit {k.misfit_um:.3g} µm, threshold "
               f"{k.threshold_um:.3g} µm)")
         print(f"  not determined by the catalogue: {', '.join(left) or 'none'}")
