@@ -135,8 +135,8 @@ def test_next_counts_no_set_up_of_the_instrument_on_the_machine(measured):
 
 
 def test_a_ball_bar_run_after_the_probe_changes_the_instrument(measured):
-    """From the probe or the R-test on the machine, a ball-bar run costs the change of instrument and the bar's
-    set-up as in a new session (mounting, tool, W ball), and the instrument's run after it its set-up again; the
+    """From the probe or the R-test on the machine, its own run comes first and costs no set-up; the ball-bar run
+    after it costs the change of instrument and the bar's set-up as in a new session (mounting, tool, W ball); the
     minutes of a plan's counts walk the same schedule (the same float)."""
     from mtmcal_bayes.machine_time import TimeModel
     from mtmcal_bayes.planning.design_timing import Timing
@@ -148,9 +148,17 @@ def test_a_ball_bar_run_after_the_probe_changes_the_instrument(measured):
     runs = designed_runs(cands, np.array([1, 1]))
     new = timing.total(runs, (False, None, None))
     on = timing.total(runs, step.design.start)
-    # the bar's runs first (a session's order): the change to the bar on top, the instrument set up again after it
-    assert on == pytest.approx(new + times.instrument_change_min, rel=1e-12)
-    assert [e.kind for e in timing.events(runs, step.design.start)][:2] == ["change instrument", "mount ball bar"]
+    # the instrument on the machine first, from its state there, then the change and the bar as in a new session
+    own = timing.total([r for r in runs if r.instrument == kind], step.design.start)
+    bar_alone = timing.total([r for r in runs if r.instrument == "ballbar"], (False, None, None))
+    assert on == pytest.approx(own + times.instrument_change_min + bar_alone, rel=1e-12)
+    set_up = times.mount_probe_min if kind == "probe" else times.mount_rtest_min
+    assert on < new - set_up + times.stylus_change_min + times.move_sphere_min + 1e-9  # its set-up saved
+    ordered = [runs[i] for i in timing.order(runs, step.design.start)]
+    assert [r.instrument for r in ordered] == [kind, "ballbar"]
+    kinds = [e.kind for e in timing.events(ordered, step.design.start)]
+    assert not any(k.startswith("mount") and "ball bar" not in k for k in kinds)  # the instrument is not set up
+    assert kinds[kinds.index("change instrument") + 1] == "mount ball bar"
     assert timing.total_of_counts(cands, np.array([1, 1]), step.design.start) == on
 
 

@@ -10,8 +10,9 @@ measures ``repeats × positions × probe_position_min``, an R-test run its posit
 
 The machine's state at the start, ``start`` = (ball bar mounted, set-up id, mount id[, other]): ``other`` (``next``
 after a probe or R-test run, :func:`.next_run.machine_state`) the instrument on the machine instead of the ball bar,
-``("probe", stylus length, sphere)`` or ``("rtest",)``: its set-up is not counted again, a probe run at its stylus and
-sphere costs no change, and the ball bar's first run costs ``instrument_change_min`` before the bar's own set-up.
+``("probe", stylus length, sphere)`` or ``("rtest",)``: that instrument's runs are measured first (its set-up is not
+counted again, a probe run at its stylus and sphere costs no change), then the ball bar's, whose first run costs
+``instrument_change_min`` before the bar's own set-up, then the other instrument's.
 """
 
 from __future__ import annotations
@@ -44,25 +45,22 @@ class Timing:
         self.clock = kit_of(campaign).clock(model, campaign)
 
     def order(self, runs, start) -> list[int]:
-        """The measuring order: the ball bar's runs by set-up and placement, then the probe's by stylus and sphere,
-        then the R-test's (module docstring)."""
+        """The measuring order: the runs of a probe or an R-test already on the machine (``start``) first, then the
+        ball bar's by set-up and placement, then the probe's by stylus and sphere, then the R-test's (module
+        docstring)."""
         bar = [i for i, r in enumerate(runs) if r.instrument == "ballbar"]
-        out = [bar[j] for j in canonical_order([runs[i] for i in bar], start[1], start[2])]
         probe = [i for i, r in enumerate(runs) if r.instrument == "probe"]
         keys = list(dict.fromkeys(_probe_key(runs[i].candidate) for i in probe))
-        out += sorted(probe, key=lambda i: keys.index(_probe_key(runs[i].candidate)))
-        return out + [i for i, r in enumerate(runs) if r.instrument == "rtest"]
+        by = {"ballbar": [bar[j] for j in canonical_order([runs[i] for i in bar], start[1], start[2])],
+              "probe": sorted(probe, key=lambda i: keys.index(_probe_key(runs[i].candidate))),
+              "rtest": [i for i, r in enumerate(runs) if r.instrument == "rtest"]}
+        return [i for instrument in _session(start) for i in by[instrument]]
 
     def total(self, runs, start) -> float:
-        """Minutes of ``runs`` in their measuring order."""
-        ordered = [runs[i] for i in self.order(runs, start)]
-        bar = [r for r in ordered if r.instrument == "ballbar"]
+        """Minutes of ``runs`` in their measuring order (the schedule's events added one by one, in order)."""
         t = 0.0
-        for e in self._bar_events(bar, start):
+        for e in self.schedule([runs[i] for i in self.order(runs, start)], start).events:
             t += e.minutes
-        for _, _, minutes in self._other_steps([r for r in ordered if r.instrument != "ballbar"],
-                                               _current(start, bool(bar))):
-            t += minutes
         return t
 
     def _bar_events(self, bar, start) -> list[Event]:
@@ -86,14 +84,25 @@ class Timing:
         return self.schedule(runs, start).events
 
     def schedule(self, runs, start) -> Schedule:
-        """The schedule of the ordered ``runs`` (the ball bar's first, as :meth:`order` puts them)."""
-        bar = [r for r in runs if r.instrument == "ballbar"]
-        if len(bar) == len(runs) and other_on(start) is None:
+        """The schedule of the ordered ``runs`` (as :meth:`order` puts them: the runs of a probe or an R-test on the
+        machine, then the ball bar's, then the other instruments')."""
+        bar_at = [j for j, r in enumerate(runs) if r.instrument == "ballbar"]
+        if len(bar_at) == len(runs) and other_on(start) is None:
             return self.clock.schedule(runs, start[:3])
-        events = self._bar_events(bar, start)
-        t = sum(e.minutes for e in events)
-        for j, kind, minutes in self._other_steps(runs[len(bar):], _current(start, bool(bar))):
-            events.append(Event(kind, len(bar) + j, t, minutes, runs[len(bar) + j].label))
+        first = bar_at[0] if bar_at else len(runs)
+        end = first + len(bar_at)
+        events, t = [], 0.0
+        for j, kind, minutes in self._other_steps(runs[:first], _current(start, False)):
+            events.append(Event(kind, j, t, minutes, runs[j].label))
+            t += minutes
+        # the bar after the instrument on the machine: a change of instrument, then its set-up as in a new session
+        bar_start = (False, None, None, (runs[first - 1].instrument,)) if first else start
+        t_bar = t
+        for e in self._bar_events(runs[first:end], bar_start):
+            events.append(Event(e.kind, first + e.run_index, t_bar + e.start_min, e.minutes, e.label))
+            t += e.minutes
+        for j, kind, minutes in self._other_steps(runs[end:], ("ballbar",)):
+            events.append(Event(kind, end + j, t, minutes, runs[end + j].label))
             t += minutes
         return Schedule(events)
 
@@ -160,6 +169,12 @@ class Timing:
             setups.insert(0, start[1])
         m = self.model
         t = 0.0
+        # the runs of the probe or the R-test on the machine first (:meth:`order`), the others after the bar's
+        pre, rest = self._other_entries(candidates, others, start) if others else ([], [])
+        if pre and groups:
+            t = self._others_after(t, candidates, pre, _current(start, False))
+        elif pre:
+            pre, rest = [], pre + rest  # no bar run between them: one walk
         if groups and other_on(start) is not None:  # the probe or the R-test on the machine: changed for the bar
             t += m.instrument_change_min
             mounted, setup, mount = NEW
@@ -187,24 +202,33 @@ class Timing:
                     t += m.pattern_change_min
                     t += measure[k]
                 mounted, setup, mount = True, s, mt
-        if others:
-            t = self._others_after(t, candidates, others, _current(start, bool(groups)))
+        if rest:
+            t = self._others_after(t, candidates, rest, ("ballbar",) if groups else _current(start, False))
         return t
 
-    def _others_after(self, t: float, candidates, others: list[tuple[int, int]], current: tuple | None) -> float:
-        """``t`` plus the minutes of the probe's and the R-test's runs ``others`` ((candidate, runs), in candidate
-        order) in :meth:`order`'s order from ``current`` (:func:`_current`): :meth:`_other_steps`' additions, in the
-        same order (the same float), without making runs."""
-        inst, key, stylus, sphere, minutes, renamed = self._other_keys(candidates)
+    def _other_entries(self, candidates, others: list[tuple[int, int]], start) -> tuple[list, list]:
+        """The probe's and the R-test's runs ``others`` ((candidate, runs), in candidate order) as ``(candidate,
+        instance)`` in :meth:`order`'s order: those of the instrument on the machine (``start``), and the rest."""
+        inst, key = self._other_keys(candidates)[:2]
         rank: dict = {}
         probe = [(k, i) for k, n in others if inst[k] == "probe" for i in range(1, n + 1)]
         for k, _ in probe:
             rank.setdefault(key[k], len(rank))
         probe.sort(key=lambda e: rank[key[e[0]]])  # by stylus and sphere in order of first appearance (stable)
+        by = {"probe": probe, "rtest": [(k, i) for k, n in others if inst[k] == "rtest" for i in range(1, n + 1)]}
+        on = other_on(start)
+        pre = by.pop(on[0]) if on is not None and on[0] in by else []
+        return pre, [e for i in ("probe", "rtest") if i in by for e in by[i]]
+
+    def _others_after(self, t: float, candidates, entries: list[tuple[int, int]], current: tuple | None) -> float:
+        """``t`` plus the minutes of the probe's and the R-test's runs ``entries`` ((candidate, instance), in
+        measuring order) from ``current`` (:func:`_current`): :meth:`_other_steps`' additions, in the same order (the
+        same float), without making runs."""
+        inst, key, stylus, sphere, minutes, renamed = self._other_keys(candidates)
         m = self.model
         current, sty, sph = (current[0], current[1], tuple(current[2])) if current and current[0] == "probe" \
             else (current[0] if current else None, None, None)
-        for k, i in probe + [(k, i) for k, n in others if inst[k] == "rtest" for i in range(1, n + 1)]:
+        for k, i in entries:
             if inst[k] != current:
                 if current is not None:
                     t += m.instrument_change_min
@@ -284,6 +308,12 @@ def _further(r) -> bool:
     (its candidate the catalogue's as that run, owners ``<id>#<k>``: :meth:`.candidates.WithoutBar.again`)."""
     head, sep, k = r.candidate.id.rpartition("#")
     return r.instance > 1 or bool(head and sep and k.isdigit())
+
+
+def _session(start) -> tuple[str, ...]:
+    """The order of the instruments from ``start``: a probe or an R-test on the machine first, then :data:`SESSION`'s."""
+    on = other_on(start)
+    return SESSION if on is None or on[0] not in SESSION else (on[0],) + tuple(i for i in SESSION if i != on[0])
 
 
 def _current(start, bar: bool) -> tuple | None:
