@@ -174,7 +174,7 @@ class Timing:
         if pre and groups:
             t = self._others_after(t, candidates, pre, _current(start, False))
         elif pre:
-            pre, rest = [], pre + rest  # no bar run between them: one walk
+            rest = pre + rest  # no bar run between them: one walk
         if groups and other_on(start) is not None:  # the probe or the R-test on the machine: changed for the bar
             t += m.instrument_change_min
             mounted, setup, mount = NEW
@@ -260,7 +260,7 @@ class Timing:
                 [None if c is None else c.stylus_length for c in probe],
                 [None if c is None else tuple(c.sphere) for c in probe],
                 [None if c is None else self._other_minutes(c) for c in other],
-                [c is not None and _further(_Other(c, 1)) for c in other]))
+                [c is not None and _renamed(c) for c in other]))
         return cache[id(candidates)][1]
 
     def floor(self, candidates) -> np.ndarray:
@@ -305,9 +305,15 @@ class _Other:
 
 def _further(r) -> bool:
     """Whether ``r`` is a further run of one probe candidate: its ``instance`` > 1, or a run ``next`` plans as one
-    (its candidate the catalogue's as that run, owners ``<id>#<k>``: :meth:`.candidates.WithoutBar.again`)."""
-    head, sep, k = r.candidate.id.rpartition("#")
-    return r.instance > 1 or bool(head and sep and k.isdigit())
+    (:func:`_renamed`)."""
+    return r.instance > 1 or _renamed(r.candidate)
+
+
+def _renamed(c) -> bool:
+    """Whether candidate ``c`` is the catalogue's as a further run of itself (owners ``<id>#<k>``:
+    :meth:`.candidates.WithoutBar.again`)."""
+    head, sep, k = c.id.rpartition("#")
+    return bool(head and sep and k.isdigit())
 
 
 def _session(start) -> tuple[str, ...]:

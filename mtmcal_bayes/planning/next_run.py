@@ -20,6 +20,7 @@ one; the probability is the share of simulated machines in which the plan meets 
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -95,8 +96,6 @@ def planned_other_candidates(campaign, instruments) -> list:
     of the kept plan, each the catalogue's candidate of its name as that run (``<name> #k``: its k-th run, its terms'
     owners its own, :meth:`.candidates.WithoutBar.again`) named as the run, so the plan names it as the design did.
     A planned run whose candidate the catalogue of ``instruments`` no longer holds is left to the re-plan."""
-    import dataclasses
-
     names = planned_other(campaign).values()
     if not names:
         return []
@@ -211,12 +210,12 @@ def next_step(campaign, *, targets: dict | None = None, contraction: float | Non
             design = without_unneeded(design, counts, c_now, start=start, planner=planner, **settings)
         else:
             design = None
+    planned = {p.label for p in bb.planned} | set(others.values())
     if design is None:
         if campaign.design is not None and not bb.planned and not others:
             settings["contraction"] = None  # the designed plan, measured in full, delivered it: the targets are left
         design = _designed_again(campaign, plan, planner, sd_now=sd_now, c_now=c_now, start=start, settings=settings)
-        design = planned_first(design, {p.label for p in bb.planned} | set(others.values()))
-    planned = {p.label for p in bb.planned} | set(others.values())
+        design = planned_first(design, planned)
     chosen = {r.label for r in design.runs}
     return NextStep("measure", probability_targets_met=design.probability_targets_met(), design=design,
                     dropped=sorted(planned - chosen), added=sorted(chosen - planned), **base)
