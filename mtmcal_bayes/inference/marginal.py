@@ -193,8 +193,9 @@ class _BlockWhitening:
                 self.inner = _BlockWhitening(S0[np.ix_(self.b, self.b)], base_var[self.b], others[:, 1:],
                                              groups_b - 1, n_first=len(np.unique(others[:, 1])))
                 self.L_b = None
-                self.W = self.inner(S0[np.ix_(self.b, self.a)])  # (Gb, mb, ma)
-                self._W_parts = self.inner._parts(S0[np.ix_(self.b, self.a)])  # W as the inner whitening's parts
+                S0_ba = S0[np.ix_(self.b, self.a)]
+                self.W = self.inner(S0_ba)  # (Gb, mb, ma)
+                self._W_parts = self.inner._parts(S0_ba)  # W as the inner whitening's parts
                 logdet_b = self.inner.logdet
             else:
                 S_bb = S0[np.ix_(self.b, self.b)][None] + (base_var[self.b][None] + others[:, groups_b] ** 2
@@ -535,16 +536,16 @@ class MarginalPosterior:
         elif log_extra is not None:
             lw += log_extra
         lw += const[:, None]
+        return self._normalised(lw)
+
+    @staticmethod
+    def _normalised(lw: np.ndarray) -> np.ndarray:
+        """Each column of the log-weights ``lw`` (G, N) made weights summing to one, in ``lw``'s memory (every caller
+        passes an array of its own)."""
         lw -= lw.max(axis=0)
         np.exp(lw, out=lw)
         lw /= lw.sum(axis=0)
         return lw
-
-    @staticmethod
-    def _normalised(lw: np.ndarray) -> np.ndarray:
-        lw = lw - lw.max(axis=0)
-        w = np.exp(lw)
-        return w / w.sum(axis=0)
 
     def log_evidence(self, y: np.ndarray) -> float:
         """The marginal likelihood ``log p(y)`` of one data vector ``y`` (m,) (density of the means, mm⁻ᵐ):
