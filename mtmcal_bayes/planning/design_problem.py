@@ -306,9 +306,8 @@ class DesignProblem:
     @watch.setter
     def watch(self, value) -> None:
         self._watch = None if value is None else np.asarray(value, dtype=bool)
-        #: supports (K,) of designs found to determine every watched target, and them stacked (:meth:`_covered`)
-        self._complete: list[np.ndarray] = []
-        self._complete_stack = np.zeros((0, len(self.candidates)), dtype=bool)
+        #: (n, K) the supports of designs found to determine every watched target (:meth:`_covered`)
+        self._complete = np.zeros((0, len(self.candidates)), dtype=bool)
 
     def _undetermined(self, counts: np.ndarray) -> np.ndarray:
         """(B, t) :attr:`DesignValue.undetermined` of designs ``counts`` (B, K)."""
@@ -318,7 +317,7 @@ class DesignProblem:
             if not self._covered(c > 0):
                 out[b] = _unseen(self.determination.unseen(c), self.watch)
                 if not out[b].any():
-                    self._complete.append(c > 0)
+                    self._complete = np.vstack([self._complete, c > 0])
         return out
 
     def _undetermined_plus_one(self, counts: np.ndarray) -> np.ndarray:
@@ -330,11 +329,7 @@ class DesignProblem:
     def _covered(self, support: np.ndarray) -> bool:
         """Whether the candidates of ``support`` (K,) include those of a design known to determine every watched
         target: adding rows only shrinks the null space, so they determine them too (no null space made)."""
-        if not self._complete:
-            return False
-        if len(self._complete) != len(self._complete_stack):
-            self._complete_stack = np.array(self._complete)
-        return bool(np.any(np.all(support[None] | ~self._complete_stack, axis=1)))
+        return bool(np.any(np.all(support[None] | ~self._complete, axis=1)))
 
     def _watched(self) -> bool:
         return self.watch is not None and bool(np.any(self.watch))
@@ -409,7 +404,8 @@ class DesignProblem:
         """``counts``' posterior at the σ nodes and what its rank-r updates start from, kept for the next call with
         the same design (an exchange pass asks it once per run of the design): ``Sig`` (S, P, P), ``M2``, ``M3``,
         ``var`` (S, t), ``t`` (S,), the traces ``A = Σ M₂``, ``trA2``, ``trSM3`` (S,) when first needed
-        (:meth:`_traced`), and per candidate group the products with its rows made when first asked (``E``: ``XΣ`` (S, k·r, P), ``ETp``: ``XΣTpᵀ``, ``H``: ``XΣXᵀ`` (k, S, r, r))."""
+        (:meth:`_traced`), and per candidate group the products with its rows made when first asked (``E``: ``XΣ``
+        (S, k·r, P), ``ETp``: ``XΣTpᵀ``, ``H``: ``XΣXᵀ`` (k, S, r, r))."""
         key = counts.tobytes()
         if getattr(self, "_last_state", None) is not None and self._last_state[0] == key:
             return self._last_state[1]
